@@ -1,0 +1,19 @@
+// fenestra: command-line client for scenes, sky matrices, daylight coefficients and jobs.
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "client/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"fenestra: daylight simulation and Venetian blind design"};
+  app.require_subcommand(1);
+  fenestra::AddSceneCommand(app);
+  fenestra::AddSkyCommand(app);
+  fenestra::AddDcCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  return 0;
+}

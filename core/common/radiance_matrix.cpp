@@ -1,0 +1,136 @@
+#include "core/common/radiance_matrix.h"
+
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/strip.h"
+#include "core/common/atomic_file.h"
+
+namespace fenestra {
+
+absl::Status WriteRadianceMatrix(const std::string& path, const Matrix& m, MatrixFormat format) {
+  const bool binary = format == MatrixFormat::kFloat;
+  return WriteFileAtomically(
+      path,
+      [&](std::ostream& out) {
+        out << "#?RADIANCE\n"
+            << "NROWS=" << m.rows() << "\nNCOLS=" << m.cols() << "\nNCOMP=1\n"
+            << "FORMAT=" << (binary ? "float" : "ascii") << "\n\n";
+        if (binary) {
+          for (Eigen::Index r = 0; r < m.rows(); ++r) {
+            for (Eigen::Index c = 0; c < m.cols(); ++c) {
+              const float v = static_cast<float>(m(r, c));
+              out.write(reinterpret_cast<const char*>(&v), sizeof v);
+            }
+          }
+        } else {
+          out.precision(9);
+          for (Eigen::Index r = 0; r < m.rows(); ++r) {
+            for (Eigen::Index c = 0; c < m.cols(); ++c) out << (c ? "\t" : "") << m(r, c);
+            out << '\n';
+          }
+        }
+        return absl::OkStatus();
+      },
+      binary);
+}
+
+namespace {
+
+absl::StatusOr<Matrix> ParseTable(const std::string& path, std::istream& in, long rows,
+                                  long cols) {
+  std::vector<double> values;
+  long row_count = 0;
+  long col_count = -1;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string field;
+    long n = 0;
+    while (fields >> field) {
+      double v;
+      if (!absl::SimpleAtod(field, &v)) {
+        return absl::InvalidArgumentError(
+            absl::StrCat(path, ": not a number: '", field, "'"));
+      }
+      values.push_back(v);
+      ++n;
+    }
+    if (n == 0) continue;
+    if (rows < 0) {
+      if (col_count >= 0 && n != col_count) {
+        return absl::InvalidArgumentError(absl::StrCat(path, ": row ", row_count + 1, " has ",
+                                                       n, " values, expected ", col_count));
+      }
+      col_count = n;
+      ++row_count;
+    }
+  }
+  if (rows < 0) {
+    rows = row_count;
+    cols = std::max(col_count, 0L);
+  }
+  if (static_cast<long>(values.size()) != rows * cols) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": expected ", rows * cols,
+                                                   " values, found ", values.size()));
+  }
+  return Matrix(Eigen::Map<Matrix>(values.data(), rows, cols));
+}
+
+}  // namespace
+
+absl::StatusOr<Matrix> ReadRadianceMatrix(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return absl::NotFoundError(absl::StrCat(path, ": cannot open"));
+  const int first = in.peek();
+  if (first != '#') return ParseTable(path, in, -1, -1);
+
+  long rows = -1, cols = -1, comps = 1;
+  std::string format = "ascii";
+  std::string line;
+  while (std::getline(in, line) && !line.empty()) {
+    absl::string_view v = line;
+    if (absl::ConsumePrefix(&v, "NROWS=")) {
+      if (!absl::SimpleAtoi(v, &rows)) rows = -1;
+    } else if (absl::ConsumePrefix(&v, "NCOLS=")) {
+      if (!absl::SimpleAtoi(v, &cols)) cols = -1;
+    } else if (absl::ConsumePrefix(&v, "NCOMP=")) {
+      if (!absl::SimpleAtoi(v, &comps)) comps = -1;
+    } else if (absl::ConsumePrefix(&v, "FORMAT=")) {
+      format = std::string(v);
+    }
+  }
+  if (rows <= 0 || cols <= 0) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": header lacks NROWS/NCOLS"));
+  }
+  if (comps != 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": NCOMP=", comps, " (only one-component matrices are supported)"));
+  }
+  if (format == "ascii") return ParseTable(path, in, rows, cols);
+  Matrix m(rows, cols);
+  if (format == "float" || format == "double") {
+    const bool is_float = format == "float";
+    for (long i = 0; i < rows * cols; ++i) {
+      double v;
+      if (is_float) {
+        float f;
+        in.read(reinterpret_cast<char*>(&f), sizeof f);
+        v = f;
+      } else {
+        in.read(reinterpret_cast<char*>(&v), sizeof v);
+      }
+      if (!in) return absl::InvalidArgumentError(absl::StrCat(path, ": truncated data"));
+      m.data()[i] = v;
+    }
+    return m;
+  }
+  return absl::InvalidArgumentError(absl::StrCat(path, ": unsupported FORMAT=", format));
+}
+
+}  // namespace fenestra

@@ -1,0 +1,46 @@
+#pragma once
+
+#include <cstdint>
+
+#include "core/common/vec3.h"
+#include "core/geometry/mesh.h"
+
+namespace fenestra {
+
+struct Window;
+
+// A design parameter: value and the range an optimizer may explore.
+struct ParameterRange {
+  double value = 0, min = 0, max = 0;
+};
+
+// The Venetian blind's fixed description (from the scene).
+struct BlindSpec {
+  uint32_t material = 0;      // index into the scene's materials
+  bool vertical = false;      // slats vertical (stacked across the window) instead of horizontal
+  ParameterRange tilt_rad, slat_width_m, slat_spacing_m, slat_thickness_m;
+  double wall_gap_m = 0.01;   // clearance between wall and slat at any tilt [m]
+  double side_margin_m = 0;   // extra slat length beyond the opening at each end [m]
+};
+
+// One design: the free values of the blind.
+struct BlindDesign {
+  bool has_blind = false;
+  double tilt_rad = 0, slat_width_m = 0, slat_spacing_m = 0, slat_thickness_m = 0;
+};
+
+// How the generator laid out the slats.
+struct BlindLayout {
+  int slat_count = 0;
+  double pitch_m = 0;        // distance between neighbouring slat axes
+  double axis_depth_m = 0;   // distance of the slat axes behind the wall's inner face
+};
+
+// Slat layout for `design` in `window` (see blind.cpp for the exact rule).
+BlindLayout LayoutBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design);
+
+// Appends the slats (12 triangles each, indoor) to `mesh` under part `part_index`.
+BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design,
+                          uint32_t part_index, TriangleMesh& mesh);
+
+}  // namespace fenestra
