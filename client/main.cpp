@@ -1,6 +1,7 @@
 // fenestra: command-line client for scenes, sky matrices, daylight coefficients and jobs.
-#include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
 
 #include "client/commands.h"
 

@@ -1,9 +1,10 @@
 #include "core/common/atomic_file.h"
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 #include "absl/strings/str_cat.h"
 
@@ -29,7 +30,8 @@ absl::Status WriteFileAtomically(const std::string& path,
   std::filesystem::rename(tmp, path, ec);
   if (ec) {
     std::filesystem::remove(tmp, ec);
-    return absl::InternalError(absl::StrCat(path, ": cannot rename temporary file: ", ec.message()));
+    return absl::InternalError(
+        absl::StrCat(path, ": cannot rename temporary file: ", ec.message()));
   }
   return absl::OkStatus();
 }

@@ -42,8 +42,7 @@ absl::Status WriteRadianceMatrix(const std::string& path, const Matrix& m, Matri
 
 namespace {
 
-absl::StatusOr<Matrix> ParseTable(const std::string& path, std::istream& in, long rows,
-                                  long cols) {
+absl::StatusOr<Matrix> ParseTable(const std::string& path, std::istream& in, long rows, long cols) {
   std::vector<double> values;
   long row_count = 0;
   long col_count = -1;
@@ -55,8 +54,7 @@ absl::StatusOr<Matrix> ParseTable(const std::string& path, std::istream& in, lon
     while (fields >> field) {
       double v;
       if (!absl::SimpleAtod(field, &v)) {
-        return absl::InvalidArgumentError(
-            absl::StrCat(path, ": not a number: '", field, "'"));
+        return absl::InvalidArgumentError(absl::StrCat(path, ": not a number: '", field, "'"));
       }
       values.push_back(v);
       ++n;
@@ -64,8 +62,8 @@ absl::StatusOr<Matrix> ParseTable(const std::string& path, std::istream& in, lon
     if (n == 0) continue;
     if (rows < 0) {
       if (col_count >= 0 && n != col_count) {
-        return absl::InvalidArgumentError(absl::StrCat(path, ": row ", row_count + 1, " has ",
-                                                       n, " values, expected ", col_count));
+        return absl::InvalidArgumentError(absl::StrCat(path, ": row ", row_count + 1, " has ", n,
+                                                       " values, expected ", col_count));
       }
       col_count = n;
       ++row_count;
@@ -76,8 +74,8 @@ absl::StatusOr<Matrix> ParseTable(const std::string& path, std::istream& in, lon
     cols = std::max(col_count, 0L);
   }
   if (static_cast<long>(values.size()) != rows * cols) {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": expected ", rows * cols,
-                                                   " values, found ", values.size()));
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": expected ", rows * cols, " values, found ", values.size()));
   }
   return Matrix(Eigen::Map<Matrix>(values.data(), rows, cols));
 }

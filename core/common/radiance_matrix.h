@@ -1,8 +1,7 @@
 #pragma once
 
-#include <string>
-
 #include <Eigen/Core>
+#include <string>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"

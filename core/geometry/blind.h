@@ -16,11 +16,11 @@ struct ParameterRange {
 
 // The Venetian blind's fixed description (from the scene).
 struct BlindSpec {
-  uint32_t material = 0;      // index into the scene's materials
-  bool vertical = false;      // slats vertical (stacked across the window) instead of horizontal
+  uint32_t material = 0;  // index into the scene's materials
+  bool vertical = false;  // slats vertical (stacked across the window) instead of horizontal
   ParameterRange tilt_rad, slat_width_m, slat_spacing_m, slat_thickness_m;
-  double wall_gap_m = 0.01;   // clearance between wall and slat at any tilt [m]
-  double side_margin_m = 0;   // extra slat length beyond the opening at each end [m]
+  double wall_gap_m = 0.01;  // clearance between wall and slat at any tilt [m]
+  double side_margin_m = 0;  // extra slat length beyond the opening at each end [m]
 };
 
 // One design: the free values of the blind.
@@ -32,8 +32,8 @@ struct BlindDesign {
 // How the generator laid out the slats.
 struct BlindLayout {
   int slat_count = 0;
-  double pitch_m = 0;        // distance between neighbouring slat axes
-  double axis_depth_m = 0;   // distance of the slat axes behind the wall's inner face
+  double pitch_m = 0;       // distance between neighbouring slat axes
+  double axis_depth_m = 0;  // distance of the slat axes behind the wall's inner face
 };
 
 // Slat layout for `design` in `window` (see blind.cpp for the exact rule).

@@ -14,16 +14,16 @@ enum class Side : uint8_t { kIndoor, kOutdoor };
 // A Lambertian material.
 struct Material {
   std::string name;
-  double reflectance = 0;      // diffuse reflectance in [0, 1)
-  double transmittance = -1;   // glazing transmittance in [0, 1]; < 0 = opaque
+  double reflectance = 0;     // diffuse reflectance in [0, 1)
+  double transmittance = -1;  // glazing transmittance in [0, 1]; < 0 = opaque
 };
 
 // Assembled triangle soup: triangle i has vertices 3i, 3i+1, 3i+2 [m].
 struct TriangleMesh {
   std::vector<Vec3d> vertices;
-  std::vector<uint32_t> material;   // per triangle: index into the scene's materials
-  std::vector<Side> side;           // per triangle
-  std::vector<uint32_t> part;       // per triangle: index into part_names
+  std::vector<uint32_t> material;  // per triangle: index into the scene's materials
+  std::vector<Side> side;          // per triangle
+  std::vector<uint32_t> part;      // per triangle: index into part_names
   std::vector<std::string> part_names;
 
   size_t TriangleCount() const { return material.size(); }

@@ -15,34 +15,34 @@ namespace fenestra {
 
 // The window rectangle (the opening's outer face), the interface of the two-stage method.
 struct Window {
-  Vec3d center;          // centre of the outer face [m]
-  Vec3d normal;          // unit outward normal
-  Vec3d up;              // unit, along the height
-  Vec3d across;          // unit, along the width: Cross(up, normal)
+  Vec3d center;  // centre of the outer face [m]
+  Vec3d normal;  // unit outward normal
+  Vec3d up;      // unit, along the height
+  Vec3d across;  // unit, along the width: Cross(up, normal)
   double width_m = 0;
   double height_m = 0;
-  double depth_m = 0;    // wall thickness: inner face = center - depth_m * normal
+  double depth_m = 0;  // wall thickness: inner face = center - depth_m * normal
   double Area() const { return width_m * height_m; }
 };
 
 struct Sensor {
   std::string name;
-  Vec3d position;    // [m]
-  Vec3d direction;   // unit
+  Vec3d position;   // [m]
+  Vec3d direction;  // unit
 };
 
 struct Site {
   double latitude_deg = 0;
   double longitude_deg = 0;
   double time_zone_h = 0;
-  std::string weather_file;   // absolute path, or empty
+  std::string weather_file;  // absolute path, or empty
   double ground_reflectance = 0.2;
 };
 
 // A validated scene: fixed geometry as triangles, plus what the blind and the stages need.
 struct Scene {
   std::string name;
-  std::string source_path;        // the scene file
+  std::string source_path;  // the scene file
   std::vector<Material> materials;
   TriangleMesh fixed;             // every surface except the blind
   size_t dropped_degenerate = 0;  // zero-area OBJ triangles left out

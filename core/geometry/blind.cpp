@@ -1,0 +1,102 @@
+// Venetian blind generator.
+//
+// Frame: n = the window's outward normal, d = -n (into the room), a = the stacking axis
+// (the window's `up` for horizontal slats, its `across` for vertical ones), l = the slat's
+// length axis (the other in-plane axis). The wall's inner face is the plane
+// center - depth_m * n.
+//
+// Exact rule:
+// - Each slat is a box of width w (across the slat), thickness t and length L + 2 * margin,
+//   where L is the opening's extent along l. Its cross-section rotates by the tilt α about
+//   the slat's own axis: the width runs along cos α * a + sin α * d, the thickness along
+//   -sin α * a + cos α * d. α = 0 puts the slats in the window plane, α = π/2 perpendicular
+//   to it.
+// - The axes lie in one plane parallel to the window, at depth g + sqrt(w² + t²) / 2 behind
+//   the wall's inner face (g = wall_gap_m), so no slat reaches closer than g to the wall at
+//   any tilt.
+// - Pitch p = max(w + s, p_min(α)) with p_min(α) = min(w / |cos α|, t / |sin α|), the
+//   smallest distance at which two neighbouring slats tilted by α do not interpenetrate
+//   (separating axes of two equal rectangles). At α = 0 the pitch is w + s.
+// - Count n = 1 + ceil((H - w) / p), H = the opening's extent along a: the fewest slats
+//   whose stack, (n - 1) p + w, covers the opening. The stack is centred on the opening.
+//   At α = 0, s = 0 the slats touch and form a closed plate over the whole opening.
+#include "core/geometry/blind.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/geometry/scene.h"
+
+namespace fenestra {
+namespace {
+
+constexpr double kCountTolerance = 1e-9;
+
+struct Frame {
+  Vec3d stack;   // a
+  Vec3d length;  // l
+  double stack_extent_m;
+  double length_extent_m;
+};
+
+Frame BlindFrame(const Window& window, const BlindSpec& spec) {
+  if (spec.vertical) return {window.across, window.up, window.width_m, window.height_m};
+  return {window.up, window.across, window.height_m, window.width_m};
+}
+
+double MinimumPitch(double w, double t, double tilt) {
+  const double c = std::abs(std::cos(tilt));
+  const double s = std::abs(std::sin(tilt));
+  double p = std::numeric_limits<double>::infinity();
+  if (c > 0) p = std::min(p, w / c);
+  if (s > 0) p = std::min(p, t / s);
+  return p;
+}
+
+}  // namespace
+
+BlindLayout LayoutBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design) {
+  const Frame frame = BlindFrame(window, spec);
+  const double w = design.slat_width_m;
+  const double t = design.slat_thickness_m;
+  BlindLayout layout;
+  layout.pitch_m = std::max(w + design.slat_spacing_m, MinimumPitch(w, t, design.tilt_rad));
+  const double gaps = std::max(0.0, (frame.stack_extent_m - w) / layout.pitch_m);
+  layout.slat_count = 1 + static_cast<int>(std::ceil(gaps - kCountTolerance));
+  layout.axis_depth_m = spec.wall_gap_m + 0.5 * std::sqrt(w * w + t * t);
+  return layout;
+}
+
+BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design,
+                          uint32_t part_index, TriangleMesh& mesh) {
+  const BlindLayout layout = LayoutBlind(window, spec, design);
+  const Frame frame = BlindFrame(window, spec);
+  const Vec3d into_room = -window.normal;
+  const Vec3d inner_center = window.center - window.depth_m * window.normal;
+  const Vec3d axis_center = inner_center + layout.axis_depth_m * into_room;
+  const double c = std::cos(design.tilt_rad);
+  const double s = std::sin(design.tilt_rad);
+  const Vec3d half_width = (0.5 * design.slat_width_m) * (c * frame.stack + s * into_room);
+  const Vec3d half_thick = (0.5 * design.slat_thickness_m) * (-s * frame.stack + c * into_room);
+  const Vec3d half_length = (0.5 * frame.length_extent_m + spec.side_margin_m) * frame.length;
+
+  // Corners of each slat box, then its 6 faces as 12 triangles
+  for (int k = 0; k < layout.slat_count; ++k) {
+    const double offset = (k - 0.5 * (layout.slat_count - 1)) * layout.pitch_m;
+    const Vec3d center = axis_center + offset * frame.stack;
+    Vec3d corner[8];
+    for (int i = 0; i < 8; ++i) {
+      corner[i] = center + ((i & 1) ? 1.0 : -1.0) * half_length +
+                  ((i & 2) ? 1.0 : -1.0) * half_width + ((i & 4) ? 1.0 : -1.0) * half_thick;
+    }
+    static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
+                                         {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+    for (const auto& f : kFaces) {
+      mesh.Add(corner[f[0]], corner[f[1]], corner[f[2]], spec.material, Side::kIndoor, part_index);
+      mesh.Add(corner[f[0]], corner[f[2]], corner[f[3]], spec.material, Side::kIndoor, part_index);
+    }
+  }
+  return layout;
+}
+
+}  // namespace fenestra

@@ -1,0 +1,462 @@
+#include "core/geometry/scene.h"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <unordered_map>
+
+#include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
+#include "core/geometry/obj_io.h"
+
+namespace fenestra {
+namespace {
+
+// Relative tolerance for planarity and perpendicularity checks.
+constexpr double kShapeTolerance = 1e-6;
+
+// Collects errors as "<file>: <field>: <reason>".
+class Checker {
+ public:
+  explicit Checker(std::string path) : path_(std::move(path)) {}
+
+  absl::Status Error(const std::string& field, const std::string& reason) const {
+    return absl::InvalidArgumentError(absl::StrCat(path_, ": ", field, ": ", reason));
+  }
+
+  absl::StatusOr<Vec3d> Point(const v1::Vec3& v, const std::string& field) const {
+    if (!std::isfinite(v.x()) || !std::isfinite(v.y()) || !std::isfinite(v.z())) {
+      return Error(field, "coordinates must be finite numbers");
+    }
+    return Vec3d{v.x(), v.y(), v.z()};
+  }
+
+  absl::StatusOr<Vec3d> Direction(const v1::Vec3& v, const std::string& field) const {
+    absl::StatusOr<Vec3d> d = Point(v, field);
+    if (!d.ok()) return d;
+    const double length = Length(*d);
+    if (!(length > 0)) return Error(field, "direction must not be zero");
+    return *d / length;
+  }
+
+  absl::Status Positive(double value, const std::string& field) const {
+    if (!std::isfinite(value) || !(value > 0)) {
+      return Error(field, absl::StrCat("must be a finite number > 0, got ", value));
+    }
+    return absl::OkStatus();
+  }
+
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+double TriangleArea(Vec3d a, Vec3d b, Vec3d c) { return 0.5 * Length(Cross(b - a, c - a)); }
+
+absl::StatusOr<std::vector<Material>> BuildMaterials(const v1::Scene& proto, const Checker& check) {
+  std::vector<Material> materials;
+  for (int i = 0; i < proto.materials_size(); ++i) {
+    const v1::Material& m = proto.materials(i);
+    const std::string field = absl::StrCat("materials[", i, "]");
+    if (m.name().empty()) return check.Error(field + ".name", "must not be empty");
+    for (const Material& other : materials) {
+      if (other.name == m.name()) {
+        return check.Error(field + ".name", absl::StrCat("duplicate material '", m.name(), "'"));
+      }
+    }
+    if (!(m.reflectance() >= 0 && m.reflectance() < 1)) {
+      return check.Error(field + ".reflectance",
+                         absl::StrCat("must be in [0, 1), got ", m.reflectance()));
+    }
+    double transmittance = -1;
+    if (m.has_transmittance()) {
+      transmittance = m.transmittance();
+      if (!(transmittance >= 0 && transmittance <= 1)) {
+        return check.Error(field + ".transmittance",
+                           absl::StrCat("must be in [0, 1], got ", transmittance));
+      }
+      if (!(m.reflectance() + transmittance <= 1)) {
+        return check.Error(field, "reflectance + transmittance must not exceed 1");
+      }
+    }
+    materials.push_back({m.name(), m.reflectance(), transmittance});
+  }
+  if (materials.empty()) return check.Error("materials", "at least one material is required");
+  return materials;
+}
+
+absl::StatusOr<uint32_t> FindMaterial(const std::vector<Material>& materials,
+                                      const std::string& name, const std::string& field,
+                                      const Checker& check) {
+  for (uint32_t i = 0; i < materials.size(); ++i) {
+    if (materials[i].name == name) return i;
+  }
+  return check.Error(field, absl::StrCat("unknown material '", name, "'"));
+}
+
+absl::Status AddPolygon(const v1::Polygon& polygon, const std::string& field, uint32_t material,
+                        Side side, uint32_t part, const Checker& check, TriangleMesh& mesh) {
+  if (polygon.vertices_size() < 3) return check.Error(field, "a polygon needs at least 3 vertices");
+  std::vector<Vec3d> v;
+  for (int k = 0; k < polygon.vertices_size(); ++k) {
+    FENESTRA_ASSIGN_OR_RETURN(
+        p, check.Point(polygon.vertices(k), absl::StrCat(field, ".vertices[", k, "]")));
+    v.push_back(p);
+  }
+  // Newell's normal: robust for any planar polygon
+  Vec3d normal{0, 0, 0};
+  double size = 0;
+  for (size_t k = 0; k < v.size(); ++k) {
+    const Vec3d a = v[k], b = v[(k + 1) % v.size()];
+    normal += Cross(a, b);
+    size = std::max(size, Length(b - a));
+  }
+  const double area = 0.5 * Length(normal);
+  if (!(area > kShapeTolerance * size * size)) {
+    return check.Error(field, "degenerate polygon (zero area)");
+  }
+  normal = Normalize(normal);
+  for (size_t k = 1; k < v.size(); ++k) {
+    if (std::abs(Dot(v[k] - v[0], normal)) > kShapeTolerance * size) {
+      return check.Error(absl::StrCat(field, ".vertices[", k, "]"), "polygon is not planar");
+    }
+  }
+  for (size_t k = 1; k + 1 < v.size(); ++k) mesh.Add(v[0], v[k], v[k + 1], material, side, part);
+  return absl::OkStatus();
+}
+
+absl::Status AddBox(const v1::Box& box, const std::string& field, uint32_t material, Side side,
+                    uint32_t part, const Checker& check, TriangleMesh& mesh) {
+  FENESTRA_ASSIGN_OR_RETURN(lo, check.Point(box.min(), field + ".min"));
+  FENESTRA_ASSIGN_OR_RETURN(hi, check.Point(box.max(), field + ".max"));
+  if (!(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z)) {
+    return check.Error(field, "min must be below max in x, y and z");
+  }
+  auto corner = [&](int i) {
+    return Vec3d{(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z};
+  };
+  static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
+                                       {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+  for (const auto& f : kFaces) {
+    mesh.Add(corner(f[0]), corner(f[1]), corner(f[2]), material, side, part);
+    mesh.Add(corner(f[0]), corner(f[2]), corner(f[3]), material, side, part);
+  }
+  return absl::OkStatus();
+}
+
+absl::Status AddObj(const v1::ObjMesh& obj, const std::string& field, uint32_t default_material,
+                    Side side, uint32_t part, const std::vector<Material>& materials,
+                    const Checker& check, TriangleMesh& mesh, size_t& dropped) {
+  if (obj.path().empty()) return check.Error(field + ".path", "must not be empty");
+  const std::filesystem::path base = std::filesystem::path(check.path()).parent_path();
+  const std::string file = (base / obj.path()).string();
+  absl::StatusOr<ObjTriangles> triangles = ReadObj(file);
+  if (!triangles.ok()) {
+    return check.Error(field + ".path", std::string(triangles.status().message()));
+  }
+  std::unordered_map<std::string, uint32_t> group_material;
+  for (const auto& [group, name] : obj.group_materials()) {
+    FENESTRA_ASSIGN_OR_RETURN(
+        index, FindMaterial(materials, name, absl::StrCat(field, ".group_materials['", group, "']"),
+                            check));
+    group_material[group] = index;
+  }
+  for (size_t t = 0; t < triangles->group.size(); ++t) {
+    const Vec3d a = triangles->vertices[3 * t], b = triangles->vertices[3 * t + 1],
+                c = triangles->vertices[3 * t + 2];
+    if (!(TriangleArea(a, b, c) > 0)) {
+      ++dropped;
+      continue;
+    }
+    auto it = group_material.find(triangles->group[t]);
+    mesh.Add(a, b, c, it == group_material.end() ? default_material : it->second, side, part);
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<Window> BuildWindow(const v1::Scene& proto, const Checker& check) {
+  if (!proto.has_window()) return check.Error("window", "is required");
+  const v1::Window& w = proto.window();
+  Window window;
+  FENESTRA_ASSIGN_OR_RETURN(center, check.Point(w.center(), "window.center"));
+  FENESTRA_ASSIGN_OR_RETURN(normal, check.Direction(w.outward_normal(), "window.outward_normal"));
+  FENESTRA_ASSIGN_OR_RETURN(up, check.Direction(w.up(), "window.up"));
+  if (std::abs(Dot(normal, up)) > kShapeTolerance) {
+    return check.Error("window.up", "must be perpendicular to window.outward_normal");
+  }
+  FENESTRA_RETURN_IF_ERROR(check.Positive(w.width_m(), "window.width_m"));
+  FENESTRA_RETURN_IF_ERROR(check.Positive(w.height_m(), "window.height_m"));
+  if (!std::isfinite(w.depth_m()) || w.depth_m() < 0) {
+    return check.Error("window.depth_m", "must be a finite number >= 0");
+  }
+  window.center = center;
+  window.normal = normal;
+  window.up = up;
+  window.across = Normalize(Cross(up, normal));
+  window.width_m = w.width_m();
+  window.height_m = w.height_m();
+  window.depth_m = w.depth_m();
+  return window;
+}
+
+absl::StatusOr<std::vector<Sensor>> BuildSensors(const v1::Scene& proto, const Checker& check) {
+  std::vector<Sensor> sensors;
+  for (int i = 0; i < proto.sensors_size(); ++i) {
+    const v1::Sensor& s = proto.sensors(i);
+    const std::string field = absl::StrCat("sensors[", i, "]");
+    FENESTRA_ASSIGN_OR_RETURN(position, check.Point(s.position(), field + ".position"));
+    FENESTRA_ASSIGN_OR_RETURN(direction, check.Direction(s.direction(), field + ".direction"));
+    sensors.push_back(
+        {s.name().empty() ? absl::StrCat("s", i + 1) : s.name(), position, direction});
+  }
+  for (int i = 0; i < proto.sensor_grids_size(); ++i) {
+    const v1::SensorGrid& g = proto.sensor_grids(i);
+    const std::string field = absl::StrCat("sensor_grids[", i, "]");
+    FENESTRA_RETURN_IF_ERROR(check.Positive(g.spacing_m(), field + ".spacing_m"));
+    for (double v : {g.z_m(), g.x_min_m(), g.x_max_m(), g.y_min_m(), g.y_max_m()}) {
+      if (!std::isfinite(v)) return check.Error(field, "coordinates must be finite numbers");
+    }
+    const long nx = std::lround(std::floor((g.x_max_m() - g.x_min_m()) / g.spacing_m() + 1e-9));
+    const long ny = std::lround(std::floor((g.y_max_m() - g.y_min_m()) / g.spacing_m() + 1e-9));
+    if (nx < 1 || ny < 1) return check.Error(field, "the grid holds no cell of the given spacing");
+    const std::string prefix = g.name().empty() ? absl::StrCat("grid", i) : g.name();
+    for (long iy = 0; iy < ny; ++iy) {
+      for (long ix = 0; ix < nx; ++ix) {
+        sensors.push_back({absl::StrCat(prefix, "_", sensors.size()),
+                           {g.x_min_m() + (ix + 0.5) * g.spacing_m(),
+                            g.y_min_m() + (iy + 0.5) * g.spacing_m(), g.z_m()},
+                           {0, 0, 1}});
+      }
+    }
+  }
+  if (sensors.empty()) return check.Error("sensors", "at least one sensor is required");
+  return sensors;
+}
+
+absl::StatusOr<ParameterRange> BuildParameter(const v1::Parameter& p, const std::string& field,
+                                              double lowest, const Checker& check) {
+  for (double v : {p.value(), p.min(), p.max()}) {
+    if (!std::isfinite(v)) return check.Error(field, "value, min and max must be finite");
+  }
+  ParameterRange range{p.value(), p.min(), p.max()};
+  if (range.min == 0 && range.max == 0) range.min = range.max = range.value;  // fixed value
+  if (range.min > range.max) return check.Error(field, "min must not exceed max");
+  if (range.value < range.min || range.value > range.max) {
+    return check.Error(field, absl::StrCat("value ", range.value, " is outside [", range.min, ", ",
+                                           range.max, "]"));
+  }
+  if (range.min < lowest) {
+    return check.Error(field, absl::StrCat("must not go below ", lowest, ", got ", range.min));
+  }
+  return range;
+}
+
+absl::StatusOr<BlindSpec> BuildBlind(const v1::VenetianBlind& b,
+                                     const std::vector<Material>& materials, const Checker& check) {
+  BlindSpec spec;
+  FENESTRA_ASSIGN_OR_RETURN(material,
+                            FindMaterial(materials, b.material(), "blind.material", check));
+  spec.material = material;
+  spec.vertical = b.orientation() == v1::VenetianBlind::VERTICAL;
+  FENESTRA_ASSIGN_OR_RETURN(
+      tilt, BuildParameter(b.tilt_rad(), "blind.tilt_rad", -std::numbers::pi / 2, check));
+  if (tilt.max > std::numbers::pi / 2 + 1e-12) {
+    return check.Error("blind.tilt_rad", "must not exceed π/2");
+  }
+  FENESTRA_ASSIGN_OR_RETURN(width,
+                            BuildParameter(b.slat_width_m(), "blind.slat_width_m", 0, check));
+  FENESTRA_ASSIGN_OR_RETURN(spacing,
+                            BuildParameter(b.slat_spacing_m(), "blind.slat_spacing_m", 0, check));
+  FENESTRA_ASSIGN_OR_RETURN(
+      thickness, BuildParameter(b.slat_thickness_m(), "blind.slat_thickness_m", 0, check));
+  if (!(width.min > 0)) return check.Error("blind.slat_width_m", "must be > 0");
+  if (!(thickness.min > 0)) return check.Error("blind.slat_thickness_m", "must be > 0");
+  spec.tilt_rad = tilt;
+  spec.slat_width_m = width;
+  spec.slat_spacing_m = spacing;
+  spec.slat_thickness_m = thickness;
+  if (b.has_wall_gap_m()) {
+    if (!std::isfinite(b.wall_gap_m()) || b.wall_gap_m() < 0) {
+      return check.Error("blind.wall_gap_m", "must be a finite number >= 0");
+    }
+    spec.wall_gap_m = b.wall_gap_m();
+  }
+  if (!std::isfinite(b.side_margin_m()) || b.side_margin_m() < 0) {
+    return check.Error("blind.side_margin_m", "must be a finite number >= 0");
+  }
+  spec.side_margin_m = b.side_margin_m();
+  return spec;
+}
+
+absl::StatusOr<Site> BuildSite(const v1::Scene& proto, const Checker& check) {
+  Site site;
+  if (!proto.has_site()) return site;
+  const v1::Site& s = proto.site();
+  if (!(s.latitude_deg() >= -90 && s.latitude_deg() <= 90)) {
+    return check.Error("site.latitude_deg",
+                       absl::StrCat("must be in [-90, 90], got ", s.latitude_deg()));
+  }
+  if (!(s.longitude_deg() >= -180 && s.longitude_deg() <= 180)) {
+    return check.Error("site.longitude_deg",
+                       absl::StrCat("must be in [-180, 180], got ", s.longitude_deg()));
+  }
+  if (!(s.time_zone_h() >= -12 && s.time_zone_h() <= 14)) {
+    return check.Error("site.time_zone_h",
+                       absl::StrCat("must be in [-12, 14], got ", s.time_zone_h()));
+  }
+  site.latitude_deg = s.latitude_deg();
+  site.longitude_deg = s.longitude_deg();
+  site.time_zone_h = s.time_zone_h();
+  if (!s.weather_file().empty()) {
+    const std::filesystem::path base = std::filesystem::path(check.path()).parent_path();
+    site.weather_file = (base / s.weather_file()).lexically_normal().string();
+  }
+  if (s.has_ground_reflectance()) {
+    if (!(s.ground_reflectance() >= 0 && s.ground_reflectance() < 1)) {
+      return check.Error("site.ground_reflectance", "must be in [0, 1)");
+    }
+    site.ground_reflectance = s.ground_reflectance();
+  }
+  return site;
+}
+
+}  // namespace
+
+absl::StatusOr<v1::Scene> ReadSceneProto(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return absl::NotFoundError(absl::StrCat(path, ": cannot open scene file"));
+  std::stringstream text;
+  text << in.rdbuf();
+  v1::Scene scene;
+  google::protobuf::util::JsonParseOptions options;
+  options.ignore_unknown_fields = false;
+  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &scene, options);
+  if (!status.ok()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": malformed scene: ", std::string(status.message())));
+  }
+  return scene;
+}
+
+absl::StatusOr<Scene> BuildScene(const v1::Scene& proto, const std::string& path) {
+  const Checker check(path);
+  Scene scene;
+  scene.name = proto.name();
+  scene.source_path = path;
+  FENESTRA_ASSIGN_OR_RETURN(materials, BuildMaterials(proto, check));
+  scene.materials = std::move(materials);
+
+  // Triangulate every surface
+  for (int i = 0; i < proto.surfaces_size(); ++i) {
+    const v1::Surface& s = proto.surfaces(i);
+    const std::string field = absl::StrCat("surfaces[", i, "]");
+    FENESTRA_ASSIGN_OR_RETURN(
+        material, FindMaterial(scene.materials, s.material(), field + ".material", check));
+    if (s.side() == v1::SIDE_UNSPECIFIED) {
+      return check.Error(field + ".side", "must be SIDE_INDOOR or SIDE_OUTDOOR");
+    }
+    const Side side = s.side() == v1::SIDE_INDOOR ? Side::kIndoor : Side::kOutdoor;
+    const uint32_t part = static_cast<uint32_t>(scene.fixed.part_names.size());
+    scene.fixed.part_names.push_back(s.name().empty() ? field : s.name());
+    absl::Status status;
+    switch (s.shape_case()) {
+      case v1::Surface::kPolygon:
+        status =
+            AddPolygon(s.polygon(), field + ".polygon", material, side, part, check, scene.fixed);
+        break;
+      case v1::Surface::kBox:
+        status = AddBox(s.box(), field + ".box", material, side, part, check, scene.fixed);
+        break;
+      case v1::Surface::kObj:
+        status = AddObj(s.obj(), field + ".obj", material, side, part, scene.materials, check,
+                        scene.fixed, scene.dropped_degenerate);
+        break;
+      default:
+        status = check.Error(field, "needs one of polygon, box or obj");
+    }
+    FENESTRA_RETURN_IF_ERROR(status);
+  }
+
+  FENESTRA_ASSIGN_OR_RETURN(window, BuildWindow(proto, check));
+  scene.window = window;
+  FENESTRA_ASSIGN_OR_RETURN(sensors, BuildSensors(proto, check));
+  scene.sensors = std::move(sensors);
+  if (proto.has_blind()) {
+    FENESTRA_ASSIGN_OR_RETURN(blind, BuildBlind(proto.blind(), scene.materials, check));
+    scene.blind = blind;
+  }
+  FENESTRA_ASSIGN_OR_RETURN(site, BuildSite(proto, check));
+  scene.site = site;
+  return scene;
+}
+
+absl::StatusOr<Scene> LoadScene(const std::string& path) {
+  FENESTRA_ASSIGN_OR_RETURN(proto, ReadSceneProto(path));
+  return BuildScene(proto, path);
+}
+
+TriangleMesh AssembleMesh(const Scene& scene, const BlindDesign& design) {
+  TriangleMesh mesh = scene.fixed;
+  if (scene.blind && design.has_blind) {
+    const uint32_t part = static_cast<uint32_t>(mesh.part_names.size());
+    mesh.part_names.push_back("blind");
+    GenerateBlind(scene.window, *scene.blind, design, part, mesh);
+  }
+  return mesh;
+}
+
+BlindDesign DefaultDesign(const Scene& scene) {
+  BlindDesign design;
+  if (!scene.blind) return design;
+  design.has_blind = true;
+  design.tilt_rad = scene.blind->tilt_rad.value;
+  design.slat_width_m = scene.blind->slat_width_m.value;
+  design.slat_spacing_m = scene.blind->slat_spacing_m.value;
+  design.slat_thickness_m = scene.blind->slat_thickness_m.value;
+  return design;
+}
+
+absl::StatusOr<BlindDesign> DesignWithOverrides(const Scene& scene,
+                                                const std::map<std::string, double>& values) {
+  BlindDesign design = DefaultDesign(scene);
+  if (values.empty()) return design;
+  if (!scene.blind) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(scene.source_path, ": design values given but the scene has no blind"));
+  }
+  struct Variable {
+    const char* name;
+    const ParameterRange* range;
+    double* value;
+  };
+  const Variable variables[] = {
+      {"alpha", &scene.blind->tilt_rad, &design.tilt_rad},
+      {"width", &scene.blind->slat_width_m, &design.slat_width_m},
+      {"spacing", &scene.blind->slat_spacing_m, &design.slat_spacing_m},
+      {"thickness", &scene.blind->slat_thickness_m, &design.slat_thickness_m},
+  };
+  for (const auto& [name, value] : values) {
+    const Variable* match = nullptr;
+    for (const Variable& v : variables) {
+      if (name == v.name) match = &v;
+    }
+    if (!match) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "unknown design variable '", name, "' (known: alpha, width, spacing, thickness)"));
+    }
+    if (!std::isfinite(value) || value < match->range->min || value > match->range->max) {
+      return absl::OutOfRangeError(absl::StrCat("design variable ", name, " = ", value,
+                                                " is outside its range [", match->range->min, ", ",
+                                                match->range->max, "] in ", scene.source_path));
+    }
+    *match->value = value;
+  }
+  return design;
+}
+
+}  // namespace fenestra
