@@ -1,0 +1,95 @@
+#include "core/dc/backend_support.h"
+
+#include <cmath>
+
+#include "absl/strings/str_cat.h"
+
+namespace fenestra {
+
+absl::Status CheckOneStageInput(const std::vector<Sensor>& sensors,
+                                const OneStageOptions& options) {
+  if (sensors.empty()) return absl::InvalidArgumentError("the scene has no sensors");
+  for (size_t i = 0; i < sensors.size(); ++i) {
+    const Sensor& s = sensors[i];
+    const Vec3d p = s.position, d = s.direction;
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("sensor ", i, " ('", s.name, "') has a non-finite position"));
+    }
+    const double length = Length(d);
+    if (!std::isfinite(length) || !(length > 1e-12)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("sensor ", i, " ('", s.name, "') has no valid direction"));
+    }
+  }
+  if (options.paths_per_sensor < 2) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("paths per sensor must be at least 2 (for a standard error), got ",
+                     options.paths_per_sensor));
+  }
+  if (options.threads < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("threads must be >= 0 (0 = all cores), got ", options.threads));
+  }
+  if (options.max_bounces <= 0 && !options.russian_roulette) {
+    return absl::InvalidArgumentError(
+        "unlimited bounces (max_bounces <= 0) need Russian roulette to end the paths");
+  }
+  if (options.russian_roulette &&
+      !(options.roulette_threshold > 0 && options.roulette_threshold <= 1)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("roulette threshold must be in (0, 1], got ", options.roulette_threshold));
+  }
+  return absl::OkStatus();
+}
+
+PathSettings PathSettingsFor(const OneStageOptions& options) {
+  PathSettings settings;
+  settings.max_bounces = options.max_bounces > 0 ? options.max_bounces : -1;
+  settings.russian_roulette = options.russian_roulette;
+  settings.roulette_threshold = static_cast<float>(options.roulette_threshold);
+  settings.max_vertices = 1u << 20;
+  return settings;
+}
+
+std::vector<TraceSensor> LocalSensors(const TraceGeometry& geometry,
+                                      const std::vector<Sensor>& sensors) {
+  std::vector<TraceSensor> local;
+  for (const Sensor& s : sensors) {
+    const Vec3d d = Normalize(s.direction);
+    local.push_back({geometry.ToLocal(s.position),
+                     {static_cast<float>(d.x), static_cast<float>(d.y), static_cast<float>(d.z)}});
+  }
+  return local;
+}
+
+void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum_squares,
+                  int sensor_count, int64_t paths, OneStageResult* result) {
+  const double n = static_cast<double>(paths);
+  result->paths_per_sensor = paths;
+  result->coefficients.resize(sensor_count, kDaylightBins);
+  result->standard_error.resize(sensor_count, kDaylightBins);
+  result->sky_sum.resize(sensor_count);
+  result->sky_sum_standard_error.resize(sensor_count);
+  // Standard error of a mean of n values from its first two moments
+  const auto standard_error = [n](double total, double total_squares) {
+    const double mean = total / n;
+    return std::sqrt(std::max(0.0, (total_squares / n - mean * mean) / (n - 1)));
+  };
+  for (int s = 0; s < sensor_count; ++s) {
+    double sky = 0, sky_squares = 0;
+    for (int b = 0; b < kDaylightBins; ++b) {
+      const size_t k = static_cast<size_t>(s) * kDaylightBins + b;
+      result->coefficients(s, b) = sum[k] / n;
+      result->standard_error(s, b) = standard_error(sum[k], sum_squares[k]);
+      if (b > 0) {
+        sky += sum[k];
+        sky_squares += sum_squares[k];  // a path scores one bin: no cross terms
+      }
+    }
+    result->sky_sum(s) = sky / n;
+    result->sky_sum_standard_error(s) = standard_error(sky, sky_squares);
+  }
+}
+
+}  // namespace fenestra

@@ -1,0 +1,74 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/common/radiance_matrix.h"
+#include "core/geometry/mesh.h"
+#include "core/geometry/scene.h"
+
+namespace fenestra {
+
+// Number of daylight-coefficient columns: bin 0 = ground, 1..145 = Tregenza sky patches.
+inline constexpr int kDaylightBins = 146;
+
+// How to trace the one-stage daylight coefficients.
+struct OneStageOptions {
+  int64_t paths_per_sensor = 100000;  // at least 2
+  // Surface reflections a path may make (Radiance's -ab is one more); <= 0 = unlimited,
+  // ended by Russian roulette only (unbiased).
+  int max_bounces = 0;
+  uint64_t seed = 1;  // a path's random stream is a function of (seed, sensor, path index)
+  int threads = 0;    // CPU threads; 0 = every hardware thread
+  // Russian roulette: required when unlimited; optional (still unbiased) with a limit.
+  bool russian_roulette = true;
+  // Path weight below which roulette plays, in (0, 1]. A path that survives carries the
+  // threshold on, so no path ever carries more than 1. 1 = survive each reflection with
+  // probability equal to the reflectance at constant weight (bench/README.md: the most
+  // efficient choice measured on the lightwell).
+  double roulette_threshold = 1.0;
+};
+
+// One-stage daylight coefficients with their Monte Carlo error.
+struct OneStageResult {
+  // D: sensors x 146, irradiance at the sensor per unit radiance of the bin [sr].
+  Matrix coefficients;
+  // Standard error of each coefficient, from the per-path second moment [sr].
+  Matrix standard_error;
+  Eigen::VectorXd sky_sum;                 // per sensor: sum of D over bins 1..145 [sr]
+  Eigen::VectorXd sky_sum_standard_error;  // its standard error [sr]
+  int64_t paths_per_sensor = 0;
+  uint64_t rays_traced = 0;         // closest-hit queries, all sensors
+  uint64_t escaped_paths = 0;       // paths that left the scene (scored)
+  uint64_t roulette_paths = 0;      // paths ended by Russian roulette
+  uint64_t bounce_limit_paths = 0;  // paths cut by the bounce limit (the bias it causes)
+  uint64_t truncated_paths = 0;     // paths cut by the safety cap on interactions
+  double max_path_weight = 0;       // largest throughput any path carried (<= 1)
+  int threads = 0;
+  double wall_seconds = 0;  // tracing time, scene preparation included
+  std::string backend;      // which backend traced it
+};
+
+// A tracer backend for daylight coefficients (CPU Embree now; CUDA later), chosen at run
+// time. Implementations are thread-compatible: one call at a time per object.
+class DcBackend {
+ public:
+  virtual ~DcBackend() = default;
+  virtual std::string Name() const = 0;
+
+  // Traces options.paths_per_sensor paths from every sensor through `mesh` (materials
+  // indexed by mesh.material). InvalidArgument for bad options, sensors or materials.
+  virtual absl::StatusOr<OneStageResult> OneStage(const TriangleMesh& mesh,
+                                                  const std::vector<Material>& materials,
+                                                  const std::vector<Sensor>& sensors,
+                                                  const OneStageOptions& options) = 0;
+};
+
+// The Embree CPU backend (always available).
+std::unique_ptr<DcBackend> MakeEmbreeBackend();
+
+}  // namespace fenestra

@@ -1,0 +1,57 @@
+#include <chrono>
+
+#include "core/common/status_macros.h"
+#include "core/dc/backend_support.h"
+#include "core/dc/dc_backend.h"
+#include "core/trace/embree_scene.h"
+#include "core/trace/one_stage_cpu.h"
+#include "core/trace/trace_geometry.h"
+
+namespace fenestra {
+namespace {
+
+class EmbreeBackend : public DcBackend {
+ public:
+  std::string Name() const override { return "embree-cpu"; }
+
+  absl::StatusOr<OneStageResult> OneStage(const TriangleMesh& mesh,
+                                          const std::vector<Material>& materials,
+                                          const std::vector<Sensor>& sensors,
+                                          const OneStageOptions& options) override {
+    const auto start = std::chrono::steady_clock::now();
+    FENESTRA_RETURN_IF_ERROR(CheckOneStageInput(sensors, options));
+    FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(mesh, materials));
+    FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
+
+    // Trace
+    OneStageSettings settings;
+    settings.paths_per_sensor = static_cast<uint64_t>(options.paths_per_sensor);
+    settings.seed = options.seed;
+    settings.threads = options.threads;
+    settings.path = PathSettingsFor(options);
+    const OneStageTally tally = TraceOneStageCpu(scene->Intersector(), geometry.Surfaces(),
+                                                 LocalSensors(geometry, sensors), settings);
+
+    // Report
+    OneStageResult result;
+    FillFromSums(tally.sum, tally.sum_squares, tally.sensor_count, options.paths_per_sensor,
+                 &result);
+    result.rays_traced = tally.rays;
+    result.escaped_paths = tally.ends[static_cast<int>(PathEnd::kEscaped)];
+    result.roulette_paths = tally.ends[static_cast<int>(PathEnd::kRoulette)];
+    result.bounce_limit_paths = tally.ends[static_cast<int>(PathEnd::kBounceLimit)];
+    result.truncated_paths = tally.ends[static_cast<int>(PathEnd::kTruncated)];
+    result.max_path_weight = tally.max_weight;
+    result.threads = tally.threads;
+    result.backend = Name();
+    result.wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<DcBackend> MakeEmbreeBackend() { return std::make_unique<EmbreeBackend>(); }
+
+}  // namespace fenestra

@@ -1,0 +1,216 @@
+// The per-path logic of the Monte Carlo tracer, written once for CPU and GPU.
+//
+// TracePath follows one path: its mode samples the start, then the loop finds the closest
+// hit, scatters (diffuse reflection about the geometric normal turned to the incoming side,
+// or straight-through transmission at glazing), weights by the surface, applies the bounce
+// limit and Russian roulette, and hands an escaping ray back to the mode. Everything here
+// is POD, fixed arrays and raw pointers, templated on:
+//
+//   Intersector  bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const;
+//                closest hit along the ray (t in (0, inf)), in the scene's local frame.
+//   Mode         what a path is for: where it starts and what its light is worth.
+//     PathState Start(const Intersector&, const PathRandom&)     first vertex (draw 0)
+//     void AtReflection(const Intersector&, const PathState&, const ReflectionVertex&,
+//                       const PathRandom&)                      before each reflection
+//     void Escape(const PathState&)                              the ray left the scene
+//     void Finish(const PathStats&)                              once, at the end
+//
+// OneStageMode is the one-stage daylight-coefficient estimator (DESIGN.md section 1): start
+// at a sensor with a cosine-sampled direction and add pi times the path weight to the sky
+// bin of the escape direction. The two-stage modes plug in here without touching the
+// loop: the outdoor stage starts on the window (uniform point, direction uniform within one
+// hemisphere cell) and escapes like the one-stage mode into O[cell, bin]; the indoor stage
+// starts at a sensor, connects each vertex to a sampled window point in Start and
+// AtReflection (next-event estimation, using random purpose 1), accumulates into the 288
+// direction cells of a per-path scratch that Finish commits, and ignores escapes.
+#pragma once
+
+#include <math.h>
+#include <stdint.h>
+
+#include "core/common/cpu_gpu.h"
+#include "core/common/vec3.h"
+#include "core/sky/sky_bin.h"
+#include "core/trace/philox.h"
+#include "core/trace/ray_offset.h"
+#include "core/trace/sampling.h"
+
+namespace fenestra {
+
+// Bins of the Tregenza sky plus the ground (bin 0).
+inline constexpr int kTregenzaBinCount = 146;
+
+// Surface properties as the tracer sees them.
+struct TraceMaterial {
+  float reflectance;    // Lambertian reflectance in [0, 1)
+  float transmittance;  // straight-through glazing transmittance; < 0 = opaque
+};
+
+// Per-triangle materials: materials[triangle_material[triangle]].
+struct SurfaceTable {
+  const TraceMaterial* materials;
+  const uint32_t* triangle_material;
+};
+
+// The closest hit an intersector reports.
+struct SurfaceHit {
+  Vec3f position;     // on the triangle, interpolated from barycentrics (local frame)
+  Vec3f normal;       // geometric normal, any orientation and length (0 if degenerate)
+  uint32_t triangle;  // triangle index into the SurfaceTable
+};
+
+// A sensor: a point and the unit normal of the hemisphere it sees.
+struct TraceSensor {
+  Vec3f position;  // local frame [m]
+  Vec3f normal;    // unit
+};
+
+// How far paths go.
+struct PathSettings {
+  int32_t max_bounces;       // surface reflections allowed; < 0 = unlimited (needs roulette)
+  bool russian_roulette;     // play roulette when the weight falls below the threshold
+  float roulette_threshold;  // in (0, 1]; 1 = survive with the reflectance, weight stays 1
+  uint32_t max_vertices;     // hard cap on surface interactions per path (safety net)
+};
+
+// Where a path is: the next ray to trace and what it carries.
+struct PathState {
+  Vec3f origin;         // local frame, already offset from the surface it leaves
+  Vec3f direction;      // unit
+  float weight;         // throughput so far, <= 1
+  int32_t reflections;  // surface reflections so far
+  uint32_t vertex;      // interactions so far (0 = start); indexes random draws
+};
+
+// A diffuse reflection about to happen, for modes that connect vertices (indoor stage).
+struct ReflectionVertex {
+  Vec3f position;     // on the surface (local frame)
+  Vec3f normal;       // unit, on the side the path arrived from and leaves to
+  float reflectance;  // of the surface
+};
+
+// How a path ended.
+enum class PathEnd : uint8_t {
+  kEscaped,      // left the scene; the mode scored it
+  kAbsorbed,     // zero weight (black surface)
+  kRoulette,     // terminated by Russian roulette
+  kBounceLimit,  // needed one more reflection than allowed
+  kTruncated,    // hit max_vertices
+  kDegenerate,   // hit a triangle without a normal
+};
+
+struct PathStats {
+  uint32_t rays;     // closest-hit queries
+  float max_weight;  // largest throughput the path carried
+  PathEnd end;
+};
+
+// Follows one path from mode.Start to its end. See the file comment for the contracts.
+template <class Intersector, class Mode>
+FENESTRA_CPU_GPU inline PathStats TracePath(const Intersector& scene, const SurfaceTable& surfaces,
+                                            const PathSettings& settings, const PathRandom& random,
+                                            Mode& mode) {
+  PathState path = mode.Start(scene, random);
+  PathStats stats{0, path.weight, PathEnd::kEscaped};
+  for (;;) {
+    if (path.vertex >= settings.max_vertices) {
+      stats.end = PathEnd::kTruncated;
+      break;
+    }
+    // Find the closest hit; an escaping ray is the mode's to score
+    SurfaceHit hit;
+    ++stats.rays;
+    if (!scene.Intersect(path.origin, path.direction, &hit)) {
+      mode.Escape(path);
+      stats.end = PathEnd::kEscaped;
+      break;
+    }
+    ++path.vertex;
+
+    // Turn the geometric normal to the side the ray came from (surfaces are two-sided)
+    const float length_squared = Dot(hit.normal, hit.normal);
+    if (!(length_squared > 0.0f) || !(length_squared < 3.0e38f)) {
+      stats.end = PathEnd::kDegenerate;
+      break;
+    }
+    Vec3f normal = hit.normal * (1.0f / sqrtf(length_squared));
+    if (Dot(normal, path.direction) > 0.0f) normal = -normal;
+
+    // Choose transmission or reflection; glazing picks by probability tau / (tau + rho)
+    const TraceMaterial material = surfaces.materials[surfaces.triangle_material[hit.triangle]];
+    const Uniform4 u = random.Draw(path.vertex, 0);
+    float factor = material.reflectance;
+    bool transmit = false;
+    if (material.transmittance > 0.0f) {
+      const float total = material.reflectance + material.transmittance;
+      transmit = u.u[3] * total < material.transmittance;
+      factor = fminf(total, 1.0f);
+    }
+    if (!transmit) {
+      mode.AtReflection(scene, path, ReflectionVertex{hit.position, normal, material.reflectance},
+                        random);
+      if (settings.max_bounces >= 0 && path.reflections >= settings.max_bounces) {
+        stats.end = PathEnd::kBounceLimit;
+        break;
+      }
+    }
+
+    // Weight by the surface, then Russian roulette: survive with probability w / threshold
+    // and carry the threshold on, so the weight never exceeds 1 and the mean is unchanged
+    float weight = path.weight * factor;
+    if (!(weight > 0.0f)) {
+      stats.end = PathEnd::kAbsorbed;
+      break;
+    }
+    if (settings.russian_roulette && weight < settings.roulette_threshold) {
+      if (!(u.u[2] * settings.roulette_threshold < weight)) {
+        stats.end = PathEnd::kRoulette;
+        break;
+      }
+      weight = settings.roulette_threshold;
+    }
+    path.weight = weight;
+    stats.max_weight = fmaxf(stats.max_weight, weight);
+
+    // Continue straight through, or cosine-sampled about the incoming side's normal
+    if (transmit) {
+      path.origin = OffsetRayOrigin(hit.position, -normal);
+    } else {
+      path.origin = OffsetRayOrigin(hit.position, normal);
+      path.direction = SampleCosineHemisphere(normal, u.u[0], u.u[1]);
+      ++path.reflections;
+    }
+  }
+  mode.Finish(stats);
+  return stats;
+}
+
+// One-stage daylight coefficients: paths from one sensor, scored by escape bin.
+//   Sink  void Add(int bin, double value);   value = pi * weight
+template <class Sink>
+struct OneStageMode {
+  Vec3f sensor_position;  // local frame
+  Vec3f sensor_normal;    // unit
+  Sink* sink;
+
+  // Start on the sensor (moved off any surface it lies on), cosine-sampled direction.
+  template <class Intersector>
+  FENESTRA_CPU_GPU PathState Start(const Intersector&, const PathRandom& random) const {
+    const Uniform4 u = random.Draw(0, 0);
+    return PathState{OffsetRayOrigin(sensor_position, sensor_normal),
+                     SampleCosineHemisphere(sensor_normal, u.u[0], u.u[1]), 1.0f, 0, 0};
+  }
+
+  template <class Intersector>
+  FENESTRA_CPU_GPU void AtReflection(const Intersector&, const PathState&, const ReflectionVertex&,
+                                     const PathRandom&) const {}
+
+  // With cosine sampling, D[i, j] = pi * mean(weight of paths escaping through j).
+  FENESTRA_CPU_GPU void Escape(const PathState& path) {
+    sink->Add(TregenzaBin(path.direction), kPi * static_cast<double>(path.weight));
+  }
+
+  FENESTRA_CPU_GPU void Finish(const PathStats&) const {}
+};
+
+}  // namespace fenestra

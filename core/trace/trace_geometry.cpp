@@ -1,0 +1,83 @@
+#include "core/trace/trace_geometry.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "absl/strings/str_cat.h"
+
+namespace fenestra {
+namespace {
+
+bool IsFinite(Vec3d v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+}  // namespace
+
+Vec3f TraceGeometry::ToLocal(Vec3d world) const {
+  const Vec3d d = world - origin;
+  return {static_cast<float>(d.x), static_cast<float>(d.y), static_cast<float>(d.z)};
+}
+
+bool HasArea(const TraceGeometry& geometry, size_t i) {
+  const Vec3f* v = &geometry.vertices[3 * i];
+  const Vec3f n = Cross(v[1] - v[0], v[2] - v[0]);
+  const float length_squared = Dot(n, n);
+  return length_squared > 0.0f && std::isfinite(length_squared);
+}
+
+absl::StatusOr<TraceGeometry> PrepareTraceGeometry(const TriangleMesh& mesh,
+                                                   const std::vector<Material>& materials) {
+  TraceGeometry geometry;
+  // Check the materials
+  for (size_t m = 0; m < materials.size(); ++m) {
+    const Material& material = materials[m];
+    const double rho = material.reflectance, tau = material.transmittance;
+    if (!(rho >= 0 && rho < 1)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("material '", material.name, "': reflectance must be in [0, 1), got ", rho));
+    }
+    if (tau >= 0 && !(tau <= 1 && rho + tau <= 1)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("material '", material.name,
+                       "': transmittance must be at most 1 - reflectance, got ", tau));
+    }
+    geometry.materials.push_back(
+        {static_cast<float>(rho), tau >= 0 ? static_cast<float>(tau) : -1.0f});
+  }
+
+  // Check the triangles and find the bounding box
+  const size_t triangles = mesh.TriangleCount();
+  if (mesh.vertices.size() != 3 * triangles) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("mesh has ", mesh.vertices.size(), " vertices for ", triangles, " triangles"));
+  }
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  Vec3d lo{kInf, kInf, kInf}, hi{-kInf, -kInf, -kInf};
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Vec3d v = mesh.vertices[i];
+    if (!IsFinite(v)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("triangle ", i / 3, " has a non-finite vertex"));
+    }
+    lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
+    hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
+  }
+  for (size_t t = 0; t < triangles; ++t) {
+    if (mesh.material[t] >= materials.size()) {
+      return absl::InvalidArgumentError(absl::StrCat("triangle ", t, " uses material ",
+                                                     mesh.material[t], " of ", materials.size()));
+    }
+  }
+
+  // Translate to the box centre in double, then convert
+  if (triangles > 0) geometry.origin = (lo + hi) * 0.5;
+  geometry.vertices.reserve(mesh.vertices.size());
+  for (const Vec3d& v : mesh.vertices) geometry.vertices.push_back(geometry.ToLocal(v));
+  geometry.triangle_material = mesh.material;
+  for (size_t t = 0; t < triangles; ++t) {
+    if (!HasArea(geometry, t)) ++geometry.degenerate_triangles;
+  }
+  return geometry;
+}
+
+}  // namespace fenestra

@@ -1,0 +1,136 @@
+#include "core/trace/bvh.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/geometry/scene.h"
+#include "core/trace/brute_force_intersector.h"
+#include "core/trace/bvh_intersector.h"
+#include "core/trace/trace_geometry.h"
+
+namespace fenestra {
+namespace {
+
+TraceGeometry Load(const std::string& name) {
+  absl::StatusOr<Scene> scene = LoadScene(FENESTRA_SOURCE_DIR "/examples/" + name + "/scene.json");
+  EXPECT_TRUE(scene.ok()) << scene.status();
+  absl::StatusOr<TraceGeometry> geometry =
+      PrepareTraceGeometry(AssembleMesh(*scene, DefaultDesign(*scene)), scene->materials);
+  EXPECT_TRUE(geometry.ok()) << geometry.status();
+  return *geometry;
+}
+
+// Every triangle sits in exactly one leaf, and every leaf box holds its triangles.
+TEST(BvhTest, LeavesHoldEveryTriangleOnceInsideTheirBoxes) {
+  const TraceGeometry geometry = Load("city_office");
+  absl::StatusOr<BvhLayout> bvh = BuildBvh(geometry);
+  ASSERT_TRUE(bvh.ok()) << bvh.status();
+  std::vector<int> seen(geometry.TriangleCount(), 0);
+  for (const BvhNode& node : bvh->nodes) {
+    for (int i = 0; i < 2; ++i) {
+      if (node.child[i] >= 0 || node.lo[i][0] > node.hi[i][0]) continue;
+      const int code = ~node.child[i];
+      for (int t = code / kBvhMaxLeafSize; t <= code / kBvhMaxLeafSize + code % kBvhMaxLeafSize;
+           ++t) {
+        const BvhTriangle& tri = bvh->triangles[t];
+        ++seen[tri.index];
+        for (Vec3f v : {tri.v0, tri.v1, tri.v2}) {
+          for (int k = 0; k < 3; ++k) {
+            EXPECT_GE(v[k], node.lo[i][k]);
+            EXPECT_LE(v[k], node.hi[i][k]);
+          }
+        }
+      }
+    }
+  }
+  for (size_t t = 0; t < seen.size(); ++t) EXPECT_EQ(seen[t], 1) << "triangle " << t;
+  EXPECT_LE(bvh->depth, 48);
+}
+
+// The BVH traversal finds the same closest hits as testing every triangle.
+void CompareWithBruteForce(const std::string& name) {
+  const TraceGeometry geometry = Load(name);
+  absl::StatusOr<BvhLayout> bvh = BuildBvh(geometry);
+  ASSERT_TRUE(bvh.ok()) << bvh.status();
+  const BvhIntersector fast{bvh->nodes.data(), bvh->triangles.data()};
+  const BruteForceIntersector slow{geometry.vertices.data(),
+                                   static_cast<uint32_t>(geometry.TriangleCount())};
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<float> u(-1, 1);
+  int hits = 0, disagreements = 0;
+  const int rays = 50000;
+  for (int i = 0; i < rays; ++i) {
+    // Origins inside the room and outdoors, directions uniform on the sphere
+    const Vec3f origin =
+        geometry.ToLocal(Vec3d{1.4 * u(rng), -3.0 + 3.1 * u(rng), 1.5 + 1.4 * u(rng)} +
+                         Vec3d{0, 0, name == "city_office" ? 6.0 : 0.0});
+    Vec3f d{u(rng), u(rng), u(rng)};
+    if (Dot(d, d) > 1 || Dot(d, d) < 1e-4f) continue;
+    d = Normalize(d);
+    SurfaceHit a, b;
+    const bool ha = fast.Intersect(origin, d, &a);
+    const bool hb = slow.Intersect(origin, d, &b);
+    if (ha) ++hits;
+    if (ha != hb) {
+      ++disagreements;
+      continue;
+    }
+    if (!ha) continue;
+    const float ta = Length(a.position - origin), tb = Length(b.position - origin);
+    if (std::abs(ta - tb) > 1e-4f * std::max(1.0f, tb)) ++disagreements;
+  }
+  EXPECT_GT(hits, rays / 4);
+  // Only rays through shared edges may differ (Möller-Trumbore is not watertight)
+  EXPECT_LE(disagreements, 2) << name;
+}
+
+TEST(BvhTest, AgreesWithBruteForceOnTheLightwell) { CompareWithBruteForce("lightwell"); }
+TEST(BvhTest, AgreesWithBruteForceOnTheCityOffice) { CompareWithBruteForce("city_office"); }
+
+// Rays aimed exactly at the diagonal shared by a quad's two triangles always hit.
+TEST(BvhTest, SharedEdgesAreWatertight) {
+  TraceGeometry geometry;
+  const Vec3f a{0, 0, 0}, b{1, 0, 0}, c{1, 1, 0}, d{0, 1, 0};
+  geometry.vertices = {a, b, c, a, c, d};
+  geometry.triangle_material = {0, 0};
+  geometry.materials = {{0.5f, -1.0f}};
+  absl::StatusOr<BvhLayout> bvh = BuildBvh(geometry);
+  ASSERT_TRUE(bvh.ok());
+  const BvhIntersector fast{bvh->nodes.data(), bvh->triangles.data()};
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<float> u(0, 1);
+  for (int i = 0; i < 20000; ++i) {
+    const float s = u(rng);
+    const Vec3f target{s, s, 0};
+    const Vec3f origin{u(rng) * 4 - 2, u(rng) * 4 - 2, 0.5f + u(rng)};
+    SurfaceHit hit;
+    ASSERT_TRUE(fast.Intersect(origin, Normalize(target - origin), &hit))
+        << "ray through (" << s << ", " << s << ") slipped through the diagonal";
+  }
+}
+
+TEST(BvhTest, EmptyAndSingleTriangleScenes) {
+  TraceGeometry geometry;
+  geometry.materials = {{0.5f, -1.0f}};
+  absl::StatusOr<BvhLayout> empty = BuildBvh(geometry);
+  ASSERT_TRUE(empty.ok());
+  SurfaceHit hit;
+  EXPECT_FALSE((BvhIntersector{empty->nodes.data(), empty->triangles.data()}.Intersect(
+      {0, 0, 0}, {0, 0, 1}, &hit)));
+
+  geometry.vertices = {{-1, -1, 1}, {1, -1, 1}, {0, 1, 1}};
+  geometry.triangle_material = {0};
+  absl::StatusOr<BvhLayout> one = BuildBvh(geometry);
+  ASSERT_TRUE(one.ok());
+  const BvhIntersector fast{one->nodes.data(), one->triangles.data()};
+  ASSERT_TRUE(fast.Intersect({0, 0, 0}, {0, 0, 1}, &hit));
+  EXPECT_FLOAT_EQ(hit.position.z, 1);
+  EXPECT_EQ(hit.triangle, 0u);
+  EXPECT_FALSE(fast.Intersect({0, 0, 0}, {0, 0, -1}, &hit));
+  EXPECT_FALSE(fast.Intersect({0, 0, 2}, {0, 0, 1}, &hit));
+}
+
+}  // namespace
+}  // namespace fenestra
