@@ -1,0 +1,114 @@
+// Climate-based annual daylight metrics per sensor and for the scene, with Honeybee's
+// conventions (honeybee-radiance-postprocess metrics.py; IES LM-83 for sDA and ASE):
+//
+// - UDI[a,b] (Nabil & Mardaljevic 2005; upper limit 3000 lx as revised by Mardaljevic):
+//   a <= E <= b, both limits inclusive; fell short: E < a, which includes every analysed
+//   hour with the sun down; exceeded: E > b.
+// - DA300: E >= 300 lx. Continuous DA: mean of min(E / 300, 1), partial credit below 300.
+// - sDA300/50%: share of sensors whose DA300 >= 50%.
+// - ASE1000,250: share of sensors whose direct-sun-only illuminance (sun alone, no
+//   interreflection: Radiance -ab 0 with a sun-only sky) is > 1000 lx in >= 250 analysed
+//   hours. It needs that illuminance as a separate matrix; without it ASE is not reported.
+//
+// The analysed hours (the denominator of every share) are the occupied steps (occupancy.h)
+// by default, or every step of the year. The illuminance matrix holds only the time steps
+// listed in `columns` (illuminance.h); every other step has E = 0 exactly. Shares are
+// percentages, 0-100.
+#pragma once
+
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/common/radiance_matrix.h"
+
+namespace fenestra {
+
+enum class HourBasis {
+  kOccupied,  // the occupied steps (default, the field's convention)
+  kAllHours,  // every step of the year
+};
+
+struct MetricOptions {
+  double udi_lower_lux = 100;       // a, inclusive
+  double udi_upper_lux = 3000;      // b, inclusive
+  double da_threshold_lux = 300;    // DA counts E >= it; cDA credits min(E / it, 1)
+  double sda_min_da_percent = 50;   // a sensor counts towards sDA when its DA >= it
+  double ase_threshold_lux = 1000;  // direct-only E > it counts towards ASE
+  int ase_min_hours = 250;          // a sensor counts towards ASE at >= this many hours
+  HourBasis hours = HourBasis::kOccupied;
+};
+
+// One sensor's metrics; shares in percent of the analysed hours.
+struct SensorMetrics {
+  double udi_percent = 0;             // a <= E <= b
+  double udi_fell_short_percent = 0;  // E < a, dark hours included
+  double udi_exceeded_percent = 0;    // E > b
+  double da_percent = 0;              // E >= DA threshold
+  double cda_percent = 0;             // mean of min(E / DA threshold, 1) x 100
+  double mean_illuminance_lux = 0;    // mean E over the analysed hours
+  double ase_hours = 0;               // analysed hours with direct-only E > ASE threshold
+};
+
+struct SceneMetrics {
+  // Share of analysed hours in which every sensor is in [a, b]; hours in which at least one
+  // sensor falls short / exceeds (an hour can do both, so the three may sum past 100).
+  double udi_all_percent = 0;
+  double udi_all_fell_short_percent = 0;
+  double udi_all_exceeded_percent = 0;
+  // The per-sensor shares averaged over sensors (Honeybee's and LM-83's aggregation).
+  double udi_mean_percent = 0;
+  double udi_mean_fell_short_percent = 0;
+  double udi_mean_exceeded_percent = 0;
+  double da_mean_percent = 0;
+  double cda_mean_percent = 0;
+  double sda_percent = 0;           // sensors with DA >= sda_min_da_percent
+  double ase_percent = 0;           // sensors with ase_hours >= ase_min_hours; 0 without input
+  double mean_illuminance_lux = 0;  // over sensors and analysed hours
+};
+
+struct AnnualMetrics {
+  int analysed_hours = 0;  // the denominator
+  bool has_ase = false;    // a direct-only illuminance was given
+  std::vector<SensorMetrics> sensors;
+  SceneMetrics scene;
+};
+
+// The scene metrics by name, for objectives and reports.
+enum class SceneMetric {
+  kUdiAll,
+  kUdiAllFellShort,
+  kUdiAllExceeded,
+  kUdiMean,
+  kUdiMeanFellShort,
+  kUdiMeanExceeded,
+  kDaMean,
+  kCdaMean,
+  kSda,
+  kAse,
+  kMeanIlluminance,
+};
+
+double SceneMetricValue(const SceneMetrics& scene, SceneMetric metric);
+
+// Stable lower-case names: "udi_all", "udi_all_fell_short", "udi_all_exceeded", "udi_mean",
+// "udi_mean_fell_short", "udi_mean_exceeded", "da_mean", "cda_mean", "sda", "ase",
+// "mean_illuminance".
+std::string_view SceneMetricName(SceneMetric metric);
+// InvalidArgument listing the valid names when `name` is none of them.
+absl::StatusOr<SceneMetric> SceneMetricFromName(std::string_view name);
+
+// Metrics of `illuminance_lux` (n sensors x columns.size(); column c is time step
+// columns[c]). `occupied` has one flag per time step of the year and so also gives the
+// number of steps; with HourBasis::kAllHours only its length is used.
+// `direct_illuminance_lux`, when not null, is the direct-sun-only illuminance with the same
+// shape and columns, for ASE. InvalidArgument for mismatched shapes, bad columns, non-finite
+// illuminance, inconsistent options, no sensors or no analysed hours.
+absl::StatusOr<AnnualMetrics> ComputeAnnualMetrics(const Matrix& illuminance_lux,
+                                                   std::span<const int> columns,
+                                                   const std::vector<bool>& occupied,
+                                                   const MetricOptions& options = {},
+                                                   const Matrix* direct_illuminance_lux = nullptr);
+
+}  // namespace fenestra

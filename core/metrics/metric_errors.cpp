@@ -1,0 +1,200 @@
+#include "core/metrics/metric_errors.h"
+
+#include <array>
+#include <cmath>
+#include <functional>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
+#include "core/metrics/illuminance.h"
+
+namespace fenestra {
+namespace {
+
+constexpr std::array kSensorFields = {
+    &SensorMetrics::udi_percent,
+    &SensorMetrics::udi_fell_short_percent,
+    &SensorMetrics::udi_exceeded_percent,
+    &SensorMetrics::da_percent,
+    &SensorMetrics::cda_percent,
+    &SensorMetrics::mean_illuminance_lux,
+    &SensorMetrics::ase_hours,
+};
+
+constexpr std::array kSceneFields = {
+    &SceneMetrics::udi_all_percent,
+    &SceneMetrics::udi_all_fell_short_percent,
+    &SceneMetrics::udi_all_exceeded_percent,
+    &SceneMetrics::udi_mean_percent,
+    &SceneMetrics::udi_mean_fell_short_percent,
+    &SceneMetrics::udi_mean_exceeded_percent,
+    &SceneMetrics::da_mean_percent,
+    &SceneMetrics::cda_mean_percent,
+    &SceneMetrics::sda_percent,
+    &SceneMetrics::ase_percent,
+    &SceneMetrics::mean_illuminance_lux,
+};
+
+// Every number of `m` in a fixed order: the scene's, then each sensor's.
+void Flatten(const AnnualMetrics& m, double* out) {
+  for (const auto field : kSceneFields) *out++ = m.scene.*field;
+  for (const SensorMetrics& s : m.sensors) {
+    for (const auto field : kSensorFields) *out++ = s.*field;
+  }
+}
+
+void Unflatten(const double* in, AnnualMetrics& m) {
+  for (const auto field : kSceneFields) m.scene.*field = *in++;
+  for (SensorMetrics& s : m.sensors) {
+    for (const auto field : kSensorFields) s.*field = *in++;
+  }
+}
+
+// The time steps that count: the positions in `columns` of the analysed ones.
+struct AnalysedColumns {
+  std::vector<int> steps;
+  std::vector<int> positions;
+};
+
+absl::StatusOr<AnalysedColumns> SelectAnalysed(std::span<const int> columns,
+                                               const std::vector<bool>& occupied,
+                                               const MetricOptions& options) {
+  FENESTRA_RETURN_IF_ERROR(CheckColumns(columns, static_cast<int>(occupied.size())));
+  AnalysedColumns selected;
+  for (size_t c = 0; c < columns.size(); ++c) {
+    if (options.hours == HourBasis::kAllHours || occupied[columns[c]]) {
+      selected.steps.push_back(columns[c]);
+      selected.positions.push_back(static_cast<int>(c));
+    }
+  }
+  return selected;
+}
+
+// The jackknife over batches. `full` is E of the mean of all batches and `batch(b)` gives
+// E_b, both over the analysed steps only.
+absl::StatusOr<AnnualMetricsEstimate> Jackknife(
+    int batches, const Matrix& full, const std::function<absl::StatusOr<Matrix>(int)>& batch,
+    const AnalysedColumns& analysed, size_t column_count, const std::vector<bool>& occupied,
+    const MetricOptions& options, const Matrix* direct_illuminance_lux) {
+  Matrix direct;
+  if (direct_illuminance_lux != nullptr) {
+    if (direct_illuminance_lux->rows() != full.rows() ||
+        direct_illuminance_lux->cols() != static_cast<Eigen::Index>(column_count)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "direct-only illuminance is ", direct_illuminance_lux->rows(), " x ",
+          direct_illuminance_lux->cols(), ", expected ", full.rows(), " x ", column_count));
+    }
+    direct = (*direct_illuminance_lux)(Eigen::all, analysed.positions);
+  }
+  const Matrix* direct_used = direct_illuminance_lux != nullptr ? &direct : nullptr;
+  const std::span<const int> steps(analysed.steps);
+
+  AnnualMetricsEstimate estimate;
+  estimate.batches = batches;
+  FENESTRA_ASSIGN_OR_RETURN(value,
+                            ComputeAnnualMetrics(full, steps, occupied, options, direct_used));
+  estimate.value = std::move(value);
+
+  // Leave each batch out in turn
+  const size_t fields = kSceneFields.size() + kSensorFields.size() * estimate.value.sensors.size();
+  Matrix loo(batches, static_cast<Eigen::Index>(fields));
+  const double scale = 1.0 / (batches - 1);
+  for (int b = 0; b < batches; ++b) {
+    FENESTRA_ASSIGN_OR_RETURN(e_b, batch(b));
+    const Matrix e_loo = (batches * full - e_b) * scale;
+    FENESTRA_ASSIGN_OR_RETURN(m_b,
+                              ComputeAnnualMetrics(e_loo, steps, occupied, options, direct_used));
+    Flatten(m_b, loo.row(b).data());
+  }
+
+  std::vector<double> se(fields);
+  std::vector<double> column(batches);
+  for (size_t f = 0; f < fields; ++f) {
+    for (int b = 0; b < batches; ++b) column[b] = loo(b, static_cast<Eigen::Index>(f));
+    se[f] = JackknifeStandardError(column);
+  }
+  estimate.standard_error.analysed_hours = estimate.value.analysed_hours;
+  estimate.standard_error.has_ase = estimate.value.has_ase;
+  estimate.standard_error.sensors.resize(estimate.value.sensors.size());
+  Unflatten(se.data(), estimate.standard_error);
+  return estimate;
+}
+
+}  // namespace
+
+double JackknifeStandardError(std::span<const double> leave_one_out_values) {
+  const size_t b = leave_one_out_values.size();
+  if (b < 2) return 0;
+  double mean = 0;
+  for (const double v : leave_one_out_values) mean += v;
+  mean /= static_cast<double>(b);
+  double squares = 0;
+  for (const double v : leave_one_out_values) squares += (v - mean) * (v - mean);
+  return std::sqrt(squares * static_cast<double>(b - 1) / static_cast<double>(b));
+}
+
+absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsWithErrors(
+    std::span<const Matrix> dc_batches, std::span<const Matrix> sky_channels,
+    std::span<const int> columns, const std::vector<bool>& occupied, const MetricOptions& options,
+    const Matrix* direct_illuminance_lux) {
+  const int batches = static_cast<int>(dc_batches.size());
+  if (batches < 2) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("standard errors need at least 2 batches, got ", batches));
+  }
+  for (const Matrix& d : dc_batches) {
+    if (d.rows() != dc_batches[0].rows() || d.cols() != dc_batches[0].cols()) {
+      return absl::InvalidArgumentError("daylight coefficient batches differ in shape");
+    }
+  }
+  if (!sky_channels.empty() &&
+      sky_channels[0].cols() != static_cast<Eigen::Index>(occupied.size())) {
+    return absl::InvalidArgumentError(absl::StrCat("the sky has ", sky_channels[0].cols(),
+                                                   " time steps, the occupancy ", occupied.size()));
+  }
+  FENESTRA_ASSIGN_OR_RETURN(analysed, SelectAnalysed(columns, occupied, options));
+
+  Matrix mean_dc = dc_batches[0];
+  for (int b = 1; b < batches; ++b) mean_dc += dc_batches[b];
+  mean_dc /= batches;
+  FENESTRA_ASSIGN_OR_RETURN(
+      full, Illuminance(std::span<const Matrix>(&mean_dc, 1), sky_channels, analysed.steps));
+  auto batch = [&](int b) {
+    return Illuminance(dc_batches.subspan(b, 1), sky_channels, analysed.steps);
+  };
+  return Jackknife(batches, full, batch, analysed, columns.size(), occupied, options,
+                   direct_illuminance_lux);
+}
+
+absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromIlluminanceBatches(
+    std::span<const Matrix> illuminance_batches_lux, std::span<const int> columns,
+    const std::vector<bool>& occupied, const MetricOptions& options,
+    const Matrix* direct_illuminance_lux) {
+  const int batches = static_cast<int>(illuminance_batches_lux.size());
+  if (batches < 2) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("standard errors need at least 2 batches, got ", batches));
+  }
+  for (const Matrix& e : illuminance_batches_lux) {
+    if (e.rows() != illuminance_batches_lux[0].rows() ||
+        e.cols() != static_cast<Eigen::Index>(columns.size())) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("every illuminance batch must be ", illuminance_batches_lux[0].rows(), " x ",
+                       columns.size(), "; got ", e.rows(), " x ", e.cols()));
+    }
+  }
+  FENESTRA_ASSIGN_OR_RETURN(analysed, SelectAnalysed(columns, occupied, options));
+
+  Matrix full = illuminance_batches_lux[0](Eigen::all, analysed.positions);
+  for (int b = 1; b < batches; ++b)
+    full += illuminance_batches_lux[b](Eigen::all, analysed.positions);
+  full /= batches;
+  auto batch = [&](int b) -> absl::StatusOr<Matrix> {
+    return Matrix(illuminance_batches_lux[b](Eigen::all, analysed.positions));
+  };
+  return Jackknife(batches, full, batch, analysed, columns.size(), occupied, options,
+                   direct_illuminance_lux);
+}
+
+}  // namespace fenestra
