@@ -1,0 +1,14 @@
+// Glue between the annual metrics and the search: one scene metric as the objective value.
+#pragma once
+
+#include "core/metrics/annual_metrics.h"
+#include "core/metrics/metric_errors.h"
+#include "core/optimize/vns.h"
+
+namespace fenestra {
+
+// The value and jackknife standard error of `metric` from `estimate`, which becomes the
+// payload (read it back with std::any_cast<const AnnualMetricsEstimate&>).
+Evaluation MetricEvaluation(AnnualMetricsEstimate estimate, SceneMetric metric);
+
+}  // namespace fenestra

@@ -1,0 +1,168 @@
+// Variable Neighborhood Search (Mladenovic & Hansen 1997, "Variable neighborhood search",
+// Computers & Operations Research 24(11)) over box-constrained design variables, as in the
+// design brief: neighborhood N_k = (v, r) changes v randomly chosen free variables at once,
+// each by U(-r, r) x (upper - lower). The search starts at N_1; an improvement moves the
+// incumbent and returns to N_1, a failure goes on to N_{k+1}; after the last neighborhood
+// a new cycle starts at N_1 from the incumbent. It stops at the first of: the evaluation
+// budget, the time budget, `failed_cycles_to_stop` consecutive cycles in which every
+// neighborhood failed, the target reached (target mode), or cancellation.
+//
+// Moves are clamped to the box by default, so optima on a bound (a blind fully open, a
+// tilt of 0) are reached exactly; BoundaryRule::kReflect mirrors them back instead. A
+// variable with a `step` is then snapped to lower + k x step (and clamped again).
+//
+// Every evaluated design is cached by its exact coordinates after clamping and snapping;
+// proposing it again costs no evaluation and is marked `cached` in the history (`step`
+// is how to make nearby designs count as equal). The random stream is std::mt19937_64
+// seeded with `seed` and turned into numbers by fixed bit arithmetic (no std::
+// distributions), so the sequence of designs is the same for the same seed on every
+// platform and standard library, provided the objective is deterministic and no time
+// budget or cancellation cuts the run short.
+#pragma once
+
+#include <any>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/statusor.h"
+
+namespace fenestra {
+
+struct DesignVariable {
+  std::string name;
+  double lower = 0;  // inclusive bound, in the variable's units
+  double upper = 0;  // inclusive bound; upper == lower behaves as fixed
+  double start = 0;  // in [lower, upper]; evaluated first, as given
+  bool fixed = false;
+  double step = 0;  // grid spacing of proposed values, variable's units; 0 = continuous
+};
+
+// How many free variables change, and by how much.
+struct Neighborhood {
+  static constexpr int kAllVariables = 0;
+  int variables = 1;              // at most this many (kAllVariables: every free one)
+  double radius_fraction = 0.05;  // each moves by U(-r, r) x (upper - lower)
+};
+
+// (1, 0.02), (1, 0.1), (2, 0.1), (2, 0.3), (all, 0.5): fine then medium one-variable steps
+// to refine; pairs for coupled variables (slat width and spacing act through their ratio,
+// tilt and spacing through the cut-off angle); a shake of everything to leave a basin. A
+// cycle costs 5 evaluations, so the reference budget of 150 allows 30 cycles.
+std::vector<Neighborhood> DefaultNeighborhoods();
+
+enum class BoundaryRule { kClamp, kReflect };
+
+enum class ObjectiveSense {
+  kMaximize,  // score = value
+  kMinimize,  // score = -value
+  kTarget,    // score = -|value - target| (the inverse problem)
+};
+
+struct Objective {
+  ObjectiveSense sense = ObjectiveSense::kMaximize;
+  double target = 0;            // kTarget only
+  double target_tolerance = 0;  // kTarget: stop once |value - target| <= this
+};
+
+struct VnsOptions {
+  std::vector<Neighborhood> neighborhoods = DefaultNeighborhoods();
+  BoundaryRule boundary = BoundaryRule::kClamp;
+  Objective objective;
+  int max_evaluations = 150;  // objective calls, the start included; >= 1
+  double max_seconds = 0;     // wall-clock budget [s]; 0 = none
+  // Stop after this many consecutive cycles in which every neighborhood failed; 1 = at the
+  // first such cycle, 0 = never (run to the budget). A move in a random direction improves
+  // at best about half the time, so a run of 15 failures (3 cycles) happens by chance in
+  // about 1 run of 100 far from any optimum; 10 cycles (50 failures) means convergence.
+  int failed_cycles_to_stop = 10;
+  // A candidate replaces the incumbent when its score exceeds the incumbent's by more than
+  // max(min_improvement, min_improvement_standard_errors x sqrt(se_new^2 + se_best^2)).
+  // The defaults (0, 0) take any strict improvement, right with common random numbers,
+  // whose errors largely cancel between designs.
+  double min_improvement = 0;
+  double min_improvement_standard_errors = 0;
+  uint64_t seed = 1;
+  // Stop when this many proposals in a row were already in the cache: the space is used up
+  // at the resolution of the variables' steps.
+  int max_consecutive_cache_hits = 1000;
+};
+
+// What the objective returns for one design.
+struct Evaluation {
+  double value = 0;           // the metric, e.g. UDI [%]
+  double standard_error = 0;  // its Monte Carlo standard error, same units
+  std::any payload;           // anything the caller wants back (e.g. all metrics)
+};
+
+// Evaluates one design (one coordinate per variable, fixed ones included). An error status
+// stops the search and is returned.
+using ObjectiveFunction = std::function<absl::StatusOr<Evaluation>(const std::vector<double>& x)>;
+
+// One step of the search.
+struct VnsRecord {
+  int index = 0;  // position in the history
+  std::vector<double> x;
+  Evaluation evaluation;
+  double score = 0;               // what the search maximizes (see ObjectiveSense)
+  double evaluation_seconds = 0;  // time in the objective; 0 when cached
+  double elapsed_seconds = 0;     // since the start of the run, after this step
+  bool cached = false;            // served from the cache, not evaluated
+  bool improved = false;          // became the incumbent (the start does)
+  int neighborhood = -1;          // index into VnsOptions::neighborhoods; -1 = start
+};
+
+struct VnsProgress {
+  int evaluations = 0;  // objective calls so far
+  int max_evaluations = 0;
+  const VnsRecord* current = nullptr;  // the step just done
+  const VnsRecord* best = nullptr;     // the incumbent
+  double elapsed_seconds = 0;
+  // Seconds left at the current rate until the evaluation or time budget, whichever comes
+  // first; the search may stop earlier.
+  double remaining_seconds = 0;
+};
+
+struct VnsCallbacks {
+  std::function<void(const VnsProgress&)> progress;  // after each step; may be empty
+  std::function<bool()> cancelled;  // polled before each step; true stops; may be empty
+};
+
+enum class StopReason {
+  kEvaluationBudget,
+  kTimeBudget,
+  kAllNeighborhoodsFailed,
+  kTargetReached,
+  kCancelled,
+  kNoFreeVariables,
+  kSpaceExhausted,
+};
+
+std::string_view StopReasonName(StopReason reason);
+
+struct VnsResult {
+  std::vector<double> best_x;  // the incumbent at the end
+  Evaluation best;
+  double best_score = 0;
+  int best_index = 0;  // into history
+  std::vector<VnsRecord> history;
+  int evaluations = 0;
+  int cache_hits = 0;
+  int improvements = 0;  // moves of the incumbent, the start excluded
+  StopReason stop_reason = StopReason::kEvaluationBudget;
+  double elapsed_seconds = 0;
+  double evaluation_seconds = 0;  // total time in the objective
+};
+
+// Runs the search from the variables' start values. InvalidArgument for bad variables or
+// options, or a non-finite value from the objective; the objective's own error status as
+// returned (with the design prepended); Cancelled when cancelled before the start was
+// evaluated. A cancellation after that returns the result so far with kCancelled.
+absl::StatusOr<VnsResult> RunVns(std::span<const DesignVariable> variables,
+                                 const ObjectiveFunction& objective, const VnsOptions& options = {},
+                                 const VnsCallbacks& callbacks = {});
+
+}  // namespace fenestra

@@ -1,0 +1,369 @@
+#include "core/optimize/vns.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <set>
+#include <thread>
+#include <vector>
+
+namespace fenestra {
+namespace {
+
+DesignVariable Var(std::string name, double lower, double upper, double start) {
+  DesignVariable v;
+  v.name = std::move(name);
+  v.lower = lower;
+  v.upper = upper;
+  v.start = start;
+  return v;
+}
+
+Evaluation Value(double value, double standard_error = 0) {
+  Evaluation e;
+  e.value = value;
+  e.standard_error = standard_error;
+  return e;
+}
+
+// Deterministic noise of unit variance for a design (like common random numbers: the same
+// design always gets the same error).
+double Noise(const std::vector<double>& x) {
+  uint64_t h = 1469598103934665603ull;
+  for (double v : x) {
+    uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    h = (h ^ bits) * 1099511628211ull;
+    h ^= h >> 29;
+  }
+  const double u1 = ((h >> 11) + 0.5) * 0x1.0p-53;
+  const double u2 = (((h * 6364136223846793005ull) >> 11) + 0.5) * 0x1.0p-53;
+  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+}
+
+// A bowl with its top (100) at (0.3, 0.7).
+absl::StatusOr<Evaluation> Bowl(const std::vector<double>& x) {
+  const double dx = x[0] - 0.3, dy = x[1] - 0.7;
+  return Value(100 - 1000 * (dx * dx + dy * dy));
+}
+
+TEST(VnsTest, FindsTheTopOfASmoothBowl) {
+  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0), Var("y", 0, 1, 0)};
+  VnsOptions options;
+  options.max_evaluations = 200;
+  absl::StatusOr<VnsResult> r = RunVns(vars, Bowl, options);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_NEAR(r->best_x[0], 0.3, 0.03);
+  EXPECT_NEAR(r->best_x[1], 0.7, 0.03);
+  EXPECT_GT(r->best.value, 99.5);
+  EXPECT_LE(r->evaluations, 200);
+  EXPECT_EQ(r->history[r->best_index].x, r->best_x);
+  EXPECT_TRUE(r->history[r->best_index].improved);
+  EXPECT_EQ(r->history.front().neighborhood, -1);
+  EXPECT_EQ(r->history.front().x, (std::vector<double>{0, 0}));
+}
+
+// 50 +- 1 on [0.2, 0.8]^2, falling steeply outside.
+absl::StatusOr<Evaluation> Plateau(const std::vector<double>& x) {
+  double outside = 0;
+  for (double v : x) outside += std::max({0.0, 0.2 - v, v - 0.8});
+  return Value(50 - 500 * outside + Noise(x), 1.0);
+}
+
+TEST(VnsTest, NoisyPlateauStaysOnThePlateauAndReportsTheNoise) {
+  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0.5), Var("y", 0, 1, 0.5)};
+  VnsOptions options;
+  options.max_evaluations = 100;
+  absl::StatusOr<VnsResult> r = RunVns(vars, Plateau, options);
+  ASSERT_TRUE(r.ok());
+  for (double v : r->best_x) {
+    EXPECT_GE(v, 0.2);
+    EXPECT_LE(v, 0.8);
+  }
+  // The best of ~100 noisy draws sits a few errors above the truth, and says so
+  EXPECT_LT(r->best.value, 50 + 4.5);
+  EXPECT_EQ(r->best.standard_error, 1.0);
+
+  // Asking for a 2-sigma gain keeps the incumbent from chasing the noise
+  options.min_improvement_standard_errors = 2;
+  absl::StatusOr<VnsResult> strict = RunVns(vars, Plateau, options);
+  ASSERT_TRUE(strict.ok());
+  EXPECT_LE(strict->improvements, r->improvements);
+  EXPECT_LE(strict->improvements, 2);
+  EXPECT_LT(strict->best.value, 50 + 4.5);
+}
+
+TEST(VnsTest, FixedVariableNeverChanges) {
+  std::vector<DesignVariable> vars = {Var("a", 0, 1, 0), Var("b", 0, 1, 0.4), Var("c", 0, 1, 1)};
+  vars[1].fixed = true;
+  auto f = [](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
+    return Value(-std::abs(x[0] - 0.5) - std::abs(x[1] - 0.9) - std::abs(x[2] - 0.5));
+  };
+  VnsOptions options;
+  options.max_evaluations = 60;
+  absl::StatusOr<VnsResult> r = RunVns(vars, f, options);
+  ASSERT_TRUE(r.ok());
+  for (const VnsRecord& record : r->history) EXPECT_EQ(record.x[1], 0.4);
+  EXPECT_GT(r->improvements, 0);
+}
+
+TEST(VnsTest, ZeroWidthRangeBehavesAsFixed) {
+  const std::vector<DesignVariable> vars = {Var("a", 0, 1, 0.5), Var("w", 2, 2, 2)};
+  int calls = 0;
+  auto f = [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
+    ++calls;
+    return Value(x[0]);
+  };
+  VnsOptions options;
+  options.max_evaluations = 30;
+  absl::StatusOr<VnsResult> r = RunVns(vars, f, options);
+  ASSERT_TRUE(r.ok());
+  for (const VnsRecord& record : r->history) EXPECT_EQ(record.x[1], 2);
+  EXPECT_EQ(calls, r->evaluations);
+
+  // Nothing free at all: only the start is evaluated
+  const std::vector<DesignVariable> none = {Var("w", 2, 2, 2)};
+  absl::StatusOr<VnsResult> only = RunVns(none, f, options);
+  ASSERT_TRUE(only.ok());
+  EXPECT_EQ(only->evaluations, 1);
+  EXPECT_EQ(only->stop_reason, StopReason::kNoFreeVariables);
+}
+
+TEST(VnsTest, BudgetOfOneEvaluatesOnlyTheStart) {
+  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0.1), Var("y", 0, 1, 0.9)};
+  VnsOptions options;
+  options.max_evaluations = 1;
+  absl::StatusOr<VnsResult> r = RunVns(vars, Bowl, options);
+  ASSERT_TRUE(r.ok());
+  ASSERT_EQ(r->history.size(), 1u);
+  EXPECT_EQ(r->evaluations, 1);
+  EXPECT_EQ(r->best_x, (std::vector<double>{0.1, 0.9}));
+  EXPECT_EQ(r->stop_reason, StopReason::kEvaluationBudget);
+  EXPECT_EQ(r->improvements, 0);
+}
+
+TEST(VnsTest, TargetModeReachesTheTarget) {
+  // UDI-like response rising to 40% at x = 0.6 and falling after: 32% has two solutions
+  auto f = [](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
+    return Value(40 - 100 * std::abs(x[0] - 0.6), 0.1);
+  };
+  const std::vector<DesignVariable> vars = {Var("alpha", 0, 1, 0)};
+  VnsOptions options;
+  options.objective.sense = ObjectiveSense::kTarget;
+  options.objective.target = 32;
+  options.max_evaluations = 150;
+  absl::StatusOr<VnsResult> r = RunVns(vars, f, options);
+  ASSERT_TRUE(r.ok());
+  EXPECT_NEAR(r->best.value, 32, 0.5);
+  EXPECT_NEAR(std::abs(r->best_x[0] - 0.6), 0.08, 0.005);
+  EXPECT_NEAR(r->best_score, -std::abs(r->best.value - 32), 1e-12);
+
+  options.objective.target_tolerance = 0.5;
+  absl::StatusOr<VnsResult> tolerant = RunVns(vars, f, options);
+  ASSERT_TRUE(tolerant.ok());
+  EXPECT_EQ(tolerant->stop_reason, StopReason::kTargetReached);
+  EXPECT_LE(std::abs(tolerant->best.value - 32), 0.5);
+  EXPECT_LT(tolerant->evaluations, r->evaluations);
+}
+
+TEST(VnsTest, MinimizeMode) {
+  auto f = [](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
+    return Value((x[0] - 0.25) * (x[0] - 0.25));
+  };
+  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 1)};
+  VnsOptions options;
+  options.objective.sense = ObjectiveSense::kMinimize;
+  absl::StatusOr<VnsResult> r = RunVns(vars, f, options);
+  ASSERT_TRUE(r.ok());
+  EXPECT_NEAR(r->best_x[0], 0.25, 0.02);
+}
+
+TEST(VnsTest, SameSeedSameRunOtherSeedOtherRun) {
+  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0), Var("y", 0, 1, 0),
+                                            Var("z", -1, 1, 0)};
+  VnsOptions options;
+  options.max_evaluations = 50;
+  options.seed = 42;
+  absl::StatusOr<VnsResult> a = RunVns(vars, Plateau, options);
+  absl::StatusOr<VnsResult> b = RunVns(vars, Plateau, options);
+  options.seed = 43;
+  absl::StatusOr<VnsResult> c = RunVns(vars, Plateau, options);
+  ASSERT_TRUE(a.ok() && b.ok() && c.ok());
+  ASSERT_EQ(a->history.size(), b->history.size());
+  for (size_t i = 0; i < a->history.size(); ++i) {
+    EXPECT_EQ(a->history[i].x, b->history[i].x);
+    EXPECT_EQ(a->history[i].neighborhood, b->history[i].neighborhood);
+    EXPECT_EQ(a->history[i].improved, b->history[i].improved);
+  }
+  EXPECT_NE(a->history[1].x, c->history[1].x);
+}
+
+TEST(VnsTest, RepeatedDesignIsServedFromTheCache) {
+  // A grid of 5 x 5 designs: the search soon proposes designs it has seen
+  std::vector<DesignVariable> vars = {Var("x", 0, 1, 0), Var("y", 0, 1, 0)};
+  for (DesignVariable& v : vars) v.step = 0.25;
+  std::set<std::vector<double>> seen;
+  int calls = 0;
+  auto f = [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
+    ++calls;
+    EXPECT_TRUE(seen.insert(x).second) << "evaluated twice";
+    return Bowl(x);
+  };
+  VnsOptions options;
+  options.max_evaluations = 100;
+  options.failed_cycles_to_stop = 0;
+  options.max_consecutive_cache_hits = 50;
+  absl::StatusOr<VnsResult> r = RunVns(vars, f, options);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(calls, r->evaluations);
+  EXPECT_LE(calls, 25);
+  EXPECT_GT(r->cache_hits, 0);
+  EXPECT_EQ(static_cast<int>(r->history.size()), r->evaluations + r->cache_hits);
+  for (const VnsRecord& record : r->history) {
+    for (double v : record.x) EXPECT_EQ(std::fmod(v, 0.25), 0.0);
+    if (record.cached) {
+      EXPECT_EQ(record.evaluation_seconds, 0);
+    }
+  }
+  EXPECT_EQ(r->best_x, (std::vector<double>{0.25, 0.75}));
+  EXPECT_EQ(r->stop_reason, StopReason::kSpaceExhausted);
+}
+
+TEST(VnsTest, CancellationStopsAtACheckpoint) {
+  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0), Var("y", 0, 1, 0)};
+  std::atomic<bool> cancel = false;
+  int reports = 0;
+  VnsCallbacks callbacks;
+  callbacks.progress = [&](const VnsProgress& p) {
+    ++reports;
+    EXPECT_NE(p.current, nullptr);
+    EXPECT_GE(p.best->score, p.current->score - (p.current->improved ? 0 : 1e300));
+    EXPECT_GE(p.remaining_seconds, 0);
+    if (p.evaluations == 5) cancel = true;
+  };
+  callbacks.cancelled = [&] { return cancel.load(); };
+  absl::StatusOr<VnsResult> r = RunVns(vars, Bowl, {}, callbacks);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->stop_reason, StopReason::kCancelled);
+  EXPECT_EQ(r->evaluations, 5);
+  EXPECT_EQ(reports, static_cast<int>(r->history.size()));
+
+  // Cancelled before anything was evaluated
+  absl::StatusOr<VnsResult> none = RunVns(vars, Bowl, {}, callbacks);
+  EXPECT_EQ(none.status().code(), absl::StatusCode::kCancelled);
+}
+
+TEST(VnsTest, ProgressReportsTheIncumbent) {
+  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0), Var("y", 0, 1, 0)};
+  double best_so_far = -1e300;
+  int last_evaluations = 0;
+  VnsCallbacks callbacks;
+  callbacks.progress = [&](const VnsProgress& p) {
+    EXPECT_GE(p.best->score, best_so_far);
+    EXPECT_GE(p.best->score, p.current->score);
+    best_so_far = p.best->score;
+    EXPECT_GE(p.evaluations, last_evaluations);
+    last_evaluations = p.evaluations;
+    EXPECT_EQ(p.max_evaluations, 40);
+    EXPECT_GE(p.elapsed_seconds, 0);
+  };
+  VnsOptions options;
+  options.max_evaluations = 40;
+  absl::StatusOr<VnsResult> r = RunVns(vars, Bowl, options, callbacks);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(best_so_far, r->best_score);
+}
+
+TEST(VnsTest, StopsWhenAllNeighborhoodsFail) {
+  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0.5)};
+  auto flat = [](const std::vector<double>&) -> absl::StatusOr<Evaluation> { return Value(1); };
+  VnsOptions options;
+  options.failed_cycles_to_stop = 1;
+  absl::StatusOr<VnsResult> r = RunVns(vars, flat, options);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->stop_reason, StopReason::kAllNeighborhoodsFailed);
+  EXPECT_EQ(r->evaluations, 1 + static_cast<int>(options.neighborhoods.size()));
+
+  options.failed_cycles_to_stop = 0;  // run to the budget
+  options.max_evaluations = 40;
+  absl::StatusOr<VnsResult> budget = RunVns(vars, flat, options);
+  ASSERT_TRUE(budget.ok());
+  EXPECT_EQ(budget->stop_reason, StopReason::kEvaluationBudget);
+  EXPECT_EQ(budget->evaluations, 40);
+}
+
+TEST(VnsTest, TimeBudget) {
+  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0)};
+  auto slow = [](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    return Value(x[0]);
+  };
+  VnsOptions options;
+  options.max_seconds = 0.05;
+  options.failed_cycles_to_stop = 0;
+  absl::StatusOr<VnsResult> r = RunVns(vars, slow, options);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->stop_reason, StopReason::kTimeBudget);
+  EXPECT_LT(r->evaluations, 20);
+  EXPECT_GE(r->elapsed_seconds, 0.05);
+  EXPECT_GE(r->evaluation_seconds, 0.005 * r->evaluations);
+}
+
+TEST(VnsTest, ReflectKeepsMovesInsideTheBox) {
+  const std::vector<DesignVariable> vars = {Var("x", -1, 1, 1), Var("y", 0, 0.5, 0)};
+  VnsOptions options;
+  options.boundary = BoundaryRule::kReflect;
+  options.neighborhoods = {{2, 3.0}};
+  options.failed_cycles_to_stop = 0;
+  options.max_evaluations = 100;
+  auto f = [](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
+    EXPECT_GE(x[0], -1);
+    EXPECT_LE(x[0], 1);
+    EXPECT_GE(x[1], 0);
+    EXPECT_LE(x[1], 0.5);
+    return Value(x[0] + x[1]);
+  };
+  absl::StatusOr<VnsResult> r = RunVns(vars, f, options);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->evaluations, 100);
+}
+
+TEST(VnsTest, ObjectiveErrorAbortsTheRun) {
+  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0)};
+  int calls = 0;
+  auto f = [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
+    if (++calls == 3) return absl::ResourceExhaustedError("out of device memory");
+    return Value(x[0]);
+  };
+  absl::StatusOr<VnsResult> r = RunVns(vars, f);
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_NE(r.status().message().find("out of device memory"), std::string::npos);
+  EXPECT_EQ(calls, 3);
+
+  auto nan = [](const std::vector<double>&) -> absl::StatusOr<Evaluation> {
+    return Value(std::nan(""));
+  };
+  EXPECT_EQ(RunVns(vars, nan).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+TEST(VnsTest, RejectsBadVariablesAndOptions) {
+  EXPECT_FALSE(RunVns({}, Bowl).ok());
+  const std::vector<DesignVariable> outside = {Var("x", 0, 1, 2)};
+  EXPECT_EQ(RunVns(outside, Bowl).status().code(), absl::StatusCode::kInvalidArgument);
+  const std::vector<DesignVariable> inverted = {Var("x", 1, 0, 0.5)};
+  EXPECT_FALSE(RunVns(inverted, Bowl).ok());
+  const std::vector<DesignVariable> ok = {Var("x", 0, 1, 0), Var("y", 0, 1, 0)};
+  VnsOptions no_budget;
+  no_budget.max_evaluations = 0;
+  EXPECT_FALSE(RunVns(ok, Bowl, no_budget).ok());
+  VnsOptions bad_neighborhood;
+  bad_neighborhood.neighborhoods = {{1, 0}};
+  EXPECT_FALSE(RunVns(ok, Bowl, bad_neighborhood).ok());
+}
+
+}  // namespace
+}  // namespace fenestra
