@@ -112,19 +112,19 @@ std::vector<Neighborhood> DefaultNeighborhoods() {
 std::string_view StopReasonName(StopReason reason) {
   switch (reason) {
     case StopReason::kEvaluationBudget:
-      return "evaluation budget spent";
+      return "evaluation_budget";
     case StopReason::kTimeBudget:
-      return "time budget spent";
+      return "time_budget";
     case StopReason::kAllNeighborhoodsFailed:
-      return "all neighborhoods failed";
+      return "all_neighborhoods_failed";
     case StopReason::kTargetReached:
-      return "target reached";
+      return "target_reached";
     case StopReason::kCancelled:
       return "cancelled";
     case StopReason::kNoFreeVariables:
-      return "no free variables";
+      return "no_free_variables";
     case StopReason::kSpaceExhausted:
-      return "design space exhausted";
+      return "space_exhausted";
   }
   return "";
 }

@@ -141,6 +141,8 @@ enum class StopReason {
   kSpaceExhausted,
 };
 
+// Stable snake_case names: "evaluation_budget", "time_budget", "all_neighborhoods_failed",
+// "target_reached", "cancelled", "no_free_variables", "space_exhausted".
 std::string_view StopReasonName(StopReason reason);
 
 struct VnsResult {

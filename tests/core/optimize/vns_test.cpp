@@ -231,6 +231,7 @@ TEST(VnsTest, RepeatedDesignIsServedFromTheCache) {
   }
   EXPECT_EQ(r->best_x, (std::vector<double>{0.25, 0.75}));
   EXPECT_EQ(r->stop_reason, StopReason::kSpaceExhausted);
+  EXPECT_EQ(StopReasonName(r->stop_reason), "space_exhausted");
 }
 
 TEST(VnsTest, CancellationStopsAtACheckpoint) {
