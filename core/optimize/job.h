@@ -1,0 +1,86 @@
+#pragma once
+
+// An optimization job end to end in one process: scene and weather -> sky matrix ->
+// outdoor matrix (once) -> per candidate design: indoor matrix -> D = I O -> E = D S ->
+// annual metrics with standard errors -> Variable Neighborhood Search. The command line's
+// local mode and the service's workers run exactly this.
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "core/common/radiance_matrix.h"
+#include "core/geometry/scene.h"
+#include "fenestra/v1/job.pb.h"
+
+namespace fenestra {
+
+// The outdoor matrix O of a site: window direction cells x 146 sky bins [-], with its
+// standard error and how it was made.
+struct OutdoorMatrix {
+  Matrix coefficients;
+  Matrix standard_error;
+  int basis_cells = 0;
+  int64_t paths = 0;
+  int bounces = 0;
+  uint64_t seed = 0;
+  double wall_seconds = 0;
+  std::string backend;
+  std::string key;  // OutdoorMatrixKey of what it was computed from
+};
+
+// A job checked and resolved: scene loaded, weather file found, variables known, defaults
+// filled in. Preparing does all validation, so a job that prepares runs.
+struct PreparedJob {
+  v1::Job job;          // with defaults filled in and paths resolved
+  Scene scene;
+  std::string weather_file;
+};
+
+// Reads a job file (the JSON form of fenestra.v1.Job; unknown fields are errors).
+absl::StatusOr<v1::Job> ReadJobFile(const std::string& path);
+
+// Validates `job` and fills in defaults. Relative scene_file/weather_file paths are taken
+// from `base_dir` (the job file's folder). Errors name the field and the reason.
+absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& base_dir);
+
+// A content hash of everything the outdoor matrix depends on: the outdoor triangles and
+// their materials, the window, and the outdoor sampling settings (paths, bounces, seed,
+// basis). Equal keys mean an equal matrix (up to the backend's rounding). Indoor surfaces,
+// the blind, sensors and the weather do not enter it.
+std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling);
+
+// Fills in the defaults of `sampling` (see job.proto) and checks its ranges.
+absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& sampling);
+
+// Traces the outdoor stage: only the scene's outdoor surfaces and its window; `sampling`
+// resolved (ResolveSampling). `cancelled` is polled between batches of paths.
+absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene,
+                                                   const v1::Sampling& sampling,
+                                                   const std::function<bool()>& cancelled = {});
+
+// What a running job reports after each evaluation.
+struct JobProgress {
+  int evaluations = 0;
+  int max_evaluations = 0;
+  v1::Evaluation current;
+  v1::Evaluation best;
+  double elapsed_seconds = 0;
+  double remaining_seconds = 0;  // estimate
+};
+
+struct JobCallbacks {
+  // A stage starts: "sky", "outdoor", "search".
+  std::function<void(const std::string& stage)> stage;
+  std::function<void(const JobProgress&)> progress;
+  // Polled between evaluations; true stops the search at that checkpoint.
+  std::function<bool()> cancelled;
+};
+
+// Runs the job. `outdoor` may hold a cached outdoor matrix whose key equals
+// OutdoorMatrixKey(job); otherwise (null) it is computed. A cancelled job returns its
+// result so far with stop_reason "cancelled". `outdoor` with another key is an error.
+absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix* outdoor,
+                                     const JobCallbacks& callbacks = {});
+
+}  // namespace fenestra
