@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
+#include "core/trace/one_stage_cpu.h"
 
 namespace fenestra {
 
@@ -30,6 +31,10 @@ absl::Status CheckOneStageInput(const std::vector<Sensor>& sensors,
   if (options.threads < 0) {
     return absl::InvalidArgumentError(
         absl::StrCat("threads must be >= 0 (0 = all cores), got ", options.threads));
+  }
+  if (options.batches < 0 || options.batches > options.paths_per_sensor) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("batches must be in [0, paths per sensor], got ", options.batches));
   }
   if (options.max_bounces <= 0 && !options.russian_roulette) {
     return absl::InvalidArgumentError(
@@ -89,6 +94,23 @@ void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum
     }
     result->sky_sum(s) = sky / n;
     result->sky_sum_standard_error(s) = standard_error(sky, sky_squares);
+  }
+}
+
+void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int batches, int64_t paths,
+                 OneStageResult* result) {
+  result->batch_coefficients.clear();
+  if (batches < 2) return;
+  for (int b = 0; b < batches; ++b) {
+    const double n =
+        static_cast<double>(BatchStart(paths, batches, b + 1) - BatchStart(paths, batches, b));
+    Matrix d(sensor_count, kDaylightBins);
+    for (int s = 0; s < sensor_count; ++s) {
+      for (int bin = 0; bin < kDaylightBins; ++bin) {
+        d(s, bin) = batch_sum[(static_cast<size_t>(s) * batches + b) * kDaylightBins + bin] / n;
+      }
+    }
+    result->batch_coefficients.push_back(std::move(d));
   }
 }
 

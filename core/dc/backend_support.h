@@ -27,4 +27,8 @@ std::vector<TraceSensor> LocalSensors(const TraceGeometry& geometry,
 void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum_squares,
                   int sensor_count, int64_t paths, OneStageResult* result);
 
+// batch_coefficients from per-batch sums (batch_sum as OneStageTally), when batches > 1.
+void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int batches, int64_t paths,
+                 OneStageResult* result);
+
 }  // namespace fenestra

@@ -26,11 +26,14 @@ struct OneStageOptions {
   int threads = 0;    // CPU threads; 0 = every hardware thread
   // Russian roulette: required when unlimited; optional (still unbiased) with a limit.
   bool russian_roulette = true;
-  // Path weight below which roulette plays, in (0, 1]. A path that survives carries the
-  // threshold on, so no path ever carries more than 1. 1 = survive each reflection with
-  // probability equal to the reflectance at constant weight (bench/README.md: the most
-  // efficient choice measured on the lightwell).
-  double roulette_threshold = 1.0;
+  // Path weight below which roulette plays, in (0, 1]: such a path survives with
+  // probability weight / threshold and carries the threshold on, so no path ever carries
+  // more than 1. 1 = survive each reflection with probability equal to the reflectance.
+  // 0.25 was the most efficient (variance x time) on the lightwell (bench/README.md).
+  double roulette_threshold = 0.25;
+  // Also report D of this many independent batches (each sensor's paths split into equal,
+  // contiguous ranges), for jackknife errors of non-linear results; 0 or 1 = none.
+  int batches = 0;
 };
 
 // One-stage daylight coefficients with their Monte Carlo error.
@@ -41,6 +44,8 @@ struct OneStageResult {
   Matrix standard_error;
   Eigen::VectorXd sky_sum;                 // per sensor: sum of D over bins 1..145 [sr]
   Eigen::VectorXd sky_sum_standard_error;  // its standard error [sr]
+  // With options.batches = B > 1: D of each batch; `coefficients` is their mean.
+  std::vector<Matrix> batch_coefficients;
   int64_t paths_per_sensor = 0;
   uint64_t rays_traced = 0;         // closest-hit queries, all sensors
   uint64_t escaped_paths = 0;       // paths that left the scene (scored)

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <chrono>
 
 #include "core/common/status_macros.h"
@@ -28,6 +29,7 @@ class EmbreeBackend : public DcBackend {
     settings.paths_per_sensor = static_cast<uint64_t>(options.paths_per_sensor);
     settings.seed = options.seed;
     settings.threads = options.threads;
+    settings.batches = std::max(1, options.batches);
     settings.path = PathSettingsFor(options);
     const OneStageTally tally = TraceOneStageCpu(scene->Intersector(), geometry.Surfaces(),
                                                  LocalSensors(geometry, sensors), settings);
@@ -36,6 +38,8 @@ class EmbreeBackend : public DcBackend {
     OneStageResult result;
     FillFromSums(tally.sum, tally.sum_squares, tally.sensor_count, options.paths_per_sensor,
                  &result);
+    FillBatches(tally.batch_sum, tally.sensor_count, tally.batches, options.paths_per_sensor,
+                &result);
     result.rays_traced = tally.rays;
     result.escaped_paths = tally.ends[static_cast<int>(PathEnd::kEscaped)];
     result.roulette_paths = tally.ends[static_cast<int>(PathEnd::kRoulette)];

@@ -11,6 +11,7 @@
 #include "core/common/cpu_gpu.h"
 #include "core/common/vec3.h"
 #include "core/trace/path.h"
+#include "core/trace/ray_offset.h"
 
 namespace fenestra {
 
@@ -45,11 +46,9 @@ struct BruteForceIntersector {
       }
     }
     if (!(closest < INFINITY)) return false;
-    const Vec3f v0 = vertices[3 * best];
-    const Vec3f e1 = vertices[3 * best + 1] - v0;
-    const Vec3f e2 = vertices[3 * best + 2] - v0;
-    hit->position = v0 + e1 * best_u + e2 * best_v;
-    hit->normal = Cross(e1, e2);
+    const Vec3f v0 = vertices[3 * best], v1 = vertices[3 * best + 1], v2 = vertices[3 * best + 2];
+    hit->position = SurfacePoint(v0, v1, v2, best_u, best_v);
+    hit->normal = Cross(v1 - v0, v2 - v0);
     hit->triangle = best;
     return true;
   }

@@ -9,6 +9,7 @@
 #include "absl/status/statusor.h"
 #include "core/common/vec3.h"
 #include "core/trace/path.h"
+#include "core/trace/ray_offset.h"
 #include "core/trace/trace_geometry.h"
 
 namespace fenestra {
@@ -41,16 +42,10 @@ struct EmbreeIntersector {
     rtcIntersect1(scene, &context, &query);
     if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
 
-    // The hit point from clamped barycentrics (never origin + t * direction)
+    // The hit point from barycentrics (never origin + t * direction)
     const uint32_t prim = query.hit.primID;
-    float u = fmaxf(query.hit.u, 0.0f), v = fmaxf(query.hit.v, 0.0f);
-    if (u + v > 1.0f) {
-      const float scale = 1.0f / (u + v);
-      u *= scale;
-      v *= scale;
-    }
-    const Vec3f v0 = vertices[3 * prim];
-    hit->position = v0 + (vertices[3 * prim + 1] - v0) * u + (vertices[3 * prim + 2] - v0) * v;
+    hit->position = SurfacePoint(vertices[3 * prim], vertices[3 * prim + 1], vertices[3 * prim + 2],
+                                 query.hit.u, query.hit.v);
     hit->normal = {query.hit.Ng_x, query.hit.Ng_y, query.hit.Ng_z};
     hit->triangle = primitive_triangle[prim];
     return true;

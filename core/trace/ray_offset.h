@@ -5,9 +5,12 @@
 // then each coordinate is moved along the geometric normal by a fixed number of units in
 // the last place (256 ulp times the normal's component), so the offset scales with the
 // point's magnitude; coordinates near zero (|p| < 1/32) get a fixed absolute offset of
-// 2^-16 times the normal's component instead.
+// 2^-16 times the normal's component instead. SurfacePoint applies the same offset within
+// the surface, towards the triangle's interior, so that a point on a concave corner's edge
+// cannot round to behind the adjacent surface.
 #pragma once
 
+#include <math.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -45,6 +48,26 @@ FENESTRA_CPU_GPU inline float OffsetComponent(float p, float n) {
 FENESTRA_CPU_GPU inline Vec3f OffsetRayOrigin(Vec3f p, Vec3f n) {
   using ray_offset_internal::OffsetComponent;
   return {OffsetComponent(p.x, n.x), OffsetComponent(p.y, n.y), OffsetComponent(p.z, n.z)};
+}
+
+// The point with barycentric coordinates (b1, b2) on triangle v0 v1 v2, for a new ray to
+// leave from. The coordinates are clamped to the triangle, and the interpolated point is
+// moved towards the triangle's centroid by the same ulp-scaled offset: rounding can place
+// a point interpolated on an edge a few ulps beyond it, and at a concave corner "beyond"
+// is behind the adjacent surface, where the next ray would leak out of the scene.
+FENESTRA_CPU_GPU inline Vec3f SurfacePoint(Vec3f v0, Vec3f v1, Vec3f v2, float b1, float b2) {
+  b1 = fmaxf(b1, 0.0f);
+  b2 = fmaxf(b2, 0.0f);
+  if (b1 + b2 > 1.0f) {
+    const float scale = 1.0f / (b1 + b2);
+    b1 *= scale;
+    b2 *= scale;
+  }
+  const Vec3f p = v0 + (v1 - v0) * b1 + (v2 - v0) * b2;
+  const Vec3f inward = (v0 + v1 + v2) * (1.0f / 3.0f) - p;
+  const float length_squared = Dot(inward, inward);
+  if (!(length_squared > 0.0f)) return p;
+  return OffsetRayOrigin(p, inward * (1.0f / sqrtf(length_squared)));
 }
 
 }  // namespace fenestra

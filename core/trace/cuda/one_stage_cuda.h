@@ -19,7 +19,7 @@ struct CudaOneStageInput {
   uint32_t sensor_count = 0;
   uint64_t paths_per_sensor = 0;
   uint64_t seed = 0;
-  PathSettings path{-1, true, 1.0f, 1u << 20};
+  PathSettings path{-1, true, 0.25f, 1u << 20};
 };
 
 // Whether a CUDA device is present.

@@ -1,0 +1,327 @@
+// One-stage daylight coefficients against analytic answers. Monte Carlo tolerances are in
+// standard errors (the ones the result reports) and the seeds are fixed.
+#include "core/dc/one_stage.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "tests/core/trace/test_meshes.h"
+
+namespace fenestra {
+namespace {
+
+using testing_meshes::AddBox;
+using testing_meshes::AddSquare;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180;
+
+// Cosine-weighted solid angle of every Tregenza bin (0 for the ground): a band patch of
+// n patches between altitudes a and b gets (1/n) * integral over phi and altitude of
+// sin(alt) cos(alt) = pi (sin^2 b - sin^2 a) / n; the 6 degree cap gets pi cos^2(84).
+std::vector<double> CosineWeightedPatches() {
+  const int counts[] = {30, 30, 24, 24, 18, 12, 6};
+  std::vector<double> w = {0.0};
+  for (int row = 0; row < 7; ++row) {
+    const double lo = std::sin(12.0 * row * kDeg), hi = std::sin(12.0 * (row + 1) * kDeg);
+    for (int k = 0; k < counts[row]; ++k) w.push_back(kPi * (hi * hi - lo * lo) / counts[row]);
+  }
+  w.push_back(kPi * std::pow(std::cos(84 * kDeg), 2));
+  return w;
+}
+
+// View factor from a downward-facing point at height h to the centred square of half
+// side a below it: four corner rectangles, each (Howell's catalogue, B-3)
+// F = [X/sqrt(1+X^2) atan(Y/sqrt(1+X^2)) + Y/sqrt(1+Y^2) atan(X/sqrt(1+Y^2))] / (2 pi).
+double SquareViewFactor(double a, double h) {
+  const double x = a / h, s = std::sqrt(1 + x * x);
+  return 4 * (2 * x / s * std::atan(x / s)) / (2 * kPi);
+}
+
+Sensor MakeSensor(Vec3d position, Vec3d direction) { return {"s", position, direction}; }
+
+OneStageOptions Options(int64_t paths, uint64_t seed) {
+  OneStageOptions options;
+  options.paths_per_sensor = paths;
+  options.seed = seed;
+  return options;
+}
+
+TEST(OneStageTest, UnobstructedUpwardSensorSeesPiSplitByPatch) {
+  TriangleMesh mesh;
+  AddSquare(mesh, 0, 0, 50, -1, 0);  // a floor below, never seen
+  const auto result = ComputeOneStage(mesh, {{"floor", 0.2, -1}},
+                                      {MakeSensor({0, 0, 0}, {0, 0, 1})}, Options(400000, 1));
+  ASSERT_TRUE(result.ok()) << result.status();
+  const std::vector<double> expected = CosineWeightedPatches();
+  double expected_total = 0;
+  for (double w : expected) expected_total += w;
+  ASSERT_NEAR(expected_total, kPi, 1e-12);
+
+  // Every path escapes upwards: the sum is pi up to rounding
+  EXPECT_NEAR(result->sky_sum(0), kPi, 1e-12);
+  EXPECT_EQ(result->coefficients(0, 0), 0.0);
+  EXPECT_EQ(result->rays_traced, 400000u);
+  double chi_square = 0;
+  for (int b = 1; b < kDaylightBins; ++b) {
+    const double z = (result->coefficients(0, b) - expected[b]) / result->standard_error(0, b);
+    EXPECT_LT(std::fabs(z), 4.5) << "bin " << b;
+    chi_square += z * z;
+  }
+  // 145 terms (one linear constraint): mean 144, sd 17
+  EXPECT_LT(std::fabs(chi_square - 144), 4 * 17) << chi_square;
+}
+
+TEST(OneStageTest, DownwardSensorOverGroundSeesPiRhoLessWhatMissesTheGround) {
+  const double rho = 0.3, half = 5000, height = 1;
+  TriangleMesh mesh;
+  AddSquare(mesh, 0, 0, half, 0, 0);
+  // Roulette at every reflection (threshold 1), so the sum has Monte Carlo error
+  OneStageOptions options = Options(400000, 2);
+  options.roulette_threshold = 1.0;
+  const auto result = ComputeOneStage(mesh, {{"ground", rho, -1}},
+                                      {MakeSensor({0, 0, height}, {0, 0, -1})}, options);
+  ASSERT_TRUE(result.ok()) << result.status();
+  // The share of cosine-weighted directions that misses the square escapes below the
+  // horizon (bin 0); the rest reflects once and sees the sky
+  const double hit = SquareViewFactor(half, height);
+  EXPECT_GT(1 - hit, 0);
+  EXPECT_LT(1 - hit, 1e-6);
+  EXPECT_NEAR(result->sky_sum(0), kPi * rho * hit, 4 * result->sky_sum_standard_error(0));
+  EXPECT_NEAR(result->coefficients(0, 0), kPi * (1 - hit), 1e-4);
+  const std::vector<double> expected = CosineWeightedPatches();
+  for (int b = 1; b < kDaylightBins; ++b) {
+    EXPECT_NEAR(result->coefficients(0, b), rho * hit * expected[b],
+                4.5 * result->standard_error(0, b))
+        << "bin " << b;
+  }
+}
+
+TEST(OneStageTest, SquareViewFactorMatchesNumericalIntegration) {
+  // Midpoint rule over the cosine-weighted disk of directions, as a check of the formula
+  const double a = 2.0, h = 1.0;
+  const int n = 2000;
+  double hit = 0;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const double x = -1 + (i + 0.5) * 2.0 / n, y = -1 + (j + 0.5) * 2.0 / n;
+      const double r2 = x * x + y * y;
+      if (r2 >= 1) continue;
+      // Disk point (x, y) lifts to the direction (x, y, -sqrt(1 - r2)) (Malley)
+      const double scale = h / std::sqrt(1 - r2);
+      if (std::fabs(x * scale) < a && std::fabs(y * scale) < a) hit += 1;
+    }
+  }
+  hit *= (2.0 / n) * (2.0 / n) / kPi;
+  EXPECT_NEAR(SquareViewFactor(a, h), hit, 2e-3);
+}
+
+TEST(OneStageTest, ClosedBoxGivesExactlyZero) {
+  TriangleMesh mesh;
+  AddBox(mesh, {-1.5, -6.25, 0}, {1.5, 0, 3}, 0);
+  OneStageOptions options = Options(100000, 3);
+  const auto result = ComputeOneStage(
+      mesh, {{"wall", 0.9, -1}},
+      {MakeSensor({0, -1, 0.7}, {0, 0, 1}), MakeSensor({1.5, -3, 1.5}, {-1, 0, 0})}, options);
+  ASSERT_TRUE(result.ok()) << result.status();
+  EXPECT_EQ(result->coefficients.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(result->standard_error.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(result->escaped_paths, 0u);
+  EXPECT_GT(result->rays_traced, 10u * 200000u);  // about 1 / (1 - 0.9) rays per path
+}
+
+// Sensor facing up at z = 0.5 between a ground (z = 0, reflectance rho_g) and a glazed
+// ceiling (z = 1, tau, rho_p), both 20 km wide: light reaches the sky only through the
+// pane, after k round trips with probability (rho_p rho_g)^k, so the sky sees
+// pi tau / (1 - rho_p rho_g) in total, split like an unobstructed sensor's.
+struct GlazedSlab {
+  double tau = 0.5, rho_p = 0.3, rho_g = 0.5;
+  TriangleMesh mesh;
+  std::vector<Material> materials;
+  std::vector<Sensor> sensors = {MakeSensor({0, 0, 0.5}, {0, 0, 1})};
+
+  GlazedSlab() {
+    AddSquare(mesh, 0, 0, 1e4, 0, 0);
+    AddSquare(mesh, 0, 0, 1e4, 1, 1);
+    materials = {{"ground", rho_g, -1}, {"pane", rho_p, tau}};
+  }
+  // Expected sky sum with at most `max_bounces` reflections (<= 0: unlimited).
+  double SkySum(int max_bounces) const {
+    const double r = rho_p * rho_g;
+    if (max_bounces <= 0) return kPi * tau / (1 - r);
+    return kPi * tau * (1 - std::pow(r, max_bounces / 2 + 1)) / (1 - r);
+  }
+};
+
+TEST(OneStageTest, RouletteAndBounceLimitsAreUnbiased) {
+  const GlazedSlab slab;
+  struct Case {
+    bool roulette;
+    double threshold;
+    int max_bounces;
+  };
+  const Case cases[] = {{true, 1.0, 0},     {true, 0.3, 0}, {true, 0.01, 0},
+                        {false, 1.0, 1000}, {true, 1.0, 1}, {false, 1.0, 2},
+                        {true, 0.3, 3},     {true, 1.0, 4}, {false, 1.0, 0}};
+  for (const Case& c : cases) {
+    OneStageOptions options = Options(200000, 4);
+    options.russian_roulette = c.roulette;
+    options.roulette_threshold = c.threshold;
+    options.max_bounces = c.max_bounces;
+    const auto result = ComputeOneStage(slab.mesh, slab.materials, slab.sensors, options);
+    if (!c.roulette && c.max_bounces <= 0) {
+      EXPECT_EQ(result.status().code(), absl::StatusCode::kInvalidArgument);
+      continue;
+    }
+    ASSERT_TRUE(result.ok()) << result.status();
+    SCOPED_TRACE(testing::Message() << "roulette " << c.roulette << " threshold " << c.threshold
+                                    << " bounces " << c.max_bounces);
+    EXPECT_NEAR(result->sky_sum(0), slab.SkySum(c.max_bounces),
+                4 * result->sky_sum_standard_error(0));
+    EXPECT_LE(result->max_path_weight, 1.0);
+    EXPECT_EQ(result->coefficients(0, 0), 0.0);
+  }
+}
+
+// z-scores of many independent runs against the analytic value: mean 0, sd 1.
+struct ZStats {
+  double mean = 0, sd = 0;
+  int n = 0;
+};
+ZStats Summarize(const std::vector<double>& z) {
+  ZStats s;
+  s.n = static_cast<int>(z.size());
+  for (double v : z) s.mean += v / s.n;
+  for (double v : z) s.sd += (v - s.mean) * (v - s.mean) / (s.n - 1);
+  s.sd = std::sqrt(s.sd);
+  return s;
+}
+
+TEST(OneStageTest, StandardErrorsAreCalibrated) {
+  // 200 seeds of 10^5 paths through the glazed slab with variable path weights (roulette
+  // threshold 0.3):
+  // z of the sky sum and of every sky bin against the analytic values
+  const GlazedSlab slab;
+  const std::vector<double> patches = CosineWeightedPatches();
+  const double share = slab.SkySum(0) / kPi;
+  const int kSeeds = 200;
+  std::vector<double> z_sum, z_bins;
+  for (int seed = 0; seed < kSeeds; ++seed) {
+    OneStageOptions options = Options(100000, 1000 + seed);
+    options.roulette_threshold = 0.3;
+    const auto result = ComputeOneStage(slab.mesh, slab.materials, slab.sensors, options);
+    ASSERT_TRUE(result.ok()) << result.status();
+    z_sum.push_back((result->sky_sum(0) - slab.SkySum(0)) / result->sky_sum_standard_error(0));
+    for (int b = 1; b < kDaylightBins; ++b) {
+      z_bins.push_back((result->coefficients(0, b) - share * patches[b]) /
+                       result->standard_error(0, b));
+    }
+  }
+  // Sky sum: 200 values; sd of the mean 0.07, of the sd about 0.05
+  const ZStats sum = Summarize(z_sum);
+  EXPECT_LT(std::fabs(sum.mean), 0.25) << sum.mean;
+  EXPECT_LT(std::fabs(sum.sd - 1), 0.18) << sum.sd;
+  // Bins: 29000 values, weakly correlated within a run (sd of the mean about 0.006). With
+  // about 100 to 1000 escapes per bin and run, z computed with its own estimated error is
+  // skewed by about -1 / (2 sqrt(count)), hence the wider bands
+  const ZStats bins = Summarize(z_bins);
+  EXPECT_LT(std::fabs(bins.mean), 0.06) << bins.mean;
+  EXPECT_LT(std::fabs(bins.sd - 1), 0.06) << bins.sd;
+  std::printf("calibration: sky sum z mean %.3f sd %.3f (n %d); bins z mean %.3f sd %.3f (n %d)\n",
+              sum.mean, sum.sd, sum.n, bins.mean, bins.sd, bins.n);
+}
+
+TEST(OneStageTest, ResultsDoNotDependOnTheThreadCount) {
+  TriangleMesh mesh;
+  AddBox(mesh, {-1.5, -6.25, 0}, {1.5, 0, 3}, 0);
+  // Open the box: remove the ceiling's two triangles (indices 2, 3)
+  mesh.vertices.erase(mesh.vertices.begin() + 6, mesh.vertices.begin() + 12);
+  mesh.material.erase(mesh.material.begin() + 2, mesh.material.begin() + 4);
+  mesh.side.erase(mesh.side.begin() + 2, mesh.side.begin() + 4);
+  mesh.part.erase(mesh.part.begin() + 2, mesh.part.begin() + 4);
+  const std::vector<Sensor> sensors = {MakeSensor({0, -1, 0.7}, {0, 0, 1}),
+                                       MakeSensor({0, -5, 0.7}, {0, 0, 1})};
+  OneStageOptions options = Options(10007, 5);  // not a multiple of the chunk size
+  options.batches = 3;
+  std::vector<OneStageResult> results;
+  for (int threads : {1, 2, 3, 8}) {
+    options.threads = threads;
+    auto result = ComputeOneStage(mesh, {{"wall", 0.8, -1}}, sensors, options);
+    ASSERT_TRUE(result.ok()) << result.status();
+    EXPECT_EQ(result->threads, threads);
+    results.push_back(*std::move(result));
+  }
+  for (size_t i = 1; i < results.size(); ++i) {
+    EXPECT_TRUE(results[i].coefficients == results[0].coefficients);  // bitwise
+    EXPECT_TRUE(results[i].standard_error == results[0].standard_error);
+    EXPECT_EQ(results[i].rays_traced, results[0].rays_traced);
+    for (int b = 0; b < 3; ++b) {
+      EXPECT_TRUE(results[i].batch_coefficients[b] == results[0].batch_coefficients[b]);
+    }
+  }
+  EXPECT_GT(results[0].sky_sum(0), 0);
+}
+
+TEST(OneStageTest, BatchesSplitThePathsAndAverageToTheTotal) {
+  TriangleMesh mesh;
+  AddSquare(mesh, 0, 0, 100, 0, 0);
+  OneStageOptions options = Options(30001, 6);
+  options.batches = 7;
+  const auto result =
+      ComputeOneStage(mesh, {{"ground", 0.5, -1}}, {MakeSensor({0, 0, 1}, {0, 0, -1})}, options);
+  ASSERT_TRUE(result.ok()) << result.status();
+  ASSERT_EQ(result->batch_coefficients.size(), 7u);
+  // Batches of 4285 or 4286 paths: their path-weighted mean is the total
+  Matrix mean = Matrix::Zero(1, kDaylightBins);
+  for (int b = 0; b < 7; ++b) {
+    const double paths = double((30001 * (b + 1)) / 7 - (30001 * b) / 7);
+    mean += result->batch_coefficients[b] * (paths / 30001);
+  }
+  EXPECT_LT((mean - result->coefficients).cwiseAbs().maxCoeff(), 1e-12);
+  // Each batch is a D of its own: about pi * 0.5 in total
+  for (const Matrix& d : result->batch_coefficients) {
+    EXPECT_NEAR(d.sum(), kPi * 0.5, 0.1);
+  }
+  options.batches = 0;
+  EXPECT_TRUE(
+      ComputeOneStage(mesh, {{"ground", 0.5, -1}}, {MakeSensor({0, 0, 1}, {0, 0, -1})}, options)
+          ->batch_coefficients.empty());
+}
+
+TEST(OneStageTest, RejectsBadOptionsAndSensors) {
+  TriangleMesh mesh;
+  AddSquare(mesh, 0, 0, 1, 0, 0);
+  const std::vector<Material> materials = {{"m", 0.5, -1}};
+  const std::vector<Sensor> good = {MakeSensor({0, 0, 1}, {0, 0, 1})};
+  const auto code = [&](const std::vector<Sensor>& sensors, OneStageOptions options) {
+    return ComputeOneStage(mesh, materials, sensors, options).status().code();
+  };
+  const auto kInvalid = absl::StatusCode::kInvalidArgument;
+  OneStageOptions options = Options(100, 1);
+  EXPECT_EQ(code(good, options), absl::StatusCode::kOk);
+  EXPECT_EQ(code({}, options), kInvalid);
+  EXPECT_EQ(code({MakeSensor({0, 0, NAN}, {0, 0, 1})}, options), kInvalid);
+  EXPECT_EQ(code({MakeSensor({0, 0, 1}, {0, 0, 0})}, options), kInvalid);
+  options.paths_per_sensor = 1;
+  EXPECT_EQ(code(good, options), kInvalid);
+  options = Options(100, 1);
+  options.threads = -1;
+  EXPECT_EQ(code(good, options), kInvalid);
+  options = Options(100, 1);
+  options.roulette_threshold = 0;
+  EXPECT_EQ(code(good, options), kInvalid);
+  options.roulette_threshold = 1.5;
+  EXPECT_EQ(code(good, options), kInvalid);
+  options = Options(100, 1);
+  options.batches = 101;
+  EXPECT_EQ(code(good, options), kInvalid);
+  options.batches = -1;
+  EXPECT_EQ(code(good, options), kInvalid);
+  EXPECT_EQ(ComputeOneStage(mesh, {{"m", 1.0, -1}}, good, Options(100, 1)).status().code(),
+            kInvalid);
+}
+
+}  // namespace
+}  // namespace fenestra
