@@ -14,12 +14,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
+struct CliRun {
   int exit_code;
   std::string output;  // stdout and stderr together
 };
 
-Run Fenestra(const std::string& args) {
+CliRun Fenestra(const std::string& args) {
   const std::string command = std::string(FENESTRA_CLI) + " " + args + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   std::string output;
@@ -45,7 +45,7 @@ class SceneCliTest : public ::testing::Test {
 
 TEST_F(SceneCliTest, ExportLightwellGives42Triangles) {
   const std::string obj = (dir_ / "x.obj").string();
-  const Run run = Fenestra("scene export " + kExamples + "/lightwell/scene.json --obj " + obj);
+  const CliRun run = Fenestra("scene export " + kExamples + "/lightwell/scene.json --obj " + obj);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   absl::StatusOr<ObjTriangles> read = ReadObj(obj);
   ASSERT_TRUE(read.ok()) << read.status();
@@ -54,8 +54,8 @@ TEST_F(SceneCliTest, ExportLightwellGives42Triangles) {
 
 TEST_F(SceneCliTest, ExportWithDesignValues) {
   const std::string obj = (dir_ / "office.obj").string();
-  const Run run = Fenestra("scene export " + kExamples + "/city_office/scene.json --obj " + obj +
-                           " --set alpha=0.5,width=0.1");
+  const CliRun run = Fenestra("scene export " + kExamples + "/city_office/scene.json --obj " + obj +
+                              " --set alpha=0.5,width=0.1");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   absl::StatusOr<ObjTriangles> read = ReadObj(obj);
   ASSERT_TRUE(read.ok()) << read.status();
@@ -64,7 +64,7 @@ TEST_F(SceneCliTest, ExportWithDesignValues) {
 }
 
 TEST_F(SceneCliTest, CheckPrintsASummary) {
-  const Run run = Fenestra("scene check " + kExamples + "/city_office/scene.json");
+  const CliRun run = Fenestra("scene check " + kExamples + "/city_office/scene.json");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("246 triangles"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("sensors: 9"), std::string::npos) << run.output;
@@ -73,8 +73,8 @@ TEST_F(SceneCliTest, CheckPrintsASummary) {
 
 TEST_F(SceneCliTest, BadDesignValueFailsAndWritesNothing) {
   const std::string obj = (dir_ / "bad.obj").string();
-  const Run run = Fenestra("scene export " + kExamples + "/city_office/scene.json --obj " + obj +
-                           " --set width=0.3");
+  const CliRun run = Fenestra("scene export " + kExamples + "/city_office/scene.json --obj " + obj +
+                              " --set width=0.3");
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.output.find("error: design variable width = 0.3 is outside its range"),
             std::string::npos)
@@ -87,7 +87,7 @@ TEST_F(SceneCliTest, BadSceneFailsAndWritesNothing) {
   const std::string scene = (dir_ / "scene.json").string();
   std::ofstream(scene) << R"({"name": "x", "materials": [{"name": "m", "reflectance": 1.5}]})";
   const std::string obj = (dir_ / "out.obj").string();
-  const Run run = Fenestra("scene export " + scene + " --obj " + obj);
+  const CliRun run = Fenestra("scene export " + scene + " --obj " + obj);
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.output.find(scene + ": materials[0].reflectance: must be in [0, 1)"),
             std::string::npos)
@@ -96,8 +96,8 @@ TEST_F(SceneCliTest, BadSceneFailsAndWritesNothing) {
 }
 
 TEST_F(SceneCliTest, UnwritableOutputFailsCleanly) {
-  const Run run = Fenestra("scene export " + kExamples + "/lightwell/scene.json --obj " +
-                           (dir_ / "no/such/dir/x.obj").string());
+  const CliRun run = Fenestra("scene export " + kExamples + "/lightwell/scene.json --obj " +
+                              (dir_ / "no/such/dir/x.obj").string());
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.output.find("cannot open for writing"), std::string::npos) << run.output;
 }

@@ -30,7 +30,7 @@ TEST(BvhTest, LeavesHoldEveryTriangleOnceInsideTheirBoxes) {
   std::vector<int> seen(geometry.TriangleCount(), 0);
   for (const BvhNode& node : bvh->nodes) {
     for (int i = 0; i < 2; ++i) {
-      if (node.child[i] >= 0 || node.lo[i][0] > node.hi[i][0]) continue;
+      if (node.child[i] >= 0 || node.child[i] == kBvhEmptyChild) continue;
       const int code = ~node.child[i];
       for (int t = code / kBvhMaxLeafSize; t <= code / kBvhMaxLeafSize + code % kBvhMaxLeafSize;
            ++t) {

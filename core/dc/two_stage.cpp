@@ -1,0 +1,189 @@
+#include "core/dc/two_stage.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
+#include "core/dc/backend_support.h"
+#include "core/trace/embree_scene.h"
+#include "core/trace/trace_geometry.h"
+#include "core/trace/two_stage_cpu.h"
+
+namespace fenestra {
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+PathSettings Settings(int max_bounces, bool russian_roulette, double roulette_threshold) {
+  PathSettings settings;
+  settings.max_bounces = max_bounces >= 0 ? max_bounces : -1;
+  settings.russian_roulette = russian_roulette;
+  settings.roulette_threshold = static_cast<float>(roulette_threshold);
+  settings.max_vertices = 1u << 20;
+  return settings;
+}
+
+absl::Status CheckPaths(int max_bounces, bool russian_roulette, double roulette_threshold,
+                        int threads) {
+  if (max_bounces < 0 && !russian_roulette) {
+    return absl::InvalidArgumentError("unlimited bounces need Russian roulette");
+  }
+  if (!(roulette_threshold > 0 && roulette_threshold <= 1)) {
+    return absl::InvalidArgumentError("roulette threshold must be in (0, 1]");
+  }
+  if (threads < 0) return absl::InvalidArgumentError("threads must be >= 0");
+  return absl::OkStatus();
+}
+
+TraceWindow LocalWindow(const TraceGeometry& geometry, const Window& window) {
+  auto f = [](Vec3d v) { return Vec3f{float(v.x), float(v.y), float(v.z)}; };
+  return {geometry.ToLocal(window.center),
+          f(window.across),
+          f(window.up),
+          f(window.normal),
+          static_cast<float>(window.width_m),
+          static_cast<float>(window.height_m)};
+}
+
+}  // namespace
+
+absl::StatusOr<HemisphereBasis> BasisFor(int cells) {
+  if (cells != 288 && cells != 1152) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("window basis must have 288 or 1152 cells, got ", cells));
+  }
+  return BeckersBasis(cells);
+}
+
+TriangleMesh SelectSide(const TriangleMesh& mesh, Side side) {
+  TriangleMesh out;
+  out.part_names = mesh.part_names;
+  for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
+    if (mesh.side[t] != side) continue;
+    out.Add(mesh.vertices[3 * t], mesh.vertices[3 * t + 1], mesh.vertices[3 * t + 2],
+            mesh.material[t], side, mesh.part[t]);
+  }
+  return out;
+}
+
+absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene,
+                                                  const OutdoorOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  FENESTRA_ASSIGN_OR_RETURN(basis, BasisFor(options.basis_cells));
+  FENESTRA_RETURN_IF_ERROR(CheckPaths(options.max_bounces, options.russian_roulette,
+                                      options.roulette_threshold, options.threads));
+  if (options.paths < basis.cell_count * int64_t{2}) {
+    return absl::InvalidArgumentError(absl::StrCat("outdoor paths must be at least 2 per cell (",
+                                                   2 * basis.cell_count, "), got ", options.paths));
+  }
+  const TriangleMesh outdoor = SelectSide(scene.fixed, Side::kOutdoor);
+  FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(outdoor, scene.materials));
+  FENESTRA_ASSIGN_OR_RETURN(embree, EmbreeScene::Build(geometry));
+
+  // Trace, then O = sums / paths per cell
+  const uint64_t per_cell = static_cast<uint64_t>(options.paths) / basis.cell_count;
+  const OutdoorTally tally = TraceOutdoorCpu(
+      embree->Intersector(), geometry.Surfaces(), LocalWindow(geometry, scene.window), basis,
+      per_cell, options.seed,
+      Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold),
+      options.threads);
+  OutdoorResult result;
+  result.basis_cells = basis.cell_count;
+  result.paths_per_cell = static_cast<int64_t>(per_cell);
+  result.coefficients.resize(basis.cell_count, kDaylightBins);
+  result.standard_error.resize(basis.cell_count, kDaylightBins);
+  const double n = static_cast<double>(per_cell);
+  for (int k = 0; k < basis.cell_count; ++k) {
+    for (int j = 0; j < kDaylightBins; ++j) {
+      const double sum = tally.sum[k * kDaylightBins + j];
+      const double mean = sum / n;
+      const double variance =
+          std::max(0.0, (tally.sum_squares[k * kDaylightBins + j] - sum * mean) / (n - 1));
+      result.coefficients(k, j) = mean;
+      result.standard_error(k, j) = std::sqrt(variance / n);
+    }
+  }
+  result.rays_traced = tally.counters.rays;
+  result.triangles = outdoor.TriangleCount();
+  result.backend = "embree-cpu";
+  result.wall_seconds = Seconds(start);
+  return result;
+}
+
+absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindDesign& design,
+                                                const IndoorOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  FENESTRA_ASSIGN_OR_RETURN(basis, BasisFor(options.basis_cells));
+  FENESTRA_RETURN_IF_ERROR(CheckPaths(options.max_bounces, options.russian_roulette,
+                                      options.roulette_threshold, options.threads));
+  if (options.batches < 2) return absl::InvalidArgumentError("batches must be at least 2");
+  if (options.paths_per_sensor < options.batches) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("indoor paths per sensor must be at least the batch count (", options.batches,
+                     "), got ", options.paths_per_sensor));
+  }
+  const TriangleMesh indoor = SelectSide(AssembleMesh(scene, design), Side::kIndoor);
+  FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(indoor, scene.materials));
+  FENESTRA_ASSIGN_OR_RETURN(embree, EmbreeScene::Build(geometry));
+
+  // Trace, then I_b = batch sums / batch paths
+  const IndoorTally tally = TraceIndoorCpu(
+      embree->Intersector(), geometry.Surfaces(), LocalSensors(geometry, scene.sensors),
+      LocalWindow(geometry, scene.window), basis, static_cast<uint64_t>(options.paths_per_sensor),
+      options.batches, options.seed,
+      Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold),
+      options.threads);
+  IndoorResult result;
+  const int sensors = tally.sensors, cells = tally.cells, batches = tally.batches;
+  result.coefficients = Matrix::Zero(sensors, cells);
+  for (int b = 0; b < batches; ++b) {
+    Matrix batch(sensors, cells);
+    for (int s = 0; s < sensors; ++s) {
+      for (int k = 0; k < cells; ++k) {
+        batch(s, k) = tally.sum[(static_cast<size_t>(b) * sensors + s) * cells + k] /
+                      static_cast<double>(tally.batch_paths[b]);
+      }
+    }
+    result.coefficients += batch / batches;
+    result.batches.push_back(std::move(batch));
+  }
+  Matrix variance = Matrix::Zero(sensors, cells);
+  for (const Matrix& batch : result.batches) {
+    variance += (batch - result.coefficients).cwiseAbs2();
+  }
+  result.standard_error = (variance / (batches * (batches - 1.0))).cwiseSqrt();
+  result.paths_per_sensor = options.paths_per_sensor;
+  result.rays_traced = tally.counters.rays;
+  result.triangles = indoor.TriangleCount();
+  result.backend = "embree-cpu";
+  result.wall_seconds = Seconds(start);
+  return result;
+}
+
+absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
+                                             const OutdoorResult& outdoor) {
+  if (indoor.coefficients.cols() != outdoor.coefficients.rows()) {
+    return absl::InvalidArgumentError(absl::StrCat("indoor matrix has ", indoor.coefficients.cols(),
+                                                   " window cells, outdoor matrix ",
+                                                   outdoor.coefficients.rows()));
+  }
+  TwoStageResult result;
+  result.coefficients = indoor.coefficients * outdoor.coefficients;
+  const double batches = static_cast<double>(indoor.batches.size());
+  Matrix indoor_variance = Matrix::Zero(result.coefficients.rows(), result.coefficients.cols());
+  for (const Matrix& batch : indoor.batches) {
+    Matrix d = batch * outdoor.coefficients;
+    indoor_variance += (d - result.coefficients).cwiseAbs2();
+    result.batches.push_back(std::move(d));
+  }
+  if (batches > 1) indoor_variance /= batches * (batches - 1);
+  const Matrix outdoor_variance =
+      indoor.coefficients.cwiseAbs2() * outdoor.standard_error.cwiseAbs2();
+  result.standard_error = (indoor_variance + outdoor_variance).cwiseSqrt();
+  return result;
+}
+
+}  // namespace fenestra

@@ -1,0 +1,194 @@
+#include "core/trace/bvh.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <limits>
+#include <memory>
+
+#include "absl/strings/str_cat.h"
+#include "core/trace/trace_geometry.h"
+
+namespace fenestra {
+namespace {
+
+// Embree-side nodes, allocated by Embree's thread-local allocator during the build.
+struct BuildNode {
+  bool leaf;
+};
+struct BuildInner : BuildNode {
+  BuildNode* children[2];
+  RTCBounds bounds[2];
+  int child_count;
+};
+struct BuildLeaf : BuildNode {
+  uint32_t count;
+  uint32_t primitives[kBvhMaxLeafSize];
+};
+
+void* CreateNode(RTCThreadLocalAllocator alloc, unsigned int child_count, void*) {
+  void* memory = rtcThreadLocalAlloc(alloc, sizeof(BuildInner), 16);
+  auto* node = new (memory) BuildInner;
+  node->leaf = false;
+  node->child_count = static_cast<int>(child_count);
+  node->children[0] = node->children[1] = nullptr;
+  return node;
+}
+
+void SetNodeChildren(void* node_ptr, void** children, unsigned int child_count, void*) {
+  auto* node = static_cast<BuildInner*>(node_ptr);
+  for (unsigned int i = 0; i < child_count; ++i)
+    node->children[i] = static_cast<BuildNode*>(children[i]);
+}
+
+void SetNodeBounds(void* node_ptr, const RTCBounds** bounds, unsigned int child_count, void*) {
+  auto* node = static_cast<BuildInner*>(node_ptr);
+  for (unsigned int i = 0; i < child_count; ++i) node->bounds[i] = *bounds[i];
+}
+
+void* CreateLeaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* primitives, size_t count,
+                 void*) {
+  void* memory = rtcThreadLocalAlloc(alloc, sizeof(BuildLeaf), 16);
+  auto* leaf = new (memory) BuildLeaf;
+  leaf->leaf = true;
+  leaf->count = static_cast<uint32_t>(count);
+  for (size_t i = 0; i < count; ++i) leaf->primitives[i] = primitives[i].primID;
+  return leaf;
+}
+
+class Flattener {
+ public:
+  Flattener(const TraceGeometry& geometry, BvhLayout& layout)
+      : geometry_(geometry), layout_(layout) {}
+
+  // Emits the leaf's triangles and returns its encoded child reference.
+  int32_t Leaf(const BuildLeaf& leaf) {
+    const uint32_t first = static_cast<uint32_t>(layout_.triangles.size());
+    for (uint32_t k = 0; k < leaf.count; ++k) {
+      const uint32_t t = leaf.primitives[k];
+      layout_.triangles.push_back({geometry_.vertices[3 * t],
+                                   geometry_.vertices[3 * t + 1],
+                                   geometry_.vertices[3 * t + 2],
+                                   t,
+                                   {0, 0}});
+    }
+    return ~static_cast<int32_t>(first * kBvhMaxLeafSize + (leaf.count - 1));
+  }
+
+  // Emits `node` (and its subtree) as node `index`; returns the subtree's depth.
+  int Inner(const BuildInner& node, size_t index) {
+    int depth = 0;
+    for (int i = 0; i < 2; ++i) {
+      BvhNode& out = layout_.nodes[index];
+      if (i >= node.child_count || node.children[i] == nullptr) {
+        SetEmpty(out, i);
+        continue;
+      }
+      const RTCBounds& b = node.bounds[i];
+      out.lo[i][0] = b.lower_x, out.lo[i][1] = b.lower_y, out.lo[i][2] = b.lower_z;
+      out.hi[i][0] = b.upper_x, out.hi[i][1] = b.upper_y, out.hi[i][2] = b.upper_z;
+      const BuildNode* child = node.children[i];
+      if (child->leaf) {
+        layout_.nodes[index].child[i] = Leaf(*static_cast<const BuildLeaf*>(child));
+        depth = std::max(depth, 1);
+      } else {
+        const size_t child_index = layout_.nodes.size();
+        layout_.nodes.push_back({});
+        layout_.nodes[index].child[i] = static_cast<int32_t>(child_index);
+        depth = std::max(depth, Inner(*static_cast<const BuildInner*>(child), child_index));
+      }
+    }
+    return depth + 1;
+  }
+
+  static void SetEmpty(BvhNode& node, int i) {
+    for (int k = 0; k < 3; ++k) {
+      node.lo[i][k] = std::numeric_limits<float>::infinity();
+      node.hi[i][k] = -std::numeric_limits<float>::infinity();
+    }
+    node.child[i] = kBvhEmptyChild;
+  }
+
+ private:
+  const TraceGeometry& geometry_;
+  BvhLayout& layout_;
+};
+
+}  // namespace
+
+absl::StatusOr<BvhLayout> BuildBvh(const TraceGeometry& geometry) {
+  std::vector<RTCBuildPrimitive> primitives;
+  for (size_t t = 0; t < geometry.TriangleCount(); ++t) {
+    if (!HasArea(geometry, t)) continue;  // never hit
+    const Vec3f a = geometry.vertices[3 * t], b = geometry.vertices[3 * t + 1],
+                c = geometry.vertices[3 * t + 2];
+    RTCBuildPrimitive p;
+    p.lower_x = std::min({a.x, b.x, c.x});
+    p.lower_y = std::min({a.y, b.y, c.y});
+    p.lower_z = std::min({a.z, b.z, c.z});
+    p.upper_x = std::max({a.x, b.x, c.x});
+    p.upper_y = std::max({a.y, b.y, c.y});
+    p.upper_z = std::max({a.z, b.z, c.z});
+    p.geomID = 0;
+    p.primID = static_cast<unsigned int>(t);
+    primitives.push_back(p);
+  }
+  BvhLayout layout;
+  layout.nodes.push_back({});
+  if (primitives.empty()) {
+    Flattener::SetEmpty(layout.nodes[0], 0);
+    Flattener::SetEmpty(layout.nodes[0], 1);
+    layout.depth = 1;
+    return layout;
+  }
+
+  std::unique_ptr<RTCDeviceTy, void (*)(RTCDevice)> device(rtcNewDevice("threads=1"),
+                                                           rtcReleaseDevice);
+  if (!device) return absl::InternalError("Embree: cannot create a device for the BVH builder");
+  std::unique_ptr<RTCBVHTy, void (*)(RTCBVH)> bvh(rtcNewBVH(device.get()), rtcReleaseBVH);
+  RTCBuildArguments args = rtcDefaultBuildArguments();
+  args.buildQuality = RTC_BUILD_QUALITY_HIGH;
+  args.maxBranchingFactor = 2;
+  args.maxDepth = 48;
+  args.minLeafSize = 1;
+  args.maxLeafSize = kBvhMaxLeafSize;
+  args.traversalCost = 1.0f;
+  args.intersectionCost = 1.0f;
+  args.bvh = bvh.get();
+  args.primitives = primitives.data();
+  args.primitiveCount = primitives.size();
+  args.primitiveArrayCapacity = primitives.size();
+  args.createNode = CreateNode;
+  args.setNodeChildren = SetNodeChildren;
+  args.setNodeBounds = SetNodeBounds;
+  args.createLeaf = CreateLeaf;
+  const BuildNode* root = static_cast<const BuildNode*>(rtcBuildBVH(&args));
+  if (!root) {
+    return absl::InternalError(
+        absl::StrCat("Embree BVH builder failed (error ", rtcGetDeviceError(device.get()), ")"));
+  }
+
+  // Flatten depth-first; a root that is a leaf becomes a node with one child
+  Flattener flatten(geometry, layout);
+  if (root->leaf) {
+    const auto& leaf = *static_cast<const BuildLeaf*>(root);
+    BvhNode& node = layout.nodes[0];
+    Vec3f lo{std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+             std::numeric_limits<float>::infinity()};
+    Vec3f hi = -lo;
+    for (const RTCBuildPrimitive& p : primitives) {
+      lo = {std::min(lo.x, p.lower_x), std::min(lo.y, p.lower_y), std::min(lo.z, p.lower_z)};
+      hi = {std::max(hi.x, p.upper_x), std::max(hi.y, p.upper_y), std::max(hi.z, p.upper_z)};
+    }
+    node.lo[0][0] = lo.x, node.lo[0][1] = lo.y, node.lo[0][2] = lo.z;
+    node.hi[0][0] = hi.x, node.hi[0][1] = hi.y, node.hi[0][2] = hi.z;
+    node.child[0] = flatten.Leaf(leaf);
+    Flattener::SetEmpty(node, 1);
+    layout.depth = 2;
+  } else {
+    layout.depth = flatten.Inner(*static_cast<const BuildInner*>(root), 0);
+  }
+  return layout;
+}
+
+}  // namespace fenestra
