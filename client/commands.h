@@ -8,5 +8,6 @@ namespace fenestra {
 void AddSceneCommand(CLI::App& app);
 void AddSkyCommand(CLI::App& app);
 void AddDcCommand(CLI::App& app);
+void AddOptimizeCommand(CLI::App& app);
 
 }  // namespace fenestra

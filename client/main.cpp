@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   fenestra::AddSceneCommand(app);
   fenestra::AddSkyCommand(app);
   fenestra::AddDcCommand(app);
+  fenestra::AddOptimizeCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

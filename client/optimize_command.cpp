@@ -1,0 +1,92 @@
+// fenestra optimize --local JOB.json
+#include <fmt/format.h>
+#include <google/protobuf/util/json_util.h>
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "client/cli_util.h"
+#include "client/commands.h"
+#include "client/progress_display.h"
+#include "core/common/atomic_file.h"
+#include "core/optimize/job.h"
+
+namespace fenestra {
+namespace {
+
+absl::Status WriteResult(const std::string& path, const v1::JobResult& result) {
+  std::string json;
+  google::protobuf::util::JsonPrintOptions options;
+  options.add_whitespace = true;
+  options.always_print_primitive_fields = true;
+  options.preserve_proto_field_names = true;
+  const auto status = google::protobuf::util::MessageToJsonString(result, &json, options);
+  if (!status.ok()) return absl::InternalError(std::string(status.message()));
+  return WriteFileAtomically(path, [&](std::ostream& out) {
+    out << json << '\n';
+    return absl::OkStatus();
+  });
+}
+
+absl::Status WriteHistoryCsv(const std::string& path, const v1::JobResult& result) {
+  return WriteFileAtomically(path, [&](std::ostream& out) {
+    std::vector<std::string> names;
+    for (const auto& [name, value] : result.best_design()) names.push_back(name);
+    std::sort(names.begin(), names.end());
+    out << "index";
+    for (const std::string& n : names) out << ',' << n;
+    out << ",value,standard_error,seconds,cached,improved,neighborhood\n";
+    for (const v1::Evaluation& e : result.history()) {
+      out << e.index();
+      for (const std::string& n : names) out << ',' << fmt::format("{:.9g}", e.design().at(n));
+      out << fmt::format(",{:.9g},{:.9g},{:.6f},{},{},{}\n", e.value().value(),
+                         e.value().standard_error(), e.seconds(), e.cached() ? 1 : 0,
+                         e.improved() ? 1 : 0, e.neighborhood());
+    }
+    return absl::OkStatus();
+  });
+}
+
+}  // namespace
+
+void AddOptimizeCommand(CLI::App& app) {
+  struct Args {
+    std::string job, output, csv;
+    bool local = false;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* cmd = app.add_subcommand("optimize", "Run an optimization job in this process");
+  cmd->add_option("JOB", args->job, "Job file (JSON)")->required();
+  cmd->add_flag("--local", args->local, "Run here, without the service")->required();
+  cmd->add_option("-o,--output", args->output, "Result file (JSON); default: JOB.result.json");
+  cmd->add_option("--csv", args->csv, "History as CSV; default: the result file with .csv");
+  cmd->callback([args] {
+    const v1::Job job = ValueOrFail(ReadJobFile(args->job));
+    const std::string base = std::filesystem::path(args->job).parent_path().string();
+    const PreparedJob prepared = ValueOrFail(PrepareJob(job, base.empty() ? "." : base));
+    std::string output = args->output;
+    if (output.empty()) {
+      output = std::filesystem::path(args->job).replace_extension(".result.json").string();
+    }
+    std::string csv = args->csv;
+    if (csv.empty()) csv = std::filesystem::path(output).replace_extension(".csv").string();
+
+    JobCallbacks callbacks;
+    callbacks.stage = [](const std::string& stage) {
+      EndProgress();
+      fmt::print("{}...\n", stage == "sky"       ? "building the sky matrix"
+                            : stage == "outdoor" ? "tracing the outdoor matrix"
+                                                 : "searching");
+      std::fflush(stdout);
+    };
+    callbacks.progress = ShowProgress;
+    const v1::JobResult result = ValueOrFail(RunJob(prepared, nullptr, callbacks));
+    EndProgress();
+    if (absl::Status s = WriteResult(output, result); !s.ok()) Fail(s);
+    if (absl::Status s = WriteHistoryCsv(csv, result); !s.ok()) Fail(s);
+    fmt::print("{}result: {}\nhistory: {}\n", FormatResult(result), output, csv);
+  });
+}
+
+}  // namespace fenestra

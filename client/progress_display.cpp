@@ -1,0 +1,79 @@
+#include "client/progress_display.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+namespace fenestra {
+namespace {
+
+std::string Clock(double seconds) {
+  if (!std::isfinite(seconds) || seconds < 0) return "--:--";
+  const long s = std::lround(seconds);
+  if (s >= 3600) return fmt::format("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60);
+  return fmt::format("{:02}:{:02}", s / 60, s % 60);
+}
+
+std::string Value(const v1::Estimate& e) {
+  return fmt::format("{:.2f} ± {:.2f}", e.value(), e.standard_error());
+}
+
+bool live_line = false;
+
+}  // namespace
+
+std::string FormatDesign(const google::protobuf::Map<std::string, double>& design) {
+  const std::map<std::string, double> sorted(design.begin(), design.end());
+  std::string out;
+  for (const auto& [name, value] : sorted) {
+    out += fmt::format("{}{}={:.4g}", out.empty() ? "" : " ", name, value);
+  }
+  return out;
+}
+
+std::string FormatProgress(const JobProgress& p) {
+  return fmt::format("[{}/{}] best {} % ({}) | current {} %{} ({}) | {} elapsed, ~{} left",
+                     p.evaluations, p.max_evaluations, Value(p.best.value()),
+                     FormatDesign(p.best.design()), Value(p.current.value()),
+                     p.current.cached() ? " cached" : "", FormatDesign(p.current.design()),
+                     Clock(p.elapsed_seconds), Clock(p.remaining_seconds));
+}
+
+void ShowProgress(const JobProgress& progress) {
+  const std::string line = FormatProgress(progress);
+  if (isatty(STDOUT_FILENO)) {
+    std::printf("\r\033[K%s", line.c_str());
+    live_line = true;
+  } else {
+    std::printf("%s\n", line.c_str());
+  }
+  std::fflush(stdout);
+}
+
+void EndProgress() {
+  if (live_line) std::printf("\n");
+  live_line = false;
+  std::fflush(stdout);
+}
+
+std::string FormatResult(const v1::JobResult& r) {
+  const v1::Metrics& m = r.best_metrics();
+  std::string out = fmt::format("best design: {}\n", FormatDesign(r.best_design()));
+  out += fmt::format("objective: {} %\n", Value(r.best_value()));
+  out += fmt::format(
+      "UDI {} % (fell short {} %, exceeded {} %), UDI all sensors {} %, DA {} %, cDA {} %, "
+      "sDA {} %\n",
+      Value(m.udi()), Value(m.udi_fell_short()), Value(m.udi_exceeded()),
+      Value(m.udi_all_sensors()), Value(m.da()), Value(m.cda()), Value(m.sda()));
+  out += fmt::format(
+      "{} evaluations ({}), backend {}: sky {:.2f} s, outdoor {:.2f} s, evaluations {:.2f} s, "
+      "total {:.2f} s\n",
+      r.evaluations(), r.stop_reason(), r.backend(), r.timings().sky_seconds(),
+      r.timings().outdoor_seconds(), r.timings().evaluation_seconds(), r.timings().total_seconds());
+  return out;
+}
+
+}  // namespace fenestra
