@@ -9,5 +9,8 @@ void AddSceneCommand(CLI::App& app);
 void AddSkyCommand(CLI::App& app);
 void AddDcCommand(CLI::App& app);
 void AddOptimizeCommand(CLI::App& app);
+// Clients of fenestrad (client/site_command.cpp, client/job_command.cpp).
+void AddSiteCommand(CLI::App& app);
+void AddJobCommand(CLI::App& app);
 
 }  // namespace fenestra

@@ -12,6 +12,8 @@ int main(int argc, char** argv) {
   fenestra::AddSkyCommand(app);
   fenestra::AddDcCommand(app);
   fenestra::AddOptimizeCommand(app);
+  fenestra::AddSiteCommand(app);
+  fenestra::AddJobCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,385 @@
+// fenestra job submit/watch/list/show/cancel/result: optimization jobs run by fenestrad.
+#include <fmt/format.h>
+#include <google/protobuf/util/json_util.h>
+
+#include <algorithm>
+#include <ctime>
+#include <memory>
+#include <optional>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/str_cat.h"
+#include "client/cli_util.h"
+#include "client/commands.h"
+#include "client/grpc_client.h"
+#include "client/progress_display.h"
+#include "core/common/atomic_file.h"
+
+namespace fenestra {
+namespace {
+
+std::string StateName(v1::JobState state) {
+  std::string name = v1::JobState_Name(state);
+  return absl::AsciiStrToLower(name.substr(name.find("STATE_") + 6));
+}
+
+bool IsTerminalState(v1::JobState state) {
+  return state != v1::JOB_STATE_QUEUED && state != v1::JOB_STATE_RUNNING &&
+         state != v1::JOB_STATE_UNSPECIFIED;
+}
+
+std::string Json(const google::protobuf::Message& message, bool pretty) {
+  std::string json;
+  google::protobuf::util::JsonPrintOptions options;
+  options.add_whitespace = pretty;
+  (void)google::protobuf::util::MessageToJsonString(message, &json, options);
+  if (!pretty) json.erase(std::remove(json.begin(), json.end(), '\n'), json.end());
+  return json;
+}
+
+std::string LocalTime(int64_t unix_ms) {
+  if (unix_ms == 0) return "-";
+  const std::time_t t = unix_ms / 1000;
+  std::tm tm{};
+  localtime_r(&t, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S", &tm);
+  return text;
+}
+
+v1::JobInfo GetJob(FenestradClient& client, const std::string& id) {
+  v1::GetJobRequest request;
+  request.set_id(id);
+  v1::JobInfo info;
+  if (absl::Status st =
+          client.Check(client.jobs().Get(client.UnaryContext().get(), request, &info));
+      !st.ok()) {
+    Fail(st);
+  }
+  return info;
+}
+
+void PrintJob(const v1::JobInfo& j) {
+  fmt::print("{} ({}): {}{}\n", j.id(), j.name(), StateName(j.state()),
+             j.cancel_requested() && j.state() == v1::JOB_STATE_RUNNING ? ", cancelling" : "");
+  if (!j.site_id().empty()) fmt::print("  site: {}\n", j.site_id());
+  fmt::print("  submitted {}, started {}, finished {}\n", LocalTime(j.created_unix_ms()),
+             LocalTime(j.started_unix_ms()), LocalTime(j.finished_unix_ms()));
+  if (j.state() == v1::JOB_STATE_QUEUED) fmt::print("  {} job(s) ahead\n", j.queue_position());
+  if (j.state() == v1::JOB_STATE_RUNNING) fmt::print("  stage: {}\n", j.stage());
+  if (j.started_unix_ms() && j.stage() != "outdoor") {
+    fmt::print("  outdoor matrix: {} in {:.3f} s\n",
+               j.outdoor_reused() ? "reused from the cache" : "traced", j.outdoor_seconds());
+  }
+  if (j.has_progress()) fmt::print("  {}\n", FormatProgress(FromProto(j.progress())));
+  if (!j.error().empty()) fmt::print("  error: {}\n", j.error());
+  if (j.has_result()) {
+    fmt::print("{}", FormatResult(j.result()));
+  }
+}
+
+// Follows a job's events until it ends; returns the process exit code (0 = succeeded).
+int Watch(FenestradClient& client, const std::string& id, bool json) {
+  grpc::ClientContext context;
+  v1::WatchJobRequest request;
+  request.set_id(id);
+  std::unique_ptr<grpc::ClientReader<v1::JobEvent>> reader = client.jobs().Watch(&context, request);
+  v1::JobEvent event;
+  std::optional<v1::JobState> end;
+  v1::JobResult result;
+  std::string error;
+  while (reader->Read(&event)) {
+    if (json) {
+      fmt::print("{}\n", Json(event, false));
+      std::fflush(stdout);
+    }
+    switch (event.kind_case()) {
+      case v1::JobEvent::kSnapshot: {
+        const v1::JobInfo& j = event.snapshot();
+        if (!json) {
+          fmt::print("{} ({}): {}", j.id(), j.name(), StateName(j.state()));
+          if (j.state() == v1::JOB_STATE_QUEUED)
+            fmt::print(", {} job(s) ahead", j.queue_position());
+          if (j.state() == v1::JOB_STATE_RUNNING) fmt::print(", stage {}", j.stage());
+          fmt::print("\n");
+          if (j.has_progress() && j.state() == v1::JOB_STATE_RUNNING) {
+            ShowProgress(FromProto(j.progress()));
+          }
+        }
+        if (j.state() != v1::JOB_STATE_QUEUED && j.state() != v1::JOB_STATE_RUNNING) {
+          end = j.state();
+          result = j.result();
+          error = j.error();
+        }
+        break;
+      }
+      case v1::JobEvent::kQueued:
+        if (!json) fmt::print("queued, {} job(s) ahead\n", event.queued());
+        break;
+      case v1::JobEvent::kStarted:
+        if (!json) fmt::print("started (backend {})\n", event.started().backend());
+        break;
+      case v1::JobEvent::kStage:
+        if (!json) {
+          EndProgress();
+          const std::string& stage = event.stage().name();
+          fmt::print("{}...\n", stage == "sky" ? "building the sky matrix"
+                                : stage == "outdoor"
+                                    ? (event.stage().cached() ? "outdoor matrix from the cache"
+                                                              : "tracing the outdoor matrix")
+                                    : "searching");
+        }
+        break;
+      case v1::JobEvent::kProgress:
+        if (!json) ShowProgress(FromProto(event.progress()));
+        break;
+      case v1::JobEvent::kFinished:
+        end = v1::JOB_STATE_SUCCEEDED;
+        result = event.finished();
+        break;
+      case v1::JobEvent::kFailed:
+        end = v1::JOB_STATE_FAILED;
+        error = event.failed();
+        break;
+      case v1::JobEvent::kCancelled:
+        end = v1::JOB_STATE_CANCELLED;
+        result = event.cancelled().result();
+        break;
+      case v1::JobEvent::kInterrupted:
+        end = v1::JOB_STATE_INTERRUPTED;
+        result = event.interrupted().result();
+        break;
+      default:
+        break;
+    }
+    std::fflush(stdout);
+  }
+  if (!json) EndProgress();
+  const grpc::Status status = reader->Finish();
+  if (!end) {
+    absl::Status st = client.Check(status);
+    if (st.ok()) st = absl::UnavailableError("the event stream ended before the job did");
+    Fail(absl::Status(st.code(), absl::StrCat(st.message(),
+                                              "; follow the job again with: "
+                                              "fenestra job watch ",
+                                              id)));
+  }
+  if (json) return *end == v1::JOB_STATE_SUCCEEDED ? 0 : 1;
+  switch (*end) {
+    case v1::JOB_STATE_SUCCEEDED:
+      fmt::print("{} succeeded\n{}", id, FormatResult(result));
+      return 0;
+    case v1::JOB_STATE_FAILED:
+      fmt::print(stderr, "error: {} failed: {}\n", id, error);
+      return 1;
+    default:
+      fmt::print("{} {}{}\n", id, StateName(*end),
+                 *end == v1::JOB_STATE_INTERRUPTED ? " (fenestrad shut down)" : "");
+      if (result.evaluations() > 0) fmt::print("best so far:\n{}", FormatResult(result));
+      return 1;
+  }
+}
+
+}  // namespace
+
+void AddJobCommand(CLI::App& app) {
+  CLI::App* job = app.add_subcommand("job", "Optimization jobs run by fenestrad");
+  job->require_subcommand(1);
+
+  // job submit
+  struct SubmitArgs {
+    ServerOptions server;
+    std::string file, site, backend;
+    bool watch = false, quiet = false, json = false;
+  };
+  auto submit = std::make_shared<SubmitArgs>();
+  CLI::App* submit_cmd = job->add_subcommand(
+      "submit", "Submit a job file; its scene, OBJ meshes and weather file travel inline");
+  submit_cmd->add_option("JOB", submit->file, "Job file (JSON)")->required();
+  submit_cmd->add_option("--site", submit->site, "Reuse this site's cached outdoor matrix");
+  submit_cmd->add_option("--backend", submit->backend,
+                         "cpu, cuda or auto when the job names none; default: the daemon's");
+  submit_cmd->add_flag("--watch", submit->watch, "Follow its progress until it ends");
+  submit_cmd->add_flag("-q,--quiet", submit->quiet, "Print only the job id");
+  submit_cmd->add_flag("--json", submit->json, "With --watch: print the events as JSON lines");
+  AddServerOptions(submit_cmd, submit->server);
+  submit_cmd->callback([submit] {
+    v1::SubmitJobRequest request = ValueOrFail(SubmitRequestFromJobFile(submit->file));
+    request.set_site_id(submit->site);
+    request.set_default_backend(submit->backend);
+    FenestradClient client(submit->server);
+    v1::JobInfo info;
+    if (absl::Status st =
+            client.Check(client.jobs().Submit(client.UnaryContext().get(), request, &info));
+        !st.ok()) {
+      Fail(st);
+    }
+    if (submit->quiet) {
+      fmt::print("{}\n", info.id());
+    } else if (!submit->json) {
+      fmt::print("{} submitted ({}), {} job(s) ahead\n", info.id(), info.name(),
+                 info.queue_position());
+    }
+    std::fflush(stdout);
+    if (submit->watch) {
+      const int code = Watch(client, info.id(), submit->json);
+      if (code != 0) throw CLI::RuntimeError(code);
+    }
+  });
+
+  // job watch
+  struct WatchArgs {
+    ServerOptions server;
+    std::string id;
+    bool json = false;
+  };
+  auto watch = std::make_shared<WatchArgs>();
+  CLI::App* watch_cmd = job->add_subcommand(
+      "watch", "Follow a job: its current state, then its progress until it ends");
+  watch_cmd->add_option("ID", watch->id, "Job id")->required();
+  watch_cmd->add_flag("--json", watch->json, "Print the events as JSON lines");
+  AddServerOptions(watch_cmd, watch->server);
+  watch_cmd->callback([watch] {
+    FenestradClient client(watch->server);
+    const int code = Watch(client, watch->id, watch->json);
+    if (code != 0) throw CLI::RuntimeError(code);
+  });
+
+  // job list
+  struct ListArgs {
+    ServerOptions server;
+    std::string state;
+    int limit = 0;
+  };
+  auto list = std::make_shared<ListArgs>();
+  CLI::App* list_cmd = job->add_subcommand("list", "List jobs, newest first");
+  list_cmd->add_option("--state", list->state,
+                       "Only: queued, running, succeeded, failed, cancelled, interrupted");
+  list_cmd->add_option("--limit", list->limit, "At most this many [100]");
+  AddServerOptions(list_cmd, list->server);
+  list_cmd->callback([list] {
+    v1::ListJobsRequest request;
+    if (!list->state.empty()) {
+      v1::JobState state;
+      if (!v1::JobState_Parse("JOB_STATE_" + absl::AsciiStrToUpper(list->state), &state)) {
+        Fail(
+            absl::InvalidArgumentError(absl::StrCat("--state: unknown state '", list->state, "'")));
+      }
+      request.set_state(state);
+    }
+    request.set_limit(list->limit);
+    FenestradClient client(list->server);
+    v1::ListJobsResponse response;
+    if (absl::Status st =
+            client.Check(client.jobs().List(client.UnaryContext().get(), request, &response));
+        !st.ok()) {
+      Fail(st);
+    }
+    fmt::print("{:<10} {:<12} {:>11} {:>18}  {}\n", "ID", "STATE", "EVALUATIONS", "BEST [%]",
+               "NAME");
+    for (const v1::JobInfo& j : response.jobs()) {
+      const v1::JobProgress& p = j.progress();
+      fmt::print(
+          "{:<10} {:<12} {:>11} {:>18}  {}\n", j.id(), StateName(j.state()),
+          j.has_progress() ? fmt::format("{}/{}", p.evaluations(), p.max_evaluations()) : "-",
+          j.has_progress() ? fmt::format("{:.2f} ± {:.2f}", p.best().value().value(),
+                                         p.best().value().standard_error())
+                           : "-",
+          j.name());
+    }
+  });
+
+  // job show
+  struct ShowArgs {
+    ServerOptions server;
+    std::string id;
+    bool json = false;
+  };
+  auto show = std::make_shared<ShowArgs>();
+  CLI::App* show_cmd = job->add_subcommand("show", "Show a job's state, progress and result");
+  show_cmd->add_option("ID", show->id, "Job id")->required();
+  show_cmd->add_flag("--json", show->json, "Print the job as JSON");
+  AddServerOptions(show_cmd, show->server);
+  show_cmd->callback([show] {
+    FenestradClient client(show->server);
+    const v1::JobInfo info = GetJob(client, show->id);
+    if (show->json) {
+      fmt::print("{}\n", Json(info, true));
+    } else {
+      PrintJob(info);
+    }
+  });
+
+  // job cancel
+  struct CancelArgs {
+    ServerOptions server;
+    std::string id;
+  };
+  auto cancel = std::make_shared<CancelArgs>();
+  CLI::App* cancel_cmd =
+      job->add_subcommand("cancel", "Cancel a job (a running one stops at its next checkpoint)");
+  cancel_cmd->add_option("ID", cancel->id, "Job id")->required();
+  AddServerOptions(cancel_cmd, cancel->server);
+  cancel_cmd->callback([cancel] {
+    FenestradClient client(cancel->server);
+    v1::CancelJobRequest request;
+    request.set_id(cancel->id);
+    v1::JobInfo info;
+    if (absl::Status st =
+            client.Check(client.jobs().Cancel(client.UnaryContext().get(), request, &info));
+        !st.ok()) {
+      Fail(st);
+    }
+    if (info.state() == v1::JOB_STATE_RUNNING) {
+      fmt::print("{}: cancelling; it stops at its next checkpoint\n", info.id());
+    } else {
+      fmt::print("{}: {}\n", info.id(), StateName(info.state()));
+    }
+  });
+
+  // job result
+  struct ResultArgs {
+    ServerOptions server;
+    std::string id, output;
+    bool json = false;
+  };
+  auto result = std::make_shared<ResultArgs>();
+  CLI::App* result_cmd = job->add_subcommand("result", "Print a job's result (best design)");
+  result_cmd->add_option("ID", result->id, "Job id")->required();
+  result_cmd->add_flag("--json", result->json, "Print the result as JSON");
+  result_cmd->add_option("-o,--output", result->output, "Also write the result as JSON here");
+  AddServerOptions(result_cmd, result->server);
+  result_cmd->callback([result] {
+    FenestradClient client(result->server);
+    const v1::JobInfo info = GetJob(client, result->id);
+    if (!info.has_result()) {
+      if (info.state() == v1::JOB_STATE_FAILED) {
+        Fail(absl::FailedPreconditionError(absl::StrCat(info.id(), " failed: ", info.error())));
+      }
+      Fail(absl::FailedPreconditionError(absl::StrCat(
+          info.id(), " is ", StateName(info.state()),
+          IsTerminalState(info.state())
+              ? " without a result"
+              : absl::StrCat("; no result yet (fenestra job watch ", info.id(), ")"))));
+    }
+    if (!result->output.empty()) {
+      const std::string json = Json(info.result(), true);
+      if (absl::Status st = WriteFileAtomically(result->output,
+                                                [&](std::ostream& out) {
+                                                  out << json << '\n';
+                                                  return absl::OkStatus();
+                                                });
+          !st.ok()) {
+        Fail(st);
+      }
+    }
+    if (result->json) {
+      fmt::print("{}\n", Json(info.result(), true));
+    } else {
+      fmt::print("{} ({}): {}\n{}", info.id(), info.name(), StateName(info.state()),
+                 FormatResult(info.result()));
+    }
+  });
+}
+
+}  // namespace fenestra

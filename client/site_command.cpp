@@ -1,0 +1,221 @@
+// fenestra site add/list/show/rm: sites registered with fenestrad, whose outdoor matrices
+// the daemon computes once and caches.
+#include <fmt/format.h>
+#include <google/protobuf/util/json_util.h>
+
+#include <filesystem>
+#include <memory>
+#include <thread>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/str_cat.h"
+#include "client/cli_util.h"
+#include "client/commands.h"
+#include "client/grpc_client.h"
+#include "core/geometry/scene.h"
+
+namespace fenestra {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string StateName(v1::SiteState state) {
+  std::string name = v1::SiteState_Name(state);
+  return absl::AsciiStrToLower(name.substr(name.find("STATE_") + 6));
+}
+
+std::string Json(const google::protobuf::Message& message) {
+  std::string json;
+  google::protobuf::util::JsonPrintOptions options;
+  options.add_whitespace = true;
+  (void)google::protobuf::util::MessageToJsonString(message, &json, options);
+  return json;
+}
+
+void PrintSite(const v1::SiteInfo& s) {
+  fmt::print("{} ({}): {}\n", s.id(), s.name(), StateName(s.state()));
+  fmt::print("  location: {:.4f}° N, {:.4f}° E; weather: {}\n", s.latitude_deg(), s.longitude_deg(),
+             s.has_weather() ? s.weather_name() : "none");
+  fmt::print("  outdoor: {} triangles, {} paths, {} bounces, seed {}, {} cells\n",
+             s.outdoor_triangles(), s.sampling().outdoor_paths(), s.sampling().outdoor_bounces(),
+             s.sampling().seed(), s.sampling().basis_cells());
+  fmt::print("  outdoor matrix key: {}\n", s.outdoor_key());
+  if (s.state() == v1::SITE_STATE_READY) {
+    fmt::print(
+        "  matrix: traced {} time(s), last in {:.2f} s on {}{}; mean relative standard error "
+        "{:.4f}; reused by {} job(s)\n",
+        s.computations(), s.compute_seconds(), s.backend(),
+        s.loaded_from_disk() ? ", loaded from the disk cache at start" : "",
+        s.mean_relative_standard_error(), s.jobs_reused());
+  }
+  if (s.state() == v1::SITE_STATE_FAILED) fmt::print("  error: {}\n", s.error());
+}
+
+}  // namespace
+
+void AddSiteCommand(CLI::App& app) {
+  CLI::App* site = app.add_subcommand("site", "Sites registered with fenestrad (outdoor matrices)");
+  site->require_subcommand(1);
+
+  // site add
+  struct AddArgs {
+    ServerOptions server;
+    std::string scene, job, name, backend;
+    int64_t outdoor_paths = 0;
+    int outdoor_bounces = 0, basis_cells = 0;
+    uint64_t seed = 0;
+    bool wait = false, json = false;
+  };
+  auto add = std::make_shared<AddArgs>();
+  CLI::App* add_cmd = site->add_subcommand(
+      "add", "Register a site: its outdoor matrix is computed in the background and cached");
+  add_cmd->add_option("SCENE", add->scene, "Scene file (JSON)");
+  add_cmd->add_option("--job", add->job,
+                      "Job file: take its scene and outdoor sampling (so its jobs match)");
+  add_cmd->add_option("--name", add->name, "Label; default: the scene's name");
+  add_cmd->add_option("--outdoor-paths", add->outdoor_paths, "Outdoor paths [default 2e7]");
+  add_cmd->add_option("--outdoor-bounces", add->outdoor_bounces, "Outdoor reflections [30]");
+  add_cmd->add_option("--seed", add->seed, "Random seed [1]");
+  add_cmd->add_option("--basis-cells", add->basis_cells, "Window direction cells: 288 or 1152");
+  add_cmd->add_option("--backend", add->backend, "cpu, cuda or auto; default: the daemon's");
+  add_cmd->add_flag("--wait", add->wait, "Wait until the outdoor matrix is ready");
+  add_cmd->add_flag("--json", add->json, "Print the site as JSON");
+  AddServerOptions(add_cmd, add->server);
+  add_cmd->callback([add] {
+    if (add->scene.empty() == add->job.empty()) {
+      Fail(absl::InvalidArgumentError("give a scene file or --job JOB.json (one of them)"));
+    }
+    v1::RegisterSiteRequest request;
+    if (!add->job.empty()) {
+      v1::SubmitJobRequest job = ValueOrFail(SubmitRequestFromJobFile(add->job));
+      *request.mutable_scene() = job.job().scene();
+      *request.mutable_sampling() = job.job().sampling();
+      request.set_weather_epw(job.weather_epw());
+      request.set_weather_name(job.weather_name());
+      request.set_name(job.job().name());
+    } else {
+      const v1::Scene scene = ValueOrFail(ReadSceneProto(add->scene));
+      const fs::path dir = fs::path(add->scene).parent_path();
+      *request.mutable_scene() = ValueOrFail(InlineObjMeshes(scene, dir.string()));
+      if (!scene.site().weather_file().empty()) {
+        const fs::path weather = dir / scene.site().weather_file();
+        request.set_weather_epw(ValueOrFail(ReadFileBytes(weather.string())));
+        request.set_weather_name(weather.filename().string());
+      }
+    }
+    request.mutable_scene()->mutable_site()->clear_weather_file();
+    if (!add->name.empty()) request.set_name(add->name);
+    v1::Sampling& s = *request.mutable_sampling();
+    if (add->outdoor_paths) s.set_outdoor_paths(add->outdoor_paths);
+    if (add->outdoor_bounces) s.set_outdoor_bounces(add->outdoor_bounces);
+    if (add->seed) s.set_seed(add->seed);
+    if (add->basis_cells) s.set_basis_cells(add->basis_cells);
+    if (!add->backend.empty()) s.set_backend(add->backend);
+
+    FenestradClient client(add->server);
+    v1::SiteInfo info;
+    if (absl::Status st =
+            client.Check(client.sites().Register(client.UnaryContext().get(), request, &info));
+        !st.ok()) {
+      Fail(st);
+    }
+    if (!add->json) {
+      fmt::print("{} registered: {}\n", info.id(),
+                 info.state() == v1::SITE_STATE_READY ? "outdoor matrix already cached"
+                                                      : "computing its outdoor matrix");
+      std::fflush(stdout);
+    }
+    while (add->wait && info.state() == v1::SITE_STATE_COMPUTING) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(250));
+      v1::GetSiteRequest get;
+      get.set_id(info.id());
+      if (absl::Status st =
+              client.Check(client.sites().Get(client.UnaryContext().get(), get, &info));
+          !st.ok()) {
+        Fail(st);
+      }
+    }
+    info.clear_scene();
+    if (add->json) {
+      fmt::print("{}\n", Json(info));
+    } else if (add->wait) {
+      PrintSite(info);
+    }
+    if (info.state() == v1::SITE_STATE_FAILED) {
+      Fail(absl::InternalError(absl::StrCat(info.id(), " failed: ", info.error())));
+    }
+  });
+
+  // site list
+  auto list_server = std::make_shared<ServerOptions>();
+  CLI::App* list_cmd = site->add_subcommand("list", "List the sites");
+  AddServerOptions(list_cmd, *list_server);
+  list_cmd->callback([list_server] {
+    FenestradClient client(*list_server);
+    v1::ListSitesResponse response;
+    if (absl::Status st = client.Check(
+            client.sites().List(client.UnaryContext().get(), v1::ListSitesRequest(), &response));
+        !st.ok()) {
+      Fail(st);
+    }
+    fmt::print("{:<10} {:<10} {:>13} {:>12} {:>5}  {}\n", "ID", "STATE", "OUTDOOR PATHS",
+               "COMPUTE [s]", "JOBS", "NAME");
+    for (const v1::SiteInfo& s : response.sites()) {
+      fmt::print("{:<10} {:<10} {:>13} {:>12.2f} {:>5}  {}\n", s.id(), StateName(s.state()),
+                 s.sampling().outdoor_paths(), s.compute_seconds(), s.jobs_reused(), s.name());
+    }
+  });
+
+  // site show
+  struct ShowArgs {
+    ServerOptions server;
+    std::string id;
+    bool json = false;
+  };
+  auto show = std::make_shared<ShowArgs>();
+  CLI::App* show_cmd = site->add_subcommand("show", "Show one site");
+  show_cmd->add_option("ID", show->id, "Site id")->required();
+  show_cmd->add_flag("--json", show->json, "Print the site as JSON (its scene left out)");
+  AddServerOptions(show_cmd, show->server);
+  show_cmd->callback([show] {
+    FenestradClient client(show->server);
+    v1::GetSiteRequest request;
+    request.set_id(show->id);
+    v1::SiteInfo info;
+    if (absl::Status st =
+            client.Check(client.sites().Get(client.UnaryContext().get(), request, &info));
+        !st.ok()) {
+      Fail(st);
+    }
+    info.clear_scene();
+    if (show->json) {
+      fmt::print("{}\n", Json(info));
+    } else {
+      PrintSite(info);
+    }
+  });
+
+  // site rm
+  struct RmArgs {
+    ServerOptions server;
+    std::string id;
+  };
+  auto rm = std::make_shared<RmArgs>();
+  CLI::App* rm_cmd = site->add_subcommand("rm", "Delete a site");
+  rm_cmd->add_option("ID", rm->id, "Site id")->required();
+  AddServerOptions(rm_cmd, rm->server);
+  rm_cmd->callback([rm] {
+    FenestradClient client(rm->server);
+    v1::DeleteSiteRequest request;
+    request.set_id(rm->id);
+    v1::DeleteSiteResponse response;
+    if (absl::Status st =
+            client.Check(client.sites().Delete(client.UnaryContext().get(), request, &response));
+        !st.ok()) {
+      Fail(st);
+    }
+    fmt::print("{} deleted\n", rm->id);
+  });
+}
+
+}  // namespace fenestra

@@ -1,0 +1,67 @@
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "fenestra/v1/job.pb.h"
+#include "fenestra/v1/service.pb.h"
+
+struct sqlite3;
+
+namespace fenestra {
+
+// The daemon's persistent state in one SQLite file (WAL journal): jobs (their submitted
+// form and latest JobInfo, result included), every job event in order, and sites.
+// Thread-safe.
+class JobStore {
+ public:
+  // Opens or creates the database at `path` and its tables.
+  static absl::StatusOr<std::unique_ptr<JobStore>> Open(const std::string& path);
+  ~JobStore();
+  JobStore(const JobStore&) = delete;
+  JobStore& operator=(const JobStore&) = delete;
+
+  // Stores a new job; returns its id "job-N" (N never reused), also set in `info`.
+  absl::StatusOr<std::string> InsertJob(v1::JobInfo& info, const v1::Job& job);
+  // Replaces a job's JobInfo (state, result, timings).
+  absl::Status UpdateJob(const v1::JobInfo& info);
+  // Removes a job and its events.
+  absl::Status DeleteJob(const std::string& id);
+  // Appends one event (its sequence must be new for the job).
+  absl::Status AppendEvent(const std::string& id, const v1::JobEvent& event);
+
+  struct StoredJob {
+    v1::JobInfo info;  // last_sequence = the job's last stored event
+    v1::Job job;
+  };
+  // Every job, oldest first.
+  absl::StatusOr<std::vector<StoredJob>> LoadJobs();
+  // A job's events in order.
+  absl::StatusOr<std::vector<v1::JobEvent>> LoadEvents(const std::string& id);
+
+  // Stores a new site; returns its id "site-N", also set in `info`.
+  absl::StatusOr<std::string> InsertSite(v1::SiteInfo& info, const std::string& weather_path);
+  // Replaces a site's SiteInfo.
+  absl::Status UpdateSite(const v1::SiteInfo& info);
+  absl::Status DeleteSite(const std::string& id);
+
+  struct StoredSite {
+    v1::SiteInfo info;
+    std::string weather_path;  // uploaded weather file in the data directory, or empty
+  };
+  // Every site, oldest first.
+  absl::StatusOr<std::vector<StoredSite>> LoadSites();
+
+ private:
+  explicit JobStore(sqlite3* db) : db_(db) {}
+  absl::Status Exec(const std::string& sql);
+
+  std::mutex mutex_;
+  sqlite3* db_;
+};
+
+}  // namespace fenestra

@@ -1,0 +1,99 @@
+#include "server/limits.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include "absl/strings/str_cat.h"
+
+namespace fenestra {
+namespace {
+
+absl::Status OverLimit(const std::string& what, double value, const std::string& limit,
+                       int64_t maximum) {
+  const int64_t shown =
+      value < 9e18 ? static_cast<int64_t>(value) : int64_t{9'000'000'000'000'000'000};
+  return absl::InvalidArgumentError(
+      absl::StrCat(what, " is ", shown, ", above this server's limit ", limit, " = ", maximum));
+}
+
+// Upper bound on the slats the blind generator can place (12 triangles each): pitch >= w.
+double MaxBlindSlats(const v1::Scene& scene, double min_slat_width_m) {
+  if (!scene.has_blind()) return 0;
+  const v1::VenetianBlind& blind = scene.blind();
+  double w = min_slat_width_m;
+  if (!(w > 0))
+    w = blind.slat_width_m().min() > 0 ? blind.slat_width_m().min() : blind.slat_width_m().value();
+  if (!(w > 0) || !std::isfinite(w)) return 0;  // invalid; the scene check reports it
+  const bool vertical = blind.orientation() == v1::VenetianBlind::VERTICAL;
+  const double extent = vertical ? scene.window().width_m() : scene.window().height_m();
+  if (!(extent > 0) || !std::isfinite(extent)) return 0;
+  return std::ceil(extent / w) + 1;
+}
+
+}  // namespace
+
+absl::Status CheckInlineScene(const v1::Scene& scene) {
+  for (int i = 0; i < scene.surfaces_size(); ++i) {
+    const v1::Surface& s = scene.surfaces(i);
+    if (s.has_obj()) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "surfaces[", i, "] ('", s.name(), "'): OBJ mesh '", s.obj().path(),
+          "' is a file on the client; send it inline as polygons (fenestra job submit and "
+          "fenestra site add do this)"));
+    }
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckSceneLimits(const v1::Scene& scene, const v1::Limits& limits,
+                              double min_slat_width_m) {
+  double triangles = 0;
+  for (const v1::Surface& s : scene.surfaces()) {
+    if (s.has_polygon()) triangles += std::max(0, s.polygon().vertices_size() - 2);
+    if (s.has_box()) triangles += 12;
+  }
+  triangles += 12 * MaxBlindSlats(scene, min_slat_width_m);
+  if (triangles > limits.max_triangles()) {
+    return OverLimit("the scene's triangle count (the blind at its most slats included)", triangles,
+                     "max_triangles", limits.max_triangles());
+  }
+  double sensors = scene.sensors_size();
+  for (const v1::SensorGrid& g : scene.sensor_grids()) {
+    if (!(g.spacing_m() > 0)) continue;  // invalid; the scene check reports it
+    const double nx = std::floor((g.x_max_m() - g.x_min_m()) / g.spacing_m()) + 1;
+    const double ny = std::floor((g.y_max_m() - g.y_min_m()) / g.spacing_m()) + 1;
+    if (nx > 0 && ny > 0) sensors += nx * ny;
+  }
+  if (!(sensors <= limits.max_sensors())) {
+    return OverLimit("the scene's sensor count (grids expanded)", sensors, "max_sensors",
+                     limits.max_sensors());
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckSamplingLimits(const v1::Sampling& sampling, const v1::Limits& limits,
+                                 bool indoor) {
+  if (sampling.outdoor_paths() > limits.max_outdoor_paths()) {
+    return OverLimit("sampling.outdoor_paths", static_cast<double>(sampling.outdoor_paths()),
+                     "max_outdoor_paths", limits.max_outdoor_paths());
+  }
+  if (indoor && sampling.indoor_paths_per_sensor() > limits.max_indoor_paths_per_sensor()) {
+    return OverLimit("sampling.indoor_paths_per_sensor",
+                     static_cast<double>(sampling.indoor_paths_per_sensor()),
+                     "max_indoor_paths_per_sensor", limits.max_indoor_paths_per_sensor());
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckBudgetLimits(const v1::Budget& budget, const v1::Limits& limits) {
+  const int evaluations = budget.max_evaluations() > 0 ? budget.max_evaluations() : 150;
+  if (evaluations > limits.max_evaluations()) {
+    return OverLimit("budget.max_evaluations", evaluations, "max_evaluations",
+                     limits.max_evaluations());
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace fenestra
