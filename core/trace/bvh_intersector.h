@@ -14,7 +14,7 @@
 
 #include "core/common/cpu_gpu.h"
 #include "core/common/vec3.h"
-#include "core/trace/bvh.h"
+#include "core/trace/bvh_layout.h"
 #include "core/trace/path.h"
 #include "core/trace/ray_offset.h"
 

@@ -17,9 +17,6 @@
 
 namespace fenestra {
 
-// Random stream of outdoor paths starting in `cell`: apart from the sensors' streams.
-inline constexpr uint32_t kOutdoorStreamBase = 0x80000000u;
-
 // Counts shared by the stages.
 struct TraceCounters {
   uint64_t rays = 0;               // closest-hit queries

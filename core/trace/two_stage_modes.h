@@ -64,6 +64,10 @@ struct TraceWindow {
   }
 };
 
+// Random stream of outdoor paths starting in cell c: kOutdoorStreamBase + c, apart from
+// the sensors' streams.
+inline constexpr uint32_t kOutdoorStreamBase = 0x80000000u;
+
 // Random purposes (PathRandom::Draw's second argument) of the two-stage modes.
 inline constexpr uint32_t kWindowSamplePurpose = 1;
 

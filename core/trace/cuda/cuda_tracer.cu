@@ -1,0 +1,352 @@
+// The GPU tracer (see cuda_tracer.h). Each kernel gives every block one row of the result
+// (a sensor, a window cell, or a sensor's batch) and accumulates that row in shared memory
+// in double precision, then adds it to global memory once per block.
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "core/trace/bvh_intersector.h"
+#include "core/trace/cuda/cuda_tracer.h"
+#include "core/trace/path.h"
+#include "core/trace/two_stage_modes.h"
+
+namespace fenestra {
+namespace {
+
+constexpr int kThreads = 256;
+constexpr int kCounters = 7;  // rays, then paths by PathEnd
+
+// A device allocation freed on scope exit; grows on demand.
+template <typename T>
+class DeviceBuffer {
+ public:
+  DeviceBuffer() = default;
+  ~DeviceBuffer() {
+    if (data_ != nullptr) cudaFree(data_);
+  }
+  DeviceBuffer(const DeviceBuffer&) = delete;
+  DeviceBuffer& operator=(const DeviceBuffer&) = delete;
+
+  cudaError_t Reserve(size_t count) {
+    count = std::max<size_t>(count, 1);
+    if (count <= capacity_) return cudaSuccess;
+    if (data_ != nullptr) cudaFree(data_);
+    data_ = nullptr;
+    capacity_ = 0;
+    const cudaError_t e = cudaMalloc(reinterpret_cast<void**>(&data_), count * sizeof(T));
+    if (e == cudaSuccess) capacity_ = count;
+    return e;
+  }
+  cudaError_t Upload(const T* host, size_t count) {
+    const cudaError_t e = Reserve(count);
+    if (e != cudaSuccess || count == 0) return e;
+    return cudaMemcpy(data_, host, count * sizeof(T), cudaMemcpyHostToDevice);
+  }
+  cudaError_t Zero(size_t count) {
+    const cudaError_t e = Reserve(count);
+    if (e != cudaSuccess) return e;
+    return cudaMemset(data_, 0, count * sizeof(T));
+  }
+  cudaError_t Download(T* host, size_t count) const {
+    return cudaMemcpy(host, data_, count * sizeof(T), cudaMemcpyDeviceToHost);
+  }
+  T* get() const { return data_; }
+
+ private:
+  T* data_ = nullptr;
+  size_t capacity_ = 0;
+};
+
+// Adds into a block's shared-memory row. Squares are taken per Add: right while a path
+// scores once (no splitting on the GPU).
+struct SharedSink {
+  double* sum;
+  double* sum_squares;  // may be null
+  FENESTRA_CPU_GPU void Add(int bin, double value) {
+#if defined(__CUDA_ARCH__)
+    atomicAdd(&sum[bin], value);
+    if (sum_squares != nullptr) atomicAdd(&sum_squares[bin], value * value);
+#endif
+  }
+  FENESTRA_CPU_GPU void EndPath() {}
+};
+
+// Zeroes the block's shared row and counters.
+__device__ void BeginRow(double* row, int size, unsigned long long* counters) {
+  for (int i = threadIdx.x; i < size; i += blockDim.x) row[i] = 0.0;
+  if (threadIdx.x < kCounters) counters[threadIdx.x] = 0;
+  __syncthreads();
+}
+
+// Adds the block's row and counters to global memory.
+__device__ void EndRow(const double* row, int size, double* global_row,
+                       const unsigned long long* counters, unsigned long long* global_counters) {
+  __syncthreads();
+  for (int i = threadIdx.x; i < size; i += blockDim.x) {
+    if (row[i] != 0.0) atomicAdd(&global_row[i], row[i]);
+  }
+  if (threadIdx.x < kCounters) atomicAdd(&global_counters[threadIdx.x], counters[threadIdx.x]);
+}
+
+// Per-thread tallies of paths, added to the block's counters once.
+struct ThreadCounts {
+  unsigned long long values[kCounters] = {};
+  __device__ void Add(const PathStats& stats) {
+    values[0] += stats.rays;
+    ++values[1 + static_cast<int>(stats.end)];
+  }
+  __device__ void Flush(unsigned long long* counters) const {
+    for (int i = 0; i < kCounters; ++i) {
+      if (values[i] != 0) atomicAdd(&counters[i], values[i]);
+    }
+  }
+};
+
+__global__ void OneStageKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
+                               const TraceSensor* sensors, uint64_t paths_per_sensor, uint64_t seed,
+                               double* sum, double* sum_squares, unsigned long long* counters) {
+  __shared__ double row[2 * kTregenzaBinCount];
+  __shared__ unsigned long long block_counters[kCounters];
+  BeginRow(row, 2 * kTregenzaBinCount, block_counters);
+  const uint32_t s = blockIdx.y;
+  SharedSink sink{row, row + kTregenzaBinCount};
+  OneStageMode<SharedSink> mode{sensors[s].position, sensors[s].normal, &sink};
+  ThreadCounts counts;
+  for (uint64_t p = blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x;
+       p < paths_per_sensor; p += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
+    counts.Add(TracePath(scene, surfaces, settings, PathRandom(seed, s, p), mode));
+  }
+  counts.Flush(block_counters);
+  EndRow(row, kTregenzaBinCount, sum + s * kTregenzaBinCount, block_counters, counters);
+  for (int i = threadIdx.x; i < kTregenzaBinCount; i += blockDim.x) {
+    if (row[kTregenzaBinCount + i] != 0.0) {
+      atomicAdd(&sum_squares[s * kTregenzaBinCount + i], row[kTregenzaBinCount + i]);
+    }
+  }
+}
+
+__global__ void OutdoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
+                              TraceWindow window, HemisphereBasis basis, uint64_t paths_per_cell,
+                              uint64_t seed, double* sum, double* sum_squares,
+                              unsigned long long* counters) {
+  __shared__ double row[2 * kTregenzaBinCount];
+  __shared__ unsigned long long block_counters[kCounters];
+  __shared__ HemisphereBasis shared_basis;
+  if (threadIdx.x == 0) shared_basis = basis;
+  BeginRow(row, 2 * kTregenzaBinCount, block_counters);
+  const int cell = static_cast<int>(blockIdx.y);
+  SharedSink sink{row, row + kTregenzaBinCount};
+  OutdoorMode<SharedSink> mode{window, &shared_basis, cell, &sink};
+  ThreadCounts counts;
+  for (uint64_t p = blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x;
+       p < paths_per_cell; p += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
+    counts.Add(
+        TracePath(scene, surfaces, settings, PathRandom(seed, kOutdoorStreamBase + cell, p), mode));
+  }
+  counts.Flush(block_counters);
+  EndRow(row, kTregenzaBinCount, sum + cell * kTregenzaBinCount, block_counters, counters);
+  for (int i = threadIdx.x; i < kTregenzaBinCount; i += blockDim.x) {
+    if (row[kTregenzaBinCount + i] != 0.0) {
+      atomicAdd(&sum_squares[cell * kTregenzaBinCount + i], row[kTregenzaBinCount + i]);
+    }
+  }
+}
+
+__global__ void IndoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
+                             const TraceSensor* sensors, int sensor_count, TraceWindow window,
+                             HemisphereBasis basis, uint64_t paths_per_sensor, int batches,
+                             uint64_t seed, double* sum, unsigned long long* counters) {
+  extern __shared__ double row[];  // basis.cell_count
+  __shared__ unsigned long long block_counters[kCounters];
+  __shared__ HemisphereBasis shared_basis;
+  if (threadIdx.x == 0) shared_basis = basis;
+  BeginRow(row, basis.cell_count, block_counters);
+  const int s = static_cast<int>(blockIdx.y) / batches;
+  const int b = static_cast<int>(blockIdx.y) % batches;
+  const uint64_t first = b * paths_per_sensor / batches;
+  const uint64_t last = (b + 1) * paths_per_sensor / batches;
+  SharedSink sink{row, nullptr};
+  IndoorMode<SharedSink> mode{sensors[s].position, sensors[s].normal,    window,
+                              &shared_basis,       settings.max_bounces, &sink};
+  ThreadCounts counts;
+  for (uint64_t p = first + blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x; p < last;
+       p += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
+    counts.Add(TracePath(scene, surfaces, settings, PathRandom(seed, s, p), mode));
+  }
+  counts.Flush(block_counters);
+  EndRow(row, basis.cell_count,
+         sum + (static_cast<size_t>(b) * sensor_count + s) * basis.cell_count, block_counters,
+         counters);
+}
+
+std::string Error(cudaError_t e) { return std::string("CUDA: ") + cudaGetErrorString(e); }
+
+}  // namespace
+
+struct CudaTracer::Impl {
+  int device = 0;
+  int multiprocessors = 1;
+  std::string name;
+  DeviceBuffer<BvhNode> nodes;
+  DeviceBuffer<BvhTriangle> triangles;
+  DeviceBuffer<uint32_t> triangle_material;
+  DeviceBuffer<TraceMaterial> materials;
+  DeviceBuffer<TraceSensor> sensors;
+  DeviceBuffer<double> sum, sum_squares;
+  DeviceBuffer<unsigned long long> counters;
+  bool has_scene = false;
+
+  BvhIntersector Scene() const { return {nodes.get(), triangles.get()}; }
+  SurfaceTable Surfaces() const { return {materials.get(), triangle_material.get()}; }
+
+  // Blocks along x for `rows` rows of `paths` paths: enough to fill the device twice.
+  unsigned int BlocksPerRow(uint64_t paths, unsigned int rows) const {
+    const uint64_t wanted = (paths + kThreads - 1) / kThreads;
+    const uint64_t fill = std::max<uint64_t>(1, 16ull * multiprocessors / std::max(1u, rows));
+    return static_cast<unsigned int>(std::max<uint64_t>(1, std::min(wanted, fill)));
+  }
+
+  // Zeroes the outputs, runs `launch`, times it, downloads.
+  template <class Launch>
+  std::string Run(size_t sum_size, bool squares, Launch launch, double* host_sum,
+                  double* host_sum_squares, CudaCounters* out) {
+    if (!has_scene) return "CUDA tracer: no scene uploaded";
+    cudaError_t e = cudaSetDevice(device);
+    if (e == cudaSuccess) e = sum.Zero(sum_size);
+    if (e == cudaSuccess && squares) e = sum_squares.Zero(sum_size);
+    if (e == cudaSuccess) e = counters.Zero(kCounters);
+    if (e != cudaSuccess) return Error(e);
+    cudaEvent_t start, stop;
+    cudaEventCreate(&start);
+    cudaEventCreate(&stop);
+    cudaEventRecord(start);
+    launch();
+    e = cudaGetLastError();
+    cudaEventRecord(stop);
+    if (e == cudaSuccess) e = cudaEventSynchronize(stop);
+    float ms = 0;
+    cudaEventElapsedTime(&ms, start, stop);
+    cudaEventDestroy(start);
+    cudaEventDestroy(stop);
+    if (e == cudaSuccess) e = cudaDeviceSynchronize();
+    unsigned long long host_counters[kCounters] = {};
+    if (e == cudaSuccess) e = sum.Download(host_sum, sum_size);
+    if (e == cudaSuccess && squares) e = sum_squares.Download(host_sum_squares, sum_size);
+    if (e == cudaSuccess) e = counters.Download(host_counters, kCounters);
+    if (e != cudaSuccess) return Error(e);
+    out->rays = host_counters[0];
+    for (int i = 0; i < 6; ++i) out->ends[i] = host_counters[1 + i];
+    out->kernel_seconds = ms / 1000.0;
+    return "";
+  }
+};
+
+int CudaDeviceCount() {
+  int count = 0;
+  if (cudaGetDeviceCount(&count) != cudaSuccess) return 0;
+  return count;
+}
+
+std::string CudaDeviceName(int device) {
+  cudaDeviceProp properties;
+  if (device >= CudaDeviceCount() || cudaGetDeviceProperties(&properties, device) != cudaSuccess) {
+    return "";
+  }
+  return properties.name;
+}
+
+CudaTracer::CudaTracer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+CudaTracer::~CudaTracer() = default;
+
+std::unique_ptr<CudaTracer> CudaTracer::Create(int device, std::string* error) {
+  const int count = CudaDeviceCount();
+  if (device < 0 || device >= count) {
+    *error = count == 0 ? "no CUDA device is available on this host"
+                        : "CUDA device " + std::to_string(device) + " does not exist (" +
+                              std::to_string(count) + " visible)";
+    return nullptr;
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->device = device;
+  cudaDeviceProp properties;
+  cudaError_t e = cudaGetDeviceProperties(&properties, device);
+  if (e == cudaSuccess) e = cudaSetDevice(device);
+  if (e != cudaSuccess) {
+    *error = Error(e);
+    return nullptr;
+  }
+  impl->multiprocessors = properties.multiProcessorCount;
+  impl->name = properties.name;
+  return std::unique_ptr<CudaTracer>(new CudaTracer(std::move(impl)));
+}
+
+std::string CudaTracer::device_name() const { return impl_->name; }
+
+std::string CudaTracer::SetScene(const BvhLayout& bvh, const uint32_t* triangle_material,
+                                 size_t triangle_count, const TraceMaterial* materials,
+                                 size_t material_count) {
+  cudaError_t e = cudaSetDevice(impl_->device);
+  if (e == cudaSuccess) e = impl_->nodes.Upload(bvh.nodes.data(), bvh.nodes.size());
+  if (e == cudaSuccess) e = impl_->triangles.Upload(bvh.triangles.data(), bvh.triangles.size());
+  if (e == cudaSuccess) {
+    e = impl_->triangle_material.Upload(triangle_material, triangle_count);
+  }
+  if (e == cudaSuccess) {
+    e = impl_->materials.Upload(materials, material_count);
+  }
+  impl_->has_scene = e == cudaSuccess;
+  return e == cudaSuccess ? "" : Error(e);
+}
+
+std::string CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
+                                 uint64_t paths_per_sensor, uint64_t seed, const PathSettings& path,
+                                 double* sum, double* sum_squares, CudaCounters* counters) {
+  Impl& d = *impl_;
+  if (cudaError_t e = d.sensors.Upload(sensors, sensor_count); e != cudaSuccess) return Error(e);
+  const dim3 grid(d.BlocksPerRow(paths_per_sensor, sensor_count), sensor_count);
+  return d.Run(
+      static_cast<size_t>(sensor_count) * kTregenzaBinCount, true,
+      [&] {
+        OneStageKernel<<<grid, kThreads>>>(d.Scene(), d.Surfaces(), path, d.sensors.get(),
+                                           paths_per_sensor, seed, d.sum.get(), d.sum_squares.get(),
+                                           d.counters.get());
+      },
+      sum, sum_squares, counters);
+}
+
+std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
+                                uint64_t paths_per_cell, uint64_t seed, const PathSettings& path,
+                                double* sum, double* sum_squares, CudaCounters* counters) {
+  Impl& d = *impl_;
+  const dim3 grid(d.BlocksPerRow(paths_per_cell, basis.cell_count), basis.cell_count);
+  return d.Run(
+      static_cast<size_t>(basis.cell_count) * kTregenzaBinCount, true,
+      [&] {
+        OutdoorKernel<<<grid, kThreads>>>(d.Scene(), d.Surfaces(), path, window, basis,
+                                          paths_per_cell, seed, d.sum.get(), d.sum_squares.get(),
+                                          d.counters.get());
+      },
+      sum, sum_squares, counters);
+}
+
+std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
+                               const TraceWindow& window, const HemisphereBasis& basis,
+                               uint64_t paths_per_sensor, int batches, uint64_t seed,
+                               const PathSettings& path, double* sum, CudaCounters* counters) {
+  Impl& d = *impl_;
+  if (cudaError_t e = d.sensors.Upload(sensors, sensor_count); e != cudaSuccess) return Error(e);
+  const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
+  const dim3 grid(d.BlocksPerRow(paths_per_sensor / batches + 1, rows), rows);
+  const size_t shared = static_cast<size_t>(basis.cell_count) * sizeof(double);
+  return d.Run(
+      static_cast<size_t>(batches) * sensor_count * basis.cell_count, false,
+      [&] {
+        IndoorKernel<<<grid, kThreads, shared>>>(d.Scene(), d.Surfaces(), path, d.sensors.get(),
+                                                 sensor_count, window, basis, paths_per_sensor,
+                                                 batches, seed, d.sum.get(), d.counters.get());
+      },
+      sum, nullptr, counters);
+}
+
+}  // namespace fenestra

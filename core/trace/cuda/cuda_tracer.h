@@ -1,0 +1,70 @@
+#pragma once
+
+// The GPU tracer: the shared per-path code (core/trace/path.h, two_stage_modes.h) with the
+// BVH traversal of core/trace/bvh_intersector.h, one CUDA thread per path. Host-only
+// declarations (no CUDA headers), so C++ code includes it; errors come back as text and
+// the caller turns them into a status.
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "core/geometry/hemisphere_basis.h"
+#include "core/trace/bvh_layout.h"
+#include "core/trace/path.h"
+#include "core/trace/two_stage_modes.h"
+
+namespace fenestra {
+
+// What the kernels counted.
+struct CudaCounters {
+  uint64_t rays = 0;      // closest-hit queries
+  uint64_t ends[6] = {};  // paths by PathEnd
+  double kernel_seconds = 0;
+};
+
+// Name of CUDA device `device`, or "" when there is none.
+std::string CudaDeviceName(int device = 0);
+
+// Number of visible CUDA devices (0 without a driver or device).
+int CudaDeviceCount();
+
+class CudaTracer {
+ public:
+  // A tracer on `device`; null with `error` set when there is no such device.
+  static std::unique_ptr<CudaTracer> Create(int device, std::string* error);
+  ~CudaTracer();
+  CudaTracer(const CudaTracer&) = delete;
+  CudaTracer& operator=(const CudaTracer&) = delete;
+
+  // Uploads the scene to trace next: its BVH, and per triangle an index into `materials`.
+  // "" or the error.
+  std::string SetScene(const BvhLayout& bvh, const uint32_t* triangle_material,
+                       size_t triangle_count, const TraceMaterial* materials,
+                       size_t material_count);
+
+  // One-stage paths; sum and sum_squares get sensors x kTregenzaBinCount values.
+  std::string OneStage(const TraceSensor* sensors, int sensor_count, uint64_t paths_per_sensor,
+                       uint64_t seed, const PathSettings& path, double* sum, double* sum_squares,
+                       CudaCounters* counters);
+
+  // Outdoor paths, paths_per_cell from each basis cell; sums per cell x kTregenzaBinCount,
+  // the same streams as TraceOutdoorCpu.
+  std::string Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
+                      uint64_t paths_per_cell, uint64_t seed, const PathSettings& path, double* sum,
+                      double* sum_squares, CudaCounters* counters);
+
+  // Indoor paths in `batches` contiguous batches per sensor, as TraceIndoorCpu; sum gets
+  // [(batch * sensors + sensor) * cells + cell].
+  std::string Indoor(const TraceSensor* sensors, int sensor_count, const TraceWindow& window,
+                     const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
+                     uint64_t seed, const PathSettings& path, double* sum, CudaCounters* counters);
+
+  std::string device_name() const;
+
+ private:
+  struct Impl;
+  explicit CudaTracer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace fenestra
