@@ -1,0 +1,89 @@
+#include "server/limits.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "server/config.h"
+
+namespace fenestra {
+namespace {
+
+using ::testing::HasSubstr;
+
+v1::Limits DefaultLimits() { return ResolveConfig(v1::DaemonConfig())->limits(); }
+
+v1::Scene SceneWithBlind(double min_width_m) {
+  v1::Scene scene;
+  scene.mutable_window()->set_width_m(2);
+  scene.mutable_window()->set_height_m(1.5);
+  v1::Surface& floor = *scene.add_surfaces();
+  for (int i = 0; i < 4; ++i) floor.mutable_polygon()->add_vertices();
+  scene.add_surfaces()->mutable_box();
+  scene.mutable_blind()->mutable_slat_width_m()->set_value(0.1);
+  scene.mutable_blind()->mutable_slat_width_m()->set_min(min_width_m);
+  return scene;
+}
+
+TEST(LimitsTest, TrianglesCountPolygonsBoxesAndTheBlindAtItsMostSlats) {
+  v1::Limits limits = DefaultLimits();
+  // 2 + 12 + 12 x (1.5 / 0.125 + 1) = 170 triangles
+  limits.set_max_triangles(170);
+  EXPECT_TRUE(CheckSceneLimits(SceneWithBlind(0.125), limits).ok());
+  limits.set_max_triangles(169);
+  const absl::Status status = CheckSceneLimits(SceneWithBlind(0.125), limits);
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), HasSubstr("max_triangles = 169"));
+  EXPECT_THAT(status.message(), HasSubstr("170"));
+  // A job's narrower width range counts
+  limits.set_max_triangles(2'000'000);
+  EXPECT_THAT(CheckSceneLimits(SceneWithBlind(0.1), limits, 1e-6).message(),
+              HasSubstr("max_triangles"));
+}
+
+TEST(LimitsTest, SensorGridsAreExpanded) {
+  v1::Scene scene;
+  scene.add_sensors();
+  v1::SensorGrid& grid = *scene.add_sensor_grids();
+  grid.set_x_max_m(9.9);  // 10 x 5 cells
+  grid.set_y_max_m(4.9);
+  grid.set_spacing_m(1);
+  v1::Limits limits = DefaultLimits();
+  limits.set_max_sensors(51);
+  EXPECT_TRUE(CheckSceneLimits(scene, limits).ok());
+  limits.set_max_sensors(50);
+  EXPECT_THAT(CheckSceneLimits(scene, limits).message(), HasSubstr("max_sensors = 50"));
+  grid.set_spacing_m(1e-6);
+  limits.set_max_sensors(10'000);
+  EXPECT_THAT(CheckSceneLimits(scene, limits).message(), HasSubstr("max_sensors"));
+}
+
+TEST(LimitsTest, PathsAndEvaluations) {
+  const v1::Limits limits = DefaultLimits();
+  v1::Sampling sampling;
+  sampling.set_outdoor_paths(2'000'000'000);
+  EXPECT_THAT(CheckSamplingLimits(sampling, limits, false).message(),
+              HasSubstr("max_outdoor_paths = 1000000000"));
+  sampling.set_outdoor_paths(1000);
+  sampling.set_indoor_paths_per_sensor(20'000'000);
+  EXPECT_TRUE(CheckSamplingLimits(sampling, limits, false).ok());
+  EXPECT_THAT(CheckSamplingLimits(sampling, limits, true).message(),
+              HasSubstr("max_indoor_paths_per_sensor"));
+  v1::Budget budget;
+  EXPECT_TRUE(CheckBudgetLimits(budget, limits).ok());  // the default, 150
+  budget.set_max_evaluations(10'001);
+  EXPECT_THAT(CheckBudgetLimits(budget, limits).message(), HasSubstr("max_evaluations = 10000"));
+}
+
+TEST(LimitsTest, ObjMeshesMustBeInlined) {
+  v1::Scene scene;
+  v1::Surface& s = *scene.add_surfaces();
+  s.set_name("city");
+  s.mutable_obj()->set_path("city.obj");
+  const absl::Status status = CheckInlineScene(scene);
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), HasSubstr("city.obj"));
+  EXPECT_THAT(status.message(), HasSubstr("inline"));
+}
+
+}  // namespace
+}  // namespace fenestra

@@ -1,0 +1,147 @@
+#include "server/outdoor_cache.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+namespace fenestra {
+namespace {
+
+using ::testing::HasSubstr;
+namespace fs = std::filesystem;
+
+OutdoorMatrix TestMatrix(const std::string& key) {
+  OutdoorMatrix m;
+  m.key = key;
+  m.coefficients = Matrix::Random(288, 146).cwiseAbs();
+  m.standard_error = 0.01 * m.coefficients;
+  m.basis_cells = 288;
+  m.paths = 20000;
+  m.bounces = 30;
+  m.seed = 7;
+  m.wall_seconds = 1.5;
+  m.backend = "embree-cpu";
+  return m;
+}
+
+std::string FreshDir(const std::string& name) {
+  const std::string dir = testing::TempDir() + "/outdoor_cache_test_" + name;
+  fs::remove_all(dir);
+  return dir;
+}
+
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST(OutdoorCacheTest, EncodeDecodeRoundTrip) {
+  const OutdoorMatrix m = TestMatrix("abc");
+  absl::StatusOr<OutdoorMatrix> back = DecodeOutdoorMatrix(EncodeOutdoorMatrix(m));
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(back->key, "abc");
+  EXPECT_TRUE(back->coefficients == m.coefficients);
+  EXPECT_TRUE(back->standard_error == m.standard_error);
+  EXPECT_EQ(back->paths, 20000);
+  EXPECT_EQ(back->seed, 7u);
+  EXPECT_EQ(back->backend, "embree-cpu");
+}
+
+TEST(OutdoorCacheTest, FlippedByteOrTruncationIsDataLoss) {
+  std::string bytes = EncodeOutdoorMatrix(TestMatrix("abc"));
+  std::string flipped = bytes;
+  flipped[bytes.size() / 2] ^= 0x40;
+  absl::Status status = DecodeOutdoorMatrix(flipped).status();
+  EXPECT_EQ(status.code(), absl::StatusCode::kDataLoss);
+  EXPECT_THAT(status.message(), HasSubstr("checksum"));
+  EXPECT_EQ(DecodeOutdoorMatrix(bytes.substr(0, bytes.size() - 8)).status().code(),
+            absl::StatusCode::kDataLoss);
+  EXPECT_EQ(DecodeOutdoorMatrix("not a cache file").status().code(), absl::StatusCode::kDataLoss);
+}
+
+TEST(OutdoorCacheTest, PutWritesAFileThatLoadReadsBackAndCorruptFilesAreDiscarded) {
+  const std::string dir = FreshDir("load");
+  const OutdoorMatrix good = TestMatrix("good");
+  {
+    OutdoorCache cache(dir);
+    ASSERT_TRUE(cache.Load().ok());
+    ASSERT_TRUE(cache.Put(std::make_shared<OutdoorMatrix>(good)).ok());
+    ASSERT_TRUE(cache.Put(std::make_shared<OutdoorMatrix>(TestMatrix("bad"))).ok());
+    EXPECT_FALSE(cache.LoadedFromDisk("good"));
+    // Corrupt one file on disk
+    const std::string path = cache.PathFor("bad");
+    std::string bytes = ReadAll(path);
+    bytes[bytes.size() - 100] ^= 0x01;
+    std::ofstream(path, std::ios::binary) << bytes;
+  }
+  OutdoorCache cache(dir);
+  absl::StatusOr<OutdoorCache::LoadReport> report = cache.Load();
+  ASSERT_TRUE(report.ok()) << report.status();
+  EXPECT_EQ(report->loaded, 1);
+  ASSERT_EQ(report->discarded.size(), 1u);
+  EXPECT_THAT(report->discarded[0], HasSubstr("checksum"));
+  ASSERT_NE(cache.Find("good"), nullptr);
+  EXPECT_TRUE(cache.LoadedFromDisk("good"));
+  EXPECT_TRUE(cache.Find("good")->coefficients == good.coefficients);
+  EXPECT_EQ(cache.Find("bad"), nullptr);
+  EXPECT_FALSE(fs::exists(cache.PathFor("bad")));
+}
+
+TEST(OutdoorCacheTest, ConcurrentRequestsForOneKeyComputeOnce) {
+  OutdoorCache cache(FreshDir("once"));
+  ASSERT_TRUE(cache.Load().ok());
+  std::atomic<int> computations = 0;
+  auto compute = [&]() -> absl::StatusOr<OutdoorMatrix> {
+    ++computations;
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    return TestMatrix("k");
+  };
+  std::vector<std::thread> threads;
+  std::atomic<int> computed = 0;
+  for (int i = 0; i < 4; ++i) {
+    threads.emplace_back([&] {
+      absl::StatusOr<OutdoorCache::Lookup> lookup = cache.GetOrCompute("k", compute);
+      ASSERT_TRUE(lookup.ok());
+      EXPECT_EQ(lookup->matrix->key, "k");
+      computed += lookup->computed;
+    });
+  }
+  for (std::thread& t : threads) t.join();
+  EXPECT_EQ(computations, 1);
+  EXPECT_EQ(computed, 1);
+}
+
+TEST(OutdoorCacheTest, FailuresAreNotCachedAndWaitsCanBeCancelled) {
+  OutdoorCache cache(FreshDir("fail"));
+  ASSERT_TRUE(cache.Load().ok());
+  auto failing = []() -> absl::StatusOr<OutdoorMatrix> {
+    return absl::InvalidArgumentError("no window");
+  };
+  EXPECT_EQ(cache.GetOrCompute("k", failing).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(cache.Find("k"), nullptr);
+
+  // A waiter gives up when cancelled while another caller computes
+  std::atomic<bool> release = false;
+  std::thread slow([&] {
+    (void)cache.GetOrCompute("slow", [&]() -> absl::StatusOr<OutdoorMatrix> {
+      while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      return TestMatrix("slow");
+    });
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  absl::Status waited = cache.GetOrCompute("slow", failing, [] { return true; }).status();
+  EXPECT_EQ(waited.code(), absl::StatusCode::kCancelled);
+  release = true;
+  slow.join();
+  EXPECT_NE(cache.Find("slow"), nullptr);
+}
+
+}  // namespace
+}  // namespace fenestra
