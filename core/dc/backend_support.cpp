@@ -1,5 +1,6 @@
 #include "core/dc/backend_support.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
@@ -31,6 +32,15 @@ absl::Status CheckOneStageInput(const std::vector<Sensor>& sensors,
   if (options.threads < 0) {
     return absl::InvalidArgumentError(
         absl::StrCat("threads must be >= 0 (0 = all cores), got ", options.threads));
+  }
+  if (options.weight_windows &&
+      !(std::isfinite(options.importance_cell_m) && options.importance_cell_m > 0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("importance cell size must be positive, got ", options.importance_cell_m));
+  }
+  if (options.pilot_paths_per_sensor < 0) {
+    return absl::InvalidArgumentError(absl::StrCat("pilot paths must be >= 0 (0 = automatic), got ",
+                                                   options.pilot_paths_per_sensor));
   }
   if (options.batches < 0 || options.batches > options.paths_per_sensor) {
     return absl::InvalidArgumentError(
@@ -69,7 +79,8 @@ std::vector<TraceSensor> LocalSensors(const TraceGeometry& geometry,
 }
 
 void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum_squares,
-                  int sensor_count, int64_t paths, OneStageResult* result) {
+                  const std::vector<double>& sky_sum_squares, int sensor_count, int64_t paths,
+                  OneStageResult* result) {
   const double n = static_cast<double>(paths);
   result->paths_per_sensor = paths;
   result->coefficients.resize(sensor_count, kDaylightBins);
@@ -82,19 +93,22 @@ void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum
     return std::sqrt(std::max(0.0, (total_squares / n - mean * mean) / (n - 1)));
   };
   for (int s = 0; s < sensor_count; ++s) {
-    double sky = 0, sky_squares = 0;
+    double sky = 0;
     for (int b = 0; b < kDaylightBins; ++b) {
       const size_t k = static_cast<size_t>(s) * kDaylightBins + b;
       result->coefficients(s, b) = sum[k] / n;
       result->standard_error(s, b) = standard_error(sum[k], sum_squares[k]);
-      if (b > 0) {
-        sky += sum[k];
-        sky_squares += sum_squares[k];  // a path scores one bin: no cross terms
-      }
+      if (b > 0) sky += sum[k];
     }
     result->sky_sum(s) = sky / n;
-    result->sky_sum_standard_error(s) = standard_error(sky, sky_squares);
+    result->sky_sum_standard_error(s) = standard_error(sky, sky_sum_squares[s]);
   }
+}
+
+int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count) {
+  if (options.pilot_paths_per_sensor > 0) return options.pilot_paths_per_sensor;
+  const int64_t cap = std::max<int64_t>(20000, 600000 / std::max<size_t>(1, sensor_count));
+  return std::max<int64_t>(1, std::min(options.paths_per_sensor / 4, cap));
 }
 
 void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int batches, int64_t paths,

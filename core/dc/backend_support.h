@@ -22,10 +22,20 @@ PathSettings PathSettingsFor(const OneStageOptions& options);
 std::vector<TraceSensor> LocalSensors(const TraceGeometry& geometry,
                                       const std::vector<Sensor>& sensors);
 
-// Coefficients, standard errors and sky sums from per-sensor, per-bin sums of path values
-// and of their squares (each path scores at most one bin), over `paths` paths per sensor.
+// Coefficients, standard errors and sky sums from per-sensor, per-bin sums of path scores
+// and of their squares, and per-sensor sums of the squared sky score of each path, over
+// `paths` paths per sensor.
 void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum_squares,
-                  int sensor_count, int64_t paths, OneStageResult* result);
+                  const std::vector<double>& sky_sum_squares, int sensor_count, int64_t paths,
+                  OneStageResult* result);
+
+// Weight windows need a pilot that saw light: with fewer scoring pilot paths than this
+// (all sensors), the importance map is mostly noise and plain roulette is used instead.
+inline constexpr uint64_t kMinPilotScoringPaths = 200;
+
+// Pilot paths per sensor for weight windows: options.pilot_paths_per_sensor, or when 0,
+// a quarter of the paths, at most max(20000, 600000 / sensors).
+int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count);
 
 // batch_coefficients from per-batch sums (batch_sum as OneStageTally), when batches > 1.
 void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int batches, int64_t paths,

@@ -31,6 +31,14 @@ struct OneStageOptions {
   // more than 1. 1 = survive each reflection with probability equal to the reflectance.
   // 0.25 was the most efficient (variance x time) on the lightwell (bench/README.md).
   double roulette_threshold = 0.25;
+  // Weight windows (unbiased, weights <= 1): a pilot pass (plain roulette) learns how much
+  // light paths leaving each region of the scene collect (cells of importance_cell_m,
+  // split by the side a surface faces); then the roulette threshold follows that map and
+  // paths split where they matter. Without enough light in the pilot
+  // (kMinPilotScoringPaths), plain roulette is used.
+  bool weight_windows = true;
+  int64_t pilot_paths_per_sensor = 0;  // 0 = automatic (bench/README.md)
+  double importance_cell_m = 0.5;
   // Also report D of this many independent batches (each sensor's paths split into equal,
   // contiguous ranges), for jackknife errors of non-linear results; 0 or 1 = none.
   int batches = 0;
@@ -47,11 +55,14 @@ struct OneStageResult {
   // With options.batches = B > 1: D of each batch; `coefficients` is their mean.
   std::vector<Matrix> batch_coefficients;
   int64_t paths_per_sensor = 0;
-  uint64_t rays_traced = 0;         // closest-hit queries, all sensors
-  uint64_t escaped_paths = 0;       // paths that left the scene (scored)
-  uint64_t roulette_paths = 0;      // paths ended by Russian roulette
-  uint64_t bounce_limit_paths = 0;  // paths cut by the bounce limit (the bias it causes)
-  uint64_t truncated_paths = 0;     // paths cut by the safety cap on interactions
+  uint64_t rays_traced = 0;         // closest-hit queries, all sensors, pilot included
+  uint64_t branches = 0;            // paths plus weight-window splits
+  int64_t pilot_paths = 0;          // weight-window pilot paths, all sensors (not in D)
+  size_t importance_cells = 0;      // cells the pilot learned; 0 = weight windows not used
+  uint64_t escaped_paths = 0;       // branches that left the scene (scored)
+  uint64_t roulette_paths = 0;      // branches ended by Russian roulette
+  uint64_t bounce_limit_paths = 0;  // branches cut by the bounce limit (the bias it causes)
+  uint64_t truncated_paths = 0;     // branches cut by the safety cap on interactions
   double max_path_weight = 0;       // largest throughput any path carried (<= 1)
   int threads = 0;
   double wall_seconds = 0;  // tracing time, scene preparation included

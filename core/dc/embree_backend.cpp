@@ -24,23 +24,40 @@ class EmbreeBackend : public DcBackend {
     FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(mesh, materials));
     FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
 
-    // Trace
+    // Learn the importance map, then trace
     OneStageSettings settings;
     settings.paths_per_sensor = static_cast<uint64_t>(options.paths_per_sensor);
     settings.seed = options.seed;
     settings.threads = options.threads;
     settings.batches = std::max(1, options.batches);
     settings.path = PathSettingsFor(options);
-    const OneStageTally tally = TraceOneStageCpu(scene->Intersector(), geometry.Surfaces(),
-                                                 LocalSensors(geometry, sensors), settings);
+    const std::vector<TraceSensor> local = LocalSensors(geometry, sensors);
+    const EmbreeIntersector intersector = scene->Intersector();
+    ImportancePilot pilot;
+    ImportanceMap map;
+    if (options.weight_windows) {
+      pilot = TraceImportancePilotCpu(intersector, geometry.Surfaces(), local,
+                                      PilotPathsPerSensor(options, sensors.size()), options.seed,
+                                      settings.path, options.threads,
+                                      static_cast<float>(options.importance_cell_m));
+      if (pilot.scoring_paths >= kMinPilotScoringPaths) {
+        map = pilot.table.Map();
+        settings.path.importance = &map;
+        for (double score : pilot.mean_score) settings.window_scale.push_back(float(score));
+      }
+    }
+    const OneStageTally tally = TraceOneStageCpu(intersector, geometry.Surfaces(), local, settings);
 
     // Report
     OneStageResult result;
-    FillFromSums(tally.sum, tally.sum_squares, tally.sensor_count, options.paths_per_sensor,
-                 &result);
+    FillFromSums(tally.sum, tally.sum_squares, tally.sky_sum_squares, tally.sensor_count,
+                 options.paths_per_sensor, &result);
     FillBatches(tally.batch_sum, tally.sensor_count, tally.batches, options.paths_per_sensor,
                 &result);
-    result.rays_traced = tally.rays;
+    result.rays_traced = tally.rays + pilot.rays;
+    result.branches = tally.branches;
+    result.pilot_paths = static_cast<int64_t>(pilot.paths);
+    result.importance_cells = settings.path.importance ? pilot.table.CellCount() : 0;
     result.escaped_paths = tally.ends[static_cast<int>(PathEnd::kEscaped)];
     result.roulette_paths = tally.ends[static_cast<int>(PathEnd::kRoulette)];
     result.bounce_limit_paths = tally.ends[static_cast<int>(PathEnd::kBounceLimit)];

@@ -3,7 +3,8 @@
 // TracePath follows one path: its mode samples the start, then the loop finds the closest
 // hit, scatters (diffuse reflection about the geometric normal turned to the incoming side,
 // or straight-through transmission at glazing), weights by the surface, applies the bounce
-// limit and Russian roulette, and hands an escaping ray back to the mode. Everything here
+// limit and Russian roulette (or weight windows: roulette and splitting by an importance
+// map), and hands an escaping ray back to the mode. Everything here
 // is POD, fixed arrays and raw pointers, templated on:
 //
 //   Intersector  bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const;
@@ -14,6 +15,10 @@
 //                       const PathRandom&)                      before each reflection
 //     void Escape(const PathState&)                              the ray left the scene
 //     void Finish(const PathStats&)                              once, at the end
+//
+// With weight windows a path may split into branches (a tree): Start and Finish are called
+// once per path, AtReflection and Escape once per event of any branch. PathState::vertex
+// numbers the interactions of the whole tree, so every draw of a path is distinct.
 //
 // OneStageMode is the one-stage daylight-coefficient estimator (DESIGN.md section 1): start
 // at a sensor with a cosine-sampled direction and add pi times the path weight to the sky
@@ -31,6 +36,7 @@
 #include "core/common/cpu_gpu.h"
 #include "core/common/vec3.h"
 #include "core/sky/sky_bin.h"
+#include "core/trace/importance_map.h"
 #include "core/trace/philox.h"
 #include "core/trace/ray_offset.h"
 #include "core/trace/sampling.h"
@@ -71,7 +77,17 @@ struct PathSettings {
   bool russian_roulette;     // play roulette when the weight falls below the threshold
   float roulette_threshold;  // in (0, 1]; 1 = survive with the reflectance, weight stays 1
   uint32_t max_vertices;     // hard cap on surface interactions per path (safety net)
+  // Weight windows, when set: at a reflection at x the threshold becomes
+  // min(1, window_scale / importance(x)) (window_scale = the mean score of a path from the
+  // start), and a path heavier than twice it splits into copies of equal weight. Both keep
+  // the estimate unbiased and every weight <= 1.
+  const ImportanceMap* importance = nullptr;
+  float window_scale = 0.0f;
 };
+
+// Branches a split path may hold waiting, and copies one split may make.
+inline constexpr int kMaxPendingBranches = 64;
+inline constexpr int kMaxSplit = 16;
 
 // Where a path is: the next ray to trace and what it carries.
 struct PathState {
@@ -100,39 +116,36 @@ enum class PathEnd : uint8_t {
 };
 
 struct PathStats {
-  uint32_t rays;     // closest-hit queries
-  float max_weight;  // largest throughput the path carried
-  PathEnd end;
+  uint32_t rays;      // closest-hit queries, all branches
+  float max_weight;   // largest throughput any branch carried
+  PathEnd end;        // how the last branch ended
+  uint32_t branches;  // 1 + splits
+  uint32_t ends[6];   // branches by PathEnd
 };
 
-// Follows one path from mode.Start to its end. See the file comment for the contracts.
+namespace path_internal {
+
+// Follows one branch until it ends; pushes the copies of any split onto `pending`.
 template <class Intersector, class Mode>
-FENESTRA_CPU_GPU inline PathStats TracePath(const Intersector& scene, const SurfaceTable& surfaces,
-                                            const PathSettings& settings, const PathRandom& random,
-                                            Mode& mode) {
-  PathState path = mode.Start(scene, random);
-  PathStats stats{0, path.weight, PathEnd::kEscaped};
+FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const SurfaceTable& surfaces,
+                                             const PathSettings& settings, const PathRandom& random,
+                                             Mode& mode, PathState path, uint32_t* interactions,
+                                             PathState* pending, int* pending_count,
+                                             PathStats* stats) {
   for (;;) {
-    if (path.vertex >= settings.max_vertices) {
-      stats.end = PathEnd::kTruncated;
-      break;
-    }
+    if (*interactions >= settings.max_vertices) return PathEnd::kTruncated;
     // Find the closest hit; an escaping ray is the mode's to score
     SurfaceHit hit;
-    ++stats.rays;
+    ++stats->rays;
     if (!scene.Intersect(path.origin, path.direction, &hit)) {
       mode.Escape(path);
-      stats.end = PathEnd::kEscaped;
-      break;
+      return PathEnd::kEscaped;
     }
-    ++path.vertex;
+    path.vertex = ++*interactions;
 
     // Turn the geometric normal to the side the ray came from (surfaces are two-sided)
     const float length_squared = Dot(hit.normal, hit.normal);
-    if (!(length_squared > 0.0f) || !(length_squared < 3.0e38f)) {
-      stats.end = PathEnd::kDegenerate;
-      break;
-    }
+    if (!(length_squared > 0.0f) || !(length_squared < 3.0e38f)) return PathEnd::kDegenerate;
     Vec3f normal = hit.normal * (1.0f / sqrtf(length_squared));
     if (Dot(normal, path.direction) > 0.0f) normal = -normal;
 
@@ -150,43 +163,84 @@ FENESTRA_CPU_GPU inline PathStats TracePath(const Intersector& scene, const Surf
       mode.AtReflection(scene, path, ReflectionVertex{hit.position, normal, material.reflectance},
                         random);
       if (settings.max_bounces >= 0 && path.reflections >= settings.max_bounces) {
-        stats.end = PathEnd::kBounceLimit;
-        break;
+        return PathEnd::kBounceLimit;
       }
     }
 
-    // Weight by the surface, then Russian roulette: survive with probability w / threshold
-    // and carry the threshold on, so the weight never exceeds 1 and the mean is unchanged
+    // Weight by the surface. Roulette below the threshold: survive with probability
+    // w / threshold and carry the threshold on. Weight windows take the threshold from the
+    // importance map and split heavy paths. Either way the mean is unchanged and w <= 1.
     float weight = path.weight * factor;
-    if (!(weight > 0.0f)) {
-      stats.end = PathEnd::kAbsorbed;
-      break;
+    if (!(weight > 0.0f)) return PathEnd::kAbsorbed;
+    float threshold = settings.roulette_threshold;
+    if (settings.importance != nullptr) {
+      const float importance = settings.importance->Lookup(hit.position, normal);
+      threshold = importance > 0.0f && settings.window_scale > 0.0f
+                      ? fminf(1.0f, settings.window_scale / importance)
+                      : 1.0f;
     }
-    if (settings.russian_roulette && weight < settings.roulette_threshold) {
-      if (!(u.u[2] * settings.roulette_threshold < weight)) {
-        stats.end = PathEnd::kRoulette;
-        break;
+    int copies = 1;
+    if (settings.russian_roulette && weight < threshold) {
+      if (!(u.u[2] * threshold < weight)) return PathEnd::kRoulette;
+      weight = threshold;
+    } else if (settings.importance != nullptr && !transmit && weight > 2.0f * threshold) {
+      copies = static_cast<int>(weight / threshold);
+      if (copies > kMaxSplit) copies = kMaxSplit;
+      if (copies > kMaxPendingBranches - *pending_count + 1) {
+        copies = kMaxPendingBranches - *pending_count + 1;
       }
-      weight = settings.roulette_threshold;
+      weight /= static_cast<float>(copies);
     }
     path.weight = weight;
-    stats.max_weight = fmaxf(stats.max_weight, weight);
+    stats->max_weight = fmaxf(stats->max_weight, weight);
 
-    // Continue straight through, or cosine-sampled about the incoming side's normal
+    // Continue straight through, or cosine-sampled about the incoming side's normal; the
+    // copies of a split leave the same point in directions of their own
     if (transmit) {
       path.origin = OffsetRayOrigin(hit.position, -normal);
-    } else {
-      path.origin = OffsetRayOrigin(hit.position, normal);
-      path.direction = SampleCosineHemisphere(normal, u.u[0], u.u[1]);
-      ++path.reflections;
+      continue;
     }
+    path.origin = OffsetRayOrigin(hit.position, normal);
+    path.direction = SampleCosineHemisphere(normal, u.u[0], u.u[1]);
+    ++path.reflections;
+    for (int c = 1; c < copies; ++c) {
+      PathState copy = path;
+      copy.vertex = ++*interactions;
+      const Uniform4 v = random.Draw(copy.vertex, 0);
+      copy.direction = SampleCosineHemisphere(normal, v.u[0], v.u[1]);
+      pending[(*pending_count)++] = copy;
+    }
+  }
+}
+
+}  // namespace path_internal
+
+// Follows one path (all its branches) from mode.Start to its end. See the file comment
+// for the contracts.
+template <class Intersector, class Mode>
+FENESTRA_CPU_GPU inline PathStats TracePath(const Intersector& scene, const SurfaceTable& surfaces,
+                                            const PathSettings& settings, const PathRandom& random,
+                                            Mode& mode) {
+  PathState path = mode.Start(scene, random);
+  PathStats stats{0, path.weight, PathEnd::kEscaped, 0, {0, 0, 0, 0, 0, 0}};
+  PathState pending[kMaxPendingBranches];
+  int pending_count = 0;
+  uint32_t interactions = path.vertex;
+  for (;;) {
+    stats.end = path_internal::FollowBranch(scene, surfaces, settings, random, mode, path,
+                                            &interactions, pending, &pending_count, &stats);
+    ++stats.branches;
+    ++stats.ends[static_cast<int>(stats.end)];
+    if (pending_count == 0) break;
+    path = pending[--pending_count];
   }
   mode.Finish(stats);
   return stats;
 }
 
 // One-stage daylight coefficients: paths from one sensor, scored by escape bin.
-//   Sink  void Add(int bin, double value);   value = pi * weight
+//   Sink  void Add(int bin, double value);   value = pi * weight, per escaping branch
+//         void EndPath();                    the path's branches are done
 template <class Sink>
 struct OneStageMode {
   Vec3f sensor_position;  // local frame
@@ -210,7 +264,7 @@ struct OneStageMode {
     sink->Add(TregenzaBin(path.direction), kPi * static_cast<double>(path.weight));
   }
 
-  FENESTRA_CPU_GPU void Finish(const PathStats&) const {}
+  FENESTRA_CPU_GPU void Finish(const PathStats&) { sink->EndPath(); }
 };
 
 }  // namespace fenestra

@@ -14,7 +14,8 @@
 namespace fenestra {
 namespace {
 
-// Accumulates escapes into global per-sensor bins.
+// Accumulates escapes into global per-sensor bins. Squares are per escape, which is per
+// path while weight windows (splitting) are off, as they are here.
 struct GlobalSink {
   double* sum;
   double* sum_squares;
@@ -27,6 +28,7 @@ struct GlobalSink {
     sum_squares[bin] += value * value;
 #endif
   }
+  FENESTRA_CPU_GPU void EndPath() {}
 };
 
 __global__ void OneStageKernel(BruteForceIntersector scene, SurfaceTable surfaces,

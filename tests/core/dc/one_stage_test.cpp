@@ -63,7 +63,7 @@ TEST(OneStageTest, UnobstructedUpwardSensorSeesPiSplitByPatch) {
   // Every path escapes upwards: the sum is pi up to rounding
   EXPECT_NEAR(result->sky_sum(0), kPi, 1e-12);
   EXPECT_EQ(result->coefficients(0, 0), 0.0);
-  EXPECT_EQ(result->rays_traced, 400000u);
+  EXPECT_EQ(result->rays_traced, 400000u + result->pilot_paths);  // one ray each
   double chi_square = 0;
   for (int b = 1; b < kDaylightBins; ++b) {
     const double z = (result->coefficients(0, b) - expected[b]) / result->standard_error(0, b);
@@ -161,23 +161,28 @@ TEST(OneStageTest, RouletteAndBounceLimitsAreUnbiased) {
     bool roulette;
     double threshold;
     int max_bounces;
+    bool weight_windows;
   };
-  const Case cases[] = {{true, 1.0, 0},     {true, 0.3, 0}, {true, 0.01, 0},
-                        {false, 1.0, 1000}, {true, 1.0, 1}, {false, 1.0, 2},
-                        {true, 0.3, 3},     {true, 1.0, 4}, {false, 1.0, 0}};
+  const Case cases[] = {{true, 1.0, 0, false},     {true, 0.3, 0, false}, {true, 0.01, 0, false},
+                        {false, 1.0, 1000, false}, {true, 1.0, 1, false}, {false, 1.0, 2, false},
+                        {true, 0.3, 3, false},     {true, 1.0, 4, false}, {false, 1.0, 0, false},
+                        {true, 0.25, 0, true},     {true, 0.25, 3, true}, {false, 1.0, 6, true}};
   for (const Case& c : cases) {
     OneStageOptions options = Options(200000, 4);
     options.russian_roulette = c.roulette;
     options.roulette_threshold = c.threshold;
     options.max_bounces = c.max_bounces;
+    options.weight_windows = c.weight_windows;
     const auto result = ComputeOneStage(slab.mesh, slab.materials, slab.sensors, options);
     if (!c.roulette && c.max_bounces <= 0) {
       EXPECT_EQ(result.status().code(), absl::StatusCode::kInvalidArgument);
       continue;
     }
     ASSERT_TRUE(result.ok()) << result.status();
-    SCOPED_TRACE(testing::Message() << "roulette " << c.roulette << " threshold " << c.threshold
-                                    << " bounces " << c.max_bounces);
+    SCOPED_TRACE(testing::Message()
+                 << "roulette " << c.roulette << " threshold " << c.threshold << " bounces "
+                 << c.max_bounces << " weight windows " << c.weight_windows);
+    if (c.weight_windows) EXPECT_GT(result->importance_cells, 0u);
     EXPECT_NEAR(result->sky_sum(0), slab.SkySum(c.max_bounces),
                 4 * result->sky_sum_standard_error(0));
     EXPECT_LE(result->max_path_weight, 1.0);
@@ -200,17 +205,17 @@ ZStats Summarize(const std::vector<double>& z) {
 }
 
 TEST(OneStageTest, StandardErrorsAreCalibrated) {
-  // 200 seeds of 10^5 paths through the glazed slab with variable path weights (roulette
-  // threshold 0.3):
-  // z of the sky sum and of every sky bin against the analytic values
+  // 100 seeds of 10^5 paths through the glazed slab, with variable path weights (roulette
+  // below 0.3): z of the sky sum and of every sky bin against the analytic values
   const GlazedSlab slab;
   const std::vector<double> patches = CosineWeightedPatches();
   const double share = slab.SkySum(0) / kPi;
-  const int kSeeds = 200;
+  const int kSeeds = 100;
   std::vector<double> z_sum, z_bins;
   for (int seed = 0; seed < kSeeds; ++seed) {
     OneStageOptions options = Options(100000, 1000 + seed);
     options.roulette_threshold = 0.3;
+    options.weight_windows = false;
     const auto result = ComputeOneStage(slab.mesh, slab.materials, slab.sensors, options);
     ASSERT_TRUE(result.ok()) << result.status();
     z_sum.push_back((result->sky_sum(0) - slab.SkySum(0)) / result->sky_sum_standard_error(0));
@@ -219,18 +224,71 @@ TEST(OneStageTest, StandardErrorsAreCalibrated) {
                        result->standard_error(0, b));
     }
   }
-  // Sky sum: 200 values; sd of the mean 0.07, of the sd about 0.05
+  // Sky sum: 100 values; sd of their mean 0.1, of their sd about 0.07
   const ZStats sum = Summarize(z_sum);
-  EXPECT_LT(std::fabs(sum.mean), 0.25) << sum.mean;
-  EXPECT_LT(std::fabs(sum.sd - 1), 0.18) << sum.sd;
-  // Bins: 29000 values, weakly correlated within a run (sd of the mean about 0.006). With
+  EXPECT_LT(std::fabs(sum.mean), 0.35) << sum.mean;
+  EXPECT_LT(std::fabs(sum.sd - 1), 0.25) << sum.sd;
+  // Bins: 14500 values, weakly correlated within a run (sd of the mean about 0.01). With
   // about 100 to 1000 escapes per bin and run, z computed with its own estimated error is
   // skewed by about -1 / (2 sqrt(count)), hence the wider bands
   const ZStats bins = Summarize(z_bins);
-  EXPECT_LT(std::fabs(bins.mean), 0.06) << bins.mean;
-  EXPECT_LT(std::fabs(bins.sd - 1), 0.06) << bins.sd;
-  std::printf("calibration: sky sum z mean %.3f sd %.3f (n %d); bins z mean %.3f sd %.3f (n %d)\n",
-              sum.mean, sum.sd, sum.n, bins.mean, bins.sd, bins.n);
+  EXPECT_LT(std::fabs(bins.mean), 0.07) << bins.mean;
+  EXPECT_LT(std::fabs(bins.sd - 1), 0.07) << bins.sd;
+  std::printf(
+      "calibration (roulette): sky sum z mean %.3f sd %.3f (n %d); bins z mean %.3f "
+      "sd %.3f (n %d)\n",
+      sum.mean, sum.sd, sum.n, bins.mean, bins.sd, bins.n);
+}
+
+TEST(OneStageTest, StandardErrorsAreCalibratedWhenPathsSplit) {
+  // An upward sensor at the bottom of a 1 x 1 x 4 m shaft open at the top (walls 0.8,
+  // floor 0.2): importance grows with height, so weight windows split climbing paths and a
+  // path scores in several bins. No closed form: the reference is a long run with plain
+  // roulette, its error included in z.
+  TriangleMesh mesh;
+  AddBox(mesh, {-0.5, -0.5, 0}, {0.5, 0.5, 4}, 0);
+  mesh.vertices.erase(mesh.vertices.begin() + 6, mesh.vertices.begin() + 12);  // no roof
+  mesh.material.erase(mesh.material.begin() + 2, mesh.material.begin() + 4);
+  mesh.side.erase(mesh.side.begin() + 2, mesh.side.begin() + 4);
+  mesh.part.erase(mesh.part.begin() + 2, mesh.part.begin() + 4);
+  mesh.material[0] = mesh.material[1] = 1;
+  const std::vector<Material> materials = {{"wall", 0.8, -1}, {"floor", 0.2, -1}};
+  const std::vector<Sensor> sensors = {MakeSensor({0.2, -0.1, 0.3}, {0, 0, 1})};
+  OneStageOptions reference_options = Options(3000000, 77);
+  reference_options.weight_windows = false;
+  const OneStageResult reference = *ComputeOneStage(mesh, materials, sensors, reference_options);
+  const double row_max = reference.coefficients.row(0).maxCoeff();
+
+  const int kSeeds = 100;
+  std::vector<double> z_sum, z_bins;
+  uint64_t branches = 0, paths = 0;
+  for (int seed = 0; seed < kSeeds; ++seed) {
+    const auto result = ComputeOneStage(mesh, materials, sensors, Options(100000, 2000 + seed));
+    ASSERT_TRUE(result.ok()) << result.status();
+    ASSERT_GT(result->importance_cells, 0u);
+    branches += result->branches;
+    paths += result->paths_per_sensor;
+    z_sum.push_back(
+        (result->sky_sum(0) - reference.sky_sum(0)) /
+        std::hypot(result->sky_sum_standard_error(0), reference.sky_sum_standard_error(0)));
+    for (int b = 1; b < kDaylightBins; ++b) {
+      if (reference.coefficients(0, b) < 0.1 * row_max) continue;
+      z_bins.push_back((result->coefficients(0, b) - reference.coefficients(0, b)) /
+                       std::hypot(result->standard_error(0, b), reference.standard_error(0, b)));
+    }
+  }
+  EXPECT_GT(branches, paths + paths / 10);  // splitting did happen
+  const ZStats sum = Summarize(z_sum);
+  EXPECT_LT(std::fabs(sum.mean), 0.35) << sum.mean;
+  EXPECT_LT(std::fabs(sum.sd - 1), 0.25) << sum.sd;
+  // Bins above 10% of the row maximum (the skew of z for few escapes as above)
+  const ZStats bins = Summarize(z_bins);
+  EXPECT_LT(std::fabs(bins.mean), 0.1) << bins.mean;
+  EXPECT_LT(std::fabs(bins.sd - 1), 0.1) << bins.sd;
+  std::printf(
+      "calibration (weight windows, %.2f branches per path): sky sum z mean %.3f sd "
+      "%.3f (n %d); bins z mean %.3f sd %.3f (n %d)\n",
+      double(branches) / paths, sum.mean, sum.sd, sum.n, bins.mean, bins.sd, bins.n);
 }
 
 TEST(OneStageTest, ResultsDoNotDependOnTheThreadCount) {
@@ -243,7 +301,7 @@ TEST(OneStageTest, ResultsDoNotDependOnTheThreadCount) {
   mesh.part.erase(mesh.part.begin() + 2, mesh.part.begin() + 4);
   const std::vector<Sensor> sensors = {MakeSensor({0, -1, 0.7}, {0, 0, 1}),
                                        MakeSensor({0, -5, 0.7}, {0, 0, 1})};
-  OneStageOptions options = Options(10007, 5);  // not a multiple of the chunk size
+  OneStageOptions options = Options(40007, 5);  // not a multiple of the chunk size
   options.batches = 3;
   std::vector<OneStageResult> results;
   for (int threads : {1, 2, 3, 8}) {
@@ -253,6 +311,7 @@ TEST(OneStageTest, ResultsDoNotDependOnTheThreadCount) {
     EXPECT_EQ(result->threads, threads);
     results.push_back(*std::move(result));
   }
+  EXPECT_GT(results[0].importance_cells, 0u);  // weight windows on
   for (size_t i = 1; i < results.size(); ++i) {
     EXPECT_TRUE(results[i].coefficients == results[0].coefficients);  // bitwise
     EXPECT_TRUE(results[i].standard_error == results[0].standard_error);
@@ -313,6 +372,12 @@ TEST(OneStageTest, RejectsBadOptionsAndSensors) {
   options.roulette_threshold = 0;
   EXPECT_EQ(code(good, options), kInvalid);
   options.roulette_threshold = 1.5;
+  EXPECT_EQ(code(good, options), kInvalid);
+  options = Options(100, 1);
+  options.importance_cell_m = 0;
+  EXPECT_EQ(code(good, options), kInvalid);
+  options = Options(100, 1);
+  options.pilot_paths_per_sensor = -5;
   EXPECT_EQ(code(good, options), kInvalid);
   options = Options(100, 1);
   options.batches = 101;

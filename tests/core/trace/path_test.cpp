@@ -20,6 +20,7 @@ struct RecordingSink {
     sum[bin] += value;
     ++escapes;
   }
+  void EndPath() {}
 };
 
 // A horizontal square of half side `half` at height `z`, two triangles.
