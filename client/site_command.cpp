@@ -92,7 +92,6 @@ void AddSiteCommand(CLI::App& app) {
       *request.mutable_sampling() = job.job().sampling();
       request.set_weather_epw(job.weather_epw());
       request.set_weather_name(job.weather_name());
-      request.set_name(job.job().name());
     } else {
       const v1::Scene scene = ValueOrFail(ReadSceneProto(add->scene));
       const fs::path dir = fs::path(add->scene).parent_path();

@@ -1,6 +1,11 @@
 #!/usr/bin/env bash
 # Installs the dependencies, builds Fenestra and runs the main job end to end on the
-# embedded example (the city office in Montevideo).
+# embedded example (the city office in Montevideo): starts fenestrad on localhost with a
+# temporary data directory, registers the site (its outdoor matrix is traced once and
+# cached), submits the tilt experiment with the client, shows its progress and the best
+# design, then stops the daemon.
+# Usage: examples/run_example.sh [JOB.json]   (default: examples/city_office/alpha_max.json;
+#        examples/city_office/alpha_max_quick.json takes seconds)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash deploy/debian_packages.sh
@@ -10,9 +15,36 @@ fi
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$(nproc)"
 fenestra=build/client/fenestra
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+job="${1:-examples/city_office/alpha_max.json}"
+data=$(mktemp -d)
+pid=""
+stop_daemon() {
+  if [ -n "$pid" ] && kill -0 "$pid" 2>/dev/null; then
+    kill -TERM "$pid"
+    wait "$pid" || true
+  fi
+  pid=""
+}
+trap 'stop_daemon; rm -rf "$data"' EXIT
 
 $fenestra scene check examples/city_office/scene.json
-$fenestra sky --epw examples/weather/URY_Montevideo.865800_IWEC.epw -o "$out/sky.mtx"
-$fenestra dc examples/city_office/scene.json --paths 20000 --bounces 5 -o "$out/dc.mtx"
+
+# The daemon, on a free localhost port
+build/server/fenestrad --listen 127.0.0.1:0 --data-dir "$data" --port-file "$data/port" \
+  2>"$data/fenestrad.log" &
+pid=$!
+for _ in $(seq 100); do [ -s "$data/port" ] && break; sleep 0.1; done
+if [ ! -s "$data/port" ]; then
+  cat "$data/fenestrad.log" >&2
+  exit 1
+fi
+server="127.0.0.1:$(cat "$data/port")"
+echo "fenestrad listening on $server (data in $data)"
+
+# The site, then the job on it: progress, then the best design
+$fenestra site add --job "$job" --wait --server "$server"
+$fenestra job submit "$job" --site site-1 --watch --server "$server"
+
+stop_daemon
+echo "fenestrad log:"
+cat "$data/fenestrad.log"

@@ -37,7 +37,7 @@ grpc::Status Handle(const char* method, grpc::ServerContext* context, const std:
 grpc::Status SiteServiceImpl::Register(grpc::ServerContext* context,
                                        const v1::RegisterSiteRequest* request,
                                        v1::SiteInfo* response) {
-  return Handle("SiteService.Register", context, request->name(), [&]() -> absl::Status {
+  return Handle("SiteService.Register", context, request->scene().name(), [&]() -> absl::Status {
     absl::StatusOr<v1::SiteInfo> info = sites_.Register(*request);
     if (!info.ok()) return info.status();
     *response = *std::move(info);
