@@ -183,8 +183,11 @@ class Daemon {
     }
     int status = 0;
     waitpid(pid, &status, 0);
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status),
-            ReadFile(base + ".out"), ReadFile(base + ".err")};
+    CliResult result{WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status),
+                     ReadFile(base + ".out"), ReadFile(base + ".err")};
+    fs::remove(base + ".out");
+    fs::remove(base + ".err");
+    return result;
   }
   // A Process running `fenestra ARGS --server <this daemon>`.
   std::unique_ptr<Process> Spawn(std::vector<std::string> args) const {
@@ -235,6 +238,10 @@ class FenestradTest : public testing::Test {
     dir_ = testing::TempDir() + "/fenestrad_test_" + info->name();
     fs::remove_all(dir_);
     fs::create_directories(dir_);
+  }
+
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
   }
 
   std::unique_ptr<Daemon> StartDaemon(std::vector<std::string> flags = {}) {
