@@ -533,6 +533,48 @@ TEST_F(FenestradTest, CorruptCacheFileIsDetectedAndRecomputed) {
   EXPECT_TRUE(GetSite(*d, "site-1").loaded_from_disk());
 }
 
+TEST_F(FenestradTest, ObjMeshesAreSentInlineAsPolygons) {
+  auto d = StartDaemon();
+  // The city office plus a kiosk from an OBJ file: a 2 m tetrahedron, two groups
+  v1::Scene scene =
+      FromJson<v1::Scene>(ReadFile(FENESTRA_SOURCE_DIR "/examples/city_office/scene.json"));
+  scene.mutable_site()->set_weather_file(FENESTRA_SOURCE_DIR
+                                         "/examples/weather/URY_Montevideo.865800_IWEC.epw");
+  v1::Surface& kiosk = *scene.add_surfaces();
+  kiosk.set_name("kiosk");
+  kiosk.set_material("city");
+  kiosk.set_side(v1::SIDE_OUTDOOR);
+  kiosk.mutable_obj()->set_path("kiosk.obj");
+  (*kiosk.mutable_obj()->mutable_group_materials())["roof"] = "office";
+  std::ofstream(dir_ + "/kiosk.obj") << "v 20 20 0\nv 22 20 0\nv 20 22 0\nv 20 20 2\n"
+                                        "g walls\nf 1 3 2\nf 1 2 4\ng roof\nf 2 3 4\nf 1 4 3\n";
+  std::ofstream(dir_ + "/scene.json") << ToJson(scene);
+
+  CliResult r =
+      d->Cli({"site", "add", dir_ + "/scene.json", "--outdoor-paths", "20000", "--wait", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const v1::SiteInfo site = FromJson<v1::SiteInfo>(r.out);
+  EXPECT_EQ(site.state(), v1::SITE_STATE_READY);
+  EXPECT_EQ(site.outdoor_triangles(), 100 + 4);
+  const v1::SiteInfo full = GetSite(*d, site.id());
+  int polygons = 0;
+  for (const v1::Surface& s : full.scene().surfaces()) {
+    EXPECT_FALSE(s.has_obj());
+    if (s.name() == "kiosk") {
+      ++polygons;
+      EXPECT_EQ(s.polygon().vertices_size(), 3);
+    }
+  }
+  EXPECT_EQ(polygons, 4);
+
+  // A job on that scene runs
+  v1::Job job = TinyJob(3);
+  job.set_scene_file(dir_ + "/scene.json");
+  r = d->Cli({"job", "submit", WriteJob("kiosk_job", job), "--watch"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("best design:"));
+}
+
 TEST_F(FenestradTest, BadRequestsGetTheRightCodeAndTheDaemonKeepsServing) {
   auto d = StartDaemon();
   auto submit = [&](const v1::SubmitJobRequest& request) {
