@@ -24,12 +24,13 @@ inline constexpr uint64_t kEmptyCellKey = ~0ull;
 // of `normal` (the side the path leaves on). The two faces of a thin wall, or a wall and
 // the floor in one cell, thus keep importances of their own.
 FENESTRA_CPU_GPU inline uint64_t CellKey(Vec3f p, Vec3f normal, float inverse_cell_m) {
-  constexpr float kOffset = 524288.0f;  // 2^19: cell coordinates in [0, 2^20)
+  constexpr double kOffset = 524288.0;  // 2^19: cell coordinates in [0, 2^20)
   const float c[3] = {p.x, p.y, p.z};
   uint64_t key = 0;
   for (int axis = 0; axis < 3; ++axis) {
-    float cell = floorf(c[axis] * inverse_cell_m) + kOffset;
-    cell = cell < 0.0f ? 0.0f : (cell > 2.0f * kOffset - 1.0f ? 2.0f * kOffset - 1.0f : cell);
+    // Truncation of a positive value is its floor
+    double cell = static_cast<double>(c[axis]) * inverse_cell_m + kOffset;
+    cell = cell < 0.0 ? 0.0 : (cell > 2.0 * kOffset - 1.0 ? 2.0 * kOffset - 1.0 : cell);
     key = (key << 20) | static_cast<uint64_t>(cell);
   }
   const float ax = fabsf(normal.x), ay = fabsf(normal.y), az = fabsf(normal.z);

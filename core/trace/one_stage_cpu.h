@@ -10,6 +10,7 @@
 #include <map>
 #include <vector>
 
+#include "absl/container/flat_hash_map.h"
 #include "core/common/vec3.h"
 #include "core/trace/importance.h"
 #include "core/trace/path.h"
@@ -264,7 +265,7 @@ ImportancePilot TraceImportancePilotCpu(const Intersector& scene, const SurfaceT
   const uint64_t chunk_paths = OneStageChunkPaths(paths_per_sensor);
   const uint64_t chunks_per_sensor = (paths_per_sensor + chunk_paths - 1) / chunk_paths;
   struct Slot {
-    std::map<uint64_t, ImportanceCell> cells;
+    absl::flat_hash_map<uint64_t, ImportanceCell> cells;
     double score = 0;
     uint64_t scoring = 0;
     uint64_t rays = 0;
@@ -289,7 +290,8 @@ ImportancePilot TraceImportancePilotCpu(const Intersector& scene, const SurfaceT
     }
   });
 
-  // Fold in order
+  // Fold in order of chunks (each key once per chunk, so sums do not depend on the hash
+  // maps' iteration order)
   ImportancePilot pilot;
   std::map<uint64_t, ImportanceCell> cells;
   pilot.mean_score.assign(sensors.size(), 0.0);

@@ -157,7 +157,7 @@ FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const Sur
     if (material.transmittance > 0.0f) {
       const float total = material.reflectance + material.transmittance;
       transmit = u.u[3] * total < material.transmittance;
-      factor = fminf(total, 1.0f);
+      factor = total < 1.0f ? total : 1.0f;
     }
     if (!transmit) {
       mode.AtReflection(scene, path, ReflectionVertex{hit.position, normal, material.reflectance},
@@ -175,9 +175,10 @@ FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const Sur
     float threshold = settings.roulette_threshold;
     if (settings.importance != nullptr) {
       const float importance = settings.importance->Lookup(hit.position, normal);
-      threshold = importance > 0.0f && settings.window_scale > 0.0f
-                      ? fminf(1.0f, settings.window_scale / importance)
-                      : 1.0f;
+      threshold =
+          importance > 0.0f && settings.window_scale > 0.0f
+              ? (settings.window_scale < importance ? settings.window_scale / importance : 1.0f)
+              : 1.0f;
     }
     int copies = 1;
     if (settings.russian_roulette && weight < threshold) {
@@ -192,7 +193,7 @@ FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const Sur
       weight /= static_cast<float>(copies);
     }
     path.weight = weight;
-    stats->max_weight = fmaxf(stats->max_weight, weight);
+    if (weight > stats->max_weight) stats->max_weight = weight;
 
     // Continue straight through, or cosine-sampled about the incoming side's normal; the
     // copies of a split leave the same point in directions of their own

@@ -56,8 +56,8 @@ FENESTRA_CPU_GPU inline Vec3f OffsetRayOrigin(Vec3f p, Vec3f n) {
 // a point interpolated on an edge a few ulps beyond it, and at a concave corner "beyond"
 // is behind the adjacent surface, where the next ray would leak out of the scene.
 FENESTRA_CPU_GPU inline Vec3f SurfacePoint(Vec3f v0, Vec3f v1, Vec3f v2, float b1, float b2) {
-  b1 = fmaxf(b1, 0.0f);
-  b2 = fmaxf(b2, 0.0f);
+  b1 = b1 > 0.0f ? b1 : 0.0f;
+  b2 = b2 > 0.0f ? b2 : 0.0f;
   if (b1 + b2 > 1.0f) {
     const float scale = 1.0f / (b1 + b2);
     b1 *= scale;
