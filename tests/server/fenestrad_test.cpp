@@ -12,6 +12,7 @@
 #include <netinet/in.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -132,6 +133,7 @@ class Daemon {
     args.insert(args.end(), flags_.begin(), flags_.end());
     pid_ = fork();
     if (pid_ == 0) {
+      prctl(PR_SET_PDEATHSIG, SIGKILL);  // no daemon outlives a crashed test
       const int log = open(log_path().c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
       dup2(log, STDERR_FILENO);
       dup2(log, STDOUT_FILENO);
