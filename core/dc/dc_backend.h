@@ -8,8 +8,11 @@
 
 #include "absl/status/statusor.h"
 #include "core/common/radiance_matrix.h"
+#include "core/geometry/hemisphere_basis.h"
 #include "core/geometry/mesh.h"
 #include "core/geometry/scene.h"
+#include "core/trace/trace_geometry.h"
+#include "core/trace/two_stage_cpu.h"
 
 namespace fenestra {
 
@@ -69,8 +72,8 @@ struct OneStageResult {
   std::string backend;      // which backend traced it
 };
 
-// A tracer backend for daylight coefficients (CPU Embree now; CUDA later), chosen at run
-// time. Implementations are thread-compatible: one call at a time per object.
+// A tracer backend for daylight coefficients (Embree on the CPU, CUDA on a GPU), chosen at
+// run time. Implementations are thread-compatible: one call at a time per object.
 class DcBackend {
  public:
   virtual ~DcBackend() = default;
@@ -82,9 +85,34 @@ class DcBackend {
                                                   const std::vector<Material>& materials,
                                                   const std::vector<Sensor>& sensors,
                                                   const OneStageOptions& options) = 0;
+
+  // The two-stage method's stages (core/dc/two_stage.h) over prepared geometry: outdoor
+  // paths from each basis cell of the window, indoor paths from each sensor in batches.
+  // `threads` applies to CPU backends.
+  virtual absl::StatusOr<OutdoorTally> Outdoor(const TraceGeometry& geometry,
+                                               const TraceWindow& window,
+                                               const HemisphereBasis& basis,
+                                               uint64_t paths_per_cell, uint64_t seed,
+                                               const PathSettings& path, int threads) = 0;
+  virtual absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry,
+                                             const std::vector<TraceSensor>& sensors,
+                                             const TraceWindow& window,
+                                             const HemisphereBasis& basis,
+                                             uint64_t paths_per_sensor, int batches, uint64_t seed,
+                                             const PathSettings& path, int threads) = 0;
 };
 
 // The Embree CPU backend (always available).
 std::unique_ptr<DcBackend> MakeEmbreeBackend();
+
+// The CUDA backend on GPU `device`: Unavailable on a build without CUDA or a host without
+// that device.
+absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int device = 0);
+
+// "cpu", "cuda" (GPU 0) or "auto" (the GPU when there is one, else the CPU).
+absl::StatusOr<std::unique_ptr<DcBackend>> MakeBackend(const std::string& name);
+
+// Number of CUDA devices this build and host can use (0 without CUDA).
+int CudaDevices();
 
 }  // namespace fenestra

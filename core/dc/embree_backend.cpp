@@ -7,6 +7,7 @@
 #include "core/trace/embree_scene.h"
 #include "core/trace/one_stage_cpu.h"
 #include "core/trace/trace_geometry.h"
+#include "core/trace/two_stage_cpu.h"
 
 namespace fenestra {
 namespace {
@@ -69,10 +70,39 @@ class EmbreeBackend : public DcBackend {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
   }
+
+  absl::StatusOr<OutdoorTally> Outdoor(const TraceGeometry& geometry, const TraceWindow& window,
+                                       const HemisphereBasis& basis, uint64_t paths_per_cell,
+                                       uint64_t seed, const PathSettings& path,
+                                       int threads) override {
+    FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
+    return TraceOutdoorCpu(scene->Intersector(), geometry.Surfaces(), window, basis, paths_per_cell,
+                           seed, path, threads);
+  }
+
+  absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry,
+                                     const std::vector<TraceSensor>& sensors,
+                                     const TraceWindow& window, const HemisphereBasis& basis,
+                                     uint64_t paths_per_sensor, int batches, uint64_t seed,
+                                     const PathSettings& path, int threads) override {
+    FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
+    return TraceIndoorCpu(scene->Intersector(), geometry.Surfaces(), sensors, window, basis,
+                          paths_per_sensor, batches, seed, path, threads);
+  }
 };
 
 }  // namespace
 
 std::unique_ptr<DcBackend> MakeEmbreeBackend() { return std::make_unique<EmbreeBackend>(); }
+
+absl::StatusOr<std::unique_ptr<DcBackend>> MakeBackend(const std::string& name) {
+  if (name == "cpu") return MakeEmbreeBackend();
+  if (name == "cuda") return MakeCudaBackend(0);
+  if (name == "auto") {
+    if (CudaDevices() > 0) return MakeCudaBackend(0);
+    return MakeEmbreeBackend();
+  }
+  return absl::InvalidArgumentError("backend must be cpu, cuda or auto, got '" + name + "'");
+}
 
 }  // namespace fenestra

@@ -2,11 +2,11 @@
 
 #include <chrono>
 #include <cmath>
+#include <memory>
 
 #include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
-#include "core/trace/embree_scene.h"
 #include "core/trace/trace_geometry.h"
 #include "core/trace/two_stage_cpu.h"
 
@@ -69,8 +69,8 @@ TriangleMesh SelectSide(const TriangleMesh& mesh, Side side) {
   return out;
 }
 
-absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene,
-                                                  const OutdoorOptions& options) {
+absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const OutdoorOptions& options,
+                                                  DcBackend* backend) {
   const auto start = std::chrono::steady_clock::now();
   FENESTRA_ASSIGN_OR_RETURN(basis, BasisFor(options.basis_cells));
   FENESTRA_RETURN_IF_ERROR(CheckPaths(options.max_bounces, options.russian_roulette,
@@ -81,15 +81,17 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene,
   }
   const TriangleMesh outdoor = SelectSide(scene.fixed, Side::kOutdoor);
   FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(outdoor, scene.materials));
-  FENESTRA_ASSIGN_OR_RETURN(embree, EmbreeScene::Build(geometry));
+  std::unique_ptr<DcBackend> fallback;
+  if (backend == nullptr) backend = (fallback = MakeEmbreeBackend()).get();
 
   // Trace, then O = sums / paths per cell
   const uint64_t per_cell = static_cast<uint64_t>(options.paths) / basis.cell_count;
-  const OutdoorTally tally = TraceOutdoorCpu(
-      embree->Intersector(), geometry.Surfaces(), LocalWindow(geometry, scene.window), basis,
-      per_cell, options.seed,
-      Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold),
-      options.threads);
+  FENESTRA_ASSIGN_OR_RETURN(
+      tally,
+      backend->Outdoor(
+          geometry, LocalWindow(geometry, scene.window), basis, per_cell, options.seed,
+          Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold),
+          options.threads));
   OutdoorResult result;
   result.basis_cells = basis.cell_count;
   result.paths_per_cell = static_cast<int64_t>(per_cell);
@@ -108,13 +110,13 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene,
   }
   result.rays_traced = tally.counters.rays;
   result.triangles = outdoor.TriangleCount();
-  result.backend = "embree-cpu";
+  result.backend = backend->Name();
   result.wall_seconds = Seconds(start);
   return result;
 }
 
 absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindDesign& design,
-                                                const IndoorOptions& options) {
+                                                const IndoorOptions& options, DcBackend* backend) {
   const auto start = std::chrono::steady_clock::now();
   FENESTRA_ASSIGN_OR_RETURN(basis, BasisFor(options.basis_cells));
   FENESTRA_RETURN_IF_ERROR(CheckPaths(options.max_bounces, options.russian_roulette,
@@ -127,15 +129,17 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
   }
   const TriangleMesh indoor = SelectSide(AssembleMesh(scene, design), Side::kIndoor);
   FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(indoor, scene.materials));
-  FENESTRA_ASSIGN_OR_RETURN(embree, EmbreeScene::Build(geometry));
+  std::unique_ptr<DcBackend> fallback;
+  if (backend == nullptr) backend = (fallback = MakeEmbreeBackend()).get();
 
   // Trace, then I_b = batch sums / batch paths
-  const IndoorTally tally = TraceIndoorCpu(
-      embree->Intersector(), geometry.Surfaces(), LocalSensors(geometry, scene.sensors),
-      LocalWindow(geometry, scene.window), basis, static_cast<uint64_t>(options.paths_per_sensor),
-      options.batches, options.seed,
-      Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold),
-      options.threads);
+  FENESTRA_ASSIGN_OR_RETURN(
+      tally,
+      backend->Indoor(
+          geometry, LocalSensors(geometry, scene.sensors), LocalWindow(geometry, scene.window),
+          basis, static_cast<uint64_t>(options.paths_per_sensor), options.batches, options.seed,
+          Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold),
+          options.threads));
   IndoorResult result;
   const int sensors = tally.sensors, cells = tally.cells, batches = tally.batches;
   result.coefficients = Matrix::Zero(sensors, cells);
@@ -158,7 +162,7 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
   result.paths_per_sensor = options.paths_per_sensor;
   result.rays_traced = tally.counters.rays;
   result.triangles = indoor.TriangleCount();
-  result.backend = "embree-cpu";
+  result.backend = backend->Name();
   result.wall_seconds = Seconds(start);
   return result;
 }

@@ -83,13 +83,15 @@ struct TwoStageResult {
 // The basis of `cells` cells (288 or 1152), or InvalidArgument.
 absl::StatusOr<HemisphereBasis> BasisFor(int cells);
 
-// The outdoor stage of `scene`: its outdoor surfaces and window only.
-absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene,
-                                                  const OutdoorOptions& options);
+// The outdoor stage of `scene`: its outdoor surfaces and window only. Traced by
+// `backend`, or by the Embree CPU backend when null.
+absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const OutdoorOptions& options,
+                                                  DcBackend* backend = nullptr);
 
 // The indoor stage of `scene` at `design`: indoor surfaces and the blind only.
 absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindDesign& design,
-                                                const IndoorOptions& options);
+                                                const IndoorOptions& options,
+                                                DcBackend* backend = nullptr);
 
 // D = I O. InvalidArgument when the bases differ.
 absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,

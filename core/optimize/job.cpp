@@ -317,7 +317,8 @@ absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1:
   options.max_bounces = sampling.outdoor_bounces();
   options.seed = sampling.seed();
   options.basis_cells = sampling.basis_cells();
-  FENESTRA_ASSIGN_OR_RETURN(result, ComputeOutdoorStage(scene, options));
+  FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(sampling.backend()));
+  FENESTRA_ASSIGN_OR_RETURN(result, ComputeOutdoorStage(scene, options, backend.get()));
   OutdoorMatrix matrix;
   matrix.coefficients = std::move(result.coefficients);
   matrix.standard_error = std::move(result.standard_error);
@@ -371,6 +372,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   outdoor_stage.basis_cells = outdoor->basis_cells;
 
   // The objective: indoor stage with the same random streams for every design
+  FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
   MetricOptions metric_options;
   metric_options.udi_lower_lux = spec.metrics().udi_lower_lux();
   metric_options.udi_upper_lux = spec.metrics().udi_upper_lux();
@@ -387,8 +389,8 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   const std::vector<Matrix> sky_channels = {sky.radiance};
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
-    FENESTRA_ASSIGN_OR_RETURN(indoor,
-                              ComputeIndoorStage(job.scene, DesignAt(job, x), indoor_options));
+    FENESTRA_ASSIGN_OR_RETURN(
+        indoor, ComputeIndoorStage(job.scene, DesignAt(job, x), indoor_options, backend.get()));
     FENESTRA_ASSIGN_OR_RETURN(dc, CombineStages(indoor, outdoor_stage));
     FENESTRA_ASSIGN_OR_RETURN(metrics, AnnualMetricsWithErrors(dc.batches, sky_channels, columns,
                                                                occupied, metric_options));
@@ -464,7 +466,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
     }
   }
   result.set_outdoor_mean_relative_standard_error(count > 0 ? relative / count : 0);
-  result.set_backend(outdoor->backend.empty() ? "embree-cpu" : outdoor->backend);
+  result.set_backend(backend->Name());
   return result;
 }
 

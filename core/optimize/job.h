@@ -32,7 +32,7 @@ struct OutdoorMatrix {
 // A job checked and resolved: scene loaded, weather file found, variables known, defaults
 // filled in. Preparing does all validation, so a job that prepares runs.
 struct PreparedJob {
-  v1::Job job;          // with defaults filled in and paths resolved
+  v1::Job job;  // with defaults filled in and paths resolved
   Scene scene;
   std::string weather_file;
 };
@@ -55,8 +55,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& sampling);
 
 // Traces the outdoor stage: only the scene's outdoor surfaces and its window; `sampling`
 // resolved (ResolveSampling). `cancelled` is polled between batches of paths.
-absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene,
-                                                   const v1::Sampling& sampling,
+absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1::Sampling& sampling,
                                                    const std::function<bool()>& cancelled = {});
 
 // What a running job reports after each evaluation.

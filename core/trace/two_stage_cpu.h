@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/geometry/hemisphere_basis.h"
+#include "core/trace/one_stage_cpu.h"
 #include "core/trace/path.h"
 #include "core/trace/philox.h"
 #include "core/trace/thread_pool.h"
@@ -138,8 +139,8 @@ IndoorTally TraceIndoorCpu(const Intersector& scene, const SurfaceTable& surface
   tally.threads = ResolveThreadCount(threads);
   tally.sum.assign(static_cast<size_t>(batches) * sensors.size() * cells, 0.0);
   for (int b = 0; b < batches; ++b) {
-    tally.batch_paths.push_back((b + 1) * paths_per_sensor / batches -
-                                b * paths_per_sensor / batches);
+    tally.batch_paths.push_back(BatchStart(paths_per_sensor, batches, b + 1) -
+                                BatchStart(paths_per_sensor, batches, b));
   }
   // Chunks: (sensor, batch, part of the batch)
   const uint64_t batch_paths = (paths_per_sensor + batches - 1) / batches;
@@ -151,7 +152,7 @@ IndoorTally TraceIndoorCpu(const Intersector& scene, const SurfaceTable& surface
         const uint32_t s = static_cast<uint32_t>(c / (batches * parts));
         const uint64_t b = (c / parts) % batches;
         const uint64_t part = c % parts;
-        const uint64_t batch_first = b * paths_per_sensor / batches;
+        const uint64_t batch_first = BatchStart(paths_per_sensor, batches, static_cast<int>(b));
         const uint64_t batch_size = tally.batch_paths[b];
         const uint64_t first = batch_first + part * batch_size / parts;
         const uint64_t last = batch_first + (part + 1) * batch_size / parts;

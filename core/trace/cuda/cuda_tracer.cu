@@ -103,25 +103,32 @@ struct ThreadCounts {
   }
 };
 
+// Rows are (sensor, batch): row s * batches + b holds the paths [b N / batches,
+// (b + 1) N / batches) of sensor s.
 __global__ void OneStageKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
-                               const TraceSensor* sensors, uint64_t paths_per_sensor, uint64_t seed,
-                               double* sum, double* sum_squares, unsigned long long* counters) {
+                               const TraceSensor* sensors, uint64_t paths_per_sensor, int batches,
+                               uint64_t seed, double* sum, double* sum_squares,
+                               unsigned long long* counters) {
   __shared__ double row[2 * kTregenzaBinCount];
   __shared__ unsigned long long block_counters[kCounters];
   BeginRow(row, 2 * kTregenzaBinCount, block_counters);
-  const uint32_t s = blockIdx.y;
+  const uint32_t s = blockIdx.y / batches;
+  const uint32_t b = blockIdx.y % batches;
+  const uint64_t first = b * paths_per_sensor / batches;
+  const uint64_t last = (b + 1) * paths_per_sensor / batches;
   SharedSink sink{row, row + kTregenzaBinCount};
   OneStageMode<SharedSink> mode{sensors[s].position, sensors[s].normal, &sink};
   ThreadCounts counts;
-  for (uint64_t p = blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x;
-       p < paths_per_sensor; p += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
+  for (uint64_t p = first + blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x; p < last;
+       p += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
     counts.Add(TracePath(scene, surfaces, settings, PathRandom(seed, s, p), mode));
   }
   counts.Flush(block_counters);
-  EndRow(row, kTregenzaBinCount, sum + s * kTregenzaBinCount, block_counters, counters);
+  const size_t offset = static_cast<size_t>(blockIdx.y) * kTregenzaBinCount;
+  EndRow(row, kTregenzaBinCount, sum + offset, block_counters, counters);
   for (int i = threadIdx.x; i < kTregenzaBinCount; i += blockDim.x) {
     if (row[kTregenzaBinCount + i] != 0.0) {
-      atomicAdd(&sum_squares[s * kTregenzaBinCount + i], row[kTregenzaBinCount + i]);
+      atomicAdd(&sum_squares[offset + i], row[kTregenzaBinCount + i]);
     }
   }
 }
@@ -300,17 +307,19 @@ std::string CudaTracer::SetScene(const BvhLayout& bvh, const uint32_t* triangle_
 }
 
 std::string CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
-                                 uint64_t paths_per_sensor, uint64_t seed, const PathSettings& path,
-                                 double* sum, double* sum_squares, CudaCounters* counters) {
+                                 uint64_t paths_per_sensor, int batches, uint64_t seed,
+                                 const PathSettings& path, double* sum, double* sum_squares,
+                                 CudaCounters* counters) {
   Impl& d = *impl_;
   if (cudaError_t e = d.sensors.Upload(sensors, sensor_count); e != cudaSuccess) return Error(e);
-  const dim3 grid(d.BlocksPerRow(paths_per_sensor, sensor_count), sensor_count);
+  const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
+  const dim3 grid(d.BlocksPerRow(paths_per_sensor / batches + 1, rows), rows);
   return d.Run(
-      static_cast<size_t>(sensor_count) * kTregenzaBinCount, true,
+      static_cast<size_t>(rows) * kTregenzaBinCount, true,
       [&] {
         OneStageKernel<<<grid, kThreads>>>(d.Scene(), d.Surfaces(), path, d.sensors.get(),
-                                           paths_per_sensor, seed, d.sum.get(), d.sum_squares.get(),
-                                           d.counters.get());
+                                           paths_per_sensor, batches, seed, d.sum.get(),
+                                           d.sum_squares.get(), d.counters.get());
       },
       sum, sum_squares, counters);
 }

@@ -42,10 +42,11 @@ class CudaTracer {
                        size_t triangle_count, const TraceMaterial* materials,
                        size_t material_count);
 
-  // One-stage paths; sum and sum_squares get sensors x kTregenzaBinCount values.
+  // One-stage paths of each sensor in `batches` contiguous batches; sum and sum_squares
+  // get [(sensor * batches + batch) * kTregenzaBinCount + bin].
   std::string OneStage(const TraceSensor* sensors, int sensor_count, uint64_t paths_per_sensor,
-                       uint64_t seed, const PathSettings& path, double* sum, double* sum_squares,
-                       CudaCounters* counters);
+                       int batches, uint64_t seed, const PathSettings& path, double* sum,
+                       double* sum_squares, CudaCounters* counters);
 
   // Outdoor paths, paths_per_cell from each basis cell; sums per cell x kTregenzaBinCount,
   // the same streams as TraceOutdoorCpu.

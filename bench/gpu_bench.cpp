@@ -1,0 +1,139 @@
+// GPU benchmarks (bench/README.md): rays per second on the lightwell and the city office,
+// the lightwell 3 x 10^7-path case, the city-office outdoor stage, one candidate
+// evaluation and the 500-evaluation four-variable optimization. Needs a CUDA device.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "core/dc/dc_backend.h"
+#include "core/dc/one_stage.h"
+#include "core/dc/two_stage.h"
+#include "core/metrics/illuminance.h"
+#include "core/metrics/metric_errors.h"
+#include "core/metrics/occupancy.h"
+#include "core/optimize/job.h"
+#include "core/sky/epw.h"
+#include "core/sky/sky_matrix.h"
+
+namespace fenestra {
+namespace {
+
+const std::string kRoot = FENESTRA_SOURCE_DIR;
+
+double Since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+template <typename T>
+T Check(absl::StatusOr<T> value) {
+  if (!value.ok()) {
+    std::fprintf(stderr, "error: %s\n", std::string(value.status().message()).c_str());
+    std::exit(1);
+  }
+  return *std::move(value);
+}
+
+void OneStage(DcBackend& gpu, const std::string& name, const BlindDesign* design, int64_t paths,
+              int bounces) {
+  const Scene scene = Check(LoadScene(kRoot + "/examples/" + name + "/scene.json"));
+  OneStageOptions options;
+  options.paths_per_sensor = paths;
+  options.max_bounces = bounces;
+  options.weight_windows = false;
+  const BlindDesign d = design ? *design : DefaultDesign(scene);
+  Check(ComputeOneStage(scene, d, options, &gpu));  // warm-up
+  const OneStageResult r = Check(ComputeOneStage(scene, d, options, &gpu));
+  std::printf(
+      "one-stage %-12s %zu sensors x %lld paths, %d bounces: %.4f s, %.3e rays, %.2f G rays/s, "
+      "mean relative SE %.4f, sky sums",
+      name.c_str(), scene.sensors.size(), static_cast<long long>(paths), bounces, r.wall_seconds,
+      static_cast<double>(r.rays_traced), r.rays_traced / r.wall_seconds / 1e9,
+      MeanRelativeStandardError(r));
+  for (Eigen::Index i = 0; i < r.sky_sum.size(); ++i) {
+    std::printf(" %.4e±%.1e", r.sky_sum(i), r.sky_sum_standard_error(i));
+  }
+  std::printf("\n");
+}
+
+}  // namespace
+}  // namespace fenestra
+
+int main() {
+  using namespace fenestra;
+  std::unique_ptr<DcBackend> gpu = Check(MakeCudaBackend(0));
+  std::printf("device: %s\n", gpu->Name().c_str());
+
+  // Rays per second and the lightwell reference case (Radiance -ab 30 = 29 reflections)
+  OneStage(*gpu, "lightwell", nullptr, 10'000'000, 29);
+  OneStage(*gpu, "lightwell", nullptr, 10'000'000, 4);
+  const Scene office = Check(LoadScene(kRoot + "/examples/city_office/scene.json"));
+  const BlindDesign open = Check(DesignWithOverrides(office, {{"alpha", 0.6}, {"spacing", 0.05}}));
+  OneStage(*gpu, "city_office", &open, 2'000'000, 30);
+
+  // The city-office outdoor stage
+  OutdoorOptions outdoor;
+  outdoor.paths = 20'000'000;
+  outdoor.max_bounces = 30;
+  Check(ComputeOutdoorStage(office, outdoor, gpu.get()));
+  const OutdoorResult o = Check(ComputeOutdoorStage(office, outdoor, gpu.get()));
+  std::printf("outdoor stage: %lld paths, 30 bounces: %.4f s, %.3e rays, %.2f G rays/s\n",
+              static_cast<long long>(o.paths_per_cell * o.basis_cells), o.wall_seconds,
+              static_cast<double>(o.rays_traced), o.rays_traced / o.wall_seconds / 1e9);
+
+  // One candidate: indoor stage, D = I O, E = D S, UDI with jackknife errors
+  const EpwData weather =
+      Check(ReadEpw(kRoot + "/examples/weather/URY_Montevideo.865800_IWEC.epw"));
+  const SkyMatrix sky = Check(BuildSkyMatrix(weather));
+  const std::vector<int> columns = LitColumns(sky.radiance);
+  std::vector<double> hours;
+  for (const SkyStep& step : sky.steps) hours.push_back(step.hour);
+  const std::vector<bool> occupied = Check(OccupiedSteps(hours));
+  IndoorOptions indoor;
+  indoor.paths_per_sensor = 200'000;
+  indoor.max_bounces = 5;
+  const std::vector<Matrix> sky_channels = {sky.radiance};
+  double trace = 0, total = 0;
+  const int candidates = 20;
+  uint64_t rays = 0;
+  double udi = 0, udi_se = 0;
+  for (int c = 0; c <= candidates; ++c) {
+    const BlindDesign design = Check(DesignWithOverrides(
+        office, {{"alpha", 0.05 * c}, {"width", 0.10 + 0.002 * c}, {"spacing", 0.002 * c}}));
+    const auto start = std::chrono::steady_clock::now();
+    const IndoorResult i = Check(ComputeIndoorStage(office, design, indoor, gpu.get()));
+    const TwoStageResult d = Check(CombineStages(i, o));
+    const AnnualMetricsEstimate m =
+        Check(AnnualMetricsWithErrors(d.batches, sky_channels, columns, occupied));
+    if (c == 0) continue;  // warm-up
+    trace += i.wall_seconds;
+    total += Since(start);
+    rays += i.rays_traced;
+    udi = m.value.scene.udi_mean_percent;
+    udi_se = m.standard_error.scene.udi_mean_percent;
+  }
+  std::printf(
+      "candidate evaluation (9 sensors x 2e5 paths, 5 bounces, D S, UDI): %.2f ms "
+      "(indoor stage %.2f ms, %.2f G rays/s; D S and metrics %.2f ms); last UDI %.2f ± %.2f %%\n",
+      1e3 * total / candidates, 1e3 * trace / candidates, rays / trace / 1e9,
+      1e3 * (total - trace) / candidates, udi, udi_se);
+
+  // The 500-evaluation four-variable optimization, end to end
+  v1::Job job = Check(ReadJobFile(kRoot + "/examples/city_office/four_variables.json"));
+  job.mutable_sampling()->set_backend("cuda");
+  const PreparedJob prepared = Check(PrepareJob(job, kRoot + "/examples/city_office"));
+  const auto start = std::chrono::steady_clock::now();
+  const v1::JobResult result = Check(RunJob(prepared, nullptr));
+  std::printf(
+      "four-variable optimization: %d evaluations (%s) in %.2f s (sky %.2f s, outdoor %.2f s, "
+      "evaluations %.2f s); best UDI %.2f ± %.2f %% at",
+      result.evaluations(), result.stop_reason().c_str(), Since(start),
+      result.timings().sky_seconds(), result.timings().outdoor_seconds(),
+      result.timings().evaluation_seconds(), result.best_value().value(),
+      result.best_value().standard_error());
+  for (const char* name : {"alpha", "width", "spacing", "thickness"}) {
+    std::printf(" %s=%.4f", name, result.best_design().at(name));
+  }
+  std::printf("\n");
+  return 0;
+}

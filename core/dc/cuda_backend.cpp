@@ -1,0 +1,174 @@
+// The CUDA backend: the same path code and random streams as the Embree backend, traced
+// on a GPU over a BVH built on the host (core/trace/bvh.h). Weight windows (the one-stage
+// importance map) are CPU-only: on the GPU the one-stage method uses plain roulette.
+#include <chrono>
+#include <memory>
+
+#include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
+#include "core/dc/backend_support.h"
+#include "core/dc/dc_backend.h"
+#include "core/trace/one_stage_cpu.h"
+
+#if FENESTRA_WITH_CUDA
+#include "core/trace/bvh.h"
+#include "core/trace/cuda/cuda_tracer.h"
+#endif
+
+namespace fenestra {
+
+#if FENESTRA_WITH_CUDA
+namespace {
+
+class CudaBackend : public DcBackend {
+ public:
+  explicit CudaBackend(std::unique_ptr<CudaTracer> tracer) : tracer_(std::move(tracer)) {}
+
+  std::string Name() const override { return absl::StrCat("cuda (", tracer_->device_name(), ")"); }
+
+  absl::StatusOr<OneStageResult> OneStage(const TriangleMesh& mesh,
+                                          const std::vector<Material>& materials,
+                                          const std::vector<Sensor>& sensors,
+                                          const OneStageOptions& options) override {
+    const auto start = std::chrono::steady_clock::now();
+    FENESTRA_RETURN_IF_ERROR(CheckOneStageInput(sensors, options));
+    FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(mesh, materials));
+    FENESTRA_RETURN_IF_ERROR(Upload(geometry));
+    const std::vector<TraceSensor> local = LocalSensors(geometry, sensors);
+    const int sensor_count = static_cast<int>(local.size());
+    const int batches = std::max(1, options.batches);
+    PathSettings path = PathSettingsFor(options);
+    path.importance = nullptr;
+
+    // Trace per (sensor, batch), then fold the batches
+    const size_t rows = static_cast<size_t>(sensor_count) * batches;
+    std::vector<double> batch_sum(rows * kDaylightBins), batch_squares(rows * kDaylightBins);
+    CudaCounters counters;
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->OneStage(
+        local.data(), sensor_count, static_cast<uint64_t>(options.paths_per_sensor), batches,
+        options.seed, path, batch_sum.data(), batch_squares.data(), &counters)));
+    std::vector<double> sum(sensor_count * kDaylightBins, 0.0), squares(sum.size(), 0.0);
+    std::vector<double> sky_squares(sensor_count, 0.0);
+    for (int s = 0; s < sensor_count; ++s) {
+      for (int b = 0; b < batches; ++b) {
+        for (int bin = 0; bin < kDaylightBins; ++bin) {
+          const size_t k = (static_cast<size_t>(s) * batches + b) * kDaylightBins + bin;
+          sum[s * kDaylightBins + bin] += batch_sum[k];
+          squares[s * kDaylightBins + bin] += batch_squares[k];
+          // A path scores one bin, so its sky total's square is its bin's square
+          if (bin > 0) sky_squares[s] += batch_squares[k];
+        }
+      }
+    }
+    OneStageResult result;
+    FillFromSums(sum, squares, sky_squares, sensor_count, options.paths_per_sensor, &result);
+    FillBatches(batch_sum, sensor_count, batches, options.paths_per_sensor, &result);
+    result.rays_traced = counters.rays;
+    result.branches = static_cast<uint64_t>(options.paths_per_sensor) * sensor_count;
+    result.escaped_paths = counters.ends[static_cast<int>(PathEnd::kEscaped)];
+    result.roulette_paths = counters.ends[static_cast<int>(PathEnd::kRoulette)];
+    result.bounce_limit_paths = counters.ends[static_cast<int>(PathEnd::kBounceLimit)];
+    result.truncated_paths = counters.ends[static_cast<int>(PathEnd::kTruncated)];
+    result.max_path_weight = 1.0;
+    result.backend = Name();
+    result.wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+  }
+
+  absl::StatusOr<OutdoorTally> Outdoor(const TraceGeometry& geometry, const TraceWindow& window,
+                                       const HemisphereBasis& basis, uint64_t paths_per_cell,
+                                       uint64_t seed, const PathSettings& path, int) override {
+    const auto start = std::chrono::steady_clock::now();
+    FENESTRA_RETURN_IF_ERROR(Upload(geometry));
+    OutdoorTally tally;
+    tally.cells = basis.cell_count;
+    tally.paths_per_cell = paths_per_cell;
+    tally.sum.resize(static_cast<size_t>(basis.cell_count) * kDaylightBins);
+    tally.sum_squares.resize(tally.sum.size());
+    CudaCounters counters;
+    FENESTRA_RETURN_IF_ERROR(
+        Check(tracer_->Outdoor(window, basis, paths_per_cell, seed, WithoutImportance(path),
+                               tally.sum.data(), tally.sum_squares.data(), &counters)));
+    Count(counters, &tally.counters);
+    tally.wall_seconds = Seconds(start);
+    return tally;
+  }
+
+  absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry,
+                                     const std::vector<TraceSensor>& sensors,
+                                     const TraceWindow& window, const HemisphereBasis& basis,
+                                     uint64_t paths_per_sensor, int batches, uint64_t seed,
+                                     const PathSettings& path, int) override {
+    const auto start = std::chrono::steady_clock::now();
+    FENESTRA_RETURN_IF_ERROR(Upload(geometry));
+    IndoorTally tally;
+    tally.sensors = static_cast<int>(sensors.size());
+    tally.cells = basis.cell_count;
+    tally.batches = batches;
+    tally.paths_per_sensor = paths_per_sensor;
+    for (int b = 0; b < batches; ++b) {
+      tally.batch_paths.push_back(BatchStart(paths_per_sensor, batches, b + 1) -
+                                  BatchStart(paths_per_sensor, batches, b));
+    }
+    tally.sum.resize(static_cast<size_t>(batches) * sensors.size() * basis.cell_count);
+    CudaCounters counters;
+    FENESTRA_RETURN_IF_ERROR(Check(
+        tracer_->Indoor(sensors.data(), tally.sensors, window, basis, paths_per_sensor, batches,
+                        seed, WithoutImportance(path), tally.sum.data(), &counters)));
+    Count(counters, &tally.counters);
+    tally.wall_seconds = Seconds(start);
+    return tally;
+  }
+
+ private:
+  static absl::Status Check(const std::string& error) {
+    return error.empty() ? absl::OkStatus() : absl::InternalError(error);
+  }
+  static PathSettings WithoutImportance(PathSettings path) {
+    path.importance = nullptr;
+    return path;
+  }
+  static void Count(const CudaCounters& counters, TraceCounters* out) {
+    out->rays = counters.rays;
+    for (int e = 0; e < 6; ++e) out->ends[e] = counters.ends[e];
+    out->max_weight = 1.0f;
+  }
+  static double Seconds(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  absl::Status Upload(const TraceGeometry& geometry) {
+    FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(geometry));
+    return Check(tracer_->SetScene(bvh, geometry.triangle_material.data(),
+                                   geometry.triangle_material.size(), geometry.materials.data(),
+                                   geometry.materials.size()));
+  }
+
+  std::unique_ptr<CudaTracer> tracer_;
+};
+
+}  // namespace
+
+int CudaDevices() { return CudaDeviceCount(); }
+
+absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int device) {
+  std::string error;
+  std::unique_ptr<CudaTracer> tracer = CudaTracer::Create(device, &error);
+  if (!tracer) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
+  return std::unique_ptr<DcBackend>(std::make_unique<CudaBackend>(std::move(tracer)));
+}
+
+#else
+
+int CudaDevices() { return 0; }
+
+absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int) {
+  return absl::UnavailableError(
+      "cannot use the GPU: this build of Fenestra has no CUDA backend (nvcc was not found "
+      "when it was configured)");
+}
+
+#endif
+
+}  // namespace fenestra

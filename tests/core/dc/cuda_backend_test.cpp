@@ -1,0 +1,143 @@
+// The CUDA backend against the Embree backend: same path code, same random streams.
+// The GPU cases skip on hosts without a CUDA device.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+#include "core/dc/dc_backend.h"
+#include "core/dc/one_stage.h"
+#include "core/dc/two_stage.h"
+
+namespace fenestra {
+namespace {
+
+Scene Load(const std::string& name) {
+  absl::StatusOr<Scene> scene = LoadScene(FENESTRA_SOURCE_DIR "/examples/" + name + "/scene.json");
+  EXPECT_TRUE(scene.ok()) << scene.status();
+  return *scene;
+}
+
+std::unique_ptr<DcBackend> Gpu() {
+  absl::StatusOr<std::unique_ptr<DcBackend>> backend = MakeCudaBackend(0);
+  return backend.ok() ? *std::move(backend) : nullptr;
+}
+
+// Every entry above 1% of its row maximum agrees within 3 combined standard errors.
+void ExpectParity(const Matrix& a, const Matrix& a_se, const Matrix& b, const Matrix& b_se,
+                  const std::string& what) {
+  double worst = 0;
+  int compared = 0;
+  for (Eigen::Index i = 0; i < a.rows(); ++i) {
+    const double row_max = std::max(a.row(i).maxCoeff(), b.row(i).maxCoeff());
+    for (Eigen::Index j = 0; j < a.cols(); ++j) {
+      ASSERT_TRUE(std::isfinite(a(i, j)) && std::isfinite(b(i, j))) << what;
+      if (std::max(a(i, j), b(i, j)) <= 0.01 * row_max) continue;
+      const double se = std::hypot(a_se(i, j), b_se(i, j));
+      const double z = se > 0 ? std::abs(a(i, j) - b(i, j)) / se : 0;
+      worst = std::max(worst, z);
+      ++compared;
+      EXPECT_LE(std::abs(a(i, j) - b(i, j)), 3 * se) << what << " row " << i << " col " << j;
+    }
+  }
+  std::printf("%s: %d entries compared, largest difference %.2f combined standard errors\n",
+              what.c_str(), compared, worst);
+}
+
+TEST(CudaBackendTest, MissingGpuIsAClearError) {
+  if (CudaDevices() > 0) GTEST_SKIP() << "a CUDA device is present";
+  absl::StatusOr<std::unique_ptr<DcBackend>> backend = MakeBackend("cuda");
+  ASSERT_FALSE(backend.ok());
+  EXPECT_EQ(backend.status().code(), absl::StatusCode::kUnavailable);
+  EXPECT_NE(backend.status().message().find("cannot use the GPU"), std::string::npos);
+  absl::StatusOr<std::unique_ptr<DcBackend>> automatic = MakeBackend("auto");
+  ASSERT_TRUE(automatic.ok());
+  EXPECT_EQ((*automatic)->Name(), "embree-cpu");
+}
+
+void OneStageParity(const std::string& name, const BlindDesign* design, int bounces) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const Scene scene = Load(name);
+  OneStageOptions options;
+  options.paths_per_sensor = 1'000'000;
+  options.max_bounces = bounces;
+  options.seed = 5;
+  options.weight_windows = false;  // the GPU plays plain roulette
+  const BlindDesign d = design ? *design : DefaultDesign(scene);
+  absl::StatusOr<OneStageResult> cpu = ComputeOneStage(scene, d, options);
+  absl::StatusOr<OneStageResult> cuda = ComputeOneStage(scene, d, options, gpu.get());
+  ASSERT_TRUE(cpu.ok()) << cpu.status();
+  ASSERT_TRUE(cuda.ok()) << cuda.status();
+  ExpectParity(cpu->coefficients, cpu->standard_error, cuda->coefficients, cuda->standard_error,
+               name + " one-stage");
+  std::printf("%s: CPU %.3f s, GPU %.3f s (%s), GPU rays %llu\n", name.c_str(), cpu->wall_seconds,
+              cuda->wall_seconds, cuda->backend.c_str(),
+              static_cast<unsigned long long>(cuda->rays_traced));
+}
+
+TEST(CudaBackendTest, LightwellOneStageMatchesEmbree) { OneStageParity("lightwell", nullptr, 29); }
+
+TEST(CudaBackendTest, CityOfficeOneStageMatchesEmbree) {
+  const Scene scene = Load("city_office");
+  const BlindDesign design = *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}});
+  OneStageParity("city_office", &design, 10);
+}
+
+TEST(CudaBackendTest, TwoStageMatchesEmbree) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const Scene scene = Load("city_office");
+  const BlindDesign design = *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}});
+  OutdoorOptions outdoor;
+  outdoor.paths = 2'000'000;
+  IndoorOptions indoor;
+  indoor.paths_per_sensor = 200'000;
+  absl::StatusOr<OutdoorResult> o_cpu = ComputeOutdoorStage(scene, outdoor);
+  absl::StatusOr<OutdoorResult> o_gpu = ComputeOutdoorStage(scene, outdoor, gpu.get());
+  ASSERT_TRUE(o_cpu.ok() && o_gpu.ok());
+  ExpectParity(o_cpu->coefficients, o_cpu->standard_error, o_gpu->coefficients,
+               o_gpu->standard_error, "outdoor matrix");
+  absl::StatusOr<IndoorResult> i_cpu = ComputeIndoorStage(scene, design, indoor);
+  absl::StatusOr<IndoorResult> i_gpu = ComputeIndoorStage(scene, design, indoor, gpu.get());
+  ASSERT_TRUE(i_cpu.ok() && i_gpu.ok());
+  ExpectParity(i_cpu->coefficients, i_cpu->standard_error, i_gpu->coefficients,
+               i_gpu->standard_error, "indoor matrix");
+  std::printf("outdoor: CPU %.3f s, GPU %.3f s; indoor: CPU %.3f s, GPU %.3f s\n",
+              o_cpu->wall_seconds, o_gpu->wall_seconds, i_cpu->wall_seconds, i_gpu->wall_seconds);
+}
+
+// The stiff scenes of the one-stage tests, on the GPU: finite, and matching the CPU.
+TEST(CudaBackendTest, StiffScenesStayFiniteAndMatch) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  // A white lightwell (reflectance 0.99 everywhere, 1000 bounces), far from the origin
+  Scene white = Load("lightwell");
+  for (Material& m : white.materials) m.reflectance = 0.99;
+  for (Vec3d& v : white.fixed.vertices) v += Vec3d{1e4, 1e4, 0};
+  for (Sensor& s : white.sensors) s.position += Vec3d{1e4, 1e4, 0};
+  OneStageOptions options;
+  options.paths_per_sensor = 200'000;
+  options.max_bounces = 1000;
+  options.weight_windows = false;
+  absl::StatusOr<OneStageResult> cpu = ComputeOneStage(white, DefaultDesign(white), options);
+  absl::StatusOr<OneStageResult> cuda =
+      ComputeOneStage(white, DefaultDesign(white), options, gpu.get());
+  ASSERT_TRUE(cpu.ok() && cuda.ok());
+  EXPECT_EQ(cuda->coefficients.col(0).sum(), 0.0);  // nothing below the horizon
+  ExpectParity(cpu->coefficients, cpu->standard_error, cuda->coefficients, cuda->standard_error,
+               "white lightwell at (1e4, 1e4)");
+  // A closed blind with touching slats
+  const Scene office = Load("city_office");
+  const BlindDesign closed = *DesignWithOverrides(office, {{"alpha", 0}, {"spacing", 0}});
+  options.max_bounces = 10;
+  cpu = ComputeOneStage(office, closed, options);
+  cuda = ComputeOneStage(office, closed, options, gpu.get());
+  ASSERT_TRUE(cpu.ok() && cuda.ok());
+  ExpectParity(cpu->coefficients, cpu->standard_error, cuda->coefficients, cuda->standard_error,
+               "closed blind");
+}
+
+}  // namespace
+}  // namespace fenestra
