@@ -155,14 +155,17 @@ absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsWithErrors(
   }
   FENESTRA_ASSIGN_OR_RETURN(analysed, SelectAnalysed(columns, occupied, options));
 
-  Matrix mean_dc = dc_batches[0];
-  for (int b = 1; b < batches; ++b) mean_dc += dc_batches[b];
-  mean_dc /= batches;
+  // Every batch's illuminance in one product (the sky is sliced once); E of the mean D is
+  // the mean of the batches' E
+  const Eigen::Index n = dc_batches[0].rows();
+  Matrix stacked(batches * n, dc_batches[0].cols());
+  for (int b = 0; b < batches; ++b) stacked.middleRows(b * n, n) = dc_batches[b];
   FENESTRA_ASSIGN_OR_RETURN(
-      full, Illuminance(std::span<const Matrix>(&mean_dc, 1), sky_channels, analysed.steps));
-  auto batch = [&](int b) {
-    return Illuminance(dc_batches.subspan(b, 1), sky_channels, analysed.steps);
-  };
+      all, Illuminance(std::span<const Matrix>(&stacked, 1), sky_channels, analysed.steps));
+  Matrix full = all.middleRows(0, n);
+  for (int b = 1; b < batches; ++b) full += all.middleRows(b * n, n);
+  full /= batches;
+  auto batch = [&](int b) -> absl::StatusOr<Matrix> { return Matrix(all.middleRows(b * n, n)); };
   return Jackknife(batches, full, batch, analysed, columns.size(), occupied, options,
                    direct_illuminance_lux);
 }

@@ -19,6 +19,13 @@ struct BruteForceIntersector {
   const Vec3f* vertices;  // 3 per triangle, local frame
   uint32_t triangle_count;
 
+  FENESTRA_CPU_GPU bool Occluded(Vec3f origin, Vec3f direction, float distance) const {
+    SurfaceHit hit;
+    if (!Intersect(origin, direction, &hit)) return false;
+    const Vec3f along = hit.position - origin;
+    return Dot(along, along) < distance * distance;
+  }
+
   FENESTRA_CPU_GPU bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const {
     float closest = INFINITY;
     uint32_t best = 0;

@@ -83,12 +83,22 @@ struct BvhIntersector {
   const BvhTriangle* triangles;
 
   FENESTRA_CPU_GPU bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const {
+    return Traverse(origin, direction, INFINITY, false, hit);
+  }
+
+  FENESTRA_CPU_GPU bool Occluded(Vec3f origin, Vec3f direction, float distance) const {
+    return Traverse(origin, direction, distance, true, nullptr);
+  }
+
+  // Closest hit below t_max; with any_hit, stops at the first hit (and fills no `hit`).
+  FENESTRA_CPU_GPU bool Traverse(Vec3f origin, Vec3f direction, float t_max, bool any_hit,
+                                 SurfaceHit* hit) const {
     const WatertightRay ray(origin, direction);
     const float inv[3] = {1.0f / direction.x, 1.0f / direction.y, 1.0f / direction.z};
     const float o[3] = {origin.x, origin.y, origin.z};
     // Slab distances are widened by 2 ulps each way (Ize, "Robust BVH Ray Traversal", 2013)
     const float kWiden = 1.0f + 4.0f * 5.96e-8f;
-    float t_best = INFINITY;
+    float t_best = t_max;
     float best_b[3] = {0, 0, 0};
     int32_t best = -1;
     int32_t stack[kStackSize];
@@ -137,6 +147,7 @@ struct BvhIntersector {
           const BvhTriangle& tri = triangles[t];
           float b0, b1, b2;
           if (IntersectWatertight(ray, tri.v0, tri.v1, tri.v2, &t_best, &b0, &b1, &b2)) {
+            if (any_hit) return true;
             best = t;
             best_b[0] = b0, best_b[1] = b1, best_b[2] = b2;
           }

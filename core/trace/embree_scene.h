@@ -21,6 +21,26 @@ struct EmbreeIntersector {
   const Vec3f* vertices;               // 3 per Embree primitive, local frame
   const uint32_t* primitive_triangle;  // Embree primitive -> mesh triangle
 
+  bool Occluded(Vec3f origin, Vec3f direction, float distance) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay ray;
+    ray.org_x = origin.x;
+    ray.org_y = origin.y;
+    ray.org_z = origin.z;
+    ray.tnear = 0.0f;
+    ray.dir_x = direction.x;
+    ray.dir_y = direction.y;
+    ray.dir_z = direction.z;
+    ray.time = 0.0f;
+    ray.tfar = distance;
+    ray.mask = 0xFFFFFFFFu;
+    ray.id = 0;
+    ray.flags = 0;
+    rtcOccluded1(scene, &context, &ray);
+    return ray.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
+  }
+
   bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);

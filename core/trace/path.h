@@ -9,6 +9,8 @@
 //
 //   Intersector  bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const;
 //                closest hit along the ray (t in (0, inf)), in the scene's local frame.
+//                bool Occluded(Vec3f origin, Vec3f direction, float distance) const;
+//                whether any surface lies on the ray for t in (0, distance) (shadow rays).
 //   Mode         what a path is for: where it starts and what its light is worth.
 //     PathState Start(const Intersector&, const PathRandom&)     first vertex (draw 0)
 //     void AtReflection(const Intersector&, const PathState&, const ReflectionVertex&,
@@ -130,8 +132,8 @@ template <class Intersector, class Mode>
 FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const SurfaceTable& surfaces,
                                              const PathSettings& settings, const PathRandom& random,
                                              Mode& mode, PathState path, uint32_t* interactions,
-                                             PathState* pending, int* pending_count,
-                                             PathStats* stats) {
+                                             PathState* pending, int pending_capacity,
+                                             int* pending_count, PathStats* stats) {
   for (;;) {
     if (*interactions >= settings.max_vertices) return PathEnd::kTruncated;
     // Find the closest hit; an escaping ray is the mode's to score
@@ -187,8 +189,8 @@ FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const Sur
     } else if (settings.importance != nullptr && !transmit && weight > 2.0f * threshold) {
       copies = static_cast<int>(weight / threshold);
       if (copies > kMaxSplit) copies = kMaxSplit;
-      if (copies > kMaxPendingBranches - *pending_count + 1) {
-        copies = kMaxPendingBranches - *pending_count + 1;
+      if (copies > pending_capacity - *pending_count + 1) {
+        copies = pending_capacity - *pending_count + 1;
       }
       weight /= static_cast<float>(copies);
     }
@@ -218,18 +220,21 @@ FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const Sur
 
 // Follows one path (all its branches) from mode.Start to its end. See the file comment
 // for the contracts.
-template <class Intersector, class Mode>
+// kPendingCapacity bounds the branches waiting to be followed; 0 turns splitting off and
+// keeps the per-path state small (the GPU kernels, which do not use weight windows).
+template <class Intersector, class Mode, int kPendingCapacity = kMaxPendingBranches>
 FENESTRA_CPU_GPU inline PathStats TracePath(const Intersector& scene, const SurfaceTable& surfaces,
                                             const PathSettings& settings, const PathRandom& random,
                                             Mode& mode) {
   PathState path = mode.Start(scene, random);
   PathStats stats{0, path.weight, PathEnd::kEscaped, 0, {0, 0, 0, 0, 0, 0}};
-  PathState pending[kMaxPendingBranches];
+  PathState pending[kPendingCapacity > 0 ? kPendingCapacity : 1];
   int pending_count = 0;
   uint32_t interactions = path.vertex;
   for (;;) {
-    stats.end = path_internal::FollowBranch(scene, surfaces, settings, random, mode, path,
-                                            &interactions, pending, &pending_count, &stats);
+    stats.end =
+        path_internal::FollowBranch(scene, surfaces, settings, random, mode, path, &interactions,
+                                    pending, kPendingCapacity, &pending_count, &stats);
     ++stats.branches;
     ++stats.ends[static_cast<int>(stats.end)];
     if (pending_count == 0) break;

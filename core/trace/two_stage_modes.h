@@ -145,13 +145,10 @@ struct IndoorMode {
     const int cell =
         BasisCell(*basis, Vec3f{Dot(omega, window.across), Dot(omega, window.up), cos_window});
     if (cell < 0) return;
-    // The window point itself lies in the opening, where there is no surface: any hit
+    // The window point itself lies in the opening, where there is no surface: anything
     // short of it (less a relative margin) blocks the segment
-    SurfaceHit hit;
-    if (scene.Intersect(origin, omega, &hit)) {
-      const Vec3f along = hit.position - origin;
-      if (Dot(along, along) < distance_squared * 0.999999f) return;
-    }
+    const float distance = sqrtf(distance_squared);
+    if (scene.Occluded(origin, omega, distance * 0.9999995f)) return;
     sink->Add(cell, static_cast<double>(factor * cos_vertex * cos_window * window.Area() /
                                         distance_squared));
   }

@@ -15,6 +15,10 @@ namespace fenestra {
 namespace {
 
 constexpr int kThreads = 256;
+// Blocks per multiprocessor the register budget must allow (occupancy against spills).
+#ifndef FENESTRA_CUDA_MIN_BLOCKS
+#define FENESTRA_CUDA_MIN_BLOCKS 4
+#endif
 constexpr int kCounters = 7;  // rays, then paths by PathEnd
 
 // A device allocation freed on scope exit; grows on demand.
@@ -103,12 +107,20 @@ struct ThreadCounts {
   }
 };
 
+// One path without splitting (no weight windows on the GPU): small per-thread state.
+template <class Mode>
+__device__ PathStats TraceGpuPath(const BvhIntersector& scene, const SurfaceTable& surfaces,
+                                  const PathSettings& settings, const PathRandom& random,
+                                  Mode& mode) {
+  return TracePath<BvhIntersector, Mode, 0>(scene, surfaces, settings, random, mode);
+}
+
 // Rows are (sensor, batch): row s * batches + b holds the paths [b N / batches,
 // (b + 1) N / batches) of sensor s.
-__global__ void OneStageKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
-                               const TraceSensor* sensors, uint64_t paths_per_sensor, int batches,
-                               uint64_t seed, double* sum, double* sum_squares,
-                               unsigned long long* counters) {
+__global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
+    OneStageKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
+                   const TraceSensor* sensors, uint64_t paths_per_sensor, int batches,
+                   uint64_t seed, double* sum, double* sum_squares, unsigned long long* counters) {
   __shared__ double row[2 * kTregenzaBinCount];
   __shared__ unsigned long long block_counters[kCounters];
   BeginRow(row, 2 * kTregenzaBinCount, block_counters);
@@ -121,7 +133,7 @@ __global__ void OneStageKernel(BvhIntersector scene, SurfaceTable surfaces, Path
   ThreadCounts counts;
   for (uint64_t p = first + blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x; p < last;
        p += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
-    counts.Add(TracePath(scene, surfaces, settings, PathRandom(seed, s, p), mode));
+    counts.Add(TraceGpuPath(scene, surfaces, settings, PathRandom(seed, s, p), mode));
   }
   counts.Flush(block_counters);
   const size_t offset = static_cast<size_t>(blockIdx.y) * kTregenzaBinCount;
@@ -133,10 +145,10 @@ __global__ void OneStageKernel(BvhIntersector scene, SurfaceTable surfaces, Path
   }
 }
 
-__global__ void OutdoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
-                              TraceWindow window, HemisphereBasis basis, uint64_t paths_per_cell,
-                              uint64_t seed, double* sum, double* sum_squares,
-                              unsigned long long* counters) {
+__global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
+    OutdoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
+                  TraceWindow window, HemisphereBasis basis, uint64_t paths_per_cell, uint64_t seed,
+                  double* sum, double* sum_squares, unsigned long long* counters) {
   __shared__ double row[2 * kTregenzaBinCount];
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
@@ -148,8 +160,8 @@ __global__ void OutdoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathS
   ThreadCounts counts;
   for (uint64_t p = blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x;
        p < paths_per_cell; p += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
-    counts.Add(
-        TracePath(scene, surfaces, settings, PathRandom(seed, kOutdoorStreamBase + cell, p), mode));
+    counts.Add(TraceGpuPath(scene, surfaces, settings,
+                            PathRandom(seed, kOutdoorStreamBase + cell, p), mode));
   }
   counts.Flush(block_counters);
   EndRow(row, kTregenzaBinCount, sum + cell * kTregenzaBinCount, block_counters, counters);
@@ -160,10 +172,11 @@ __global__ void OutdoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathS
   }
 }
 
-__global__ void IndoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
-                             const TraceSensor* sensors, int sensor_count, TraceWindow window,
-                             HemisphereBasis basis, uint64_t paths_per_sensor, int batches,
-                             uint64_t seed, double* sum, unsigned long long* counters) {
+__global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
+    IndoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
+                 const TraceSensor* sensors, int sensor_count, TraceWindow window,
+                 HemisphereBasis basis, uint64_t paths_per_sensor, int batches, uint64_t seed,
+                 double* sum, unsigned long long* counters) {
   extern __shared__ double row[];  // basis.cell_count
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
@@ -179,7 +192,7 @@ __global__ void IndoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSe
   ThreadCounts counts;
   for (uint64_t p = first + blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x; p < last;
        p += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
-    counts.Add(TracePath(scene, surfaces, settings, PathRandom(seed, s, p), mode));
+    counts.Add(TraceGpuPath(scene, surfaces, settings, PathRandom(seed, s, p), mode));
   }
   counts.Flush(block_counters);
   EndRow(row, basis.cell_count,

@@ -77,23 +77,25 @@ Comparison Compare(const Scene& scene, const BlindDesign& design, int64_t one_st
 }
 
 // Per sensor, two-stage and one-stage sky sums agree within 3 combined standard errors plus
-// the basis bias, measured as the difference between the 288- and 1152-cell results.
+// the basis bias. The bias of a piecewise-constant direction basis scales with the cells'
+// angular size, which halves from 288 to 1152 cells; so the measured difference between
+// the two bases, d = b_288 - b_1152 = b_288 / 2, gives b_288 = 2 d and b_1152 = d.
 void ExpectAgreement(const Comparison& c, const std::string& name) {
   const RowSums coarse = SkySums(c.coarse), fine = SkySums(c.fine);
   for (int i = 0; i < coarse.value.size(); ++i) {
     const double one = c.one_stage.sky_sum(i), one_se = c.one_stage.sky_sum_standard_error(i);
-    const double bias = std::abs(coarse.value(i) - fine.value(i));
-    const double bias_se = std::hypot(coarse.standard_error(i), fine.standard_error(i));
+    const double difference = std::abs(coarse.value(i) - fine.value(i));
     std::printf(
         "%s sensor %d: one-stage %.5e ± %.2e, two-stage 288 %.5e ± %.2e, 1152 %.5e ± "
-        "%.2e, basis bias %.2e (± %.2e)\n",
+        "%.2e, basis difference %.2e (± %.2e)\n",
         name.c_str(), i + 1, one, one_se, coarse.value(i), coarse.standard_error(i), fine.value(i),
-        fine.standard_error(i), bias, bias_se);
-    for (const RowSums* two : {&coarse, &fine}) {
+        fine.standard_error(i), difference,
+        std::hypot(coarse.standard_error(i), fine.standard_error(i)));
+    for (const auto& [two, bias] :
+         {std::pair{&coarse, 2 * difference}, std::pair{&fine, difference}}) {
       const double se = std::hypot(one_se, two->standard_error(i));
       EXPECT_LE(std::abs(two->value(i) - one), 3 * se + bias) << name << " sensor " << i + 1;
     }
-    EXPECT_EQ(c.coarse.coefficients(i, 0) >= 0, true);
   }
 }
 
