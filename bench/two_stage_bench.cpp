@@ -1,0 +1,84 @@
+// Two-stage benchmark on the city office (bench/README.md): the outdoor stage at 2 x 10^7
+// paths and 30 bounces, the indoor stage for 9 sensors at 2 x 10^5 paths and 5 bounces,
+// their wall times and standard errors. Backend: the first argument (cpu, cuda, auto).
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "core/dc/dc_backend.h"
+#include "core/dc/two_stage.h"
+
+namespace fenestra {
+namespace {
+
+template <typename T>
+T Check(absl::StatusOr<T> value) {
+  if (!value.ok()) {
+    std::fprintf(stderr, "error: %s\n", std::string(value.status().message()).c_str());
+    std::exit(1);
+  }
+  return *std::move(value);
+}
+
+// Mean of se / value over entries above 1% of their row's maximum.
+double MeanRelativeError(const Matrix& value, const Matrix& se) {
+  double total = 0;
+  int count = 0;
+  for (Eigen::Index i = 0; i < value.rows(); ++i) {
+    const double row_max = value.row(i).maxCoeff();
+    for (Eigen::Index j = 0; j < value.cols(); ++j) {
+      if (value(i, j) > 0.01 * row_max && value(i, j) > 0) {
+        total += se(i, j) / value(i, j);
+        ++count;
+      }
+    }
+  }
+  return count > 0 ? total / count : 0;
+}
+
+}  // namespace
+}  // namespace fenestra
+
+int main(int argc, char** argv) {
+  using namespace fenestra;
+  const std::string backend_name = argc > 1 ? argv[1] : "cpu";
+  std::unique_ptr<DcBackend> backend = Check(MakeBackend(backend_name));
+  const Scene scene =
+      Check(LoadScene(std::string(FENESTRA_SOURCE_DIR) + "/examples/city_office/scene.json"));
+  std::printf("backend: %s\n", backend->Name().c_str());
+
+  OutdoorOptions outdoor;
+  outdoor.paths = 20'000'000;
+  outdoor.max_bounces = 30;
+  const OutdoorResult o = Check(ComputeOutdoorStage(scene, outdoor, backend.get()));
+  std::printf(
+      "outdoor stage: %lld paths (%lld per cell, %d cells), 30 bounces, %zu triangles: %.3f s, "
+      "%.3e rays (%.3e rays/s); mean relative SE of O %.4f\n",
+      static_cast<long long>(o.paths_per_cell * o.basis_cells),
+      static_cast<long long>(o.paths_per_cell), o.basis_cells, o.triangles, o.wall_seconds,
+      static_cast<double>(o.rays_traced), o.rays_traced / o.wall_seconds,
+      MeanRelativeError(o.coefficients, o.standard_error));
+
+  for (const double alpha : {0.0, 0.6, 1.5707963}) {
+    const BlindDesign design = Check(DesignWithOverrides(scene, {{"alpha", alpha}}));
+    IndoorOptions indoor;
+    indoor.paths_per_sensor = 200'000;
+    indoor.max_bounces = 5;
+    const IndoorResult i = Check(ComputeIndoorStage(scene, design, indoor, backend.get()));
+    const TwoStageResult d = Check(CombineStages(i, o));
+    // Sky sum of sensor 1 and its standard error over the batches (indoor part)
+    const double sum = d.coefficients.row(0).tail(145).sum();
+    double variance = 0;
+    for (const Matrix& b : d.batches) variance += std::pow(b.row(0).tail(145).sum() - sum, 2);
+    const double batches = static_cast<double>(d.batches.size());
+    const double sum_se = std::sqrt(variance / (batches * (batches - 1)));
+    std::printf(
+        "indoor stage, alpha %.3f: 9 sensors x 2e5 paths, 5 bounces, %zu triangles: %.3f s, "
+        "%.3e closest-hit rays; mean relative SE of I %.4f, of D %.4f; sky sum of D, sensor 1: "
+        "%.4e ± %.1e (indoor part)\n",
+        alpha, i.triangles, i.wall_seconds, static_cast<double>(i.rays_traced),
+        MeanRelativeError(i.coefficients, i.standard_error),
+        MeanRelativeError(d.coefficients, d.standard_error), sum, sum_se);
+  }
+  return 0;
+}
