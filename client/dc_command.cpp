@@ -35,6 +35,7 @@ void AddDcCommand(CLI::App& app) {
     uint64_t seed = 1;
     int threads = 0;
     bool no_roulette = false;
+    bool no_weight_windows = false;
     double roulette_threshold = OneStageOptions{}.roulette_threshold;
   };
   auto args = std::make_shared<DcArgs>();
@@ -86,6 +87,7 @@ void AddDcCommand(CLI::App& app) {
     options.threads = args->threads;
     options.russian_roulette = !args->no_roulette;
     options.roulette_threshold = args->roulette_threshold;
+    options.weight_windows = !args->no_weight_windows;
 
     // Trace and write
     const OneStageResult result = ValueOrFail(ComputeOneStage(scene, design, options));
@@ -111,12 +113,19 @@ void AddDcCommand(CLI::App& app) {
                scene.sensors.size(), result.paths_per_sensor,
                args->bounces > 0 ? fmt::format("at most {} reflections", args->bounces)
                                  : std::string("unlimited reflections"),
-               options.russian_roulette
+               result.importance_cells > 0 ? std::string("weight windows")
+               : options.russian_roulette
                    ? fmt::format("Russian roulette below weight {}", options.roulette_threshold)
                    : std::string("no Russian roulette"),
                result.backend, result.threads);
     fmt::print("rays traced {}, {:.3g} rays/s, wall time {:.2f} s\n", result.rays_traced,
                rays_per_second, result.wall_seconds);
+    if (result.importance_cells > 0) {
+      fmt::print("weight windows: pilot {} paths, {} importance cells, {:.2f} branches per path\n",
+                 result.pilot_paths, result.importance_cells,
+                 static_cast<double>(result.branches) /
+                     (static_cast<double>(result.paths_per_sensor) * scene.sensors.size()));
+    }
     if (result.bounce_limit_paths > 0) {
       fmt::print("{} paths ({:.3g}%) were cut by the bounce limit: their light is missing\n",
                  result.bounce_limit_paths,

@@ -108,7 +108,7 @@ void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum
 int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count) {
   if (options.pilot_paths_per_sensor > 0) return options.pilot_paths_per_sensor;
   const int64_t cap = std::max<int64_t>(20000, 600000 / std::max<size_t>(1, sensor_count));
-  return std::max<int64_t>(1, std::min(options.paths_per_sensor / 4, cap));
+  return std::max<int64_t>(1, std::min(options.paths_per_sensor, cap));
 }
 
 void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int batches, int64_t paths,

@@ -34,7 +34,8 @@ void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum
 inline constexpr uint64_t kMinPilotScoringPaths = 200;
 
 // Pilot paths per sensor for weight windows: options.pilot_paths_per_sensor, or when 0,
-// a quarter of the paths, at most max(20000, 600000 / sensors).
+// as many as the paths, at most max(20000, 600000 / sensors): the map's quality pays for
+// a pilot that large (bench/README.md).
 int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count);
 
 // batch_coefficients from per-batch sums (batch_sum as OneStageTally), when batches > 1.
