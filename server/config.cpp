@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "absl/strings/str_cat.h"
+#include "core/dc/dc_backend.h"
 
 namespace fenestra {
 
@@ -32,8 +33,11 @@ absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
   if (config.listen_address().empty()) config.set_listen_address("localhost:50051");
   if (config.data_dir().empty()) config.set_data_dir("fenestra-data");
   if (config.worker_threads() < 0) return invalid("worker_threads", "must be >= 0");
-  if (config.worker_threads() == 0) config.set_worker_threads(1);
   if (config.backend().empty()) config.set_backend("auto");
+  // By default one worker per visible GPU (jobs spread over the GPUs), else one
+  if (config.worker_threads() == 0) {
+    config.set_worker_threads(config.backend() == "cpu" ? 1 : std::max(1, CudaDevices()));
+  }
   if (config.backend() != "cpu" && config.backend() != "cuda" && config.backend() != "auto") {
     return invalid("backend",
                    absl::StrCat("must be cpu, cuda or auto, got '", config.backend(), "'"));

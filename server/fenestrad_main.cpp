@@ -24,7 +24,9 @@ int main(int argc, char** argv) {
   app.add_option("--listen", listen, "host:port to listen on [localhost:50051]");
   app.add_option("--data-dir", data_dir,
                  "job store, outdoor cache and weather files [fenestra-data]");
-  app.add_option("--workers", workers, "jobs and site computations run at once [1]");
+  app.add_option(
+      "--workers", workers,
+      "jobs and site computations run at once [one per GPU, at least 1; 1 with --backend cpu]");
   app.add_option("--backend", backend, "tracer for jobs that name none: cpu, cuda, auto [auto]");
   app.add_option("--max-outdoor-paths", max_outdoor_paths, "limit: outdoor paths [1e9]");
   app.add_option("--max-indoor-paths", max_indoor_paths, "limit: indoor paths per sensor [1e7]");

@@ -109,10 +109,14 @@ std::unique_ptr<DcBackend> MakeEmbreeBackend();
 // that device.
 absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int device = 0);
 
-// "cpu", "cuda" (GPU 0) or "auto" (the GPU when there is one, else the CPU).
+// "cpu", "cuda" or "auto" (a GPU when there is one, else the CPU). Successive GPU backends
+// take the visible GPUs in turn, so concurrent jobs spread over them.
 absl::StatusOr<std::unique_ptr<DcBackend>> MakeBackend(const std::string& name);
 
 // Number of CUDA devices this build and host can use (0 without CUDA).
 int CudaDevices();
+
+// The GPU the next backend should use: the visible GPUs in turn.
+int NextCudaDevice();
 
 }  // namespace fenestra

@@ -97,9 +97,9 @@ std::unique_ptr<DcBackend> MakeEmbreeBackend() { return std::make_unique<EmbreeB
 
 absl::StatusOr<std::unique_ptr<DcBackend>> MakeBackend(const std::string& name) {
   if (name == "cpu") return MakeEmbreeBackend();
-  if (name == "cuda") return MakeCudaBackend(0);
+  if (name == "cuda") return MakeCudaBackend(NextCudaDevice());
   if (name == "auto") {
-    if (CudaDevices() > 0) return MakeCudaBackend(0);
+    if (CudaDevices() > 0) return MakeCudaBackend(NextCudaDevice());
     return MakeEmbreeBackend();
   }
   return absl::InvalidArgumentError("backend must be cpu, cuda or auto, got '" + name + "'");
