@@ -1,28 +1,17 @@
 #include "server/config.h"
 
-#include <google/protobuf/util/json_util.h>
-
 #include <algorithm>
-#include <fstream>
-#include <sstream>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/json_proto.h"
 #include "core/dc/dc_backend.h"
 
 namespace fenestra {
 
 absl::StatusOr<v1::DaemonConfig> ReadConfigFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return absl::NotFoundError(absl::StrCat(path, ": cannot open the configuration file"));
-  std::stringstream text;
-  text << in.rdbuf();
   v1::DaemonConfig config;
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;
-  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &config, options);
-  if (!status.ok()) {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": ", status.message().as_string()));
-  }
+  absl::Status status = ReadJsonProtoFile(path, "configuration", &config);
+  if (!status.ok()) return status;
   return config;
 }
 

@@ -1,15 +1,12 @@
 #include "core/geometry/scene.h"
 
-#include <google/protobuf/util/json_util.h>
-
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <numbers>
-#include <sstream>
 #include <unordered_map>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/json_proto.h"
 #include "core/common/status_macros.h"
 #include "core/geometry/obj_io.h"
 
@@ -328,18 +325,8 @@ absl::StatusOr<Site> BuildSite(const v1::Scene& proto, const Checker& check) {
 }  // namespace
 
 absl::StatusOr<v1::Scene> ReadSceneProto(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return absl::NotFoundError(absl::StrCat(path, ": cannot open scene file"));
-  std::stringstream text;
-  text << in.rdbuf();
   v1::Scene scene;
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;
-  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &scene, options);
-  if (!status.ok()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat(path, ": malformed scene: ", std::string(status.message())));
-  }
+  FENESTRA_RETURN_IF_ERROR(ReadJsonProtoFile(path, "scene", &scene));
   return scene;
 }
 

@@ -1,18 +1,15 @@
 #include "core/optimize/job.h"
 
-#include <google/protobuf/util/json_util.h>
-
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <numbers>
 #include <set>
-#include <sstream>
 
 #include "absl/strings/str_cat.h"
 #include "core/common/content_hash.h"
+#include "core/common/json_proto.h"
 #include "core/common/status_macros.h"
 #include "core/dc/two_stage.h"
 #include "core/metrics/annual_metrics.h"
@@ -205,18 +202,8 @@ v1::Metrics ToProto(const AnnualMetricsEstimate& m) {
 }  // namespace
 
 absl::StatusOr<v1::Job> ReadJobFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return absl::NotFoundError(absl::StrCat(path, ": cannot open job file"));
-  std::stringstream text;
-  text << in.rdbuf();
   v1::Job job;
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;
-  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &job, options);
-  if (!status.ok()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat(path, ": malformed job: ", std::string(status.message())));
-  }
+  FENESTRA_RETURN_IF_ERROR(ReadJsonProtoFile(path, "job", &job));
   return job;
 }
 
