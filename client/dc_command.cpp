@@ -4,12 +4,16 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "client/cli_util.h"
 #include "client/commands.h"
 #include "core/common/radiance_matrix.h"
+#include "core/dc/dc_backend.h"
 #include "core/dc/one_stage.h"
+#include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
 
 namespace fenestra {
@@ -25,6 +29,37 @@ absl::Status CheckWritable(const std::string& path, const std::string& flag) {
   return absl::OkStatus();
 }
 
+// Writes each (path, matrix) pair; on a failure removes what it wrote and fails.
+void WriteAll(const std::vector<std::pair<std::string, const Matrix*>>& outputs,
+              MatrixFormat format) {
+  std::vector<std::string> written;
+  for (const auto& [path, matrix] : outputs) {
+    if (path.empty()) continue;
+    if (const absl::Status s = WriteRadianceMatrix(path, *matrix, format); !s.ok()) {
+      std::error_code ignored;
+      for (const std::string& w : written) std::filesystem::remove(w, ignored);
+      Fail(s);
+    }
+    written.push_back(path);
+  }
+}
+
+// Mean of se / value over entries above 1% of their row's maximum.
+double MeanRelativeError(const Matrix& value, const Matrix& se) {
+  double total = 0;
+  int count = 0;
+  for (Eigen::Index i = 0; i < value.rows(); ++i) {
+    const double row_max = value.row(i).maxCoeff();
+    for (Eigen::Index j = 0; j < value.cols(); ++j) {
+      if (value(i, j) > 0 && value(i, j) > 0.01 * row_max) {
+        total += se(i, j) / value(i, j);
+        ++count;
+      }
+    }
+  }
+  return count > 0 ? total / count : 0;
+}
+
 }  // namespace
 
 void AddDcCommand(CLI::App& app) {
@@ -37,12 +72,61 @@ void AddDcCommand(CLI::App& app) {
     bool no_roulette = false;
     bool no_weight_windows = false;
     double roulette_threshold = OneStageOptions{}.roulette_threshold;
+    std::string method = "one-stage", backend = "cpu", outdoor_matrix, indoor_matrix;
+    int basis = 288;
+    int64_t outdoor_paths = 20'000'000;
+    int64_t indoor_paths = 200'000;
   };
   auto args = std::make_shared<DcArgs>();
+  // D = I O: the outdoor stage (outdoor surfaces, from the window), the indoor stage
+  // (indoor surfaces and the blind, to the window), then the product.
+  static const auto RunTwoStage = [](const DcArgs& a, const Scene& scene, const BlindDesign& design,
+                                     DcBackend& backend, MatrixFormat format) {
+    OutdoorOptions outdoor;
+    outdoor.paths = a.outdoor_paths;
+    outdoor.max_bounces = a.bounces > 0 ? a.bounces : -1;
+    outdoor.seed = a.seed;
+    outdoor.threads = a.threads;
+    outdoor.basis_cells = a.basis;
+    IndoorOptions indoor;
+    indoor.paths_per_sensor = a.indoor_paths;
+    indoor.max_bounces = a.bounces > 0 ? a.bounces : -1;
+    indoor.seed = a.seed;
+    indoor.threads = a.threads;
+    indoor.basis_cells = a.basis;
+    const OutdoorResult o = ValueOrFail(ComputeOutdoorStage(scene, outdoor, &backend));
+    const IndoorResult i = ValueOrFail(ComputeIndoorStage(scene, design, indoor, &backend));
+    const TwoStageResult d = ValueOrFail(CombineStages(i, o));
+    WriteAll({{a.output, &d.coefficients},
+              {a.standard_error, &d.standard_error},
+              {a.outdoor_matrix, &o.coefficients},
+              {a.indoor_matrix, &i.coefficients}},
+             format);
+    const std::string limit = a.bounces > 0
+                                  ? fmt::format("at most {} reflections per stage", a.bounces)
+                                  : std::string("unlimited reflections");
+    fmt::print("dc two-stage on {}, {} window cells, {}:\n", backend.Name(), a.basis, limit);
+    fmt::print(
+        "  outdoor stage: {} paths, {} triangles, {} rays, {:.2f} s, mean relative SE {:.4f}\n",
+        o.paths_per_cell * o.basis_cells, o.triangles, o.rays_traced, o.wall_seconds,
+        MeanRelativeError(o.coefficients, o.standard_error));
+    fmt::print(
+        "  indoor stage: {} sensors x {} paths, {} triangles, {} rays, {:.2f} s, mean "
+        "relative SE {:.4f}\n",
+        scene.sensors.size(), i.paths_per_sensor, i.triangles, i.rays_traced, i.wall_seconds,
+        MeanRelativeError(i.coefficients, i.standard_error));
+    fmt::print("  D = I O: mean relative SE {:.4f}\n",
+               MeanRelativeError(d.coefficients, d.standard_error));
+    for (size_t s = 0; s < scene.sensors.size(); ++s) {
+      fmt::print("  {:<12} sky sum {:.5e} sr, ground {:.3e} sr\n", scene.sensors[s].name,
+                 d.coefficients.row(static_cast<Eigen::Index>(s)).tail(145).sum(),
+                 d.coefficients(static_cast<Eigen::Index>(s), 0));
+    }
+  };
   CLI::App* command = app.add_subcommand(
       "dc",
-      "Trace one-stage daylight coefficients (rows = sensors, 146 columns: bin 0 = "
-      "ground, 1..145 = Tregenza sky patches)");
+      "Trace daylight coefficients (rows = sensors, 146 columns: bin 0 = ground, 1..145 = "
+      "Tregenza sky patches), one-stage or two-stage");
   command->add_option("SCENE", args->scene, "Scene file (JSON)")->required();
   command->add_option("-o,--output", args->output, "Output matrix D [sr]")->required();
   command->add_option("--stderr", args->standard_error,
@@ -63,6 +147,23 @@ void AddDcCommand(CLI::App& app) {
       ->add_option("--roulette-threshold", args->roulette_threshold,
                    "Path weight below which Russian roulette plays, in (0, 1]")
       ->capture_default_str();
+  command->add_option("--method", args->method, "one-stage, or two-stage (D = I O)")
+      ->check(CLI::IsMember({"one-stage", "two-stage"}))
+      ->capture_default_str();
+  command->add_option("--backend", args->backend, "cpu, cuda or auto")
+      ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
+      ->capture_default_str();
+  command->add_option("--basis", args->basis, "Two-stage: window direction cells, 288 or 1152")
+      ->check(CLI::IsMember({288, 1152}))
+      ->capture_default_str();
+  command->add_option("--outdoor-paths", args->outdoor_paths, "Two-stage: outdoor paths in total")
+      ->capture_default_str();
+  command->add_option("--indoor-paths", args->indoor_paths, "Two-stage: indoor paths per sensor")
+      ->capture_default_str();
+  command->add_option("--outdoor-matrix", args->outdoor_matrix,
+                      "Two-stage: also write O (cells x 146) [-]");
+  command->add_option("--indoor-matrix", args->indoor_matrix,
+                      "Two-stage: also write I (sensors x cells) [sr]");
   command->add_option("--format", args->format, "Matrix format")
       ->check(CLI::IsMember({"ascii", "float"}))
       ->capture_default_str();
@@ -77,9 +178,24 @@ void AddDcCommand(CLI::App& app) {
         Fail(s);
       }
     }
+    for (const auto& [path, flag] : {std::pair{args->outdoor_matrix, "--outdoor-matrix"},
+                                     std::pair{args->indoor_matrix, "--indoor-matrix"}}) {
+      if (path.empty()) continue;
+      if (args->method != "two-stage") {
+        Fail(absl::InvalidArgumentError(fmt::format("{} needs --method two-stage", flag)));
+      }
+      if (const absl::Status s = CheckWritable(path, flag); !s.ok()) Fail(s);
+    }
     const Scene scene = ValueOrFail(LoadScene(args->scene));
     const BlindDesign design =
         ValueOrFail(DesignWithOverrides(scene, ValueOrFail(ParseDesignValues(args->set))));
+    std::unique_ptr<DcBackend> backend = ValueOrFail(MakeBackend(args->backend));
+    const MatrixFormat matrix_format =
+        args->format == "float" ? MatrixFormat::kFloat : MatrixFormat::kAscii;
+    if (args->method == "two-stage") {
+      RunTwoStage(*args, scene, design, *backend, matrix_format);
+      return;
+    }
     OneStageOptions options;
     options.paths_per_sensor = args->paths;
     options.max_bounces = args->bounces;
@@ -90,7 +206,8 @@ void AddDcCommand(CLI::App& app) {
     options.weight_windows = !args->no_weight_windows;
 
     // Trace and write
-    const OneStageResult result = ValueOrFail(ComputeOneStage(scene, design, options));
+    const OneStageResult result =
+        ValueOrFail(ComputeOneStage(scene, design, options, backend.get()));
     const MatrixFormat format =
         args->format == "float" ? MatrixFormat::kFloat : MatrixFormat::kAscii;
     if (const absl::Status s = WriteRadianceMatrix(args->output, result.coefficients, format);

@@ -5,7 +5,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
+#include <tuple>
 
 #include "core/geometry/obj_io.h"
 
@@ -100,6 +102,35 @@ TEST_F(SceneCliTest, UnwritableOutputFailsCleanly) {
                               (dir_ / "no/such/dir/x.obj").string());
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.output.find("cannot open for writing"), std::string::npos) << run.output;
+}
+
+TEST_F(SceneCliTest, DcTwoStageWritesDAndBothStages) {
+  const std::string d = (dir_ / "D.mtx").string(), o = (dir_ / "O.mtx").string(),
+                    i = (dir_ / "I.mtx").string();
+  const CliRun run = Fenestra("dc " + kExamples +
+                              "/city_office/scene.json --method two-stage --outdoor-paths 57600 "
+                              "--indoor-paths 2000 --bounces 3 --set alpha=1 -o " +
+                              d + " --outdoor-matrix " + o + " --indoor-matrix " + i);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("outdoor stage: 57600 paths"), std::string::npos) << run.output;
+  for (const auto& [path, rows, cols] :
+       {std::tuple{d, 9, 146}, std::tuple{o, 288, 146}, std::tuple{i, 9, 288}}) {
+    std::ifstream in(path);
+    std::string header((std::istreambuf_iterator<char>(in)), {});
+    EXPECT_NE(header.find("NROWS=" + std::to_string(rows) + "\nNCOLS=" + std::to_string(cols)),
+              std::string::npos)
+        << path;
+  }
+}
+
+TEST_F(SceneCliTest, DcStageMatricesNeedTheTwoStageMethod) {
+  const CliRun run =
+      Fenestra("dc " + kExamples + "/lightwell/scene.json -o " + (dir_ / "D.mtx").string() +
+               " --outdoor-matrix " + (dir_ / "O.mtx").string());
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("--outdoor-matrix needs --method two-stage"), std::string::npos)
+      << run.output;
+  EXPECT_TRUE(fs::is_empty(dir_));
 }
 
 }  // namespace
