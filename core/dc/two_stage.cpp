@@ -187,6 +187,31 @@ absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
   const Matrix outdoor_variance =
       indoor.coefficients.cwiseAbs2() * outdoor.standard_error.cwiseAbs2();
   result.standard_error = (indoor_variance + outdoor_variance).cwiseSqrt();
+
+  // Sky sums: indoor error from the batches; outdoor error from each cell's row sum. A path
+  // scores one bin, so a row sum's second moment is the sum of its entries' second moments:
+  // var(row) = sum_j se_j^2 + (sum_j m_j^2 - (sum_j m_j)^2) / (n - 1)
+  const Eigen::Index sensors = result.coefficients.rows(), cells = outdoor.coefficients.rows();
+  const double n = static_cast<double>(std::max<int64_t>(2, outdoor.paths_per_cell));
+  Eigen::VectorXd row_variance(cells);
+  for (Eigen::Index k = 0; k < cells; ++k) {
+    const auto m = outdoor.coefficients.row(k).tail(kDaylightBins - 1);
+    const auto se = outdoor.standard_error.row(k).tail(kDaylightBins - 1);
+    row_variance(k) = std::max(
+        0.0, se.squaredNorm() + (m.squaredNorm() - m.sum() * m.sum()) / (n - 1));
+  }
+  result.sky_sum.resize(sensors);
+  result.sky_sum_standard_error.resize(sensors);
+  for (Eigen::Index i = 0; i < sensors; ++i) {
+    result.sky_sum(i) = result.coefficients.row(i).tail(kDaylightBins - 1).sum();
+    double variance = 0;
+    for (const Matrix& d : result.batches) {
+      variance += std::pow(d.row(i).tail(kDaylightBins - 1).sum() - result.sky_sum(i), 2);
+    }
+    if (batches > 1) variance /= batches * (batches - 1);
+    variance += indoor.coefficients.row(i).cwiseAbs2().dot(row_variance);
+    result.sky_sum_standard_error(i) = std::sqrt(variance);
+  }
   return result;
 }
 

@@ -78,6 +78,10 @@ struct TwoStageResult {
   Matrix coefficients;          // sensors x 146 [sr]
   Matrix standard_error;        // sensors x 146 [sr]
   std::vector<Matrix> batches;  // I_b O, sensors x 146
+  // Per sensor: the sum of D over the sky bins (1..145) [sr] and its standard error, both
+  // stages' errors included (O's through each cell's row sum, from the per-path moments).
+  Eigen::VectorXd sky_sum;
+  Eigen::VectorXd sky_sum_standard_error;
 };
 
 // The basis of `cells` cells (288 or 1152), or InvalidArgument.
