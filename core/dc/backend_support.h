@@ -42,4 +42,13 @@ int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count)
 void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int batches, int64_t paths,
                  OneStageResult* result);
 
+// The path-end counts of a run (indexed by PathEnd) into `result`.
+template <class Ends>
+void FillEnds(const Ends& ends, OneStageResult* result) {
+  result->escaped_paths = ends[static_cast<int>(PathEnd::kEscaped)];
+  result->roulette_paths = ends[static_cast<int>(PathEnd::kRoulette)];
+  result->bounce_limit_paths = ends[static_cast<int>(PathEnd::kBounceLimit)];
+  result->truncated_paths = ends[static_cast<int>(PathEnd::kTruncated)];
+}
+
 }  // namespace fenestra

@@ -66,10 +66,7 @@ class CudaBackend : public DcBackend {
     FillBatches(batch_sum, sensor_count, batches, options.paths_per_sensor, &result);
     result.rays_traced = counters.rays;
     result.branches = static_cast<uint64_t>(options.paths_per_sensor) * sensor_count;
-    result.escaped_paths = counters.ends[static_cast<int>(PathEnd::kEscaped)];
-    result.roulette_paths = counters.ends[static_cast<int>(PathEnd::kRoulette)];
-    result.bounce_limit_paths = counters.ends[static_cast<int>(PathEnd::kBounceLimit)];
-    result.truncated_paths = counters.ends[static_cast<int>(PathEnd::kTruncated)];
+    FillEnds(counters.ends, &result);
     result.max_path_weight = 1.0;
     result.backend = Name();
     result.wall_seconds =

@@ -59,10 +59,7 @@ class EmbreeBackend : public DcBackend {
     result.branches = tally.branches;
     result.pilot_paths = static_cast<int64_t>(pilot.paths);
     result.importance_cells = settings.path.importance ? pilot.table.CellCount() : 0;
-    result.escaped_paths = tally.ends[static_cast<int>(PathEnd::kEscaped)];
-    result.roulette_paths = tally.ends[static_cast<int>(PathEnd::kRoulette)];
-    result.bounce_limit_paths = tally.ends[static_cast<int>(PathEnd::kBounceLimit)];
-    result.truncated_paths = tally.ends[static_cast<int>(PathEnd::kTruncated)];
+    FillEnds(tally.ends, &result);
     result.max_path_weight = tally.max_weight;
     result.threads = tally.threads;
     result.backend = Name();
