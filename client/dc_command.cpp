@@ -141,6 +141,8 @@ void AddDcCommand(CLI::App& app) {
   command->add_option("--threads", args->threads, "CPU threads (0 = all cores)")
       ->capture_default_str();
   command->add_option("--set", args->set, "Blind design values, e.g. alpha=0.5,width=0.12");
+  command->add_flag("--no-weight-windows", args->no_weight_windows,
+                    "Plain Russian roulette instead of weight windows (one-stage)");
   command->add_flag("--no-roulette", args->no_roulette,
                     "No Russian roulette (needs --bounces > 0)");
   command
