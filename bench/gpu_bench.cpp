@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 
+#include "bench/bench_util.h"
 #include "core/dc/dc_backend.h"
 #include "core/dc/one_stage.h"
 #include "core/dc/two_stage.h"
@@ -25,25 +26,16 @@ double Since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-template <typename T>
-T Check(absl::StatusOr<T> value) {
-  if (!value.ok()) {
-    std::fprintf(stderr, "error: %s\n", std::string(value.status().message()).c_str());
-    std::exit(1);
-  }
-  return *std::move(value);
-}
-
 void OneStage(DcBackend& gpu, const std::string& name, const BlindDesign* design, int64_t paths,
               int bounces) {
-  const Scene scene = Check(LoadScene(kRoot + "/examples/" + name + "/scene.json"));
+  const Scene scene = ValueOrExit(LoadScene(kRoot + "/examples/" + name + "/scene.json"));
   OneStageOptions options;
   options.paths_per_sensor = paths;
   options.max_bounces = bounces;
   options.weight_windows = false;
   const BlindDesign d = design ? *design : DefaultDesign(scene);
-  Check(ComputeOneStage(scene, d, options, &gpu));  // warm-up
-  const OneStageResult r = Check(ComputeOneStage(scene, d, options, &gpu));
+  ValueOrExit(ComputeOneStage(scene, d, options, &gpu));  // warm-up
+  const OneStageResult r = ValueOrExit(ComputeOneStage(scene, d, options, &gpu));
   std::printf(
       "one-stage %-12s %zu sensors x %lld paths, %d bounces: %.4f s, %.3e rays, %.2f G rays/s, "
       "mean relative SE %.4f, sky sums",
@@ -62,34 +54,35 @@ void OneStage(DcBackend& gpu, const std::string& name, const BlindDesign* design
 int main(int argc, char** argv) {
   const bool quick = argc > 1 && std::string(argv[1]) == "quick";
   using namespace fenestra;
-  std::unique_ptr<DcBackend> gpu = Check(MakeCudaBackend(0));
+  std::unique_ptr<DcBackend> gpu = ValueOrExit(MakeCudaBackend(0));
   std::printf("device: %s\n", gpu->Name().c_str());
 
   // Rays per second and the lightwell reference case (Radiance -ab 30 = 29 reflections)
   OneStage(*gpu, "lightwell", nullptr, 10'000'000, 29);
   OneStage(*gpu, "lightwell", nullptr, 10'000'000, 4);
-  const Scene office = Check(LoadScene(kRoot + "/examples/city_office/scene.json"));
-  const BlindDesign open = Check(DesignWithOverrides(office, {{"alpha", 0.6}, {"spacing", 0.05}}));
+  const Scene office = ValueOrExit(LoadScene(kRoot + "/examples/city_office/scene.json"));
+  const BlindDesign open =
+      ValueOrExit(DesignWithOverrides(office, {{"alpha", 0.6}, {"spacing", 0.05}}));
   OneStage(*gpu, "city_office", &open, 2'000'000, 30);
 
   // The city-office outdoor stage
   OutdoorOptions outdoor;
   outdoor.paths = 20'000'000;
   outdoor.max_bounces = 30;
-  Check(ComputeOutdoorStage(office, outdoor, gpu.get()));
-  const OutdoorResult o = Check(ComputeOutdoorStage(office, outdoor, gpu.get()));
+  ValueOrExit(ComputeOutdoorStage(office, outdoor, gpu.get()));
+  const OutdoorResult o = ValueOrExit(ComputeOutdoorStage(office, outdoor, gpu.get()));
   std::printf("outdoor stage: %lld paths, 30 bounces: %.4f s, %.3e rays, %.2f G rays/s\n",
               static_cast<long long>(o.paths_per_cell * o.basis_cells), o.wall_seconds,
               static_cast<double>(o.rays_traced), o.rays_traced / o.wall_seconds / 1e9);
 
   // One candidate: indoor stage, D = I O, E = D S, UDI with jackknife errors
   const EpwData weather =
-      Check(ReadEpw(kRoot + "/examples/weather/URY_Montevideo.865800_IWEC.epw"));
-  const SkyMatrix sky = Check(BuildSkyMatrix(weather));
+      ValueOrExit(ReadEpw(kRoot + "/examples/weather/URY_Montevideo.865800_IWEC.epw"));
+  const SkyMatrix sky = ValueOrExit(BuildSkyMatrix(weather));
   const std::vector<int> columns = LitColumns(sky.radiance);
   std::vector<double> hours;
   for (const SkyStep& step : sky.steps) hours.push_back(step.hour);
-  const std::vector<bool> occupied = Check(OccupiedSteps(hours));
+  const std::vector<bool> occupied = ValueOrExit(OccupiedSteps(hours));
   IndoorOptions indoor;
   indoor.paths_per_sensor = 200'000;
   indoor.max_bounces = 5;
@@ -99,13 +92,13 @@ int main(int argc, char** argv) {
   uint64_t rays = 0;
   double udi = 0, udi_se = 0;
   for (int c = 0; c <= candidates; ++c) {
-    const BlindDesign design = Check(DesignWithOverrides(
+    const BlindDesign design = ValueOrExit(DesignWithOverrides(
         office, {{"alpha", 0.05 * c}, {"width", 0.10 + 0.002 * c}, {"spacing", 0.002 * c}}));
     const auto start = std::chrono::steady_clock::now();
-    const IndoorResult i = Check(ComputeIndoorStage(office, design, indoor, gpu.get()));
-    const TwoStageResult d = Check(CombineStages(i, o));
+    const IndoorResult i = ValueOrExit(ComputeIndoorStage(office, design, indoor, gpu.get()));
+    const TwoStageResult d = ValueOrExit(CombineStages(i, o));
     const AnnualMetricsEstimate m =
-        Check(AnnualMetricsWithErrors(d.batches, sky_channels, columns, occupied));
+        ValueOrExit(AnnualMetricsWithErrors(d.batches, sky_channels, columns, occupied));
     if (c == 0) continue;  // warm-up
     trace += i.wall_seconds;
     total += Since(start);
@@ -121,11 +114,11 @@ int main(int argc, char** argv) {
 
   // The 500-evaluation four-variable optimization, end to end
   if (quick) return 0;
-  v1::Job job = Check(ReadJobFile(kRoot + "/examples/city_office/four_variables.json"));
+  v1::Job job = ValueOrExit(ReadJobFile(kRoot + "/examples/city_office/four_variables.json"));
   job.mutable_sampling()->set_backend("cuda");
-  const PreparedJob prepared = Check(PrepareJob(job, kRoot + "/examples/city_office"));
+  const PreparedJob prepared = ValueOrExit(PrepareJob(job, kRoot + "/examples/city_office"));
   const auto start = std::chrono::steady_clock::now();
-  const v1::JobResult result = Check(RunJob(prepared, nullptr));
+  const v1::JobResult result = ValueOrExit(RunJob(prepared, nullptr));
   std::printf(
       "four-variable optimization: %d evaluations (%s) in %.2f s (sky %.2f s, outdoor %.2f s, "
       "evaluations %.2f s); best UDI %.2f ± %.2f %% at",

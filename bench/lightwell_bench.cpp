@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench/bench_util.h"
 #include "core/common/radiance_matrix.h"
 #include "core/dc/one_stage.h"
 #include "core/geometry/scene.h"
@@ -100,15 +101,11 @@ Run Trace(const Bench& bench, int64_t paths, int max_bounces, const Strategy& st
   options.seed = seed;
   options.threads = bench.threads;
   const double cpu_start = CpuSeconds();
-  absl::StatusOr<OneStageResult> result =
-      ComputeOneStage(bench.scene, DefaultDesign(bench.scene), options);
+  OneStageResult result =
+      ValueOrExit(ComputeOneStage(bench.scene, DefaultDesign(bench.scene), options));
   const double cpu_seconds = CpuSeconds() - cpu_start;
-  if (!result.ok()) {
-    std::fprintf(stderr, "error: %s\n", std::string(result.status().message()).c_str());
-    std::exit(1);
-  }
   Run run;
-  run.result = *std::move(result);
+  run.result = std::move(result);
   run.cpu_seconds = cpu_seconds;
   run.seconds_per_path = run.result.wall_seconds / paths;
   for (int s = 0; s < 3; ++s) {

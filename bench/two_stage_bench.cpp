@@ -5,52 +5,22 @@
 #include <cstdio>
 #include <string>
 
+#include "bench/bench_util.h"
 #include "core/dc/dc_backend.h"
 #include "core/dc/two_stage.h"
-
-namespace fenestra {
-namespace {
-
-template <typename T>
-T Check(absl::StatusOr<T> value) {
-  if (!value.ok()) {
-    std::fprintf(stderr, "error: %s\n", std::string(value.status().message()).c_str());
-    std::exit(1);
-  }
-  return *std::move(value);
-}
-
-// Mean of se / value over entries above 1% of their row's maximum.
-double MeanRelativeError(const Matrix& value, const Matrix& se) {
-  double total = 0;
-  int count = 0;
-  for (Eigen::Index i = 0; i < value.rows(); ++i) {
-    const double row_max = value.row(i).maxCoeff();
-    for (Eigen::Index j = 0; j < value.cols(); ++j) {
-      if (value(i, j) > 0.01 * row_max && value(i, j) > 0) {
-        total += se(i, j) / value(i, j);
-        ++count;
-      }
-    }
-  }
-  return count > 0 ? total / count : 0;
-}
-
-}  // namespace
-}  // namespace fenestra
 
 int main(int argc, char** argv) {
   using namespace fenestra;
   const std::string backend_name = argc > 1 ? argv[1] : "cpu";
-  std::unique_ptr<DcBackend> backend = Check(MakeBackend(backend_name));
+  std::unique_ptr<DcBackend> backend = ValueOrExit(MakeBackend(backend_name));
   const Scene scene =
-      Check(LoadScene(std::string(FENESTRA_SOURCE_DIR) + "/examples/city_office/scene.json"));
+      ValueOrExit(LoadScene(std::string(FENESTRA_SOURCE_DIR) + "/examples/city_office/scene.json"));
   std::printf("backend: %s\n", backend->Name().c_str());
 
   OutdoorOptions outdoor;
   outdoor.paths = 20'000'000;
   outdoor.max_bounces = 30;
-  const OutdoorResult o = Check(ComputeOutdoorStage(scene, outdoor, backend.get()));
+  const OutdoorResult o = ValueOrExit(ComputeOutdoorStage(scene, outdoor, backend.get()));
   std::printf(
       "outdoor stage: %lld paths (%lld per cell, %d cells), 30 bounces, %zu triangles: %.3f s, "
       "%.3e rays (%.3e rays/s); mean relative SE of O %.4f\n",
@@ -60,12 +30,12 @@ int main(int argc, char** argv) {
       MeanRelativeError(o.coefficients, o.standard_error));
 
   for (const double alpha : {0.0, 0.6, 1.5707963}) {
-    const BlindDesign design = Check(DesignWithOverrides(scene, {{"alpha", alpha}}));
+    const BlindDesign design = ValueOrExit(DesignWithOverrides(scene, {{"alpha", alpha}}));
     IndoorOptions indoor;
     indoor.paths_per_sensor = 200'000;
     indoor.max_bounces = 5;
-    const IndoorResult i = Check(ComputeIndoorStage(scene, design, indoor, backend.get()));
-    const TwoStageResult d = Check(CombineStages(i, o));
+    const IndoorResult i = ValueOrExit(ComputeIndoorStage(scene, design, indoor, backend.get()));
+    const TwoStageResult d = ValueOrExit(CombineStages(i, o));
     // Sky sum of sensor 1 and its standard error over the batches (indoor part)
     const double sum = d.coefficients.row(0).tail(145).sum();
     double variance = 0;

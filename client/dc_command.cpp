@@ -44,22 +44,6 @@ void WriteAll(const std::vector<std::pair<std::string, const Matrix*>>& outputs,
   }
 }
 
-// Mean of se / value over entries above 1% of their row's maximum.
-double MeanRelativeError(const Matrix& value, const Matrix& se) {
-  double total = 0;
-  int count = 0;
-  for (Eigen::Index i = 0; i < value.rows(); ++i) {
-    const double row_max = value.row(i).maxCoeff();
-    for (Eigen::Index j = 0; j < value.cols(); ++j) {
-      if (value(i, j) > 0 && value(i, j) > 0.01 * row_max) {
-        total += se(i, j) / value(i, j);
-        ++count;
-      }
-    }
-  }
-  return count > 0 ? total / count : 0;
-}
-
 }  // namespace
 
 void AddDcCommand(CLI::App& app) {

@@ -38,21 +38,7 @@ int64_t NowUnixMs() {
 }
 
 double MeanRelativeStandardError(const OutdoorMatrix& matrix) {
-  if (matrix.coefficients.size() == 0 ||
-      matrix.standard_error.size() != matrix.coefficients.size()) {
-    return 0;
-  }
-  const double threshold = 0.01 * matrix.coefficients.maxCoeff();
-  double sum = 0;
-  int64_t count = 0;
-  for (Eigen::Index i = 0; i < matrix.coefficients.size(); ++i) {
-    const double c = matrix.coefficients.data()[i];
-    if (c > 0 && c >= threshold) {
-      sum += matrix.standard_error.data()[i] / c;
-      ++count;
-    }
-  }
-  return count ? sum / static_cast<double>(count) : 0;
+  return MeanRelativeError(matrix.coefficients, matrix.standard_error, 0.01, false);
 }
 
 namespace {

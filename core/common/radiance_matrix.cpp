@@ -40,6 +40,27 @@ absl::Status WriteRadianceMatrix(const std::string& path, const Matrix& m, Matri
       binary);
 }
 
+double MeanRelativeError(const Matrix& value, const Matrix& standard_error, double min_fraction,
+                         bool per_row) {
+  if (value.size() == 0 || standard_error.rows() != value.rows() ||
+      standard_error.cols() != value.cols()) {
+    return 0;
+  }
+  const double matrix_max = value.maxCoeff();
+  double total = 0;
+  int64_t count = 0;
+  for (Eigen::Index i = 0; i < value.rows(); ++i) {
+    const double threshold = min_fraction * (per_row ? value.row(i).maxCoeff() : matrix_max);
+    for (Eigen::Index j = 0; j < value.cols(); ++j) {
+      if (value(i, j) > 0 && value(i, j) > threshold) {
+        total += standard_error(i, j) / value(i, j);
+        ++count;
+      }
+    }
+  }
+  return count > 0 ? total / static_cast<double>(count) : 0.0;
+}
+
 namespace {
 
 absl::StatusOr<Matrix> ParseTable(const std::string& path, std::istream& in, long rows, long cols) {

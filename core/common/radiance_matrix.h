@@ -19,6 +19,11 @@ enum class MatrixFormat { kAscii, kFloat };
 absl::Status WriteRadianceMatrix(const std::string& path, const Matrix& m,
                                  MatrixFormat format = MatrixFormat::kAscii);
 
+// Mean of standard_error / value over the entries above `min_fraction` of their row's
+// maximum (of the whole matrix's maximum when !per_row); 0 when there are none.
+double MeanRelativeError(const Matrix& value, const Matrix& standard_error,
+                         double min_fraction = 0.01, bool per_row = true);
+
 // Reads a one-component Radiance matrix (ascii, float or double), or a gzip-free
 // whitespace-separated text table when the file has no Radiance header.
 absl::StatusOr<Matrix> ReadRadianceMatrix(const std::string& path);

@@ -23,19 +23,7 @@ absl::StatusOr<OneStageResult> ComputeOneStage(const Scene& scene, const BlindDe
 }
 
 double MeanRelativeStandardError(const OneStageResult& result, double min_fraction) {
-  double total = 0;
-  int count = 0;
-  for (Eigen::Index s = 0; s < result.coefficients.rows(); ++s) {
-    const double row_max = result.coefficients.row(s).maxCoeff();
-    for (Eigen::Index b = 0; b < result.coefficients.cols(); ++b) {
-      const double value = result.coefficients(s, b);
-      if (value > 0 && value > min_fraction * row_max) {
-        total += result.standard_error(s, b) / value;
-        ++count;
-      }
-    }
-  }
-  return count > 0 ? total / count : 0.0;
+  return MeanRelativeError(result.coefficients, result.standard_error, min_fraction);
 }
 
 }  // namespace fenestra

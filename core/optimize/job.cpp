@@ -442,17 +442,8 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   result.set_stop_reason(std::string(StopReasonName(search.stop_reason)));
   result.mutable_timings()->set_evaluation_seconds(search.evaluation_seconds);
   result.mutable_timings()->set_total_seconds(Since(start));
-  double relative = 0;
-  int count = 0;
-  const double max = outdoor->coefficients.maxCoeff();
-  for (Eigen::Index i = 0; i < outdoor->coefficients.size(); ++i) {
-    const double value = outdoor->coefficients.data()[i];
-    if (value > 0.01 * max) {
-      relative += outdoor->standard_error.data()[i] / value;
-      ++count;
-    }
-  }
-  result.set_outdoor_mean_relative_standard_error(count > 0 ? relative / count : 0);
+  result.set_outdoor_mean_relative_standard_error(
+      MeanRelativeError(outdoor->coefficients, outdoor->standard_error, 0.01, false));
   result.set_backend(backend->Name());
   return result;
 }
