@@ -58,6 +58,7 @@ void AddDcCommand(CLI::App& app) {
     double roulette_threshold = OneStageOptions{}.roulette_threshold;
     std::string method = "one-stage", backend = "cpu", outdoor_matrix, indoor_matrix;
     int basis = 288;
+    std::string window_parts = "auto";
     int64_t outdoor_paths = 20'000'000;
     int64_t indoor_paths = 200'000;
   };
@@ -66,18 +67,23 @@ void AddDcCommand(CLI::App& app) {
   // (indoor surfaces and the blind, to the window), then the product.
   static const auto RunTwoStage = [](const DcArgs& a, const Scene& scene, const BlindDesign& design,
                                      DcBackend& backend, MatrixFormat format) {
+    const WindowParts parts = a.window_parts == "auto"
+                                  ? AutomaticWindowParts(scene.window)
+                                  : ValueOrFail(ParseWindowParts(a.window_parts));
     OutdoorOptions outdoor;
     outdoor.paths = a.outdoor_paths;
     outdoor.max_bounces = a.bounces > 0 ? a.bounces : -1;
     outdoor.seed = a.seed;
     outdoor.threads = a.threads;
     outdoor.basis_cells = a.basis;
+    outdoor.parts = parts;
     IndoorOptions indoor;
     indoor.paths_per_sensor = a.indoor_paths;
     indoor.max_bounces = a.bounces > 0 ? a.bounces : -1;
     indoor.seed = a.seed;
     indoor.threads = a.threads;
     indoor.basis_cells = a.basis;
+    indoor.parts = parts;
     const OutdoorResult o = ValueOrFail(ComputeOutdoorStage(scene, outdoor, &backend));
     const IndoorResult i = ValueOrFail(ComputeIndoorStage(scene, design, indoor, &backend));
     const TwoStageResult d = ValueOrFail(CombineStages(i, o));
@@ -89,10 +95,11 @@ void AddDcCommand(CLI::App& app) {
     const std::string limit = a.bounces > 0
                                   ? fmt::format("at most {} reflections per stage", a.bounces)
                                   : std::string("unlimited reflections");
-    fmt::print("dc two-stage on {}, {} window cells, {}:\n", backend.Name(), a.basis, limit);
+    fmt::print("dc two-stage on {}, {}x{} window parts x {} direction cells, {}:\n", backend.Name(),
+               parts.columns, parts.rows, a.basis, limit);
     fmt::print(
         "  outdoor stage: {} paths, {} triangles, {} rays, {:.2f} s, mean relative SE {:.4f}\n",
-        o.paths_per_cell * o.basis_cells, o.triangles, o.rays_traced, o.wall_seconds,
+        o.paths_per_cell * o.coefficients.rows(), o.triangles, o.rays_traced, o.wall_seconds,
         MeanRelativeError(o.coefficients, o.standard_error));
     fmt::print(
         "  indoor stage: {} sensors x {} paths, {} triangles, {} rays, {:.2f} s, mean "
@@ -141,6 +148,11 @@ void AddDcCommand(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--basis", args->basis, "Two-stage: window direction cells, 288 or 1152")
       ->check(CLI::IsMember({288, 1152}))
+      ->capture_default_str();
+  command
+      ->add_option("--window-parts", args->window_parts,
+                   "Two-stage: the window split into COLUMNSxROWS parts, each with its own "
+                   "direction cells; auto = parts of at most 0.5 m")
       ->capture_default_str();
   command->add_option("--outdoor-paths", args->outdoor_paths, "Two-stage: outdoor paths in total")
       ->capture_default_str();

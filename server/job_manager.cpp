@@ -166,7 +166,8 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
     return absl::InvalidArgumentError(absl::StrCat(
         "the job does not match site ", request.site_id(),
         ": its outdoor surfaces, materials, window or outdoor sampling (outdoor_paths, "
-        "outdoor_bounces, seed, basis_cells) differ from the site's, so the site's outdoor "
+        "outdoor_bounces, seed, basis_cells, window parts) differ from the site's, so the site's "
+        "outdoor "
         "matrix cannot be reused (job key ",
         key.substr(0, 16), ", site key ", site->info.outdoor_key().substr(0, 16), ")"));
   }

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -46,6 +47,8 @@ std::string EncodeOutdoorMatrix(const OutdoorMatrix& matrix) {
                                         matrix.standard_error.data() + n);
   }
   entry.set_basis_cells(matrix.basis_cells);
+  entry.set_window_columns(matrix.parts.columns);
+  entry.set_window_rows(matrix.parts.rows);
   entry.set_paths(matrix.paths);
   entry.set_bounces(matrix.bounces);
   entry.set_seed(matrix.seed);
@@ -98,6 +101,7 @@ absl::StatusOr<OutdoorMatrix> DecodeOutdoorMatrix(std::string_view bytes) {
               matrix.standard_error.data());
   }
   matrix.basis_cells = entry.basis_cells();
+  matrix.parts = {std::max(1, entry.window_columns()), std::max(1, entry.window_rows())};
   matrix.paths = entry.paths();
   matrix.bounces = entry.bounces();
   matrix.seed = entry.seed();

@@ -80,9 +80,9 @@ class CudaBackend : public DcBackend {
     const auto start = std::chrono::steady_clock::now();
     FENESTRA_RETURN_IF_ERROR(Upload(geometry));
     OutdoorTally tally;
-    tally.cells = basis.cell_count;
+    tally.cells = WindowCellCount(window, basis);
     tally.paths_per_cell = paths_per_cell;
-    tally.sum.resize(static_cast<size_t>(basis.cell_count) * kDaylightBins);
+    tally.sum.resize(static_cast<size_t>(tally.cells) * kDaylightBins);
     tally.sum_squares.resize(tally.sum.size());
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(
@@ -102,14 +102,14 @@ class CudaBackend : public DcBackend {
     FENESTRA_RETURN_IF_ERROR(Upload(geometry));
     IndoorTally tally;
     tally.sensors = static_cast<int>(sensors.size());
-    tally.cells = basis.cell_count;
+    tally.cells = WindowCellCount(window, basis);
     tally.batches = batches;
     tally.paths_per_sensor = paths_per_sensor;
     for (int b = 0; b < batches; ++b) {
       tally.batch_paths.push_back(BatchStart(paths_per_sensor, batches, b + 1) -
                                   BatchStart(paths_per_sensor, batches, b));
     }
-    tally.sum.resize(static_cast<size_t>(batches) * sensors.size() * basis.cell_count);
+    tally.sum.resize(static_cast<size_t>(batches) * sensors.size() * tally.cells);
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(Check(
         tracer_->Indoor(sensors.data(), tally.sensors, window, basis, paths_per_sensor, batches,

@@ -1,10 +1,13 @@
 #include "core/dc/two_stage.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
 
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
 #include "core/trace/trace_geometry.h"
@@ -12,6 +15,8 @@
 
 namespace fenestra {
 namespace {
+
+constexpr int kMaxPartsPerSide = 16;
 
 double Seconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -38,17 +43,50 @@ absl::Status CheckPaths(int max_bounces, bool russian_roulette, double roulette_
   return absl::OkStatus();
 }
 
-TraceWindow LocalWindow(const TraceGeometry& geometry, const Window& window) {
+TraceWindow LocalWindow(const TraceGeometry& geometry, const Window& window, WindowParts parts) {
   auto f = [](Vec3d v) { return Vec3f{float(v.x), float(v.y), float(v.z)}; };
   return {geometry.ToLocal(window.center),
           f(window.across),
           f(window.up),
           f(window.normal),
           static_cast<float>(window.width_m),
-          static_cast<float>(window.height_m)};
+          static_cast<float>(window.height_m),
+          parts.columns,
+          parts.rows};
+}
+
+absl::Status CheckParts(WindowParts parts) {
+  if (parts.columns < 1 || parts.rows < 1 || parts.columns > kMaxPartsPerSide ||
+      parts.rows > kMaxPartsPerSide) {
+    return absl::InvalidArgumentError(absl::StrCat("window parts must be 1 to ", kMaxPartsPerSide,
+                                                   " in each direction, got ", parts.columns, "x",
+                                                   parts.rows));
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace
+
+WindowParts AutomaticWindowParts(const Window& window) {
+  static constexpr double kPartSize = 0.5;  // [m]
+  static constexpr int kMaxAutomatic = 8;
+  auto count = [](double length) {
+    return std::clamp(static_cast<int>(std::ceil(length / kPartSize - 1e-9)), 1, kMaxAutomatic);
+  };
+  return {count(window.width_m), count(window.height_m)};
+}
+
+absl::StatusOr<WindowParts> ParseWindowParts(const std::string& text) {
+  WindowParts parts;
+  const std::vector<std::string> fields = absl::StrSplit(text, 'x');
+  if (fields.size() != 2 || !absl::SimpleAtoi(fields[0], &parts.columns) ||
+      !absl::SimpleAtoi(fields[1], &parts.rows)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("window parts must read COLUMNSxROWS, e.g. 4x2, got '", text, "'"));
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckParts(parts));
+  return parts;
+}
 
 absl::StatusOr<HemisphereBasis> BasisFor(int cells) {
   if (cells != 288 && cells != 1152) {
@@ -73,11 +111,15 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const Outd
                                                   DcBackend* backend) {
   const auto start = std::chrono::steady_clock::now();
   FENESTRA_ASSIGN_OR_RETURN(basis, BasisFor(options.basis_cells));
+  FENESTRA_RETURN_IF_ERROR(CheckParts(options.parts));
   FENESTRA_RETURN_IF_ERROR(CheckPaths(options.max_bounces, options.russian_roulette,
                                       options.roulette_threshold, options.threads));
-  if (options.paths < basis.cell_count * int64_t{2}) {
-    return absl::InvalidArgumentError(absl::StrCat("outdoor paths must be at least 2 per cell (",
-                                                   2 * basis.cell_count, "), got ", options.paths));
+  const int64_t window_cells =
+      int64_t{basis.cell_count} * options.parts.columns * options.parts.rows;
+  if (options.paths < window_cells * 2) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("outdoor paths must be at least 2 per window cell (", 2 * window_cells,
+                     "), got ", options.paths));
   }
   const TriangleMesh outdoor = SelectSide(scene.fixed, Side::kOutdoor);
   FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(outdoor, scene.materials));
@@ -85,20 +127,21 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const Outd
   if (backend == nullptr) backend = (fallback = MakeEmbreeBackend()).get();
 
   // Trace, then O = sums / paths per cell
-  const uint64_t per_cell = static_cast<uint64_t>(options.paths) / basis.cell_count;
+  const uint64_t per_cell = static_cast<uint64_t>(options.paths / window_cells);
   FENESTRA_ASSIGN_OR_RETURN(
-      tally,
-      backend->Outdoor(
-          geometry, LocalWindow(geometry, scene.window), basis, per_cell, options.seed,
-          Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold),
-          options.threads));
+      tally, backend->Outdoor(geometry, LocalWindow(geometry, scene.window, options.parts), basis,
+                              per_cell, options.seed,
+                              Settings(options.max_bounces, options.russian_roulette,
+                                       options.roulette_threshold),
+                              options.threads));
   OutdoorResult result;
   result.basis_cells = basis.cell_count;
+  result.parts = options.parts;
   result.paths_per_cell = static_cast<int64_t>(per_cell);
-  result.coefficients.resize(basis.cell_count, kDaylightBins);
-  result.standard_error.resize(basis.cell_count, kDaylightBins);
+  result.coefficients.resize(tally.cells, kDaylightBins);
+  result.standard_error.resize(tally.cells, kDaylightBins);
   const double n = static_cast<double>(per_cell);
-  for (int k = 0; k < basis.cell_count; ++k) {
+  for (int k = 0; k < tally.cells; ++k) {
     for (int j = 0; j < kDaylightBins; ++j) {
       const double sum = tally.sum[k * kDaylightBins + j];
       const double mean = sum / n;
@@ -119,6 +162,7 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
                                                 const IndoorOptions& options, DcBackend* backend) {
   const auto start = std::chrono::steady_clock::now();
   FENESTRA_ASSIGN_OR_RETURN(basis, BasisFor(options.basis_cells));
+  FENESTRA_RETURN_IF_ERROR(CheckParts(options.parts));
   FENESTRA_RETURN_IF_ERROR(CheckPaths(options.max_bounces, options.russian_roulette,
                                       options.roulette_threshold, options.threads));
   if (options.batches < 2) return absl::InvalidArgumentError("batches must be at least 2");
@@ -136,11 +180,13 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
   FENESTRA_ASSIGN_OR_RETURN(
       tally,
       backend->Indoor(
-          geometry, LocalSensors(geometry, scene.sensors), LocalWindow(geometry, scene.window),
-          basis, static_cast<uint64_t>(options.paths_per_sensor), options.batches, options.seed,
+          geometry, LocalSensors(geometry, scene.sensors),
+          LocalWindow(geometry, scene.window, options.parts), basis,
+          static_cast<uint64_t>(options.paths_per_sensor), options.batches, options.seed,
           Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold),
           options.threads));
   IndoorResult result;
+  result.parts = options.parts;
   const int sensors = tally.sensors, cells = tally.cells, batches = tally.batches;
   result.coefficients = Matrix::Zero(sensors, cells);
   for (int b = 0; b < batches; ++b) {
@@ -169,6 +215,11 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
 
 absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
                                              const OutdoorResult& outdoor) {
+  if (!(indoor.parts == outdoor.parts)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "indoor matrix has ", indoor.parts.columns, "x", indoor.parts.rows,
+        " window parts, outdoor matrix ", outdoor.parts.columns, "x", outdoor.parts.rows));
+  }
   if (indoor.coefficients.cols() != outdoor.coefficients.rows()) {
     return absl::InvalidArgumentError(absl::StrCat("indoor matrix has ", indoor.coefficients.cols(),
                                                    " window cells, outdoor matrix ",
@@ -197,8 +248,8 @@ absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
   for (Eigen::Index k = 0; k < cells; ++k) {
     const auto m = outdoor.coefficients.row(k).tail(kDaylightBins - 1);
     const auto se = outdoor.standard_error.row(k).tail(kDaylightBins - 1);
-    row_variance(k) = std::max(
-        0.0, se.squaredNorm() + (m.squaredNorm() - m.sum() * m.sum()) / (n - 1));
+    row_variance(k) =
+        std::max(0.0, se.squaredNorm() + (m.squaredNorm() - m.sum() * m.sum()) / (n - 1));
   }
   result.sky_sum.resize(sensors);
   result.sky_sum_standard_error.resize(sensors);

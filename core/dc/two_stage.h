@@ -25,22 +25,42 @@
 
 namespace fenestra {
 
+// The window split into columns x rows equal parts, each with its own direction cells
+// (core/trace/two_stage_modes.h). One part assumes the outdoor radiance from a direction is
+// the same all over the window; more parts relax that at no extra tracing cost.
+struct WindowParts {
+  int columns = 1;
+  int rows = 1;
+  bool operator==(const WindowParts&) const = default;
+};
+
+// The default split: parts at most 0.5 m wide and high (at most 8 a side), which keeps
+// the error of the averaging well below the Monte Carlo error for views of streets and
+// courtyards from ordinary windows (examples/city_office).
+WindowParts AutomaticWindowParts(const Window& window);
+
+// WindowParts from "COLUMNSxROWS" (e.g. "4x2"), or InvalidArgument.
+absl::StatusOr<WindowParts> ParseWindowParts(const std::string& text);
+
 struct OutdoorOptions {
-  int64_t paths = 20'000'000;  // in total, spread evenly over the basis cells
+  int64_t paths = 20'000'000;  // in total, spread evenly over the window cells
   int max_bounces = 30;        // surface reflections; < 0 = unlimited (roulette)
   uint64_t seed = 1;
   int threads = 0;  // CPU threads; 0 = every hardware thread
   int basis_cells = 288;
+  WindowParts parts;
   bool russian_roulette = true;
   double roulette_threshold = 1.0;  // as OneStageOptions
 };
 
-// O: mean radiance arriving at the window from each direction cell per unit radiance of
-// each sky bin [-], with standard errors from the per-path second moment.
+// O: mean radiance arriving at each window part from each direction cell per unit
+// radiance of each sky bin [-], with standard errors from the per-path second moment.
+// Rows: window cells, part * basis_cells + direction cell.
 struct OutdoorResult {
-  Matrix coefficients;    // cells x 146
-  Matrix standard_error;  // cells x 146
+  Matrix coefficients;    // window cells x 146
+  Matrix standard_error;  // window cells x 146
   int basis_cells = 0;
+  WindowParts parts;
   int64_t paths_per_cell = 0;
   uint64_t rays_traced = 0;
   size_t triangles = 0;  // outdoor triangles traced against
@@ -54,14 +74,16 @@ struct IndoorOptions {
   uint64_t seed = 1;
   int threads = 0;
   int basis_cells = 288;
+  WindowParts parts;
   int batches = 8;  // independent batches of paths (standard errors, metric errors)
   bool russian_roulette = true;
   double roulette_threshold = 1.0;
 };
 
-// I: irradiance at each sensor per unit radiance leaving the window from each direction
-// cell [sr], as the mean of independent batch estimates.
+// I: irradiance at each sensor per unit radiance leaving each window part from each
+// direction cell [sr], as the mean of independent batch estimates.
 struct IndoorResult {
+  WindowParts parts;
   Matrix coefficients;          // sensors x cells
   Matrix standard_error;        // sensors x cells, from the batches
   std::vector<Matrix> batches;  // per batch: sensors x cells
@@ -97,7 +119,7 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
                                                 const IndoorOptions& options,
                                                 DcBackend* backend = nullptr);
 
-// D = I O. InvalidArgument when the bases differ.
+// D = I O. InvalidArgument when the bases or the window parts differ.
 absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
                                              const OutdoorResult& outdoor);
 

@@ -69,7 +69,7 @@ FENESTRA_CPU_GPU inline Vec3T<T> SampleBasisCell(const HemisphereBasis& basis, i
   const T sin_theta = sqrt(fmax(T(0), T(1) - cos_theta * cos_theta));
   const T phi =
       (static_cast<T>(cell - first) + u2) * T(2 * 3.14159265358979323846) / static_cast<T>(count);
-  return {sin_theta * cos(phi), sin_theta * sin(phi), cos_theta};
+  return {static_cast<T>(sin_theta * cos(phi)), static_cast<T>(sin_theta * sin(phi)), cos_theta};
 }
 
 // Centre direction of `cell` (mid-area in cos θ, mid-azimuth), unit, local frame.

@@ -1,5 +1,6 @@
 #include "core/optimize/job.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -220,9 +221,15 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   if (s.basis_cells() != 288 && s.basis_cells() != 1152) {
     return Invalid("sampling.basis_cells", "must be 288 or 1152");
   }
-  if (s.outdoor_paths() < 2 * s.basis_cells()) {
+  if (s.window_columns() < 0 || s.window_columns() > 16 || s.window_rows() < 0 ||
+      s.window_rows() > 16) {
+    return Invalid("sampling.window_columns/window_rows", "must be in [0, 16] (0 = automatic)");
+  }
+  const int64_t window_cells =
+      int64_t{s.basis_cells()} * std::max(1, s.window_columns()) * std::max(1, s.window_rows());
+  if (s.outdoor_paths() < 2 * window_cells) {
     return Invalid("sampling.outdoor_paths",
-                   absl::StrCat("must be at least 2 per window cell (", 2 * s.basis_cells(), ")"));
+                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ")"));
   }
   if (s.batches() < 2 || s.batches() > 64) return Invalid("sampling.batches", "must be in [2, 64]");
   if (s.indoor_paths_per_sensor() < s.batches()) {
@@ -293,7 +300,15 @@ std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
   hash.Value(w.width_m), hash.Value(w.height_m);
   hash.Value(sampling.outdoor_paths()), hash.Value(sampling.outdoor_bounces());
   hash.Value(sampling.seed()), hash.Value(sampling.basis_cells());
+  const WindowParts parts = SamplingWindowParts(sampling, scene.window);
+  hash.Value(parts.columns), hash.Value(parts.rows);
   return hash.Hex();
+}
+
+WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Window& window) {
+  const WindowParts automatic = AutomaticWindowParts(window);
+  return {sampling.window_columns() > 0 ? sampling.window_columns() : automatic.columns,
+          sampling.window_rows() > 0 ? sampling.window_rows() : automatic.rows};
 }
 
 absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1::Sampling& sampling,
@@ -304,13 +319,15 @@ absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1:
   options.max_bounces = sampling.outdoor_bounces();
   options.seed = sampling.seed();
   options.basis_cells = sampling.basis_cells();
+  options.parts = SamplingWindowParts(sampling, scene.window);
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(sampling.backend()));
   FENESTRA_ASSIGN_OR_RETURN(result, ComputeOutdoorStage(scene, options, backend.get()));
   OutdoorMatrix matrix;
   matrix.coefficients = std::move(result.coefficients);
   matrix.standard_error = std::move(result.standard_error);
   matrix.basis_cells = result.basis_cells;
-  matrix.paths = result.paths_per_cell * result.basis_cells;
+  matrix.parts = result.parts;
+  matrix.paths = result.paths_per_cell * result.coefficients.rows();
   matrix.bounces = sampling.outdoor_bounces();
   matrix.seed = sampling.seed();
   matrix.wall_seconds = result.wall_seconds;
@@ -357,6 +374,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   outdoor_stage.coefficients = outdoor->coefficients;
   outdoor_stage.standard_error = outdoor->standard_error;
   outdoor_stage.basis_cells = outdoor->basis_cells;
+  outdoor_stage.parts = outdoor->parts;
 
   // The objective: indoor stage with the same random streams for every design
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
@@ -372,6 +390,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   indoor_options.max_bounces = spec.sampling().indoor_bounces();
   indoor_options.seed = spec.sampling().seed();
   indoor_options.basis_cells = spec.sampling().basis_cells();
+  indoor_options.parts = SamplingWindowParts(spec.sampling(), job.scene.window);
   indoor_options.batches = spec.sampling().batches();
   const std::vector<Matrix> sky_channels = {sky.radiance};
   const ObjectiveFunction objective =

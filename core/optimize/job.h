@@ -10,6 +10,7 @@
 
 #include "absl/status/statusor.h"
 #include "core/common/radiance_matrix.h"
+#include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
 #include "fenestra/v1/job.pb.h"
 
@@ -21,6 +22,7 @@ struct OutdoorMatrix {
   Matrix coefficients;
   Matrix standard_error;
   int basis_cells = 0;
+  WindowParts parts;
   int64_t paths = 0;
   int bounces = 0;
   uint64_t seed = 0;
@@ -49,6 +51,10 @@ absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& ba
 // basis). Equal keys mean an equal matrix (up to the backend's rounding). Indoor surfaces,
 // the blind, sensors and the weather do not enter it.
 std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling);
+
+// The window parts `sampling` asks for (resolved), automatic ones for `window` if it
+// leaves them open.
+WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Window& window);
 
 // Fills in the defaults of `sampling` (see job.proto) and checks its ranges.
 absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& sampling);

@@ -28,8 +28,8 @@
 // loop: the outdoor stage starts on the window (uniform point, direction uniform within one
 // hemisphere cell) and escapes like the one-stage mode into O[cell, bin]; the indoor stage
 // starts at a sensor, connects each vertex to a sampled window point in Start and
-// AtReflection (next-event estimation, using random purpose 1), accumulates into the 288
-// direction cells of a per-path scratch that Finish commits, and ignores escapes.
+// AtReflection (next-event estimation, using random purpose 1), scores rays that leave
+// through the window too, and weights the two by multiple importance sampling.
 #pragma once
 
 #include <math.h>
@@ -98,6 +98,10 @@ struct PathState {
   float weight;         // throughput so far, <= 1
   int32_t reflections;  // surface reflections so far
   uint32_t vertex;      // interactions so far (0 = start); indexes random draws
+  // Cosine between `direction` and the normal of the point it leaves (its cosine-sampling
+  // density is cosine / pi); 0 where no other technique samples the direction (after
+  // straight-through transmission). Only the indoor stage's MIS reads it.
+  float cosine = 0.0f;
 };
 
 // A diffuse reflection about to happen, for modes that connect vertices (indoor stage).
@@ -201,16 +205,19 @@ FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const Sur
     // copies of a split leave the same point in directions of their own
     if (transmit) {
       path.origin = OffsetRayOrigin(hit.position, -normal);
+      path.cosine = 0.0f;
       continue;
     }
     path.origin = OffsetRayOrigin(hit.position, normal);
     path.direction = SampleCosineHemisphere(normal, u.u[0], u.u[1]);
+    path.cosine = Dot(normal, path.direction);
     ++path.reflections;
     for (int c = 1; c < copies; ++c) {
       PathState copy = path;
       copy.vertex = ++*interactions;
       const Uniform4 v = random.Draw(copy.vertex, 0);
       copy.direction = SampleCosineHemisphere(normal, v.u[0], v.u[1]);
+      copy.cosine = Dot(normal, copy.direction);
       pending[(*pending_count)++] = copy;
     }
   }

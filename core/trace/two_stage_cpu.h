@@ -75,13 +75,13 @@ OutdoorTally TraceOutdoorCpu(const Intersector& scene, const SurfaceTable& surfa
   const uint64_t chunk_paths = std::max<uint64_t>(4096, (paths_per_cell + 63) / 64);
   const uint64_t chunks_per_cell = (paths_per_cell + chunk_paths - 1) / chunk_paths;
   OutdoorTally tally;
-  tally.cells = basis.cell_count;
+  tally.cells = WindowCellCount(window, basis);
   tally.paths_per_cell = paths_per_cell;
   tally.threads = ResolveThreadCount(threads);
-  tally.sum.assign(static_cast<size_t>(basis.cell_count) * kTregenzaBinCount, 0.0);
+  tally.sum.assign(static_cast<size_t>(tally.cells) * kTregenzaBinCount, 0.0);
   tally.sum_squares.assign(tally.sum.size(), 0.0);
   TraceChunksCpu<Slot>(
-      chunks_per_cell * basis.cell_count, tally.threads,
+      chunks_per_cell * tally.cells, tally.threads,
       [&](uint64_t c, Slot& slot) {
         const int cell = static_cast<int>(c / chunks_per_cell);
         const uint64_t first = (c % chunks_per_cell) * chunk_paths;
@@ -130,7 +130,7 @@ IndoorTally TraceIndoorCpu(const Intersector& scene, const SurfaceTable& surface
     void Add(int cell, double value) { sum[cell] += value; }
   };
   const auto start = std::chrono::steady_clock::now();
-  const int cells = basis.cell_count;
+  const int cells = WindowCellCount(window, basis);
   IndoorTally tally;
   tally.sensors = static_cast<int>(sensors.size());
   tally.cells = cells;

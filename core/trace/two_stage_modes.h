@@ -3,23 +3,29 @@
 // The window is the interface: a rectangle (the opening's outer face) with a frame
 // (across, up, outward normal); directions are binned by the hemisphere basis of
 // core/geometry/hemisphere_basis.h in that frame, by the outward direction omega, the way
-// light comes from.
+// light comes from. The rectangle may be split into columns x rows equal parts, each with
+// its own cells (window cell = part * basis cells + direction cell): O then holds the
+// radiance averaged over each part rather than over the whole window, which matters where
+// the outdoor view changes across the window (a street's edge seen from a wide window).
 //
-// OutdoorMode: a path starts at a uniform point of the window, its direction uniform in
-// solid angle within one basis cell, then bounces in the outdoor scene. Escaping through
+// OutdoorMode: a path starts at a uniform point of its window part, its direction uniform
+// in solid angle within one basis cell, then bounces in the outdoor scene. Escaping through
 // sky bin j it adds its weight to O[cell, j], so O[cell, j] estimates the mean radiance
 // arriving at the window from the cell per unit radiance of bin j. A path that goes back
 // in through the window ends there: light that leaves the room and returns through the
 // window is the one interreflection the two-stage split leaves out.
 //
 // IndoorMode: a path starts at a sensor, cosine-sampled, and bounces in the indoor scene.
-// At every vertex (the sensor included, and every reflection the bounce limit allows) it
-// samples a uniform window point x_w (next-event estimation) and, if the segment is clear,
-// adds to I[sensor, cell(omega)] the irradiance the window delivers there per unit
-// radiance: at the sensor cos_s cos_w A / r^2; at a reflection w rho cos_v cos_w A / r^2
-// (the sensor's cosine-sampled estimator pi L, with L = rho / pi times the vertex's
-// irradiance, and w the path weight before the reflection). A bounce ray that leaves
-// through the window ends with no contribution: the explicit samples count that light.
+// Light from the window reaches each vertex (the sensor included, and every reflection the
+// bounce limit allows) by two techniques, combined by multiple importance sampling (power
+// heuristic): next-event estimation samples a uniform window point x_w and, if the
+// segment is clear, adds to I[sensor, cell(omega)] the irradiance the window delivers there
+// per unit radiance (at the sensor cos_s cos_w A / r^2; at a reflection
+// w rho cos_v cos_w A / r^2, the sensor's cosine-sampled estimator pi L with L = rho / pi
+// times the vertex's irradiance, w the path weight before the reflection); and a bounce ray
+// that leaves through the window adds pi w. Next-event estimation alone has infinite
+// variance where surfaces touch the window (the reveals): its 1 / r^2 grows without bound
+// at the window's edge, while there the bounce ray samples the window well.
 #pragma once
 
 #include <math.h>
@@ -43,20 +49,48 @@ struct TraceWindow {
   Vec3f normal;  // unit, outward
   float width;
   float height;
+  int32_t columns = 1;  // parts across
+  int32_t rows = 1;     // parts up
 
   FENESTRA_CPU_GPU float Area() const { return width * height; }
+  FENESTRA_CPU_GPU int Parts() const { return columns * rows; }
+  // The part of the window point Point(u0, u1).
+  FENESTRA_CPU_GPU int PartOf(float u0, float u1) const {
+    return Clamp(static_cast<int>(u1 * rows), rows) * columns +
+           Clamp(static_cast<int>(u0 * columns), columns);
+  }
+  // The part of a point in the window plane.
+  FENESTRA_CPU_GPU int PartAt(Vec3f point) const {
+    const Vec3f offset = point - center;
+    return PartOf(Dot(offset, across) / width + 0.5f, Dot(offset, up) / height + 0.5f);
+  }
+  // A uniform point of `part` for two uniforms.
+  FENESTRA_CPU_GPU Vec3f PartPoint(int part, float u0, float u1) const {
+    return Point((static_cast<float>(part % columns) + u0) / static_cast<float>(columns),
+                 (static_cast<float>(part / columns) + u1) / static_cast<float>(rows));
+  }
+  FENESTRA_CPU_GPU static int Clamp(int i, int count) {
+    return i < 0 ? 0 : (i >= count ? count - 1 : i);
+  }
   // The window point for two uniforms.
   FENESTRA_CPU_GPU Vec3f Point(float u0, float u1) const {
     return center + across * ((u0 - 0.5f) * width) + up * ((u1 - 0.5f) * height);
   }
-  // Whether the ray origin + t direction, t > 0, enters the window rectangle from outside.
-  FENESTRA_CPU_GPU bool Crosses(Vec3f origin, Vec3f direction) const {
+  // Distance t > 0 at which origin + t direction passes through the window rectangle, or a
+  // negative value if it does not.
+  FENESTRA_CPU_GPU float Crossing(Vec3f origin, Vec3f direction) const {
     const float towards = Dot(direction, normal);
-    if (!(towards < 0.0f)) return false;
+    if (towards == 0.0f) return -1.0f;
     const float t = Dot(center - origin, normal) / towards;
-    if (!(t > 0.0f)) return false;
+    if (!(t > 0.0f)) return -1.0f;
     const Vec3f offset = origin + direction * t - center;
-    return fabsf(Dot(offset, across)) <= 0.5f * width && fabsf(Dot(offset, up)) <= 0.5f * height;
+    const bool inside =
+        fabsf(Dot(offset, across)) <= 0.5f * width && fabsf(Dot(offset, up)) <= 0.5f * height;
+    return inside ? t : -1.0f;
+  }
+  // Whether the ray enters the window rectangle from outside.
+  FENESTRA_CPU_GPU bool Crosses(Vec3f origin, Vec3f direction) const {
+    return Dot(direction, normal) < 0.0f && Crossing(origin, direction) > 0.0f;
   }
   // A window-frame direction in the trace frame.
   FENESTRA_CPU_GPU Vec3f ToWorld(Vec3f local) const {
@@ -68,22 +102,39 @@ struct TraceWindow {
 // the sensors' streams.
 inline constexpr uint32_t kOutdoorStreamBase = 0x80000000u;
 
+// Multiple importance sampling weight of the technique with density a against one with
+// density b (the power heuristic, exponent 2).
+FENESTRA_CPU_GPU inline float PowerHeuristic(float a, float b) {
+  const float a2 = a * a, b2 = b * b;
+  return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
+inline constexpr float kInvPiF = 0.318309886183790672f;
+
 // Random purposes (PathRandom::Draw's second argument) of the two-stage modes.
 inline constexpr uint32_t kWindowSamplePurpose = 1;
+
+// Cells of the window: its parts times the direction cells of the basis.
+FENESTRA_CPU_GPU inline int WindowCellCount(const TraceWindow& window,
+                                            const HemisphereBasis& basis) {
+  return window.Parts() * basis.cell_count;
+}
 
 template <class Sink>  // Sink: void Add(int bin, double value)
 struct OutdoorMode {
   TraceWindow window;
   const HemisphereBasis* basis;
-  int cell;
+  int cell;  // window cell: part * basis cells + direction cell
   Sink* sink;
 
   template <class Intersector>
   FENESTRA_CPU_GPU PathState Start(const Intersector&, const PathRandom& random) const {
     const Uniform4 u = random.Draw(0, 0);
-    const Vec3f direction = window.ToWorld(SampleBasisCell(*basis, cell, u.u[2], u.u[3]));
-    return PathState{OffsetRayOrigin(window.Point(u.u[0], u.u[1]), window.normal), direction, 1.0f,
-                     0, 0};
+    const int part = cell / basis->cell_count;
+    const Vec3f direction =
+        window.ToWorld(SampleBasisCell(*basis, cell - part * basis->cell_count, u.u[2], u.u[3]));
+    return PathState{OffsetRayOrigin(window.PartPoint(part, u.u[0], u.u[1]), window.normal),
+                     direction, 1.0f, 0, 0};
   }
 
   template <class Intersector>
@@ -115,7 +166,8 @@ struct IndoorMode {
     Connect(scene, sensor_position, origin, sensor_normal, 1.0f,
             random.Draw(0, kWindowSamplePurpose));
     const Uniform4 u = random.Draw(0, 0);
-    return PathState{origin, SampleCosineHemisphere(sensor_normal, u.u[0], u.u[1]), 1.0f, 0, 0};
+    const Vec3f direction = SampleCosineHemisphere(sensor_normal, u.u[0], u.u[1]);
+    return PathState{origin, direction, 1.0f, 0, 0, Dot(sensor_normal, direction)};
   }
 
   // Light reflected here reaches the sensor after path.reflections + 1 reflections.
@@ -127,8 +179,29 @@ struct IndoorMode {
             path.weight * vertex.reflectance, random.Draw(path.vertex, kWindowSamplePurpose));
   }
 
-  FENESTRA_CPU_GPU void Escape(const PathState&) const {}
+  // A bounce ray that leaves through the window scores pi w in the cell it leaves by.
+  FENESTRA_CPU_GPU void Escape(const PathState& path) {
+    const float distance = window.Crossing(path.origin, path.direction);
+    const float cos_window = Dot(window.normal, path.direction);
+    if (!(distance > 0.0f) || !(cos_window > 0.0f)) return;
+    const int cell = BasisCell(*basis, Vec3f{Dot(path.direction, window.across),
+                                             Dot(path.direction, window.up), cos_window});
+    if (cell < 0) return;
+    const int part = window.PartAt(path.origin + path.direction * distance);
+    const float mis =
+        path.cosine > 0.0f
+            ? PowerHeuristic(path.cosine * kInvPiF, WindowDensity(distance * distance, cos_window))
+            : 1.0f;
+    sink->Add(part * basis->cell_count + cell, kPi * static_cast<double>(path.weight * mis));
+  }
+
   FENESTRA_CPU_GPU void Finish(const PathStats&) const {}
+
+  // Solid-angle density of a uniform window point seen at squared distance r2 and cosine
+  // cos_window.
+  FENESTRA_CPU_GPU float WindowDensity(float r2, float cos_window) const {
+    return r2 / (window.Area() * cos_window);
+  }
 
   // Next-event estimation from `position` (rays leave from `origin`, offset off its
   // surface) towards a uniform window point; `factor` is what the path carries here.
@@ -149,8 +222,11 @@ struct IndoorMode {
     // short of it (less a relative margin) blocks the segment
     const float distance = sqrtf(distance_squared);
     if (scene.Occluded(origin, omega, distance * 0.9999995f)) return;
-    sink->Add(cell, static_cast<double>(factor * cos_vertex * cos_window * window.Area() /
-                                        distance_squared));
+    const float mis =
+        PowerHeuristic(WindowDensity(distance_squared, cos_window), cos_vertex * kInvPiF);
+    sink->Add(window.PartOf(u.u[0], u.u[1]) * basis->cell_count + cell,
+              static_cast<double>(factor * cos_vertex * cos_window * window.Area() /
+                                  distance_squared * mis));
   }
 };
 

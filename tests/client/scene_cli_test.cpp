@@ -108,18 +108,31 @@ TEST_F(SceneCliTest, DcTwoStageWritesDAndBothStages) {
   const std::string d = (dir_ / "D.mtx").string(), o = (dir_ / "O.mtx").string(),
                     i = (dir_ / "I.mtx").string();
   const CliRun run = Fenestra("dc " + kExamples +
-                              "/city_office/scene.json --method two-stage --outdoor-paths 57600 "
+                              "/city_office/scene.json --method two-stage --outdoor-paths 69120 "
                               "--indoor-paths 2000 --bounces 3 --set alpha=1 -o " +
                               d + " --outdoor-matrix " + o + " --indoor-matrix " + i);
   ASSERT_EQ(run.exit_code, 0) << run.output;
-  EXPECT_NE(run.output.find("outdoor stage: 57600 paths"), std::string::npos) << run.output;
+  // The 2 m x 1.5 m window in 4 x 3 parts of 0.5 m, 288 direction cells each
+  EXPECT_NE(run.output.find("4x3 window parts x 288 direction cells"), std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("outdoor stage: 69120 paths"), std::string::npos) << run.output;
   for (const auto& [path, rows, cols] :
-       {std::tuple{d, 9, 146}, std::tuple{o, 288, 146}, std::tuple{i, 9, 288}}) {
+       {std::tuple{d, 9, 146}, std::tuple{o, 3456, 146}, std::tuple{i, 9, 3456}}) {
     std::ifstream in(path);
     std::string header((std::istreambuf_iterator<char>(in)), {});
     EXPECT_NE(header.find("NROWS=" + std::to_string(rows) + "\nNCOLS=" + std::to_string(cols)),
               std::string::npos)
         << path;
+  }
+}
+
+TEST_F(SceneCliTest, DcRejectsBadWindowParts) {
+  for (const std::string parts : {"0x2", "4", "4x3x1", "axb", "17x1"}) {
+    const CliRun run = Fenestra("dc " + kExamples + "/city_office/scene.json --method two-stage " +
+                                "--window-parts " + parts + " -o " + (dir_ / "D.mtx").string());
+    EXPECT_EQ(run.exit_code, 1) << parts;
+    EXPECT_NE(run.output.find("window parts"), std::string::npos) << run.output;
+    EXPECT_TRUE(fs::is_empty(dir_)) << parts;
   }
 }
 

@@ -20,6 +20,8 @@ constexpr int kThreads = 256;
 #define FENESTRA_CUDA_MIN_BLOCKS 4
 #endif
 constexpr int kCounters = 7;  // rays, then paths by PathEnd
+// Shared memory a block may use without opting in to more.
+constexpr size_t kDefaultShared = 48 * 1024;
 
 // A device allocation freed on scope exit; grows on demand.
 template <typename T>
@@ -177,11 +179,12 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
                  const TraceSensor* sensors, int sensor_count, TraceWindow window,
                  HemisphereBasis basis, uint64_t paths_per_sensor, int batches, uint64_t seed,
                  double* sum, unsigned long long* counters) {
-  extern __shared__ double row[];  // basis.cell_count
+  extern __shared__ double row[];  // window cells
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
   if (threadIdx.x == 0) shared_basis = basis;
-  BeginRow(row, basis.cell_count, block_counters);
+  const int cells = WindowCellCount(window, basis);
+  BeginRow(row, cells, block_counters);
   const int s = static_cast<int>(blockIdx.y) / batches;
   const int b = static_cast<int>(blockIdx.y) % batches;
   const uint64_t first = b * paths_per_sensor / batches;
@@ -195,8 +198,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     counts.Add(TraceGpuPath(scene, surfaces, settings, PathRandom(seed, s, p), mode));
   }
   counts.Flush(block_counters);
-  EndRow(row, basis.cell_count,
-         sum + (static_cast<size_t>(b) * sensor_count + s) * basis.cell_count, block_counters,
+  EndRow(row, cells, sum + (static_cast<size_t>(b) * sensor_count + s) * cells, block_counters,
          counters);
 }
 
@@ -341,9 +343,10 @@ std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis
                                 uint64_t paths_per_cell, uint64_t seed, const PathSettings& path,
                                 double* sum, double* sum_squares, CudaCounters* counters) {
   Impl& d = *impl_;
-  const dim3 grid(d.BlocksPerRow(paths_per_cell, basis.cell_count), basis.cell_count);
+  const int cells = WindowCellCount(window, basis);
+  const dim3 grid(d.BlocksPerRow(paths_per_cell, cells), cells);
   return d.Run(
-      static_cast<size_t>(basis.cell_count) * kTregenzaBinCount, true,
+      static_cast<size_t>(cells) * kTregenzaBinCount, true,
       [&] {
         OutdoorKernel<<<grid, kThreads>>>(d.Scene(), d.Surfaces(), path, window, basis,
                                           paths_per_cell, seed, d.sum.get(), d.sum_squares.get(),
@@ -360,9 +363,33 @@ std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
   if (cudaError_t e = d.sensors.Upload(sensors, sensor_count); e != cudaSuccess) return Error(e);
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
   const dim3 grid(d.BlocksPerRow(paths_per_sensor / batches + 1, rows), rows);
-  const size_t shared = static_cast<size_t>(basis.cell_count) * sizeof(double);
+  const int cells = WindowCellCount(window, basis);
+  const size_t shared = static_cast<size_t>(cells) * sizeof(double);
+  if (shared > kDefaultShared) {
+    // Opt in to more shared memory per block, as far as the device allows
+    int device = 0, limit = 0;
+    if (cudaError_t e = cudaGetDevice(&device); e != cudaSuccess) return Error(e);
+    if (cudaError_t e =
+            cudaDeviceGetAttribute(&limit, cudaDevAttrMaxSharedMemoryPerBlockOptin, device);
+        e != cudaSuccess) {
+      return Error(e);
+    }
+    const size_t available = static_cast<size_t>(limit) - sizeof(HemisphereBasis) -
+                             kCounters * sizeof(unsigned long long);
+    if (shared > available) {
+      return "CUDA: " + std::to_string(cells) +
+             " window cells do not fit the indoor kernel's shared memory (at most " +
+             std::to_string(available / sizeof(double)) +
+             " on this device): use fewer window parts or the 288-cell basis";
+    }
+    if (cudaError_t e = cudaFuncSetAttribute(
+            IndoorKernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(shared));
+        e != cudaSuccess) {
+      return Error(e);
+    }
+  }
   return d.Run(
-      static_cast<size_t>(batches) * sensor_count * basis.cell_count, false,
+      static_cast<size_t>(batches) * sensor_count * cells, false,
       [&] {
         IndoorKernel<<<grid, kThreads, shared>>>(d.Scene(), d.Surfaces(), path, d.sensors.get(),
                                                  sensor_count, window, basis, paths_per_sensor,
