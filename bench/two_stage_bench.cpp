@@ -17,38 +17,36 @@ int main(int argc, char** argv) {
       ValueOrExit(LoadScene(std::string(FENESTRA_SOURCE_DIR) + "/examples/city_office/scene.json"));
   std::printf("backend: %s\n", backend->Name().c_str());
 
+  const WindowParts parts = AutomaticWindowParts(scene.window);
   OutdoorOptions outdoor;
   outdoor.paths = 20'000'000;
   outdoor.max_bounces = 30;
+  outdoor.parts = parts;
   const OutdoorResult o = ValueOrExit(ComputeOutdoorStage(scene, outdoor, backend.get()));
   std::printf(
-      "outdoor stage: %lld paths (%lld per cell, %d cells), 30 bounces, %zu triangles: %.3f s, "
-      "%.3e rays (%.3e rays/s); mean relative SE of O %.4f\n",
-      static_cast<long long>(o.paths_per_cell * o.basis_cells),
-      static_cast<long long>(o.paths_per_cell), o.basis_cells, o.triangles, o.wall_seconds,
-      static_cast<double>(o.rays_traced), o.rays_traced / o.wall_seconds,
-      MeanRelativeError(o.coefficients, o.standard_error));
+      "outdoor stage: %lld paths (%lld per cell, %dx%d window parts x %d direction cells), 30 "
+      "bounces, %zu triangles: %.3f s, %.3e rays (%.3e rays/s); mean relative SE of O %.4f\n",
+      static_cast<long long>(o.paths_per_cell * o.coefficients.rows()),
+      static_cast<long long>(o.paths_per_cell), parts.columns, parts.rows, o.basis_cells,
+      o.triangles, o.wall_seconds, static_cast<double>(o.rays_traced),
+      o.rays_traced / o.wall_seconds, MeanRelativeError(o.coefficients, o.standard_error));
 
   for (const double alpha : {0.0, 0.6, 1.5707963}) {
     const BlindDesign design = ValueOrExit(DesignWithOverrides(scene, {{"alpha", alpha}}));
     IndoorOptions indoor;
     indoor.paths_per_sensor = 200'000;
     indoor.max_bounces = 5;
+    indoor.parts = parts;
     const IndoorResult i = ValueOrExit(ComputeIndoorStage(scene, design, indoor, backend.get()));
     const TwoStageResult d = ValueOrExit(CombineStages(i, o));
-    // Sky sum of sensor 1 and its standard error over the batches (indoor part)
-    const double sum = d.coefficients.row(0).tail(145).sum();
-    double variance = 0;
-    for (const Matrix& b : d.batches) variance += std::pow(b.row(0).tail(145).sum() - sum, 2);
-    const double batches = static_cast<double>(d.batches.size());
-    const double sum_se = std::sqrt(variance / (batches * (batches - 1)));
     std::printf(
         "indoor stage, alpha %.3f: 9 sensors x 2e5 paths, 5 bounces, %zu triangles: %.3f s, "
         "%.3e closest-hit rays; mean relative SE of I %.4f, of D %.4f; sky sum of D, sensor 1: "
-        "%.4e ± %.1e (indoor part)\n",
+        "%.4e ± %.1e\n",
         alpha, i.triangles, i.wall_seconds, static_cast<double>(i.rays_traced),
         MeanRelativeError(i.coefficients, i.standard_error),
-        MeanRelativeError(d.coefficients, d.standard_error), sum, sum_se);
+        MeanRelativeError(d.coefficients, d.standard_error), d.sky_sum(0),
+        d.sky_sum_standard_error(0));
   }
   return 0;
 }
