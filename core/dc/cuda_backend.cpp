@@ -21,11 +21,71 @@ namespace fenestra {
 #if FENESTRA_WITH_CUDA
 namespace {
 
+absl::Status Check(const std::string& error) {
+  return error.empty() ? absl::OkStatus() : absl::InternalError(error);
+}
+
+// The annual product on the GPU. The tracer holds one product's O and S at a time; a
+// product whose matrices were replaced by a later one uploads its own again.
+class CudaAnnualProduct : public AnnualProduct {
+ public:
+  CudaAnnualProduct(CudaTracer* tracer, int* current, int generation, Matrix outdoor, Matrix sky)
+      : tracer_(tracer),
+        current_(current),
+        generation_(generation),
+        outdoor_(std::move(outdoor)),
+        sky_(std::move(sky)) {}
+
+  absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
+    if (indoor_batches.empty()) return std::vector<Matrix>{};
+    const Eigen::Index rows = indoor_batches[0].rows();
+    Matrix stacked(rows * static_cast<Eigen::Index>(indoor_batches.size()), outdoor_.rows());
+    for (size_t b = 0; b < indoor_batches.size(); ++b) {
+      if (indoor_batches[b].rows() != rows || indoor_batches[b].cols() != outdoor_.rows()) {
+        return absl::InvalidArgumentError(absl::StrCat(
+            "indoor batch ", b, " is ", indoor_batches[b].rows(), " x ", indoor_batches[b].cols(),
+            ", the outdoor matrix has ", outdoor_.rows(), " window cells"));
+      }
+      stacked.middleRows(b * rows, rows) = indoor_batches[b];
+    }
+    if (*current_ != generation_) {
+      FENESTRA_RETURN_IF_ERROR(
+          Check(tracer_->SetAnnualProduct(outdoor_.data(), static_cast<int>(outdoor_.rows()),
+                                          sky_.data(), static_cast<int>(sky_.cols()))));
+      *current_ = generation_;
+    }
+    Matrix illuminance(stacked.rows(), sky_.cols());
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->AnnualProduct(
+        stacked.data(), static_cast<int>(stacked.rows()), illuminance.data())));
+    std::vector<Matrix> batches;
+    for (size_t b = 0; b < indoor_batches.size(); ++b) {
+      batches.push_back(illuminance.middleRows(b * rows, rows));
+    }
+    return batches;
+  }
+
+ private:
+  CudaTracer* tracer_;
+  int* current_;
+  int generation_;
+  Matrix outdoor_, sky_;
+};
+
 class CudaBackend : public DcBackend {
  public:
   explicit CudaBackend(std::unique_ptr<CudaTracer> tracer) : tracer_(std::move(tracer)) {}
 
   std::string Name() const override { return absl::StrCat("cuda (", tracer_->device_name(), ")"); }
+
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(const Matrix& outdoor,
+                                                                   const Matrix& sky) override {
+    if (outdoor.cols() != kDaylightBins || sky.rows() != kDaylightBins) {
+      return absl::InvalidArgumentError(absl::StrCat("the outdoor matrix has ", outdoor.cols(),
+                                                     " sky bins, the sky ", sky.rows()));
+    }
+    return std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_current_,
+                                               ++annual_generation_, outdoor, sky);
+  }
 
   absl::StatusOr<OneStageResult> OneStage(const TriangleMesh& mesh,
                                           const std::vector<Material>& materials,
@@ -116,13 +176,11 @@ class CudaBackend : public DcBackend {
                         seed, WithoutImportance(path), tally.sum.data(), &counters)));
     Count(counters, &tally.counters);
     tally.wall_seconds = Seconds(start);
+    tally.trace_seconds = counters.kernel_seconds;
     return tally;
   }
 
  private:
-  static absl::Status Check(const std::string& error) {
-    return error.empty() ? absl::OkStatus() : absl::InternalError(error);
-  }
   static PathSettings WithoutImportance(PathSettings path) {
     path.importance = nullptr;
     return path;
@@ -144,6 +202,8 @@ class CudaBackend : public DcBackend {
   }
 
   std::unique_ptr<CudaTracer> tracer_;
+  int annual_generation_ = 0;  // products made
+  int annual_current_ = 0;     // the product whose matrices the tracer holds
 };
 
 }  // namespace

@@ -72,6 +72,17 @@ struct OneStageResult {
   std::string backend;      // which backend traced it
 };
 
+// The annual illuminance of a design's indoor batches through a fixed outdoor matrix and
+// sky: E_b = (I_b O) S for each batch b (I_b sensors x window cells, O window cells x 146,
+// S 146 x steps with the luminous efficacy folded in, so E is in lux). Made once per job
+// by DcBackend::MakeAnnualProduct, applied once per design.
+class AnnualProduct {
+ public:
+  virtual ~AnnualProduct() = default;
+  // InvalidArgument when a batch's columns are not O's rows.
+  virtual absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) = 0;
+};
+
 // A tracer backend for daylight coefficients (Embree on the CPU, CUDA on a GPU), chosen at
 // run time. Implementations are thread-compatible: one call at a time per object.
 class DcBackend {
@@ -100,6 +111,12 @@ class DcBackend {
                                              const HemisphereBasis& basis,
                                              uint64_t paths_per_sensor, int batches, uint64_t seed,
                                              const PathSettings& path, int threads) = 0;
+
+  // The annual product with `outdoor` and `sky` (AnnualProduct), computed where this
+  // backend computes: Eigen on the CPU by default, the GPU for CUDA. Must not outlive the
+  // backend.
+  virtual absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(const Matrix& outdoor,
+                                                                           const Matrix& sky);
 };
 
 // The Embree CPU backend (always available).

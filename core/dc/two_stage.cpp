@@ -206,6 +206,7 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
   }
   result.standard_error = (variance / (batches * (batches - 1.0))).cwiseSqrt();
   result.paths_per_sensor = options.paths_per_sensor;
+  result.trace_seconds = tally.trace_seconds;
   result.rays_traced = tally.counters.rays;
   result.triangles = indoor.TriangleCount();
   result.backend = backend->Name();
@@ -225,15 +226,22 @@ absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
                                                    " window cells, outdoor matrix ",
                                                    outdoor.coefficients.rows()));
   }
+  // Every batch's D in one product (I is the mean of its batches, so D is the mean of theirs)
   TwoStageResult result;
-  result.coefficients = indoor.coefficients * outdoor.coefficients;
+  const Eigen::Index rows = indoor.coefficients.rows();
   const double batches = static_cast<double>(indoor.batches.size());
-  Matrix indoor_variance = Matrix::Zero(result.coefficients.rows(), result.coefficients.cols());
-  for (const Matrix& batch : indoor.batches) {
-    Matrix d = batch * outdoor.coefficients;
-    indoor_variance += (d - result.coefficients).cwiseAbs2();
-    result.batches.push_back(std::move(d));
+  Matrix stacked(rows * indoor.batches.size(), indoor.coefficients.cols());
+  for (size_t b = 0; b < indoor.batches.size(); ++b) {
+    stacked.middleRows(b * rows, rows) = indoor.batches[b];
   }
+  const Matrix products = stacked * outdoor.coefficients;
+  result.coefficients = Matrix::Zero(rows, outdoor.coefficients.cols());
+  for (size_t b = 0; b < indoor.batches.size(); ++b) {
+    result.batches.push_back(products.middleRows(b * rows, rows));
+    result.coefficients += result.batches.back() / batches;
+  }
+  Matrix indoor_variance = Matrix::Zero(rows, result.coefficients.cols());
+  for (const Matrix& d : result.batches) indoor_variance += (d - result.coefficients).cwiseAbs2();
   if (batches > 1) indoor_variance /= batches * (batches - 1);
   const Matrix outdoor_variance =
       indoor.coefficients.cwiseAbs2() * outdoor.standard_error.cwiseAbs2();

@@ -89,8 +89,9 @@ struct IndoorResult {
   std::vector<Matrix> batches;  // per batch: sensors x cells
   int64_t paths_per_sensor = 0;
   uint64_t rays_traced = 0;
-  size_t triangles = 0;  // indoor triangles traced against (blind included)
-  double wall_seconds = 0;
+  size_t triangles = 0;      // indoor triangles traced against (blind included)
+  double wall_seconds = 0;   // scene preparation included
+  double trace_seconds = 0;  // the tracing itself (on a GPU: the kernel)
   std::string backend;
 };
 

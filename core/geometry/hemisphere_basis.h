@@ -33,6 +33,16 @@ HemisphereBasis Beckers288();
 // 288 gives Beckers288(). Returns a basis with cell_count 0 for counts outside [1, 10000].
 HemisphereBasis BeckersBasis(int cell_count);
 
+// atan2 in the precision of T (the float overload on the host too).
+template <typename T>
+FENESTRA_CPU_GPU inline T BasisAtan2(T y, T x) {
+  if constexpr (sizeof(T) == sizeof(float)) {
+    return atan2f(y, x);
+  } else {
+    return atan2(y, x);
+  }
+}
+
 // Cell of a local direction (need not be unit length), or -1 when it is not above the
 // horizon (z <= 0).
 template <typename T>
@@ -45,7 +55,7 @@ FENESTRA_CPU_GPU inline int BasisCell(const HemisphereBasis& basis, Vec3T<T> d) 
   while (ring < basis.ring_count - 1 && static_cast<T>(basis.cumulative[ring]) <= cap) ++ring;
   const int first = ring == 0 ? 0 : basis.cumulative[ring - 1];
   const int count = basis.cumulative[ring] - first;
-  T phi = atan2(d.y, d.x);
+  T phi = BasisAtan2(d.y, d.x);
   if (phi < 0) phi += T(2 * 3.14159265358979323846);
   int j = static_cast<int>(phi * static_cast<T>(count) / T(2 * 3.14159265358979323846));
   if (j >= count) j = count - 1;

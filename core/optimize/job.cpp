@@ -370,11 +370,6 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
     outdoor = &computed;
     result.mutable_timings()->set_outdoor_seconds(computed.wall_seconds);
   }
-  OutdoorResult outdoor_stage;
-  outdoor_stage.coefficients = outdoor->coefficients;
-  outdoor_stage.standard_error = outdoor->standard_error;
-  outdoor_stage.basis_cells = outdoor->basis_cells;
-  outdoor_stage.parts = outdoor->parts;
 
   // The objective: indoor stage with the same random streams for every design
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
@@ -392,14 +387,22 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   indoor_options.basis_cells = spec.sampling().basis_cells();
   indoor_options.parts = SamplingWindowParts(spec.sampling(), job.scene.window);
   indoor_options.batches = spec.sampling().batches();
-  const std::vector<Matrix> sky_channels = {sky.radiance};
+  // E_b = (I_b O) S over the lit hours, in lux, where the backend computes
+  if (!(outdoor->parts == indoor_options.parts)) {
+    return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
+  }
+  Matrix lit_sky(sky.radiance.rows(), static_cast<Eigen::Index>(columns.size()));
+  for (size_t c = 0; c < columns.size(); ++c) {
+    lit_sky.col(c) = kWhiteEfficacyLumensPerWatt * sky.radiance.col(columns[c]);
+  }
+  FENESTRA_ASSIGN_OR_RETURN(product, backend->MakeAnnualProduct(outdoor->coefficients, lit_sky));
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     FENESTRA_ASSIGN_OR_RETURN(
         indoor, ComputeIndoorStage(job.scene, DesignAt(job, x), indoor_options, backend.get()));
-    FENESTRA_ASSIGN_OR_RETURN(dc, CombineStages(indoor, outdoor_stage));
-    FENESTRA_ASSIGN_OR_RETURN(metrics, AnnualMetricsWithErrors(dc.batches, sky_channels, columns,
-                                                               occupied, metric_options));
+    FENESTRA_ASSIGN_OR_RETURN(illuminance, product->Apply(indoor.batches));
+    FENESTRA_ASSIGN_OR_RETURN(metrics, AnnualMetricsFromIlluminanceBatches(
+                                           illuminance, columns, occupied, metric_options));
     return MetricEvaluation(std::move(metrics), metric);
   };
 

@@ -202,6 +202,52 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
          counters);
 }
 
+// C = A B for row-major A (m x k) and B (k x n), in 16 x 16 tiles through shared memory.
+constexpr int kTile = 16;
+__global__ void MultiplyKernel(const double* a, const double* b, double* c, int m, int k, int n) {
+  __shared__ double a_tile[kTile][kTile];
+  __shared__ double b_tile[kTile][kTile + 1];
+  const int row = blockIdx.y * kTile + threadIdx.y, col = blockIdx.x * kTile + threadIdx.x;
+  double sum = 0;
+  for (int t = 0; t < k; t += kTile) {
+    a_tile[threadIdx.y][threadIdx.x] =
+        row < m && t + threadIdx.x < k ? a[static_cast<size_t>(row) * k + t + threadIdx.x] : 0.0;
+    b_tile[threadIdx.y][threadIdx.x] =
+        t + threadIdx.y < k && col < n ? b[static_cast<size_t>(t + threadIdx.y) * n + col] : 0.0;
+    __syncthreads();
+    for (int i = 0; i < kTile; ++i) sum += a_tile[threadIdx.y][i] * b_tile[i][threadIdx.x];
+    __syncthreads();
+  }
+  if (row < m && col < n) c[static_cast<size_t>(row) * n + col] = sum;
+}
+
+// C = A B^T for row-major A (m x k) and B (n x k), one warp per entry of C: for a long k
+// and a small C (indoor rows through the window cells), where tiles would leave the device
+// idle.
+__global__ void MultiplyTransposedKernel(const double* a, const double* b, double* c, int m, int k,
+                                         int n) {
+  const int warp = static_cast<int>((blockIdx.x * blockDim.x + threadIdx.x) / 32);
+  const int lane = static_cast<int>(threadIdx.x % 32);
+  if (warp >= m * n) return;
+  const double* a_row = a + static_cast<size_t>(warp / n) * k;
+  const double* b_row = b + static_cast<size_t>(warp % n) * k;
+  double sum = 0;
+  for (int i = lane; i < k; i += 32) sum += a_row[i] * b_row[i];
+  for (int offset = 16; offset > 0; offset /= 2) sum += __shfl_down_sync(0xffffffffu, sum, offset);
+  if (lane == 0) c[warp] = sum;
+}
+
+void MultiplyTransposed(const double* a, const double* b, double* c, int m, int k, int n) {
+  const int threads = 256;
+  const int blocks = static_cast<int>((static_cast<int64_t>(m) * n * 32 + threads - 1) / threads);
+  MultiplyTransposedKernel<<<blocks, threads>>>(a, b, c, m, k, n);
+}
+
+void Multiply(const double* a, const double* b, double* c, int m, int k, int n) {
+  const dim3 grid((n + kTile - 1) / kTile, (m + kTile - 1) / kTile), block(kTile, kTile);
+  MultiplyKernel<<<grid, block>>>(a, b, c, m, k, n);
+}
+
 std::string Error(cudaError_t e) { return std::string("CUDA: ") + cudaGetErrorString(e); }
 
 }  // namespace
@@ -218,6 +264,9 @@ struct CudaTracer::Impl {
   DeviceBuffer<double> sum, sum_squares;
   DeviceBuffer<unsigned long long> counters;
   bool has_scene = false;
+  // The annual product: O transposed, S, the indoor rows, I O and E
+  DeviceBuffer<double> outdoor_transposed, sky, indoor, through_window, illuminance;
+  int cells = 0, steps = 0;
 
   BvhIntersector Scene() const { return {nodes.get(), triangles.get()}; }
   SurfaceTable Surfaces() const { return {materials.get(), triangle_material.get()}; }
@@ -396,6 +445,43 @@ std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
                                                  batches, seed, d.sum.get(), d.counters.get());
       },
       sum, nullptr, counters);
+}
+
+std::string CudaTracer::SetAnnualProduct(const double* outdoor, int cells, const double* sky,
+                                         int steps) {
+  Impl& d = *impl_;
+  std::vector<double> transposed(static_cast<size_t>(cells) * kTregenzaBinCount);
+  for (int c = 0; c < cells; ++c) {
+    for (int j = 0; j < kTregenzaBinCount; ++j) {
+      transposed[static_cast<size_t>(j) * cells + c] =
+          outdoor[static_cast<size_t>(c) * kTregenzaBinCount + j];
+    }
+  }
+  cudaError_t e = cudaSetDevice(d.device);
+  if (e == cudaSuccess) e = d.outdoor_transposed.Upload(transposed.data(), transposed.size());
+  if (e == cudaSuccess) e = d.sky.Upload(sky, static_cast<size_t>(kTregenzaBinCount) * steps);
+  if (e != cudaSuccess) return Error(e);
+  d.cells = cells;
+  d.steps = steps;
+  return "";
+}
+
+std::string CudaTracer::AnnualProduct(const double* indoor, int rows, double* illuminance) {
+  Impl& d = *impl_;
+  if (d.cells == 0) return "CUDA tracer: no annual product set";
+  cudaError_t e = cudaSetDevice(d.device);
+  if (e == cudaSuccess) e = d.indoor.Upload(indoor, static_cast<size_t>(rows) * d.cells);
+  if (e == cudaSuccess) e = d.through_window.Reserve(static_cast<size_t>(rows) * kTregenzaBinCount);
+  if (e == cudaSuccess) e = d.illuminance.Reserve(static_cast<size_t>(rows) * d.steps);
+  if (e != cudaSuccess) return Error(e);
+  MultiplyTransposed(d.indoor.get(), d.outdoor_transposed.get(), d.through_window.get(), rows,
+                     d.cells, kTregenzaBinCount);
+  Multiply(d.through_window.get(), d.sky.get(), d.illuminance.get(), rows, kTregenzaBinCount,
+           d.steps);
+  e = cudaGetLastError();
+  if (e == cudaSuccess)
+    e = d.illuminance.Download(illuminance, static_cast<size_t>(rows) * d.steps);
+  return e == cudaSuccess ? "" : Error(e);
 }
 
 }  // namespace fenestra

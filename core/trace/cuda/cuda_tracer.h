@@ -60,6 +60,13 @@ class CudaTracer {
                      const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
                      uint64_t seed, const PathSettings& path, double* sum, CudaCounters* counters);
 
+  // The annual product of the two-stage method, E = (I O) S, on the device: SetAnnualProduct
+  // uploads O (cells x kTregenzaBinCount) and S (kTregenzaBinCount x steps), row-major;
+  // AnnualProduct multiplies `rows` stacked indoor rows (rows x cells) through them into
+  // `illuminance` (rows x steps). "" or the error.
+  std::string SetAnnualProduct(const double* outdoor, int cells, const double* sky, int steps);
+  std::string AnnualProduct(const double* indoor, int rows, double* illuminance);
+
   std::string device_name() const;
 
  private:

@@ -90,10 +90,13 @@ TEST(CudaBackendTest, TwoStageMatchesEmbree) {
   if (!gpu) GTEST_SKIP() << "no CUDA device";
   const Scene scene = Load("city_office");
   const BlindDesign design = *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}});
+  // The window in parts, as by default (4 x 3): the GPU's per-part cells and shared rows
   OutdoorOptions outdoor;
   outdoor.paths = 2'000'000;
+  outdoor.parts = AutomaticWindowParts(scene.window);
   IndoorOptions indoor;
   indoor.paths_per_sensor = 200'000;
+  indoor.parts = outdoor.parts;
   absl::StatusOr<OutdoorResult> o_cpu = ComputeOutdoorStage(scene, outdoor);
   absl::StatusOr<OutdoorResult> o_gpu = ComputeOutdoorStage(scene, outdoor, gpu.get());
   ASSERT_TRUE(o_cpu.ok() && o_gpu.ok());
@@ -106,6 +109,33 @@ TEST(CudaBackendTest, TwoStageMatchesEmbree) {
                i_gpu->standard_error, "indoor matrix");
   std::printf("outdoor: CPU %.3f s, GPU %.3f s; indoor: CPU %.3f s, GPU %.3f s\n",
               o_cpu->wall_seconds, o_gpu->wall_seconds, i_cpu->wall_seconds, i_gpu->wall_seconds);
+}
+
+// The annual product (I_b O) S on the GPU equals the CPU's, and a second product on the
+// same backend does not disturb the first.
+TEST(CudaBackendTest, AnnualProductMatchesCpu) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const int cells = 3456, sensors = 9, batches = 8, steps = 4380;
+  const Matrix outdoor = Matrix::Random(cells, kDaylightBins).cwiseAbs();
+  const Matrix sky = Matrix::Random(kDaylightBins, steps).cwiseAbs();
+  std::vector<Matrix> indoor;
+  for (int b = 0; b < batches; ++b) indoor.push_back(Matrix::Random(sensors, cells).cwiseAbs());
+  std::unique_ptr<DcBackend> cpu = MakeEmbreeBackend();
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> expected = cpu->MakeAnnualProduct(outdoor, sky);
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> first = gpu->MakeAnnualProduct(outdoor, sky);
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> second =
+      gpu->MakeAnnualProduct(Matrix::Zero(cells, kDaylightBins), sky);
+  ASSERT_TRUE(expected.ok() && first.ok() && second.ok());
+  absl::StatusOr<std::vector<Matrix>> e_cpu = (*expected)->Apply(indoor);
+  absl::StatusOr<std::vector<Matrix>> e_zero = (*second)->Apply(indoor);
+  absl::StatusOr<std::vector<Matrix>> e_gpu = (*first)->Apply(indoor);
+  ASSERT_TRUE(e_cpu.ok() && e_gpu.ok() && e_zero.ok()) << e_gpu.status();
+  for (int b = 0; b < batches; ++b) {
+    EXPECT_LT(((*e_gpu)[b] - (*e_cpu)[b]).cwiseAbs().maxCoeff(),
+              1e-12 * (*e_cpu)[b].cwiseAbs().maxCoeff());
+    EXPECT_EQ((*e_zero)[b].cwiseAbs().maxCoeff(), 0.0);
+  }
 }
 
 // The stiff scenes of the one-stage tests, on the GPU: finite, and matching the CPU.
