@@ -129,6 +129,17 @@ int main(int argc, char** argv) {
       rays / kernel / 1e9, 1e3 * multiply / candidates,
       1e3 * (total - trace - multiply) / candidates, udi, udi_se);
 
+  // Is one candidate enough to fill the GPU? The same design with 4 and 16 times the paths
+  // (as if that many candidates shared a launch)
+  for (const int64_t scale : {4, 16}) {
+    IndoorOptions more = indoor;
+    more.paths_per_sensor = indoor.paths_per_sensor * scale;
+    const IndoorResult i = ValueOrExit(ComputeIndoorStage(office, open, more, gpu.get()));
+    std::printf("indoor stage at %lld x the paths: kernel %.2f ms, %.2f G closest-hit rays/s\n",
+                static_cast<long long>(scale), 1e3 * i.trace_seconds,
+                i.rays_traced / i.trace_seconds / 1e9);
+  }
+
   // The 500-evaluation four-variable optimization, end to end
   if (quick) return 0;
   v1::Job job = ValueOrExit(ReadJobFile(kRoot + "/examples/city_office/four_variables.json"));
