@@ -4,6 +4,7 @@
 #include <cuda_runtime.h>
 
 #include <algorithm>
+#include <cstring>
 #include <vector>
 
 #include "core/trace/bvh_intersector.h"
@@ -248,6 +249,46 @@ void Multiply(const double* a, const double* b, double* c, int m, int k, int n) 
   MultiplyKernel<<<grid, block>>>(a, b, c, m, k, n);
 }
 
+// Page-locked host memory for fast transfers of large results; grows on demand.
+class PinnedBuffer {
+ public:
+  PinnedBuffer() = default;
+  ~PinnedBuffer() {
+    if (data_ != nullptr) cudaFreeHost(data_);
+  }
+  PinnedBuffer(const PinnedBuffer&) = delete;
+  PinnedBuffer& operator=(const PinnedBuffer&) = delete;
+
+  cudaError_t Reserve(size_t bytes) {
+    if (bytes <= capacity_) return cudaSuccess;
+    if (data_ != nullptr) cudaFreeHost(data_);
+    data_ = nullptr;
+    capacity_ = 0;
+    const cudaError_t e = cudaMallocHost(&data_, bytes);
+    if (e == cudaSuccess) capacity_ = bytes;
+    return e;
+  }
+  // Device to host through this buffer.
+  cudaError_t Download(const double* device, double* host, size_t count) {
+    cudaError_t e = Reserve(count * sizeof(double));
+    if (e == cudaSuccess)
+      e = cudaMemcpy(data_, device, count * sizeof(double), cudaMemcpyDeviceToHost);
+    if (e == cudaSuccess) std::memcpy(host, data_, count * sizeof(double));
+    return e;
+  }
+  // Host to device through this buffer.
+  cudaError_t Upload(const double* host, double* device, size_t count) {
+    cudaError_t e = Reserve(count * sizeof(double));
+    if (e != cudaSuccess) return e;
+    std::memcpy(data_, host, count * sizeof(double));
+    return cudaMemcpy(device, data_, count * sizeof(double), cudaMemcpyHostToDevice);
+  }
+
+ private:
+  void* data_ = nullptr;
+  size_t capacity_ = 0;
+};
+
 std::string Error(cudaError_t e) { return std::string("CUDA: ") + cudaGetErrorString(e); }
 
 }  // namespace
@@ -263,6 +304,7 @@ struct CudaTracer::Impl {
   DeviceBuffer<TraceSensor> sensors;
   DeviceBuffer<double> sum, sum_squares;
   DeviceBuffer<unsigned long long> counters;
+  PinnedBuffer staging;  // large transfers
   bool has_scene = false;
   // The annual product: O transposed, S, the indoor rows, I O and E
   DeviceBuffer<double> outdoor_transposed, sky, indoor, through_window, illuminance;
@@ -302,8 +344,10 @@ struct CudaTracer::Impl {
     cudaEventDestroy(stop);
     if (e == cudaSuccess) e = cudaDeviceSynchronize();
     unsigned long long host_counters[kCounters] = {};
-    if (e == cudaSuccess) e = sum.Download(host_sum, sum_size);
-    if (e == cudaSuccess && squares) e = sum_squares.Download(host_sum_squares, sum_size);
+    if (e == cudaSuccess) e = staging.Download(sum.get(), host_sum, sum_size);
+    if (e == cudaSuccess && squares) {
+      e = staging.Download(sum_squares.get(), host_sum_squares, sum_size);
+    }
     if (e == cudaSuccess) e = counters.Download(host_counters, kCounters);
     if (e != cudaSuccess) return Error(e);
     out->rays = host_counters[0];
@@ -470,7 +514,10 @@ std::string CudaTracer::AnnualProduct(const double* indoor, int rows, double* il
   Impl& d = *impl_;
   if (d.cells == 0) return "CUDA tracer: no annual product set";
   cudaError_t e = cudaSetDevice(d.device);
-  if (e == cudaSuccess) e = d.indoor.Upload(indoor, static_cast<size_t>(rows) * d.cells);
+  if (e == cudaSuccess) e = d.indoor.Reserve(static_cast<size_t>(rows) * d.cells);
+  if (e == cudaSuccess) {
+    e = d.staging.Upload(indoor, d.indoor.get(), static_cast<size_t>(rows) * d.cells);
+  }
   if (e == cudaSuccess) e = d.through_window.Reserve(static_cast<size_t>(rows) * kTregenzaBinCount);
   if (e == cudaSuccess) e = d.illuminance.Reserve(static_cast<size_t>(rows) * d.steps);
   if (e != cudaSuccess) return Error(e);
@@ -479,8 +526,9 @@ std::string CudaTracer::AnnualProduct(const double* indoor, int rows, double* il
   Multiply(d.through_window.get(), d.sky.get(), d.illuminance.get(), rows, kTregenzaBinCount,
            d.steps);
   e = cudaGetLastError();
-  if (e == cudaSuccess)
-    e = d.illuminance.Download(illuminance, static_cast<size_t>(rows) * d.steps);
+  if (e == cudaSuccess) {
+    e = d.staging.Download(d.illuminance.get(), illuminance, static_cast<size_t>(rows) * d.steps);
+  }
   return e == cudaSuccess ? "" : Error(e);
 }
 
