@@ -12,6 +12,7 @@
 #include "client/cli_util.h"
 #include "client/commands.h"
 #include "client/grpc_client.h"
+#include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
 
 namespace fenestra {
@@ -36,9 +37,16 @@ void PrintSite(const v1::SiteInfo& s) {
   fmt::print("{} ({}): {}\n", s.id(), s.name(), StateName(s.state()));
   fmt::print("  location: {:.4f}° N, {:.4f}° E; weather: {}\n", s.latitude_deg(), s.longitude_deg(),
              s.has_weather() ? s.weather_name() : "none");
-  fmt::print("  outdoor: {} triangles, {} paths, {} bounces, seed {}, {} cells\n",
-             s.outdoor_triangles(), s.sampling().outdoor_paths(), s.sampling().outdoor_bounces(),
-             s.sampling().seed(), s.sampling().basis_cells());
+  const v1::Sampling& sampling = s.sampling();
+  const std::string parts =
+      sampling.window_columns() > 0 || sampling.window_rows() > 0
+          ? fmt::format("{}x{}", sampling.window_columns(), sampling.window_rows())
+          : std::string("automatic");
+  fmt::print(
+      "  outdoor: {} triangles, {} paths, {} bounces, seed {}, {} direction cells, window parts "
+      "{}\n",
+      s.outdoor_triangles(), sampling.outdoor_paths(), sampling.outdoor_bounces(), sampling.seed(),
+      sampling.basis_cells(), parts);
   fmt::print("  outdoor matrix key: {}\n", s.outdoor_key());
   if (s.state() == v1::SITE_STATE_READY) {
     fmt::print(
@@ -60,7 +68,7 @@ void AddSiteCommand(CLI::App& app) {
   // site add
   struct AddArgs {
     ServerOptions server;
-    std::string scene, job, name, backend;
+    std::string scene, job, name, backend, window_parts;
     int64_t outdoor_paths = 0;
     int outdoor_bounces = 0, basis_cells = 0;
     uint64_t seed = 0;
@@ -77,6 +85,8 @@ void AddSiteCommand(CLI::App& app) {
   add_cmd->add_option("--outdoor-bounces", add->outdoor_bounces, "Outdoor reflections [30]");
   add_cmd->add_option("--seed", add->seed, "Random seed [1]");
   add_cmd->add_option("--basis-cells", add->basis_cells, "Window direction cells: 288 or 1152");
+  add_cmd->add_option("--window-parts", add->window_parts,
+                      "The window split into COLUMNSxROWS parts [default: parts of at most 0.5 m]");
   add_cmd->add_option("--backend", add->backend, "cpu, cuda or auto; default: the daemon's");
   add_cmd->add_flag("--wait", add->wait, "Wait until the outdoor matrix is ready");
   add_cmd->add_flag("--json", add->json, "Print the site as JSON");
@@ -109,6 +119,11 @@ void AddSiteCommand(CLI::App& app) {
     if (add->outdoor_bounces) s.set_outdoor_bounces(add->outdoor_bounces);
     if (add->seed) s.set_seed(add->seed);
     if (add->basis_cells) s.set_basis_cells(add->basis_cells);
+    if (!add->window_parts.empty()) {
+      const WindowParts parts = ValueOrFail(ParseWindowParts(add->window_parts));
+      s.set_window_columns(parts.columns);
+      s.set_window_rows(parts.rows);
+    }
     if (!add->backend.empty()) s.set_backend(add->backend);
 
     FenestradClient client(add->server);

@@ -52,6 +52,16 @@ TEST(OutdoorCacheTest, EncodeDecodeRoundTrip) {
   EXPECT_EQ(back->paths, 20000);
   EXPECT_EQ(back->seed, 7u);
   EXPECT_EQ(back->backend, "embree-cpu");
+  EXPECT_EQ(back->parts, (WindowParts{1, 1}));
+  // A window in parts keeps them
+  OutdoorMatrix split = TestMatrix("def");
+  split.coefficients = Matrix::Random(288 * 6, 146).cwiseAbs();
+  split.standard_error = 0.01 * split.coefficients;
+  split.parts = {3, 2};
+  absl::StatusOr<OutdoorMatrix> split_back = DecodeOutdoorMatrix(EncodeOutdoorMatrix(split));
+  ASSERT_TRUE(split_back.ok()) << split_back.status();
+  EXPECT_EQ(split_back->parts, (WindowParts{3, 2}));
+  EXPECT_TRUE(split_back->coefficients == split.coefficients);
 }
 
 TEST(OutdoorCacheTest, FlippedByteOrTruncationIsDataLoss) {

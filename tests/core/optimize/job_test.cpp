@@ -1,0 +1,54 @@
+#include "core/optimize/job.h"
+
+#include <gtest/gtest.h>
+
+namespace fenestra {
+namespace {
+
+Scene CityOffice() {
+  absl::StatusOr<Scene> scene = LoadScene(FENESTRA_SOURCE_DIR "/examples/city_office/scene.json");
+  EXPECT_TRUE(scene.ok()) << scene.status();
+  return *scene;
+}
+
+TEST(JobTest, WindowPartsAreResolvedAndChecked) {
+  absl::StatusOr<v1::Sampling> automatic = ResolveSampling(v1::Sampling());
+  ASSERT_TRUE(automatic.ok()) << automatic.status();
+  const Scene scene = CityOffice();
+  EXPECT_EQ(SamplingWindowParts(*automatic, scene.window), (WindowParts{4, 3}));
+  v1::Sampling columns_only = *automatic;
+  columns_only.set_window_columns(2);
+  EXPECT_EQ(SamplingWindowParts(columns_only, scene.window), (WindowParts{2, 3}));
+  for (const int bad : {-1, 17}) {
+    v1::Sampling s;
+    s.set_window_rows(bad);
+    absl::StatusOr<v1::Sampling> resolved = ResolveSampling(s);
+    ASSERT_FALSE(resolved.ok());
+    EXPECT_NE(resolved.status().message().find("sampling.window_columns/window_rows"),
+              std::string::npos)
+        << resolved.status();
+  }
+  // Enough outdoor paths for every window cell
+  v1::Sampling few;
+  few.set_outdoor_paths(1000);
+  few.set_window_columns(2);
+  EXPECT_FALSE(ResolveSampling(few).ok());
+}
+
+// The outdoor matrix's key follows the window parts it was traced with, not how they
+// were asked for.
+TEST(JobTest, OutdoorKeyFollowsTheWindowParts) {
+  const Scene scene = CityOffice();
+  v1::Sampling automatic = *ResolveSampling(v1::Sampling());
+  v1::Sampling explicit_parts = automatic;
+  explicit_parts.set_window_columns(4);
+  explicit_parts.set_window_rows(3);
+  v1::Sampling whole = automatic;
+  whole.set_window_columns(1);
+  whole.set_window_rows(1);
+  EXPECT_EQ(OutdoorMatrixKey(scene, automatic), OutdoorMatrixKey(scene, explicit_parts));
+  EXPECT_NE(OutdoorMatrixKey(scene, automatic), OutdoorMatrixKey(scene, whole));
+}
+
+}  // namespace
+}  // namespace fenestra
