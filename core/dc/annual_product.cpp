@@ -3,6 +3,8 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
+#include "core/dc/backend_support.h"
 #include "core/dc/dc_backend.h"
 
 namespace fenestra {
@@ -14,23 +16,8 @@ class CpuAnnualProduct : public AnnualProduct {
       : outdoor_(std::move(outdoor)), sky_(std::move(sky)) {}
 
   absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
-    if (indoor_batches.empty()) return std::vector<Matrix>{};
-    const Eigen::Index rows = indoor_batches[0].rows();
-    Matrix stacked(rows * static_cast<Eigen::Index>(indoor_batches.size()), outdoor_.rows());
-    for (size_t b = 0; b < indoor_batches.size(); ++b) {
-      if (indoor_batches[b].rows() != rows || indoor_batches[b].cols() != outdoor_.rows()) {
-        return absl::InvalidArgumentError(absl::StrCat(
-            "indoor batch ", b, " is ", indoor_batches[b].rows(), " x ", indoor_batches[b].cols(),
-            ", the outdoor matrix has ", outdoor_.rows(), " window cells"));
-      }
-      stacked.middleRows(b * rows, rows) = indoor_batches[b];
-    }
-    const Matrix illuminance = (stacked * outdoor_) * sky_;
-    std::vector<Matrix> batches;
-    for (size_t b = 0; b < indoor_batches.size(); ++b) {
-      batches.push_back(illuminance.middleRows(b * rows, rows));
-    }
-    return batches;
+    FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, outdoor_.rows()));
+    return SplitBatches((stacked * outdoor_) * sky_, indoor_batches.size());
   }
 
  private:

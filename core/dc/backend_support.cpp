@@ -128,4 +128,25 @@ void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int bat
   }
 }
 
+absl::StatusOr<Matrix> StackIndoorBatches(const std::vector<Matrix>& batches, Eigen::Index cells) {
+  const Eigen::Index rows = batches.empty() ? 0 : batches[0].rows();
+  Matrix stacked(rows * static_cast<Eigen::Index>(batches.size()), cells);
+  for (size_t b = 0; b < batches.size(); ++b) {
+    if (batches[b].rows() != rows || batches[b].cols() != cells) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("indoor batch ", b, " is ", batches[b].rows(), " x ", batches[b].cols(),
+                       ", the outdoor matrix has ", cells, " window cells"));
+    }
+    stacked.middleRows(b * rows, rows) = batches[b];
+  }
+  return stacked;
+}
+
+std::vector<Matrix> SplitBatches(const Matrix& stacked, size_t count) {
+  std::vector<Matrix> batches;
+  const Eigen::Index rows = count == 0 ? 0 : stacked.rows() / static_cast<Eigen::Index>(count);
+  for (size_t b = 0; b < count; ++b) batches.push_back(stacked.middleRows(b * rows, rows));
+  return batches;
+}
+
 }  // namespace fenestra

@@ -42,6 +42,13 @@ int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count)
 void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int batches, int64_t paths,
                  OneStageResult* result);
 
+// The indoor batches (each sensors x cells) one above the other, for the annual product;
+// InvalidArgument unless every batch has the same rows and `cells` columns.
+absl::StatusOr<Matrix> StackIndoorBatches(const std::vector<Matrix>& batches, Eigen::Index cells);
+
+// The inverse: `count` batches of equal rows from a stacked matrix.
+std::vector<Matrix> SplitBatches(const Matrix& stacked, size_t count);
+
 // The path-end counts of a run (indexed by PathEnd) into `result`.
 template <class Ends>
 void FillEnds(const Ends& ends, OneStageResult* result) {

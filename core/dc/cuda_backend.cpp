@@ -38,16 +38,7 @@ class CudaAnnualProduct : public AnnualProduct {
 
   absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
     if (indoor_batches.empty()) return std::vector<Matrix>{};
-    const Eigen::Index rows = indoor_batches[0].rows();
-    Matrix stacked(rows * static_cast<Eigen::Index>(indoor_batches.size()), outdoor_.rows());
-    for (size_t b = 0; b < indoor_batches.size(); ++b) {
-      if (indoor_batches[b].rows() != rows || indoor_batches[b].cols() != outdoor_.rows()) {
-        return absl::InvalidArgumentError(absl::StrCat(
-            "indoor batch ", b, " is ", indoor_batches[b].rows(), " x ", indoor_batches[b].cols(),
-            ", the outdoor matrix has ", outdoor_.rows(), " window cells"));
-      }
-      stacked.middleRows(b * rows, rows) = indoor_batches[b];
-    }
+    FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, outdoor_.rows()));
     if (*current_ != generation_) {
       FENESTRA_RETURN_IF_ERROR(
           Check(tracer_->SetAnnualProduct(outdoor_.data(), static_cast<int>(outdoor_.rows()),
@@ -57,11 +48,7 @@ class CudaAnnualProduct : public AnnualProduct {
     Matrix illuminance(stacked.rows(), sky_.cols());
     FENESTRA_RETURN_IF_ERROR(Check(tracer_->AnnualProduct(
         stacked.data(), static_cast<int>(stacked.rows()), illuminance.data())));
-    std::vector<Matrix> batches;
-    for (size_t b = 0; b < indoor_batches.size(); ++b) {
-      batches.push_back(illuminance.middleRows(b * rows, rows));
-    }
-    return batches;
+    return SplitBatches(illuminance, indoor_batches.size());
   }
 
  private:

@@ -230,16 +230,11 @@ absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
   TwoStageResult result;
   const Eigen::Index rows = indoor.coefficients.rows();
   const double batches = static_cast<double>(indoor.batches.size());
-  Matrix stacked(rows * indoor.batches.size(), indoor.coefficients.cols());
-  for (size_t b = 0; b < indoor.batches.size(); ++b) {
-    stacked.middleRows(b * rows, rows) = indoor.batches[b];
-  }
-  const Matrix products = stacked * outdoor.coefficients;
+  FENESTRA_ASSIGN_OR_RETURN(stacked,
+                            StackIndoorBatches(indoor.batches, outdoor.coefficients.rows()));
+  result.batches = SplitBatches(stacked * outdoor.coefficients, indoor.batches.size());
   result.coefficients = Matrix::Zero(rows, outdoor.coefficients.cols());
-  for (size_t b = 0; b < indoor.batches.size(); ++b) {
-    result.batches.push_back(products.middleRows(b * rows, rows));
-    result.coefficients += result.batches.back() / batches;
-  }
+  for (const Matrix& d : result.batches) result.coefficients += d / batches;
   Matrix indoor_variance = Matrix::Zero(rows, result.coefficients.cols());
   for (const Matrix& d : result.batches) indoor_variance += (d - result.coefficients).cwiseAbs2();
   if (batches > 1) indoor_variance /= batches * (batches - 1);
