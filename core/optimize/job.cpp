@@ -278,6 +278,16 @@ absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& ba
   }
   FENESTRA_RETURN_IF_ERROR(ValidateVariables(job, prepared.scene));
   FENESTRA_RETURN_IF_ERROR(FillDefaults(prepared.job));
+  // Enough outdoor paths for every window cell, the automatic parts resolved
+  const WindowParts parts = SamplingWindowParts(prepared.job.sampling(), prepared.scene.window);
+  const int64_t window_cells =
+      int64_t{prepared.job.sampling().basis_cells()} * parts.columns * parts.rows;
+  if (prepared.job.sampling().outdoor_paths() < 2 * window_cells) {
+    return Invalid("sampling.outdoor_paths",
+                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ": ",
+                                parts.columns, "x", parts.rows, " window parts x ",
+                                prepared.job.sampling().basis_cells(), " direction cells)"));
+  }
   return prepared;
 }
 

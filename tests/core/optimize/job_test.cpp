@@ -35,6 +35,23 @@ TEST(JobTest, WindowPartsAreResolvedAndChecked) {
   EXPECT_FALSE(ResolveSampling(few).ok());
 }
 
+// A job needs two outdoor paths per window cell of its resolved parts
+TEST(JobTest, PrepareChecksOutdoorPathsAgainstTheWindowCells) {
+  absl::StatusOr<v1::Job> job =
+      ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json");
+  ASSERT_TRUE(job.ok()) << job.status();
+  job->mutable_sampling()->set_outdoor_paths(5000);  // 4 x 3 x 288 cells need 6912
+  absl::StatusOr<PreparedJob> prepared =
+      PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
+  ASSERT_FALSE(prepared.ok());
+  EXPECT_NE(prepared.status().message().find("4x3 window parts"), std::string::npos)
+      << prepared.status();
+  job->mutable_sampling()->set_window_columns(1);
+  job->mutable_sampling()->set_window_rows(1);
+  prepared = PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
+  EXPECT_TRUE(prepared.ok()) << prepared.status();
+}
+
 // The outdoor matrix's key follows the window parts it was traced with, not how they
 // were asked for.
 TEST(JobTest, OutdoorKeyFollowsTheWindowParts) {
