@@ -7,6 +7,7 @@
 
 #include "bench/bench_util.h"
 #include "core/dc/dc_backend.h"
+#include "core/dc/indoor_replay.h"
 #include "core/dc/two_stage.h"
 
 int main(int argc, char** argv) {
@@ -45,6 +46,26 @@ int main(int argc, char** argv) {
         "%.4e ± %.1e\n",
         alpha, i.triangles, i.wall_seconds, static_cast<double>(i.rays_traced),
         MeanRelativeError(i.coefficients, i.standard_error),
+        MeanRelativeError(d.coefficients, d.standard_error), d.sky_sum(0),
+        d.sky_sum_standard_error(0));
+  }
+
+  // The same indoor stages replayed (core/dc/indoor_replay.h): recorded once, then per design
+  IndoorOptions indoor;
+  indoor.paths_per_sensor = 200'000;
+  indoor.max_bounces = 5;
+  indoor.parts = parts;
+  const std::unique_ptr<IndoorReplay> replay = ValueOrExit(IndoorReplay::Record(scene, indoor));
+  std::printf("indoor replay: recorded in %.3f s, %.1f%% of the paths traced on per design\n",
+              replay->RecordSeconds(), 100 * replay->ResumedFraction());
+  for (const double alpha : {0.0, 0.6, 1.5707963}) {
+    const BlindDesign design = ValueOrExit(DesignWithOverrides(scene, {{"alpha", alpha}}));
+    const IndoorResult i = ValueOrExit(replay->Compute(design));
+    const TwoStageResult d = ValueOrExit(CombineStages(i, o));
+    std::printf(
+        "indoor replay, alpha %.3f: %.3f s; mean relative SE of I %.4f, of D %.4f; sky sum of D, "
+        "sensor 1: %.4e ± %.1e\n",
+        alpha, i.wall_seconds, MeanRelativeError(i.coefficients, i.standard_error),
         MeanRelativeError(d.coefficients, d.standard_error), d.sky_sum(0),
         d.sky_sum_standard_error(0));
   }

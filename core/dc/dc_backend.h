@@ -89,6 +89,9 @@ class DcBackend {
  public:
   virtual ~DcBackend() = default;
   virtual std::string Name() const = 0;
+  // Whether it traces on the CPU (where an optimization replays the indoor paths,
+  // core/dc/indoor_replay.h).
+  virtual bool RunsOnCpu() const { return false; }
 
   // Traces options.paths_per_sensor paths from every sensor through `mesh` (materials
   // indexed by mesh.material). InvalidArgument for bad options, sensors or materials.

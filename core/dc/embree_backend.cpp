@@ -77,6 +77,8 @@ class EmbreeBackend : public DcBackend {
                            seed, path, threads);
   }
 
+  bool RunsOnCpu() const override { return true; }
+
   absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry,
                                      const std::vector<TraceSensor>& sensors,
                                      const TraceWindow& window, const HemisphereBasis& basis,

@@ -43,18 +43,6 @@ absl::Status CheckPaths(int max_bounces, bool russian_roulette, double roulette_
   return absl::OkStatus();
 }
 
-TraceWindow LocalWindow(const TraceGeometry& geometry, const Window& window, WindowParts parts) {
-  auto f = [](Vec3d v) { return Vec3f{float(v.x), float(v.y), float(v.z)}; };
-  return {geometry.ToLocal(window.center),
-          f(window.across),
-          f(window.up),
-          f(window.normal),
-          static_cast<float>(window.width_m),
-          static_cast<float>(window.height_m),
-          parts.columns,
-          parts.rows};
-}
-
 absl::Status CheckParts(WindowParts parts) {
   if (parts.columns < 1 || parts.rows < 1 || parts.columns > kMaxPartsPerSide ||
       parts.rows > kMaxPartsPerSide) {
@@ -74,6 +62,18 @@ WindowParts AutomaticWindowParts(const Window& window) {
     return std::clamp(static_cast<int>(std::ceil(length / kPartSize - 1e-9)), 1, kMaxAutomatic);
   };
   return {count(window.width_m), count(window.height_m)};
+}
+
+TraceWindow LocalWindow(const TraceGeometry& geometry, const Window& window, WindowParts parts) {
+  auto f = [](Vec3d v) { return Vec3f{float(v.x), float(v.y), float(v.z)}; };
+  return {geometry.ToLocal(window.center),
+          f(window.across),
+          f(window.up),
+          f(window.normal),
+          static_cast<float>(window.width_m),
+          static_cast<float>(window.height_m),
+          parts.columns,
+          parts.rows};
 }
 
 absl::StatusOr<WindowParts> ParseWindowParts(const std::string& text) {
@@ -158,9 +158,7 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const Outd
   return result;
 }
 
-absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindDesign& design,
-                                                const IndoorOptions& options, DcBackend* backend) {
-  const auto start = std::chrono::steady_clock::now();
+absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options) {
   FENESTRA_ASSIGN_OR_RETURN(basis, BasisFor(options.basis_cells));
   FENESTRA_RETURN_IF_ERROR(CheckParts(options.parts));
   FENESTRA_RETURN_IF_ERROR(CheckPaths(options.max_bounces, options.russian_roulette,
@@ -171,20 +169,14 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
         absl::StrCat("indoor paths per sensor must be at least the batch count (", options.batches,
                      "), got ", options.paths_per_sensor));
   }
-  const TriangleMesh indoor = SelectSide(AssembleMesh(scene, design), Side::kIndoor);
-  FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(indoor, scene.materials));
-  std::unique_ptr<DcBackend> fallback;
-  if (backend == nullptr) backend = (fallback = MakeEmbreeBackend()).get();
+  return basis;
+}
 
-  // Trace, then I_b = batch sums / batch paths
-  FENESTRA_ASSIGN_OR_RETURN(
-      tally,
-      backend->Indoor(
-          geometry, LocalSensors(geometry, scene.sensors),
-          LocalWindow(geometry, scene.window, options.parts), basis,
-          static_cast<uint64_t>(options.paths_per_sensor), options.batches, options.seed,
-          Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold),
-          options.threads));
+PathSettings IndoorPathSettings(const IndoorOptions& options) {
+  return Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold);
+}
+
+IndoorResult IndoorResultFromTally(const IndoorTally& tally, const IndoorOptions& options) {
   IndoorResult result;
   result.parts = options.parts;
   const int sensors = tally.sensors, cells = tally.cells, batches = tally.batches;
@@ -208,6 +200,25 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
   result.paths_per_sensor = options.paths_per_sensor;
   result.trace_seconds = tally.trace_seconds;
   result.rays_traced = tally.counters.rays;
+  return result;
+}
+
+absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindDesign& design,
+                                                const IndoorOptions& options, DcBackend* backend) {
+  const auto start = std::chrono::steady_clock::now();
+  FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
+  const TriangleMesh indoor = SelectSide(AssembleMesh(scene, design), Side::kIndoor);
+  FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(indoor, scene.materials));
+  std::unique_ptr<DcBackend> fallback;
+  if (backend == nullptr) backend = (fallback = MakeEmbreeBackend()).get();
+
+  // Trace, then I_b = batch sums / batch paths
+  FENESTRA_ASSIGN_OR_RETURN(
+      tally, backend->Indoor(geometry, LocalSensors(geometry, scene.sensors),
+                             LocalWindow(geometry, scene.window, options.parts), basis,
+                             static_cast<uint64_t>(options.paths_per_sensor), options.batches,
+                             options.seed, IndoorPathSettings(options), options.threads));
+  IndoorResult result = IndoorResultFromTally(tally, options);
   result.triangles = indoor.TriangleCount();
   result.backend = backend->Name();
   result.wall_seconds = Seconds(start);

@@ -120,6 +120,15 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
                                                 const IndoorOptions& options,
                                                 DcBackend* backend = nullptr);
 
+// For the indoor stage's tracers: the basis `options` ask for, or InvalidArgument for bad
+// options; their per-path settings; I from the sums of a trace.
+absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options);
+PathSettings IndoorPathSettings(const IndoorOptions& options);
+IndoorResult IndoorResultFromTally(const IndoorTally& tally, const IndoorOptions& options);
+
+// The window in `geometry`'s local frame, split into `parts`.
+TraceWindow LocalWindow(const TraceGeometry& geometry, const Window& window, WindowParts parts);
+
 // D = I O. InvalidArgument when the bases or the window parts differ.
 absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
                                              const OutdoorResult& outdoor);

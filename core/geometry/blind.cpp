@@ -99,4 +99,27 @@ BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const Bli
   return layout;
 }
 
+// Every slat lies within r = sqrt(w² + t²) / 2 of its axis; the axes lie at depth g + r
+// behind the wall's inner face and at most (n - 1) p / 2 <= (H - w + p) / 2 <= (H + p) / 2
+// from the opening's centre along the stack; the pitch is at most max(w + s, sqrt(2) max(w,
+// t)), since min(w / |cos α|, t / |sin α|) <= sqrt(2) max(w, t).
+BlindEnvelope EnvelopeOfBlind(const Window& window, const BlindSpec& spec, double margin_m) {
+  auto largest = [](const ParameterRange& r) { return std::max({r.value, r.min, r.max}); };
+  const double w = largest(spec.slat_width_m), t = largest(spec.slat_thickness_m);
+  const double s = largest(spec.slat_spacing_m);
+  const double r = 0.5 * std::sqrt(w * w + t * t);
+  const double pitch = std::max(w + s, std::sqrt(2.0) * std::max(w, t));
+  const Frame frame = BlindFrame(window, spec);
+  BlindEnvelope envelope;
+  envelope.axis[0] = frame.stack;
+  envelope.axis[1] = frame.length;
+  envelope.axis[2] = -window.normal;
+  envelope.half_extent[0] = 0.5 * (frame.stack_extent_m + pitch) + r + margin_m;
+  envelope.half_extent[1] = 0.5 * frame.length_extent_m + spec.side_margin_m + margin_m;
+  envelope.half_extent[2] = r + margin_m;
+  const Vec3d inner_center = window.center - window.depth_m * window.normal;
+  envelope.center = inner_center + (spec.wall_gap_m + r) * envelope.axis[2];
+  return envelope;
+}
+
 }  // namespace fenestra

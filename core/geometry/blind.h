@@ -39,6 +39,17 @@ struct BlindLayout {
 // Slat layout for `design` in `window` (see blind.cpp for the exact rule).
 BlindLayout LayoutBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design);
 
+// A box (centre, three unit axes, half extents) that holds the blind of every design whose
+// values lie within the spec's ranges (values included).
+struct BlindEnvelope {
+  Vec3d center;
+  Vec3d axis[3];  // stacking axis, slat length axis, into the room
+  double half_extent[3] = {0, 0, 0};
+};
+
+// The envelope of `spec` in `window`, with `margin_m` to spare on every side.
+BlindEnvelope EnvelopeOfBlind(const Window& window, const BlindSpec& spec, double margin_m);
+
 // Appends the slats (12 triangles each, indoor) to `mesh` under part `part_index`.
 BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design,
                           uint32_t part_index, TriangleMesh& mesh);

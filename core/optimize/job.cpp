@@ -12,6 +12,7 @@
 #include "core/common/content_hash.h"
 #include "core/common/json_proto.h"
 #include "core/common/status_macros.h"
+#include "core/dc/indoor_replay.h"
 #include "core/dc/two_stage.h"
 #include "core/metrics/annual_metrics.h"
 #include "core/metrics/illuminance.h"
@@ -41,12 +42,14 @@ struct VariableInfo {
   double lowest;
   double highest;
   double BlindDesign::*field;
+  ParameterRange BlindSpec::*range;
 };
 constexpr VariableInfo kVariables[] = {
-    {"alpha", -std::numbers::pi / 2, std::numbers::pi / 2, &BlindDesign::tilt_rad},
-    {"width", 1e-6, 1e3, &BlindDesign::slat_width_m},
-    {"spacing", 0, 1e3, &BlindDesign::slat_spacing_m},
-    {"thickness", 1e-6, 1e3, &BlindDesign::slat_thickness_m},
+    {"alpha", -std::numbers::pi / 2, std::numbers::pi / 2, &BlindDesign::tilt_rad,
+     &BlindSpec::tilt_rad},
+    {"width", 1e-6, 1e3, &BlindDesign::slat_width_m, &BlindSpec::slat_width_m},
+    {"spacing", 0, 1e3, &BlindDesign::slat_spacing_m, &BlindSpec::slat_spacing_m},
+    {"thickness", 1e-6, 1e3, &BlindDesign::slat_thickness_m, &BlindSpec::slat_thickness_m},
 };
 
 const VariableInfo* FindVariable(const std::string& name) {
@@ -406,10 +409,27 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
     lit_sky.col(c) = kWhiteEfficacyLumensPerWatt * sky.radiance.col(columns[c]);
   }
   FENESTRA_ASSIGN_OR_RETURN(product, backend->MakeAnnualProduct(outdoor->coefficients, lit_sky));
+
+  // On the CPU, the indoor paths up to the blind are traced once and replayed per design
+  std::unique_ptr<IndoorReplay> replay;
+  if (backend->RunsOnCpu() && job.scene.blind) {
+    if (callbacks.stage) callbacks.stage("indoor paths");
+    Scene ranged = job.scene;  // the blind's ranges: the job's variables'
+    for (const v1::DesignVariable& v : spec.variables()) {
+      ParameterRange& range = (*ranged.blind).*(FindVariable(v.name())->range);
+      range.min = std::min(range.min, v.lower());
+      range.max = std::max(range.max, v.upper());
+    }
+    FENESTRA_ASSIGN_OR_RETURN(recorded, IndoorReplay::Record(ranged, indoor_options));
+    replay = std::move(recorded);
+  }
+  auto indoor_stage = [&](const BlindDesign& design) {
+    return replay ? replay->Compute(design)
+                  : ComputeIndoorStage(job.scene, design, indoor_options, backend.get());
+  };
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
-    FENESTRA_ASSIGN_OR_RETURN(
-        indoor, ComputeIndoorStage(job.scene, DesignAt(job, x), indoor_options, backend.get()));
+    FENESTRA_ASSIGN_OR_RETURN(indoor, indoor_stage(DesignAt(job, x)));
     FENESTRA_ASSIGN_OR_RETURN(illuminance, product->Apply(indoor.batches));
     FENESTRA_ASSIGN_OR_RETURN(metrics, AnnualMetricsFromIlluminanceBatches(
                                            illuminance, columns, occupied, metric_options));

@@ -26,7 +26,8 @@ bool HasArea(const TraceGeometry& geometry, size_t i) {
 }
 
 absl::StatusOr<TraceGeometry> PrepareTraceGeometry(const TriangleMesh& mesh,
-                                                   const std::vector<Material>& materials) {
+                                                   const std::vector<Material>& materials,
+                                                   const Vec3d* origin) {
   TraceGeometry geometry;
   // Check the materials
   for (size_t m = 0; m < materials.size(); ++m) {
@@ -70,7 +71,11 @@ absl::StatusOr<TraceGeometry> PrepareTraceGeometry(const TriangleMesh& mesh,
   }
 
   // Translate to the box centre in double, then convert
-  if (triangles > 0) geometry.origin = (lo + hi) * 0.5;
+  if (origin != nullptr) {
+    geometry.origin = *origin;
+  } else if (triangles > 0) {
+    geometry.origin = (lo + hi) * 0.5;
+  }
   geometry.vertices.reserve(mesh.vertices.size());
   for (const Vec3d& v : mesh.vertices) geometry.vertices.push_back(geometry.ToLocal(v));
   geometry.triangle_material = mesh.material;

@@ -31,8 +31,10 @@ bool HasArea(const TraceGeometry& geometry, size_t i);
 
 // Checks and converts `mesh` and `materials`. InvalidArgument for non-finite vertices,
 // material indices out of range, reflectance outside [0, 1), transmittance above 1, or
-// reflectance + transmittance above 1.
+// reflectance + transmittance above 1. The local frame's origin is `origin` when given,
+// else the centre of the mesh's bounding box.
 absl::StatusOr<TraceGeometry> PrepareTraceGeometry(const TriangleMesh& mesh,
-                                                   const std::vector<Material>& materials);
+                                                   const std::vector<Material>& materials,
+                                                   const Vec3d* origin = nullptr);
 
 }  // namespace fenestra

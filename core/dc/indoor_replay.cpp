@@ -1,0 +1,328 @@
+#include "core/dc/indoor_replay.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
+#include "core/dc/backend_support.h"
+#include "core/trace/embree_scene.h"
+#include "core/trace/one_stage_cpu.h"
+#include "core/trace/thread_pool.h"
+#include "core/trace/trace_geometry.h"
+#include "core/trace/two_stage_cpu.h"
+
+namespace fenestra {
+namespace {
+
+// Room to spare around the blind's envelope: far above float rounding at room scale [m]
+constexpr double kEnvelopeMargin = 1e-3;
+
+// The envelope in the trace frame.
+struct LocalEnvelope {
+  Vec3f center;
+  Vec3f axis[3];
+  float half[3];
+
+  // Whether origin + t direction, t in [0, extent], enters the box.
+  bool Touches(Vec3f origin, Vec3f direction, float extent) const {
+    float t0 = 0.0f, t1 = extent;
+    const Vec3f o = origin - center;
+    for (int k = 0; k < 3; ++k) {
+      const float ok = Dot(o, axis[k]), vk = Dot(direction, axis[k]);
+      if (vk == 0.0f) {
+        if (std::fabs(ok) > half[k]) return false;
+        continue;
+      }
+      float ta = (-half[k] - ok) / vk, tb = (half[k] - ok) / vk;
+      if (ta > tb) std::swap(ta, tb);
+      t0 = std::max(t0, ta);
+      t1 = std::min(t1, tb);
+      if (t0 > t1) return false;
+    }
+    return true;
+  }
+};
+
+// A next-event estimate whose shadow ray cleared the room: it counts unless the blind
+// blocks the ray.
+struct Connection {
+  Vec3f origin;
+  Vec3f direction;
+  float distance;
+  int32_t cell;
+  double value;
+};
+
+// A path that reached the envelope: its state there and its index (random stream).
+struct Resume {
+  PathState state;
+  uint64_t path;
+};
+
+// The recorded paths of one sensor, one batch, one range of path indices.
+struct Chunk {
+  uint32_t sensor = 0;
+  int batch = 0;
+  std::vector<double> fixed;  // per window cell: what no blind can change
+  std::vector<Connection> connections;
+  std::vector<Resume> resumes;
+  uint64_t paths = 0;
+};
+
+// The room without the blind, stopping rays that touch the envelope and remembering the
+// shadow ray a next-event estimate is about to score.
+struct RecordingIntersector {
+  EmbreeIntersector room;
+  LocalEnvelope envelope;
+  mutable bool diverged = false;
+  mutable bool connection_pending = false;
+  mutable Connection pending{};
+
+  bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const {
+    const bool found = room.Intersect(origin, direction, hit);
+    const Vec3f to_hit = found ? hit->position - origin : Vec3f{0, 0, 0};
+    const float extent = found ? std::sqrt(Dot(to_hit, to_hit)) : INFINITY;
+    if (envelope.Touches(origin, direction, extent)) {
+      diverged = true;
+      return false;
+    }
+    return found;
+  }
+
+  bool Occluded(Vec3f origin, Vec3f direction, float distance) const {
+    const bool blocked = room.Occluded(origin, direction, distance);
+    connection_pending = !blocked;
+    pending = Connection{origin, direction, distance, 0, 0.0};
+    return blocked;
+  }
+};
+
+// IndoorMode's contributions: a scored shadow ray becomes a Connection, anything else
+// (a bounce ray leaving through the window without touching the envelope) is fixed.
+struct RecordingSink {
+  Chunk* chunk;
+  const RecordingIntersector* scene;
+  void Add(int cell, double value) {
+    if (scene->connection_pending) {
+      Connection c = scene->pending;
+      c.cell = cell;
+      c.value = value;
+      chunk->connections.push_back(c);
+      scene->connection_pending = false;
+    } else {
+      chunk->fixed[cell] += value;
+    }
+  }
+};
+
+// IndoorMode through the recording intersector; a ray stopped at the envelope is kept to
+// be resumed, not scored.
+struct RecordingMode {
+  IndoorMode<RecordingSink> inner;
+  const RecordingIntersector* scene;
+  Chunk* chunk;
+  uint64_t path;
+
+  template <class Intersector>
+  PathState Start(const Intersector& s, const PathRandom& random) {
+    return inner.Start(s, random);
+  }
+  template <class Intersector>
+  void AtReflection(const Intersector& s, const PathState& state, const ReflectionVertex& vertex,
+                    const PathRandom& random) {
+    inner.AtReflection(s, state, vertex, random);
+  }
+  void Escape(const PathState& state) {
+    if (scene->diverged) {
+      scene->diverged = false;
+      chunk->resumes.push_back({state, path});
+    } else {
+      inner.Escape(state);
+    }
+  }
+  void Finish(const PathStats& stats) { inner.Finish(stats); }
+};
+
+double Seconds(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+bool WithinRange(double value, const ParameterRange& range) {
+  return value >= std::min(range.min, range.value) && value <= std::max(range.max, range.value);
+}
+
+}  // namespace
+
+struct IndoorReplay::Data {
+  Scene scene;
+  IndoorOptions options;
+  HemisphereBasis basis;
+  Vec3d origin;  // the trace frame of every geometry here
+  std::vector<TraceSensor> sensors;
+  TraceWindow window;
+  std::vector<Chunk> chunks;
+  std::vector<uint64_t> batch_paths;
+  int cells = 0;
+  uint64_t resumed = 0;
+  double record_seconds = 0;
+};
+
+IndoorReplay::IndoorReplay(std::unique_ptr<Data> data) : data_(std::move(data)) {}
+IndoorReplay::~IndoorReplay() = default;
+
+absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& scene,
+                                                                   const IndoorOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (!scene.blind) return absl::InvalidArgumentError("the scene has no blind to vary");
+  auto data = std::make_unique<Data>();
+  data->scene = scene;
+  data->options = options;
+  FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
+  data->basis = basis;
+
+  // The room without the blind, in the frame of the room with it (the blind lies inside
+  // the room's bounds, so both frames are the same)
+  const TriangleMesh room = SelectSide(scene.fixed, Side::kIndoor);
+  FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(room, scene.materials));
+  data->origin = geometry.origin;
+  FENESTRA_ASSIGN_OR_RETURN(embree, EmbreeScene::Build(geometry));
+  data->sensors = LocalSensors(geometry, scene.sensors);
+  data->window = LocalWindow(geometry, scene.window, options.parts);
+  data->cells = WindowCellCount(data->window, basis);
+  const BlindEnvelope envelope = EnvelopeOfBlind(scene.window, *scene.blind, kEnvelopeMargin);
+  LocalEnvelope local;
+  local.center = geometry.ToLocal(envelope.center);
+  for (int k = 0; k < 3; ++k) {
+    const Vec3d a = envelope.axis[k];
+    local.axis[k] = {static_cast<float>(a.x), static_cast<float>(a.y), static_cast<float>(a.z)};
+    local.half[k] = static_cast<float>(envelope.half_extent[k]);
+  }
+
+  // Chunks: (sensor, batch, part of the batch), as TraceIndoorCpu
+  const int batches = options.batches;
+  const uint64_t paths = static_cast<uint64_t>(options.paths_per_sensor);
+  for (int b = 0; b < batches; ++b) {
+    data->batch_paths.push_back(BatchStart(paths, batches, b + 1) - BatchStart(paths, batches, b));
+  }
+  const uint64_t parts = 8;
+  data->chunks.resize(data->sensors.size() * batches * parts);
+  const PathSettings settings = IndoorPathSettings(options);
+  ParallelFor(data->chunks.size(), ResolveThreadCount(options.threads), [&](uint64_t c) {
+    Chunk& chunk = data->chunks[c];
+    chunk.sensor = static_cast<uint32_t>(c / (batches * parts));
+    chunk.batch = static_cast<int>((c / parts) % batches);
+    const uint64_t part = c % parts;
+    const uint64_t first_in_batch = BatchStart(paths, batches, chunk.batch);
+    const uint64_t size = data->batch_paths[chunk.batch];
+    const uint64_t first = first_in_batch + part * size / parts;
+    const uint64_t last = first_in_batch + (part + 1) * size / parts;
+    chunk.fixed.assign(data->cells, 0.0);
+    chunk.paths = last - first;
+    RecordingIntersector scene_view{embree->Intersector(), local};
+    const TraceSensor& sensor = data->sensors[chunk.sensor];
+    RecordingSink sink{&chunk, &scene_view};
+    for (uint64_t p = first; p < last; ++p) {
+      RecordingMode mode{IndoorMode<RecordingSink>{sensor.position, sensor.normal, data->window,
+                                                   &data->basis, settings.max_bounces, &sink},
+                         &scene_view, &chunk, p};
+      TracePath<RecordingIntersector, RecordingMode, 0>(scene_view, geometry.Surfaces(), settings,
+                                                        PathRandom(options.seed, chunk.sensor, p),
+                                                        mode);
+    }
+  });
+  for (const Chunk& chunk : data->chunks) data->resumed += chunk.resumes.size();
+  data->record_seconds = Seconds(start);
+  return std::unique_ptr<IndoorReplay>(new IndoorReplay(std::move(data)));
+}
+
+absl::StatusOr<IndoorResult> IndoorReplay::Compute(const BlindDesign& design) const {
+  const auto start = std::chrono::steady_clock::now();
+  const Data& d = *data_;
+  const BlindSpec& spec = *d.scene.blind;
+  if (!design.has_blind || !WithinRange(design.tilt_rad, spec.tilt_rad) ||
+      !WithinRange(design.slat_width_m, spec.slat_width_m) ||
+      !WithinRange(design.slat_spacing_m, spec.slat_spacing_m) ||
+      !WithinRange(design.slat_thickness_m, spec.slat_thickness_m)) {
+    return absl::InvalidArgumentError(
+        "the design lies outside the ranges the indoor paths were recorded for");
+  }
+
+  // The room with this blind, and the blind alone, in the recorded frame
+  const TriangleMesh full = SelectSide(AssembleMesh(d.scene, design), Side::kIndoor);
+  TriangleMesh blind;
+  GenerateBlind(d.scene.window, spec, design, 0, blind);
+  FENESTRA_ASSIGN_OR_RETURN(full_geometry,
+                            PrepareTraceGeometry(full, d.scene.materials, &d.origin));
+  FENESTRA_ASSIGN_OR_RETURN(blind_geometry,
+                            PrepareTraceGeometry(blind, d.scene.materials, &d.origin));
+  FENESTRA_ASSIGN_OR_RETURN(full_scene, EmbreeScene::Build(full_geometry));
+  FENESTRA_ASSIGN_OR_RETURN(blind_scene, EmbreeScene::Build(blind_geometry));
+  const EmbreeIntersector full_view = full_scene->Intersector();
+  const EmbreeIntersector blind_view = blind_scene->Intersector();
+  const SurfaceTable surfaces = full_geometry.Surfaces();
+  const PathSettings settings = IndoorPathSettings(d.options);
+
+  struct Slot {
+    std::vector<double> sum;
+    TraceCounters counters;
+    void Add(int cell, double value) { sum[cell] += value; }
+  };
+  const auto traced = std::chrono::steady_clock::now();
+  IndoorTally tally;
+  tally.sensors = static_cast<int>(d.sensors.size());
+  tally.cells = d.cells;
+  tally.batches = d.options.batches;
+  tally.paths_per_sensor = static_cast<uint64_t>(d.options.paths_per_sensor);
+  tally.batch_paths = d.batch_paths;
+  tally.threads = ResolveThreadCount(d.options.threads);
+  tally.sum.assign(static_cast<size_t>(tally.batches) * tally.sensors * tally.cells, 0.0);
+  TraceChunksCpu<Slot>(
+      d.chunks.size(), tally.threads,
+      [&](uint64_t c, Slot& slot) {
+        const Chunk& chunk = d.chunks[c];
+        slot.sum = chunk.fixed;
+        for (const Connection& k : chunk.connections) {
+          ++slot.counters.rays;
+          if (!blind_view.Occluded(k.origin, k.direction, k.distance)) slot.sum[k.cell] += k.value;
+        }
+        const TraceSensor& sensor = d.sensors[chunk.sensor];
+        IndoorMode<Slot> mode{sensor.position, sensor.normal,        d.window,
+                              &d.basis,        settings.max_bounces, &slot};
+        for (const Resume& r : chunk.resumes) {
+          PathStats stats{0, r.state.weight, PathEnd::kEscaped, 0, {0, 0, 0, 0, 0, 0}};
+          PathState pending[1];
+          int pending_count = 0;
+          uint32_t interactions = r.state.vertex;
+          stats.end = path_internal::FollowBranch(
+              full_view, surfaces, settings, PathRandom(d.options.seed, chunk.sensor, r.path), mode,
+              r.state, &interactions, pending, 0, &pending_count, &stats);
+          slot.counters.Add(stats);
+        }
+      },
+      [&](uint64_t c, const Slot& slot) {
+        const Chunk& chunk = d.chunks[c];
+        double* row = &tally.sum[(static_cast<size_t>(chunk.batch) * tally.sensors + chunk.sensor) *
+                                 tally.cells];
+        for (int k = 0; k < tally.cells; ++k) row[k] += slot.sum[k];
+        tally.counters.Add(slot.counters);
+      });
+  tally.trace_seconds = tally.wall_seconds = Seconds(traced);
+  IndoorResult result = IndoorResultFromTally(tally, d.options);
+  result.triangles = full.TriangleCount();
+  result.backend = "embree-cpu (replay)";
+  result.wall_seconds = Seconds(start);
+  return result;
+}
+
+double IndoorReplay::ResumedFraction() const {
+  uint64_t paths = 0;
+  for (const Chunk& chunk : data_->chunks) paths += chunk.paths;
+  return paths > 0 ? static_cast<double>(data_->resumed) / static_cast<double>(paths) : 0.0;
+}
+
+double IndoorReplay::RecordSeconds() const { return data_->record_seconds; }
+
+}  // namespace fenestra

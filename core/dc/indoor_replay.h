@@ -1,0 +1,48 @@
+#pragma once
+
+// The indoor stage of one scene for many blind designs on the CPU, as an optimization
+// needs it: the same random streams as ComputeIndoorStage (common random numbers) and the
+// same I, up to the order of floating-point sums, at a fraction of the cost.
+//
+// Each path is traced once through the room without the blind, up to where it could first
+// meet the blind of any design within the scene's ranges (the blind's envelope,
+// EnvelopeOfBlind). Until then the path does not depend on the design, except for the
+// shadow rays of its next-event estimates, which all run towards the window and so past
+// the blind. Per design, those recorded shadow rays are tested against the blind alone,
+// and the paths that reached the envelope are traced on from there through the room and
+// the blind.
+#include <memory>
+
+#include "absl/status/statusor.h"
+#include "core/dc/two_stage.h"
+
+namespace fenestra {
+
+class IndoorReplay {
+ public:
+  // Traces the design-independent part of the indoor paths of `options` (threads, seed,
+  // paths, bounces, basis, parts, batches as in ComputeIndoorStage) for the designs within
+  // the ranges of the scene's blind. InvalidArgument for bad options or a scene without a
+  // blind.
+  static absl::StatusOr<std::unique_ptr<IndoorReplay>> Record(const Scene& scene,
+                                                              const IndoorOptions& options);
+  ~IndoorReplay();
+  IndoorReplay(const IndoorReplay&) = delete;
+  IndoorReplay& operator=(const IndoorReplay&) = delete;
+
+  // I for `design`, whose values must lie within the scene's ranges (InvalidArgument
+  // otherwise). rays_traced counts the rays traced for this design.
+  absl::StatusOr<IndoorResult> Compute(const BlindDesign& design) const;
+
+  // Of all paths, the fraction that reached the envelope and is traced per design.
+  double ResumedFraction() const;
+  // Wall time of Record [s].
+  double RecordSeconds() const;
+
+ private:
+  struct Data;
+  explicit IndoorReplay(std::unique_ptr<Data> data);
+  std::unique_ptr<Data> data_;
+};
+
+}  // namespace fenestra

@@ -1,0 +1,57 @@
+#include "core/dc/indoor_replay.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace fenestra {
+namespace {
+
+Scene CityOffice() {
+  absl::StatusOr<Scene> scene = LoadScene(FENESTRA_SOURCE_DIR "/examples/city_office/scene.json");
+  EXPECT_TRUE(scene.ok()) << scene.status();
+  return *scene;
+}
+
+// Replayed paths are the traced paths: for designs across the ranges, I equals the indoor
+// stage's with the same seed, up to the order of the sums (and the rare path whose float
+// rounding differs between the two acceleration structures).
+TEST(IndoorReplayTest, EqualsTheIndoorStage) {
+  const Scene scene = CityOffice();
+  IndoorOptions options;
+  options.paths_per_sensor = 20'000;
+  options.parts = {2, 2};
+  absl::StatusOr<std::unique_ptr<IndoorReplay>> replay = IndoorReplay::Record(scene, options);
+  ASSERT_TRUE(replay.ok()) << replay.status();
+  std::printf("paths resumed per design: %.1f%%\n", 100 * (*replay)->ResumedFraction());
+  EXPECT_GT((*replay)->ResumedFraction(), 0.0);
+  EXPECT_LT((*replay)->ResumedFraction(), 0.5);
+  for (const auto& values :
+       std::vector<std::map<std::string, double>>{{{"alpha", 0.0}, {"spacing", 0.0}},
+                                                  {{"alpha", 0.8}, {"width", 0.05}},
+                                                  {{"alpha", 1.5707963}, {"spacing", 0.1}},
+                                                  {{"alpha", 0.3}, {"thickness", 0.02}}}) {
+    absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, values);
+    ASSERT_TRUE(design.ok()) << design.status();
+    absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(scene, *design, options);
+    absl::StatusOr<IndoorResult> replayed = (*replay)->Compute(*design);
+    ASSERT_TRUE(traced.ok() && replayed.ok()) << replayed.status();
+    ASSERT_EQ(traced->coefficients.cols(), replayed->coefficients.cols());
+    for (Eigen::Index s = 0; s < traced->coefficients.rows(); ++s) {
+      const double a = traced->coefficients.row(s).sum(), b = replayed->coefficients.row(s).sum();
+      EXPECT_NEAR(b, a, 1e-6 * a) << "sensor " << s + 1;
+    }
+    const double difference = (traced->coefficients - replayed->coefficients).cwiseAbs().sum();
+    EXPECT_LT(difference, 1e-6 * traced->coefficients.sum());
+  }
+  // Outside the recorded ranges the replay would be wrong, so it refuses
+  BlindDesign wide = DefaultDesign(scene);
+  wide.slat_width_m = 0.3;
+  EXPECT_EQ((*replay)->Compute(wide).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace fenestra
