@@ -179,5 +179,40 @@ TEST(BlindTest, VerticalSlatsStackAcrossTheWindow) {
   }
 }
 
+// The envelope holds every slat of every design within the ranges, horizontal or vertical,
+// tilted either way, and no more than it must along the depth.
+TEST(BlindTest, EnvelopeHoldsTheBlindOfEveryDesignInRange) {
+  std::mt19937 rng(3);
+  for (const bool vertical : {false, true}) {
+    BlindSpec spec;
+    spec.vertical = vertical;
+    spec.side_margin_m = 0.02;
+    spec.tilt_rad = {0, -std::numbers::pi / 2, std::numbers::pi / 2};
+    spec.slat_width_m = {0.15, 0.05, 0.15};
+    spec.slat_spacing_m = {0, 0, 0.1};
+    spec.slat_thickness_m = {0.01, 0.01, 0.02};
+    const BlindEnvelope envelope = EnvelopeOfBlind(OfficeWindow(), spec, 0);
+    double deepest = 0;
+    for (int i = 0; i < 2000; ++i) {
+      auto pick = [&](const ParameterRange& r) {
+        return std::uniform_real_distribution<double>(r.min, r.max)(rng);
+      };
+      const BlindDesign design = Design(pick(spec.tilt_rad), pick(spec.slat_width_m),
+                                        pick(spec.slat_spacing_m), pick(spec.slat_thickness_m));
+      const TriangleMesh mesh = Slats(design, nullptr, spec);
+      for (const Vec3d& v : mesh.vertices) {
+        for (int k = 0; k < 3; ++k) {
+          const double offset = Dot(v - envelope.center, envelope.axis[k]);
+          ASSERT_LE(std::abs(offset), envelope.half_extent[k] + 1e-12)
+              << "axis " << k << " vertical " << vertical << " tilt " << design.tilt_rad;
+          if (k == 2) deepest = std::max(deepest, offset);
+        }
+      }
+    }
+    // The widest slats, tilted perpendicular to the wall, reach the back of the envelope
+    EXPECT_GT(deepest, envelope.half_extent[2] - 0.01);
+  }
+}
+
 }  // namespace
 }  // namespace fenestra
