@@ -9,15 +9,10 @@
 #include "core/dc/dc_backend.h"
 #include "core/dc/one_stage.h"
 #include "core/dc/two_stage.h"
+#include "tests/example_scene.h"
 
 namespace fenestra {
 namespace {
-
-Scene Load(const std::string& name) {
-  absl::StatusOr<Scene> scene = LoadScene(FENESTRA_SOURCE_DIR "/examples/" + name + "/scene.json");
-  EXPECT_TRUE(scene.ok()) << scene.status();
-  return *scene;
-}
 
 std::unique_ptr<DcBackend> Gpu() {
   absl::StatusOr<std::unique_ptr<DcBackend>> backend = MakeCudaBackend(0);
@@ -59,7 +54,7 @@ TEST(CudaBackendTest, MissingGpuIsAClearError) {
 void OneStageParity(const std::string& name, const BlindDesign* design, int bounces) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
-  const Scene scene = Load(name);
+  const Scene scene = LoadExample(name);
   OneStageOptions options;
   options.paths_per_sensor = 1'000'000;
   options.max_bounces = bounces;
@@ -80,7 +75,7 @@ void OneStageParity(const std::string& name, const BlindDesign* design, int boun
 TEST(CudaBackendTest, LightwellOneStageMatchesEmbree) { OneStageParity("lightwell", nullptr, 29); }
 
 TEST(CudaBackendTest, CityOfficeOneStageMatchesEmbree) {
-  const Scene scene = Load("city_office");
+  const Scene scene = LoadExample("city_office");
   const BlindDesign design = *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}});
   OneStageParity("city_office", &design, 10);
 }
@@ -88,7 +83,7 @@ TEST(CudaBackendTest, CityOfficeOneStageMatchesEmbree) {
 TEST(CudaBackendTest, TwoStageMatchesEmbree) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
-  const Scene scene = Load("city_office");
+  const Scene scene = LoadExample("city_office");
   const BlindDesign design = *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}});
   // The window in parts, as by default (4 x 3): the GPU's per-part cells and shared rows
   OutdoorOptions outdoor;
@@ -143,7 +138,7 @@ TEST(CudaBackendTest, StiffScenesStayFiniteAndMatch) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
   // A white lightwell (reflectance 0.99 everywhere, 1000 bounces), far from the origin
-  Scene white = Load("lightwell");
+  Scene white = LoadExample("lightwell");
   for (Material& m : white.materials) m.reflectance = 0.99;
   for (Vec3d& v : white.fixed.vertices) v += Vec3d{1e4, 1e4, 0};
   for (Sensor& s : white.sensors) s.position += Vec3d{1e4, 1e4, 0};
@@ -159,7 +154,7 @@ TEST(CudaBackendTest, StiffScenesStayFiniteAndMatch) {
   ExpectParity(cpu->coefficients, cpu->standard_error, cuda->coefficients, cuda->standard_error,
                "white lightwell at (1e4, 1e4)");
   // A closed blind with touching slats
-  const Scene office = Load("city_office");
+  const Scene office = LoadExample("city_office");
   const BlindDesign closed = *DesignWithOverrides(office, {{"alpha", 0}, {"spacing", 0}});
   options.max_bounces = 10;
   cpu = ComputeOneStage(office, closed, options);

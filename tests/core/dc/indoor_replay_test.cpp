@@ -7,20 +7,16 @@
 #include <string>
 #include <vector>
 
+#include "tests/example_scene.h"
+
 namespace fenestra {
 namespace {
-
-Scene CityOffice() {
-  absl::StatusOr<Scene> scene = LoadScene(FENESTRA_SOURCE_DIR "/examples/city_office/scene.json");
-  EXPECT_TRUE(scene.ok()) << scene.status();
-  return *scene;
-}
 
 // Replayed paths are the traced paths: for designs across the ranges, I equals the indoor
 // stage's with the same seed, up to the order of the sums (and the rare path whose float
 // rounding differs between the two acceleration structures).
 TEST(IndoorReplayTest, EqualsTheIndoorStage) {
-  const Scene scene = CityOffice();
+  const Scene scene = LoadExample("city_office");
   IndoorOptions options;
   options.paths_per_sensor = 20'000;
   options.parts = {2, 2};

@@ -7,15 +7,10 @@
 #include <numbers>
 
 #include "core/dc/one_stage.h"
+#include "tests/example_scene.h"
 
 namespace fenestra {
 namespace {
-
-Scene Load(const std::string& name) {
-  absl::StatusOr<Scene> scene = LoadScene(FENESTRA_SOURCE_DIR "/examples/" + name + "/scene.json");
-  EXPECT_TRUE(scene.ok()) << scene.status();
-  return *scene;
-}
 
 struct RowSums {
   Eigen::VectorXd value, standard_error;
@@ -93,7 +88,7 @@ void ExpectAgreement(const Comparison& c, const std::string& name) {
 }
 
 TEST(TwoStageTest, LightwellAgreesWithOneStage) {
-  const Scene scene = Load("lightwell");
+  const Scene scene = LoadExample("lightwell");
   const Comparison c = Compare(scene, DefaultDesign(scene), 1'000'000, 2'000'000, 1'000'000, 29,
                                AutomaticWindowParts(scene.window));
   ExpectAgreement(c, "lightwell");
@@ -102,7 +97,7 @@ TEST(TwoStageTest, LightwellAgreesWithOneStage) {
 }
 
 TEST(TwoStageTest, CityOfficeAgreesWithOneStage) {
-  const Scene scene = Load("city_office");
+  const Scene scene = LoadExample("city_office");
   absl::StatusOr<BlindDesign> design =
       DesignWithOverrides(scene, {{"alpha", 0.8}, {"spacing", 0.05}});
   ASSERT_TRUE(design.ok()) << design.status();
@@ -114,7 +109,7 @@ TEST(TwoStageTest, CityOfficeAgreesWithOneStage) {
 }
 
 TEST(TwoStageTest, StagesSeeOnlyTheirSide) {
-  const Scene scene = Load("city_office");
+  const Scene scene = LoadExample("city_office");
   OutdoorOptions outdoor;
   outdoor.paths = 288 * 200;
   absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor);
@@ -131,7 +126,7 @@ TEST(TwoStageTest, StagesSeeOnlyTheirSide) {
 // The indoor stage does not depend on anything outdoors: enclosing the outside in a
 // closed box changes O but not I (bitwise, same seed).
 TEST(TwoStageTest, IndoorStageIgnoresOutdoorGeometry) {
-  Scene scene = Load("lightwell");
+  Scene scene = LoadExample("lightwell");
   Scene enclosed = scene;
   TriangleMesh box;
   const Vec3d lo{-5, -10, -1}, hi{5, 10, 25};
@@ -162,7 +157,7 @@ TEST(TwoStageTest, IndoorStageIgnoresOutdoorGeometry) {
 }
 
 TEST(TwoStageTest, ClosedBlindBlocksMostDirectLight) {
-  const Scene scene = Load("city_office");
+  const Scene scene = LoadExample("city_office");
   IndoorOptions indoor;
   indoor.paths_per_sensor = 20'000;
   indoor.max_bounces = 0;  // the window seen directly from the sensors
@@ -203,7 +198,7 @@ TEST(TwoStageTest, WindowPartsParseAndDefault) {
 // Splitting the window only re-bins the indoor stage: the same random numbers give the
 // same contributions, so I summed over the parts is I of the whole window.
 TEST(TwoStageTest, IndoorPartsSumToTheWholeWindow) {
-  const Scene scene = Load("city_office");
+  const Scene scene = LoadExample("city_office");
   IndoorOptions whole;
   whole.paths_per_sensor = 20'000;
   IndoorOptions split = whole;
@@ -230,7 +225,7 @@ TEST(TwoStageTest, IndoorPartsSumToTheWholeWindow) {
 
 // The backend's annual product (I_b O) S is each batch's D times the sky.
 TEST(TwoStageTest, AnnualProductIsDTimesTheSky) {
-  const Scene scene = Load("city_office");
+  const Scene scene = LoadExample("city_office");
   IndoorOptions indoor;
   indoor.paths_per_sensor = 4'000;
   indoor.parts = {2, 1};
@@ -261,7 +256,7 @@ TEST(TwoStageTest, AnnualProductIsDTimesTheSky) {
 }
 
 TEST(TwoStageTest, RejectsBadOptions) {
-  const Scene scene = Load("lightwell");
+  const Scene scene = LoadExample("lightwell");
   OutdoorOptions outdoor;
   outdoor.basis_cells = 100;
   EXPECT_EQ(ComputeOutdoorStage(scene, outdoor).status().code(),

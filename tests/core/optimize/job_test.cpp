@@ -2,19 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/example_scene.h"
+
 namespace fenestra {
 namespace {
-
-Scene CityOffice() {
-  absl::StatusOr<Scene> scene = LoadScene(FENESTRA_SOURCE_DIR "/examples/city_office/scene.json");
-  EXPECT_TRUE(scene.ok()) << scene.status();
-  return *scene;
-}
 
 TEST(JobTest, WindowPartsAreResolvedAndChecked) {
   absl::StatusOr<v1::Sampling> automatic = ResolveSampling(v1::Sampling());
   ASSERT_TRUE(automatic.ok()) << automatic.status();
-  const Scene scene = CityOffice();
+  const Scene scene = LoadExample("city_office");
   EXPECT_EQ(SamplingWindowParts(*automatic, scene.window), (WindowParts{4, 3}));
   v1::Sampling columns_only = *automatic;
   columns_only.set_window_columns(2);
@@ -55,7 +51,7 @@ TEST(JobTest, PrepareChecksOutdoorPathsAgainstTheWindowCells) {
 // The outdoor matrix's key follows the window parts it was traced with, not how they
 // were asked for.
 TEST(JobTest, OutdoorKeyFollowsTheWindowParts) {
-  const Scene scene = CityOffice();
+  const Scene scene = LoadExample("city_office");
   v1::Sampling automatic = *ResolveSampling(v1::Sampling());
   v1::Sampling explicit_parts = automatic;
   explicit_parts.set_window_columns(4);

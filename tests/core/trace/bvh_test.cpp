@@ -9,15 +9,15 @@
 #include "core/trace/brute_force_intersector.h"
 #include "core/trace/bvh_intersector.h"
 #include "core/trace/trace_geometry.h"
+#include "tests/example_scene.h"
 
 namespace fenestra {
 namespace {
 
 TraceGeometry Load(const std::string& name) {
-  absl::StatusOr<Scene> scene = LoadScene(FENESTRA_SOURCE_DIR "/examples/" + name + "/scene.json");
-  EXPECT_TRUE(scene.ok()) << scene.status();
+  const Scene scene = LoadExample(name);
   absl::StatusOr<TraceGeometry> geometry =
-      PrepareTraceGeometry(AssembleMesh(*scene, DefaultDesign(*scene)), scene->materials);
+      PrepareTraceGeometry(AssembleMesh(scene, DefaultDesign(scene)), scene.materials);
   EXPECT_TRUE(geometry.ok()) << geometry.status();
   return *geometry;
 }
