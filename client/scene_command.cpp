@@ -28,8 +28,10 @@ void PrintSummary(const Scene& scene, const BlindDesign& design) {
   }
   fmt::print("scene '{}' ({}): {} triangles, {} materials\n", scene.name, scene.source_path,
              mesh.TriangleCount(), scene.materials.size());
+  size_t width = 0;
+  for (const std::string& name : mesh.part_names) width = std::max(width, name.size());
   for (size_t p = 0; p < mesh.part_names.size(); ++p) {
-    fmt::print("  {:<28} {:>6} triangles\n", mesh.part_names[p], per_part[p]);
+    fmt::print("  {:<{}} {:>6} triangles\n", mesh.part_names[p], width, per_part[p]);
   }
   if (scene.dropped_degenerate > 0) {
     fmt::print("  ({} zero-area OBJ triangles left out)\n", scene.dropped_degenerate);
