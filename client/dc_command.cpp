@@ -146,7 +146,9 @@ void AddDcCommand(CLI::App& app) {
   command->add_option("--backend", args->backend, "cpu, cuda or auto")
       ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
       ->capture_default_str();
-  command->add_option("--basis", args->basis, "Two-stage: window direction cells, 288 or 1152")
+  command
+      ->add_option("--basis", args->basis,
+                   "Two-stage: direction cells of each window part, 288 or 1152")
       ->check(CLI::IsMember({288, 1152}))
       ->capture_default_str();
   command

@@ -84,7 +84,8 @@ void AddSiteCommand(CLI::App& app) {
   add_cmd->add_option("--outdoor-paths", add->outdoor_paths, "Outdoor paths [default 2e7]");
   add_cmd->add_option("--outdoor-bounces", add->outdoor_bounces, "Outdoor reflections [30]");
   add_cmd->add_option("--seed", add->seed, "Random seed [1]");
-  add_cmd->add_option("--basis-cells", add->basis_cells, "Window direction cells: 288 or 1152");
+  add_cmd->add_option("--basis-cells", add->basis_cells,
+                      "Direction cells of each window part: 288 or 1152");
   add_cmd->add_option("--window-parts", add->window_parts,
                       "The window split into COLUMNSxROWS parts [default: parts of at most 0.5 m]");
   add_cmd->add_option("--backend", add->backend, "cpu, cuda or auto; default: the daemon's");
