@@ -151,24 +151,26 @@ absl::StatusOr<AnnualMetrics> ComputeAnnualMetrics(const Matrix& illuminance_lux
   // Count per sensor; note per hour whether some sensor left the range
   for (Eigen::Index i = 0; i < n; ++i) {
     const double* row = e.data() + i * e.cols();
-    double in_range = dark_in_range ? dark_hours : 0;
-    double below = dark_in_range ? 0 : dark_hours;
-    double above = 0, da_hours = 0, credit = 0, sum = 0;
+    // Without branches: the comparisons are data, not control flow (hours fall either side
+    // of the limits at random, which a branch predictor cannot learn)
+    int64_t lit_below = 0, lit_above = 0, lit_da = 0;
+    double credit = 0, sum = 0;
     for (size_t u = 0; u < used.size(); ++u) {
       const double v = row[used[u]];
-      if (v < a) {
-        below += 1;
-        any_below[u] = 1;
-      } else if (v > b) {
-        above += 1;
-        any_above[u] = 1;
-      } else {
-        in_range += 1;
-      }
-      da_hours += v >= da ? 1 : 0;
+      const uint8_t is_below = v<a, is_above = v> b;
+      lit_below += is_below;
+      lit_above += is_above;
+      any_below[u] |= is_below;
+      any_above[u] |= is_above;
+      lit_da += v >= da;
       credit += std::min(v / da, 1.0);
       sum += v;
     }
+    const double lit_in_range = static_cast<double>(used.size() - lit_below - lit_above);
+    const double in_range = lit_in_range + (dark_in_range ? dark_hours : 0);
+    const double below = static_cast<double>(lit_below) + (dark_in_range ? 0 : dark_hours);
+    const double above = static_cast<double>(lit_above);
+    const double da_hours = static_cast<double>(lit_da);
     SensorMetrics& s = result.sensors[i];
     s.udi_percent = in_range * to_percent;
     s.udi_fell_short_percent = below * to_percent;
