@@ -78,6 +78,10 @@ std::vector<TraceSensor> LocalSensors(const TraceGeometry& geometry,
   return local;
 }
 
+namespace {
+
+// Coefficients, standard errors and sky sums from per-sensor, per-bin sums of path scores
+// and of their squares, and per-sensor sums of the squared sky score of each path.
 void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum_squares,
                   const std::vector<double>& sky_sum_squares, int sensor_count, int64_t paths,
                   OneStageResult* result) {
@@ -105,12 +109,7 @@ void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum
   }
 }
 
-int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count) {
-  if (options.pilot_paths_per_sensor > 0) return options.pilot_paths_per_sensor;
-  const int64_t cap = std::max<int64_t>(20000, 600000 / std::max<size_t>(1, sensor_count));
-  return std::max<int64_t>(1, std::min(options.paths_per_sensor, cap));
-}
-
+// batch_coefficients from per-batch sums, when batches > 1.
 void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int batches, int64_t paths,
                  OneStageResult* result) {
   result->batch_coefficients.clear();
@@ -126,6 +125,28 @@ void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int bat
     }
     result->batch_coefficients.push_back(std::move(d));
   }
+}
+
+}  // namespace
+
+void FillOneStageResult(const OneStageTally& tally, int64_t paths, OneStageResult* result) {
+  FillFromSums(tally.sum, tally.sum_squares, tally.sky_sum_squares, tally.sensor_count, paths,
+               result);
+  FillBatches(tally.batch_sum, tally.sensor_count, tally.batches, paths, result);
+  result->rays_traced = tally.rays;
+  result->branches = tally.branches;
+  result->escaped_paths = tally.ends[static_cast<int>(PathEnd::kEscaped)];
+  result->roulette_paths = tally.ends[static_cast<int>(PathEnd::kRoulette)];
+  result->bounce_limit_paths = tally.ends[static_cast<int>(PathEnd::kBounceLimit)];
+  result->truncated_paths = tally.ends[static_cast<int>(PathEnd::kTruncated)];
+  result->max_path_weight = tally.max_weight;
+  result->threads = tally.threads;
+}
+
+int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count) {
+  if (options.pilot_paths_per_sensor > 0) return options.pilot_paths_per_sensor;
+  const int64_t cap = std::max<int64_t>(20000, 600000 / std::max<size_t>(1, sensor_count));
+  return std::max<int64_t>(1, std::min(options.paths_per_sensor, cap));
 }
 
 absl::StatusOr<Matrix> StackIndoorBatches(const std::vector<Matrix>& batches, Eigen::Index cells) {

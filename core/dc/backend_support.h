@@ -5,6 +5,7 @@
 
 #include "absl/status/status.h"
 #include "core/dc/dc_backend.h"
+#include "core/trace/one_stage_cpu.h"
 #include "core/trace/path.h"
 #include "core/trace/trace_geometry.h"
 
@@ -22,12 +23,9 @@ PathSettings PathSettingsFor(const OneStageOptions& options);
 std::vector<TraceSensor> LocalSensors(const TraceGeometry& geometry,
                                       const std::vector<Sensor>& sensors);
 
-// Coefficients, standard errors and sky sums from per-sensor, per-bin sums of path scores
-// and of their squares, and per-sensor sums of the squared sky score of each path, over
-// `paths` paths per sensor.
-void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum_squares,
-                  const std::vector<double>& sky_sum_squares, int sensor_count, int64_t paths,
-                  OneStageResult* result);
+// The result of a one-stage trace of `paths` paths per sensor: coefficients, standard
+// errors, sky sums and batches from the tally's sums, and its counts.
+void FillOneStageResult(const OneStageTally& tally, int64_t paths, OneStageResult* result);
 
 // Weight windows need a pilot that saw light: with fewer scoring pilot paths than this
 // (all sensors), the importance map is mostly noise and plain roulette is used instead.
@@ -38,24 +36,11 @@ inline constexpr uint64_t kMinPilotScoringPaths = 200;
 // a pilot that large (bench/README.md).
 int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count);
 
-// batch_coefficients from per-batch sums (batch_sum as OneStageTally), when batches > 1.
-void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int batches, int64_t paths,
-                 OneStageResult* result);
-
 // The indoor batches (each sensors x cells) one above the other, for the annual product;
 // InvalidArgument unless every batch has the same rows and `cells` columns.
 absl::StatusOr<Matrix> StackIndoorBatches(const std::vector<Matrix>& batches, Eigen::Index cells);
 
 // The inverse: `count` batches of equal rows from a stacked matrix.
 std::vector<Matrix> SplitBatches(const Matrix& stacked, size_t count);
-
-// The path-end counts of a run (indexed by PathEnd) into `result`.
-template <class Ends>
-void FillEnds(const Ends& ends, OneStageResult* result) {
-  result->escaped_paths = ends[static_cast<int>(PathEnd::kEscaped)];
-  result->roulette_paths = ends[static_cast<int>(PathEnd::kRoulette)];
-  result->bounce_limit_paths = ends[static_cast<int>(PathEnd::kBounceLimit)];
-  result->truncated_paths = ends[static_cast<int>(PathEnd::kTruncated)];
-}
 
 }  // namespace fenestra

@@ -95,26 +95,30 @@ class CudaBackend : public DcBackend {
     FENESTRA_RETURN_IF_ERROR(Check(tracer_->OneStage(
         local.data(), sensor_count, static_cast<uint64_t>(options.paths_per_sensor), batches,
         options.seed, path, batch_sum.data(), batch_squares.data(), &counters)));
-    std::vector<double> sum(sensor_count * kDaylightBins, 0.0), squares(sum.size(), 0.0);
-    std::vector<double> sky_squares(sensor_count, 0.0);
+    OneStageTally tally;
+    tally.sensor_count = sensor_count;
+    tally.batches = batches;
+    tally.sum.assign(sensor_count * kDaylightBins, 0.0);
+    tally.sum_squares.assign(tally.sum.size(), 0.0);
+    tally.sky_sum_squares.assign(sensor_count, 0.0);
     for (int s = 0; s < sensor_count; ++s) {
       for (int b = 0; b < batches; ++b) {
         for (int bin = 0; bin < kDaylightBins; ++bin) {
           const size_t k = (static_cast<size_t>(s) * batches + b) * kDaylightBins + bin;
-          sum[s * kDaylightBins + bin] += batch_sum[k];
-          squares[s * kDaylightBins + bin] += batch_squares[k];
+          tally.sum[s * kDaylightBins + bin] += batch_sum[k];
+          tally.sum_squares[s * kDaylightBins + bin] += batch_squares[k];
           // A path scores one bin, so its sky total's square is its bin's square
-          if (bin > 0) sky_squares[s] += batch_squares[k];
+          if (bin > 0) tally.sky_sum_squares[s] += batch_squares[k];
         }
       }
     }
+    tally.batch_sum = std::move(batch_sum);
+    tally.rays = counters.rays;
+    tally.branches = static_cast<uint64_t>(options.paths_per_sensor) * sensor_count;
+    for (int e = 0; e < 6; ++e) tally.ends[e] = counters.ends[e];
+    tally.max_weight = 1.0f;  // plain roulette: no path carries more than 1
     OneStageResult result;
-    FillFromSums(sum, squares, sky_squares, sensor_count, options.paths_per_sensor, &result);
-    FillBatches(batch_sum, sensor_count, batches, options.paths_per_sensor, &result);
-    result.rays_traced = counters.rays;
-    result.branches = static_cast<uint64_t>(options.paths_per_sensor) * sensor_count;
-    FillEnds(counters.ends, &result);
-    result.max_path_weight = 1.0;
+    FillOneStageResult(tally, options.paths_per_sensor, &result);
     result.backend = Name();
     result.wall_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -51,17 +51,10 @@ class EmbreeBackend : public DcBackend {
 
     // Report
     OneStageResult result;
-    FillFromSums(tally.sum, tally.sum_squares, tally.sky_sum_squares, tally.sensor_count,
-                 options.paths_per_sensor, &result);
-    FillBatches(tally.batch_sum, tally.sensor_count, tally.batches, options.paths_per_sensor,
-                &result);
-    result.rays_traced = tally.rays + pilot.rays;
-    result.branches = tally.branches;
+    FillOneStageResult(tally, options.paths_per_sensor, &result);
+    result.rays_traced += pilot.rays;
     result.pilot_paths = static_cast<int64_t>(pilot.paths);
     result.importance_cells = settings.path.importance ? pilot.table.CellCount() : 0;
-    FillEnds(tally.ends, &result);
-    result.max_path_weight = tally.max_weight;
-    result.threads = tally.threads;
     result.backend = Name();
     result.wall_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
