@@ -70,20 +70,20 @@ void AddDcCommand(CLI::App& app) {
     const WindowParts parts = a.window_parts == "auto"
                                   ? AutomaticWindowParts(scene.window)
                                   : ValueOrFail(ParseWindowParts(a.window_parts));
+    // What both stages take from the command line
+    const auto set_common = [&](auto& options) {
+      options.max_bounces = a.bounces > 0 ? a.bounces : -1;
+      options.seed = a.seed;
+      options.threads = a.threads;
+      options.basis_cells = a.basis;
+      options.parts = parts;
+    };
     OutdoorOptions outdoor;
     outdoor.paths = a.outdoor_paths;
-    outdoor.max_bounces = a.bounces > 0 ? a.bounces : -1;
-    outdoor.seed = a.seed;
-    outdoor.threads = a.threads;
-    outdoor.basis_cells = a.basis;
-    outdoor.parts = parts;
+    set_common(outdoor);
     IndoorOptions indoor;
     indoor.paths_per_sensor = a.indoor_paths;
-    indoor.max_bounces = a.bounces > 0 ? a.bounces : -1;
-    indoor.seed = a.seed;
-    indoor.threads = a.threads;
-    indoor.basis_cells = a.basis;
-    indoor.parts = parts;
+    set_common(indoor);
     const OutdoorResult o = ValueOrFail(ComputeOutdoorStage(scene, outdoor, &backend));
     const IndoorResult i = ValueOrFail(ComputeIndoorStage(scene, design, indoor, &backend));
     const TwoStageResult d = ValueOrFail(CombineStages(i, o));
