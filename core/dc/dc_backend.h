@@ -16,6 +16,9 @@
 
 namespace fenestra {
 
+class IndoorStages;
+struct IndoorOptions;
+
 // Number of daylight-coefficient columns: bin 0 = ground, 1..145 = Tregenza sky patches.
 inline constexpr int kDaylightBins = 146;
 
@@ -89,9 +92,6 @@ class DcBackend {
  public:
   virtual ~DcBackend() = default;
   virtual std::string Name() const = 0;
-  // Whether it traces on the CPU (where an optimization replays the indoor paths,
-  // core/dc/indoor_replay.h).
-  virtual bool RunsOnCpu() const { return false; }
 
   // Traces options.paths_per_sensor paths from every sensor through `mesh` (materials
   // indexed by mesh.material). InvalidArgument for bad options, sensors or materials.
@@ -120,6 +120,13 @@ class DcBackend {
   // backend.
   virtual absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(const Matrix& outdoor,
                                                                            const Matrix& sky);
+
+  // The indoor stage of `scene` for the designs within its blind's ranges, the way this
+  // backend does it best (core/dc/two_stage.h, IndoorStages): by default each design
+  // traced in full; the CPU records the paths once and replays them
+  // (core/dc/indoor_replay.h). Must not outlive the backend.
+  virtual absl::StatusOr<std::unique_ptr<IndoorStages>> MakeIndoorStages(
+      const Scene& scene, const IndoorOptions& options);
 };
 
 // The Embree CPU backend (always available).

@@ -4,6 +4,7 @@
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
 #include "core/dc/dc_backend.h"
+#include "core/dc/indoor_replay.h"
 #include "core/trace/embree_scene.h"
 #include "core/trace/one_stage_cpu.h"
 #include "core/trace/trace_geometry.h"
@@ -70,7 +71,13 @@ class EmbreeBackend : public DcBackend {
                            seed, path, threads);
   }
 
-  bool RunsOnCpu() const override { return true; }
+  // Record the paths once, replay them per design; without a blind there is nothing to vary
+  absl::StatusOr<std::unique_ptr<IndoorStages>> MakeIndoorStages(
+      const Scene& scene, const IndoorOptions& options) override {
+    if (!scene.blind) return DcBackend::MakeIndoorStages(scene, options);
+    FENESTRA_ASSIGN_OR_RETURN(replay, IndoorReplay::Record(scene, options));
+    return std::unique_ptr<IndoorStages>(std::move(replay));
+  }
 
   absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry,
                                      const std::vector<TraceSensor>& sensors,

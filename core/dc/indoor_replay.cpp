@@ -151,7 +151,7 @@ double Seconds(std::chrono::steady_clock::time_point start) {
 }
 
 bool WithinRange(double value, const ParameterRange& range) {
-  return value >= std::min(range.min, range.value) && value <= std::max(range.max, range.value);
+  return value >= range.min && value <= range.max;
 }
 
 }  // namespace

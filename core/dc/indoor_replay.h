@@ -18,7 +18,7 @@
 
 namespace fenestra {
 
-class IndoorReplay {
+class IndoorReplay : public IndoorStages {
  public:
   // Traces the design-independent part of the indoor paths of `options` (threads, seed,
   // paths, bounces, basis, parts, batches as in ComputeIndoorStage) for the designs within
@@ -26,13 +26,13 @@ class IndoorReplay {
   // blind.
   static absl::StatusOr<std::unique_ptr<IndoorReplay>> Record(const Scene& scene,
                                                               const IndoorOptions& options);
-  ~IndoorReplay();
+  ~IndoorReplay() override;
   IndoorReplay(const IndoorReplay&) = delete;
   IndoorReplay& operator=(const IndoorReplay&) = delete;
 
   // I for `design`, whose values must lie within the scene's ranges (InvalidArgument
   // otherwise). rays_traced counts the rays traced for this design.
-  absl::StatusOr<IndoorResult> Compute(const BlindDesign& design) const;
+  absl::StatusOr<IndoorResult> Compute(const BlindDesign& design) const override;
 
   // Of all paths, the fraction that reached the envelope and is traced per design.
   double ResumedFraction() const;

@@ -280,4 +280,29 @@ absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
   return result;
 }
 
+namespace {
+
+// Every design traced in full by the backend.
+class TracedIndoorStages : public IndoorStages {
+ public:
+  TracedIndoorStages(Scene scene, const IndoorOptions& options, DcBackend* backend)
+      : scene_(std::move(scene)), options_(options), backend_(backend) {}
+  absl::StatusOr<IndoorResult> Compute(const BlindDesign& design) const override {
+    return ComputeIndoorStage(scene_, design, options_, backend_);
+  }
+
+ private:
+  Scene scene_;
+  IndoorOptions options_;
+  DcBackend* backend_;
+};
+
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<IndoorStages>> DcBackend::MakeIndoorStages(
+    const Scene& scene, const IndoorOptions& options) {
+  FENESTRA_RETURN_IF_ERROR(CheckIndoorOptions(options).status());
+  return std::make_unique<TracedIndoorStages>(scene, options, this);
+}
+
 }  // namespace fenestra

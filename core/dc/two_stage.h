@@ -120,6 +120,16 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
                                                 const IndoorOptions& options,
                                                 DcBackend* backend = nullptr);
 
+// The indoor stage of one scene for many blind designs with the same random streams (an
+// optimization's candidates); made by DcBackend::MakeIndoorStages.
+class IndoorStages {
+ public:
+  virtual ~IndoorStages() = default;
+  // I for `design`. A design outside the blind's ranges may be refused (InvalidArgument):
+  // the replay is only valid within them.
+  virtual absl::StatusOr<IndoorResult> Compute(const BlindDesign& design) const = 0;
+};
+
 // For the indoor stage's tracers: the basis `options` ask for, or InvalidArgument for bad
 // options; their per-path settings; I from the sums of a trace.
 absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options);

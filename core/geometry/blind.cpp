@@ -104,9 +104,8 @@ BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const Bli
 // from the opening's centre along the stack; the pitch is at most max(w + s, sqrt(2) max(w,
 // t)), since min(w / |cos α|, t / |sin α|) <= sqrt(2) max(w, t).
 BlindEnvelope EnvelopeOfBlind(const Window& window, const BlindSpec& spec, double margin_m) {
-  auto largest = [](const ParameterRange& r) { return std::max({r.value, r.min, r.max}); };
-  const double w = largest(spec.slat_width_m), t = largest(spec.slat_thickness_m);
-  const double s = largest(spec.slat_spacing_m);
+  const double w = spec.slat_width_m.max, t = spec.slat_thickness_m.max;
+  const double s = spec.slat_spacing_m.max;
   const double r = 0.5 * std::sqrt(w * w + t * t);
   const double pitch = std::max(w + s, std::sqrt(2.0) * std::max(w, t));
   const Frame frame = BlindFrame(window, spec);

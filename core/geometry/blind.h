@@ -40,7 +40,7 @@ struct BlindLayout {
 BlindLayout LayoutBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design);
 
 // A box (centre, three unit axes, half extents) that holds the blind of every design whose
-// values lie within the spec's ranges (values included).
+// values lie within the spec's ranges.
 struct BlindEnvelope {
   Vec3d center;
   Vec3d axis[3];  // stacking axis, slat length axis, into the room

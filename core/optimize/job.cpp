@@ -12,7 +12,6 @@
 #include "core/common/content_hash.h"
 #include "core/common/json_proto.h"
 #include "core/common/status_macros.h"
-#include "core/dc/indoor_replay.h"
 #include "core/dc/two_stage.h"
 #include "core/metrics/annual_metrics.h"
 #include "core/metrics/illuminance.h"
@@ -410,26 +409,21 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   }
   FENESTRA_ASSIGN_OR_RETURN(product, backend->MakeAnnualProduct(outdoor->coefficients, lit_sky));
 
-  // On the CPU, the indoor paths up to the blind are traced once and replayed per design
-  std::unique_ptr<IndoorReplay> replay;
-  if (backend->RunsOnCpu() && job.scene.blind) {
-    if (callbacks.stage) callbacks.stage("indoor paths");
-    Scene ranged = job.scene;  // the blind's ranges: the job's variables'
+  // The indoor stage for the designs within the job's ranges, as the backend does it best
+  // (on the CPU: the paths recorded once, then replayed per design)
+  if (callbacks.stage) callbacks.stage("indoor paths");
+  Scene ranged = job.scene;
+  if (ranged.blind) {
     for (const v1::DesignVariable& v : spec.variables()) {
       ParameterRange& range = (*ranged.blind).*(FindVariable(v.name())->range);
       range.min = std::min(range.min, v.lower());
       range.max = std::max(range.max, v.upper());
     }
-    FENESTRA_ASSIGN_OR_RETURN(recorded, IndoorReplay::Record(ranged, indoor_options));
-    replay = std::move(recorded);
   }
-  auto indoor_stage = [&](const BlindDesign& design) {
-    return replay ? replay->Compute(design)
-                  : ComputeIndoorStage(job.scene, design, indoor_options, backend.get());
-  };
+  FENESTRA_ASSIGN_OR_RETURN(indoor_stages, backend->MakeIndoorStages(ranged, indoor_options));
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
-    FENESTRA_ASSIGN_OR_RETURN(indoor, indoor_stage(DesignAt(job, x)));
+    FENESTRA_ASSIGN_OR_RETURN(indoor, indoor_stages->Compute(DesignAt(job, x)));
     FENESTRA_ASSIGN_OR_RETURN(illuminance, product->Apply(indoor.batches));
     FENESTRA_ASSIGN_OR_RETURN(metrics, AnnualMetricsFromIlluminanceBatches(
                                            illuminance, columns, occupied, metric_options));
