@@ -77,6 +77,33 @@ FENESTRA_CPU_GPU inline bool IntersectWatertight(const WatertightRay& ray, Vec3f
   return true;
 }
 
+// Node and triangle fetches: on the GPU as 16-byte loads through the read-only cache.
+FENESTRA_CPU_GPU inline BvhNode LoadNode(const BvhNode* node) {
+#if defined(__CUDA_ARCH__)
+  const float4* p = reinterpret_cast<const float4*>(node);
+  const float4 a = __ldg(p), b = __ldg(p + 1), c = __ldg(p + 2), d = __ldg(p + 3);
+  BvhNode n;
+  n.lo[0][0] = a.x, n.lo[0][1] = a.y, n.lo[0][2] = a.z, n.lo[1][0] = a.w;
+  n.lo[1][1] = b.x, n.lo[1][2] = b.y, n.hi[0][0] = b.z, n.hi[0][1] = b.w;
+  n.hi[0][2] = c.x, n.hi[1][0] = c.y, n.hi[1][1] = c.z, n.hi[1][2] = c.w;
+  n.child[0] = __float_as_int(d.x), n.child[1] = __float_as_int(d.y);
+  return n;
+#else
+  return *node;
+#endif
+}
+
+FENESTRA_CPU_GPU inline void LoadTriangle(const BvhTriangle* triangle, Vec3f* v0, Vec3f* v1,
+                                          Vec3f* v2) {
+#if defined(__CUDA_ARCH__)
+  const float4* p = reinterpret_cast<const float4*>(triangle);
+  const float4 a = __ldg(p), b = __ldg(p + 1), c = __ldg(p + 2);
+  *v0 = {a.x, a.y, a.z}, *v1 = {a.w, b.x, b.y}, *v2 = {b.z, b.w, c.x};
+#else
+  *v0 = triangle->v0, *v1 = triangle->v1, *v2 = triangle->v2;
+#endif
+}
+
 struct BvhIntersector {
   static constexpr int kStackSize = 64;
   const BvhNode* nodes;
@@ -94,70 +121,46 @@ struct BvhIntersector {
   FENESTRA_CPU_GPU bool Traverse(Vec3f origin, Vec3f direction, float t_max, bool any_hit,
                                  SurfaceHit* hit) const {
     const WatertightRay ray(origin, direction);
-    const float inv[3] = {1.0f / direction.x, 1.0f / direction.y, 1.0f / direction.z};
-    const float o[3] = {origin.x, origin.y, origin.z};
-    // Slab distances are widened by 2 ulps each way (Ize, "Robust BVH Ray Traversal", 2013)
-    const float kWiden = 1.0f + 4.0f * 5.96e-8f;
+    // A zero direction component becomes a tiny one: its slab test then needs no NaN case
+    // (0 x inf), and it stays conservative (a ray in a slab's plane enters the box)
+    const Vec3f inv = {1.0f / (direction.x != 0.0f ? direction.x : 1e-30f),
+                       1.0f / (direction.y != 0.0f ? direction.y : 1e-30f),
+                       1.0f / (direction.z != 0.0f ? direction.z : 1e-30f)};
     float t_best = t_max;
-    float best_b[3] = {0, 0, 0};
+    float best_b1 = 0, best_b2 = 0;
     int32_t best = -1;
     int32_t stack[kStackSize];
     int sp = 0;
     int32_t node = 0;
     for (;;) {
-      const BvhNode& n = nodes[node];
-      float t_near[2];
-      bool enter[2];
-      for (int i = 0; i < 2; ++i) {
-        enter[i] = false;
-        t_near[i] = 0.0f;
-        if (n.child[i] == kBvhEmptyChild) continue;
-        float t0 = 0.0f, t1 = t_best;
-        for (int k = 0; k < 3; ++k) {
-          float near_t = (n.lo[i][k] - o[k]) * inv[k];
-          float far_t = (n.hi[i][k] - o[k]) * inv[k];
-          if (near_t > far_t) {
-            const float s = near_t;
-            near_t = far_t;
-            far_t = s;
-          }
-          // NaN (0 * inf for a ray in a slab plane) leaves the limits as they are
-          t0 = near_t > t0 ? near_t : t0;
-          t1 = far_t * kWiden < t1 ? far_t * kWiden : t1;
-        }
-        enter[i] = t0 <= t1;
-        t_near[i] = t0;
-      }
-      // Visit leaves at once; push the farther inner child, descend into the nearer
-      int32_t next[2];
-      int count = 0;
-      const int first = (enter[0] && enter[1] && t_near[1] < t_near[0]) ? 1 : 0;
-      for (int k = 0; k < 2; ++k) {
-        const int i = k == 0 ? first : 1 - first;
-        if (!enter[i]) continue;
-        const int32_t child = n.child[i];
-        if (child >= 0) {
-          next[count++] = child;
-          continue;
-        }
-        const int32_t code = ~child;
-        const int32_t begin = code / kBvhMaxLeafSize;
-        const int32_t end = begin + code % kBvhMaxLeafSize + 1;
-        for (int32_t t = begin; t < end; ++t) {
-          const BvhTriangle& tri = triangles[t];
-          float b0, b1, b2;
-          if (IntersectWatertight(ray, tri.v0, tri.v1, tri.v2, &t_best, &b0, &b1, &b2)) {
-            if (any_hit) return true;
-            best = t;
-            best_b[0] = b0, best_b[1] = b1, best_b[2] = b2;
-          }
+      const BvhNode n = LoadNode(nodes + node);
+      float near0, near1;
+      const bool enter0 = n.child[0] != kBvhEmptyChild && Slab(n, 0, origin, inv, t_best, &near0);
+      const bool enter1 = n.child[1] != kBvhEmptyChild && Slab(n, 1, origin, inv, t_best, &near1);
+      // Nearer child first: leaves are tested at once, inner children wait their turn
+      const bool swap = enter0 && enter1 && near1 < near0;
+      const int32_t first = swap ? n.child[1] : n.child[0];
+      const int32_t second = swap ? n.child[0] : n.child[1];
+      const bool enter_first = swap ? enter1 : enter0;
+      const bool enter_second = swap ? enter0 : enter1;
+      int32_t next = -1, later = -1;
+      if (enter_first) {
+        if (first >= 0) {
+          next = first;
+        } else if (Leaf(ray, first, any_hit, &t_best, &best, &best_b1, &best_b2) && any_hit) {
+          return true;
         }
       }
-      if (count == 2) {
-        if (sp < kStackSize) stack[sp++] = next[1];
-        node = next[0];
-      } else if (count == 1) {
-        node = next[0];
+      if (enter_second) {
+        if (second >= 0) {
+          (next < 0 ? next : later) = second;
+        } else if (Leaf(ray, second, any_hit, &t_best, &best, &best_b1, &best_b2) && any_hit) {
+          return true;
+        }
+      }
+      if (later >= 0 && sp < kStackSize) stack[sp++] = later;
+      if (next >= 0) {
+        node = next;
       } else if (sp > 0) {
         node = stack[--sp];
       } else {
@@ -166,10 +169,45 @@ struct BvhIntersector {
     }
     if (best < 0) return false;
     const BvhTriangle& tri = triangles[best];
-    hit->position = SurfacePoint(tri.v0, tri.v1, tri.v2, best_b[1], best_b[2]);
+    hit->position = SurfacePoint(tri.v0, tri.v1, tri.v2, best_b1, best_b2);
     hit->normal = Cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
     hit->triangle = tri.index;
     return true;
+  }
+
+  // Whether the ray meets child i's box before t_best; *t_near = where it enters. Slab
+  // distances are widened by 2 ulps each way (Ize, "Robust BVH Ray Traversal", 2013).
+  FENESTRA_CPU_GPU static bool Slab(const BvhNode& n, int i, Vec3f o, Vec3f inv, float t_best,
+                                    float* t_near) {
+    const float kWiden = 1.0f + 4.0f * 5.96e-8f;
+    const float ax = (n.lo[i][0] - o.x) * inv.x, bx = (n.hi[i][0] - o.x) * inv.x;
+    const float ay = (n.lo[i][1] - o.y) * inv.y, by = (n.hi[i][1] - o.y) * inv.y;
+    const float az = (n.lo[i][2] - o.z) * inv.z, bz = (n.hi[i][2] - o.z) * inv.z;
+    const float t0 = fmaxf(fmaxf(0.0f, fminf(ax, bx)), fmaxf(fminf(ay, by), fminf(az, bz)));
+    const float t1 = fminf(fminf(t_best, fmaxf(ax, bx) * kWiden),
+                           fminf(fmaxf(ay, by) * kWiden, fmaxf(az, bz) * kWiden));
+    *t_near = t0;
+    return t0 <= t1;
+  }
+
+  // Tests the triangles of leaf `child`; true when one is hit closer than *t_best.
+  FENESTRA_CPU_GPU bool Leaf(const WatertightRay& ray, int32_t child, bool any_hit, float* t_best,
+                             int32_t* best, float* best_b1, float* best_b2) const {
+    const int32_t code = ~child;
+    const int32_t begin = code / kBvhMaxLeafSize;
+    const int32_t end = begin + code % kBvhMaxLeafSize + 1;
+    bool found = false;
+    for (int32_t t = begin; t < end; ++t) {
+      Vec3f v0, v1, v2;
+      LoadTriangle(triangles + t, &v0, &v1, &v2);
+      float b0, b1, b2;
+      if (IntersectWatertight(ray, v0, v1, v2, t_best, &b0, &b1, &b2)) {
+        *best = t, *best_b1 = b1, *best_b2 = b2;
+        found = true;
+        if (any_hit) break;
+      }
+    }
+    return found;
   }
 };
 

@@ -11,7 +11,7 @@ namespace fenestra {
 // A binary BVH node holding both children's boxes (one fetch decides both), 64 bytes.
 // child[i] >= 0: an inner node; child[i] < 0: a leaf, ~child[i] = first * 8 + (count - 1)
 // into BvhLayout::triangles; child[i] == kBvhEmptyChild: no child.
-struct BvhNode {
+struct alignas(16) BvhNode {
   float lo[2][3];
   float hi[2][3];
   int32_t child[2];
@@ -23,7 +23,7 @@ inline constexpr int kBvhMaxLeafSize = 8;
 inline constexpr int32_t kBvhEmptyChild = INT32_MIN;
 
 // A triangle in leaf order, 48 bytes: its vertices and its index in the TraceGeometry.
-struct BvhTriangle {
+struct alignas(16) BvhTriangle {
   Vec3f v0, v1, v2;
   uint32_t index;
   uint32_t pad[2];

@@ -131,6 +131,122 @@ struct PathStats {
 
 namespace path_internal {
 
+// Records how a branch ended; false, for StepBranch to return.
+FENESTRA_CPU_GPU inline bool Ended(PathEnd* end, PathEnd how) {
+  *end = how;
+  return false;
+}
+
+// Traces one ray of a branch: on to the next vertex (true, `path` updated), or the branch
+// ends (false, `end` set). Pushes the copies of any split onto `pending`.
+template <class Intersector, class Mode>
+FENESTRA_CPU_GPU inline bool StepBranch(const Intersector& scene, const SurfaceTable& surfaces,
+                                        const PathSettings& settings, const PathRandom& random,
+                                        Mode& mode, PathState& path, uint32_t* interactions,
+                                        PathState* pending, int pending_capacity,
+                                        int* pending_count, PathStats* stats, PathEnd* end) {
+  if (*interactions >= settings.max_vertices) return Ended(end, PathEnd::kTruncated);
+  // Find the closest hit; an escaping ray is the mode's to score
+  SurfaceHit hit;
+  ++stats->rays;
+  if (!scene.Intersect(path.origin, path.direction, &hit)) {
+    mode.Escape(path);
+    return Ended(end, PathEnd::kEscaped);
+  }
+  path.vertex = ++*interactions;
+
+  // Turn the geometric normal to the side the ray came from (surfaces are two-sided)
+  const float length_squared = Dot(hit.normal, hit.normal);
+  if (!(length_squared > 0.0f) || !(length_squared < 3.0e38f)) {
+    return Ended(end, PathEnd::kDegenerate);
+  }
+  Vec3f normal = hit.normal * (1.0f / sqrtf(length_squared));
+  if (Dot(normal, path.direction) > 0.0f) normal = -normal;
+
+  // Choose transmission or reflection; glazing picks by probability tau / (tau + rho)
+  const TraceMaterial material = surfaces.materials[surfaces.triangle_material[hit.triangle]];
+  const Uniform4 u = random.Draw(path.vertex, 0);
+  float factor = material.reflectance;
+  bool transmit = false;
+  if (material.transmittance > 0.0f) {
+    const float total = material.reflectance + material.transmittance;
+    transmit = u.u[3] * total < material.transmittance;
+    factor = total < 1.0f ? total : 1.0f;
+  }
+  if (!transmit) {
+    mode.AtReflection(scene, path, ReflectionVertex{hit.position, normal, material.reflectance},
+                      random);
+    if (settings.max_bounces >= 0 && path.reflections >= settings.max_bounces) {
+      return Ended(end, PathEnd::kBounceLimit);
+    }
+  }
+
+  // Weight by the surface. Roulette below the threshold: survive with probability
+  // w / threshold and carry the threshold on. Weight windows take the threshold from the
+  // importance map and split heavy paths. Either way the mean is unchanged and w <= 1.
+  float weight = path.weight * factor;
+  if (!(weight > 0.0f)) return Ended(end, PathEnd::kAbsorbed);
+  float threshold = settings.roulette_threshold;
+  if (settings.importance != nullptr) {
+    const float importance = settings.importance->Lookup(hit.position, normal);
+    threshold =
+        importance > 0.0f && settings.window_scale > 0.0f
+            ? (settings.window_scale < importance ? settings.window_scale / importance : 1.0f)
+            : 1.0f;
+  }
+  int copies = 1;
+  if (settings.russian_roulette && weight < threshold) {
+    if (!(u.u[2] * threshold < weight)) return Ended(end, PathEnd::kRoulette);
+    weight = threshold;
+  } else if (settings.importance != nullptr && !transmit && weight > 2.0f * threshold) {
+    copies = static_cast<int>(weight / threshold);
+    if (copies > kMaxSplit) copies = kMaxSplit;
+    if (copies > pending_capacity - *pending_count + 1) {
+      copies = pending_capacity - *pending_count + 1;
+    }
+    weight /= static_cast<float>(copies);
+  }
+  path.weight = weight;
+  if (weight > stats->max_weight) stats->max_weight = weight;
+
+  // Continue straight through, or cosine-sampled about the incoming side's normal; the
+  // copies of a split leave the same point in directions of their own
+  if (transmit) {
+    path.origin = OffsetRayOrigin(hit.position, -normal);
+    path.cosine = 0.0f;
+    return true;
+  }
+  path.origin = OffsetRayOrigin(hit.position, normal);
+  path.direction = SampleCosineHemisphere(normal, u.u[0], u.u[1]);
+  path.cosine = Dot(normal, path.direction);
+  ++path.reflections;
+  for (int c = 1; c < copies; ++c) {
+    PathState copy = path;
+    copy.vertex = ++*interactions;
+    const Uniform4 v = random.Draw(copy.vertex, 0);
+    copy.direction = SampleCosineHemisphere(normal, v.u[0], v.u[1]);
+    copy.cosine = Dot(normal, copy.direction);
+    pending[(*pending_count)++] = copy;
+  }
+  return true;
+}
+
+// A path's first state (mode.Start) and its stats, reset.
+template <class Intersector, class Mode>
+FENESTRA_CPU_GPU inline PathState StartPath(const Intersector& scene, const PathRandom& random,
+                                            Mode& mode, PathStats* stats) {
+  const PathState path = mode.Start(scene, random);
+  *stats = PathStats{0, path.weight, PathEnd::kEscaped, 0, {0, 0, 0, 0, 0, 0}};
+  return path;
+}
+
+// Counts a branch that ended.
+FENESTRA_CPU_GPU inline void EndBranch(PathEnd end, PathStats* stats) {
+  stats->end = end;
+  ++stats->branches;
+  ++stats->ends[static_cast<int>(end)];
+}
+
 // Follows one branch until it ends; pushes the copies of any split onto `pending`.
 template <class Intersector, class Mode>
 FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const SurfaceTable& surfaces,
@@ -138,89 +254,11 @@ FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const Sur
                                              Mode& mode, PathState path, uint32_t* interactions,
                                              PathState* pending, int pending_capacity,
                                              int* pending_count, PathStats* stats) {
-  for (;;) {
-    if (*interactions >= settings.max_vertices) return PathEnd::kTruncated;
-    // Find the closest hit; an escaping ray is the mode's to score
-    SurfaceHit hit;
-    ++stats->rays;
-    if (!scene.Intersect(path.origin, path.direction, &hit)) {
-      mode.Escape(path);
-      return PathEnd::kEscaped;
-    }
-    path.vertex = ++*interactions;
-
-    // Turn the geometric normal to the side the ray came from (surfaces are two-sided)
-    const float length_squared = Dot(hit.normal, hit.normal);
-    if (!(length_squared > 0.0f) || !(length_squared < 3.0e38f)) return PathEnd::kDegenerate;
-    Vec3f normal = hit.normal * (1.0f / sqrtf(length_squared));
-    if (Dot(normal, path.direction) > 0.0f) normal = -normal;
-
-    // Choose transmission or reflection; glazing picks by probability tau / (tau + rho)
-    const TraceMaterial material = surfaces.materials[surfaces.triangle_material[hit.triangle]];
-    const Uniform4 u = random.Draw(path.vertex, 0);
-    float factor = material.reflectance;
-    bool transmit = false;
-    if (material.transmittance > 0.0f) {
-      const float total = material.reflectance + material.transmittance;
-      transmit = u.u[3] * total < material.transmittance;
-      factor = total < 1.0f ? total : 1.0f;
-    }
-    if (!transmit) {
-      mode.AtReflection(scene, path, ReflectionVertex{hit.position, normal, material.reflectance},
-                        random);
-      if (settings.max_bounces >= 0 && path.reflections >= settings.max_bounces) {
-        return PathEnd::kBounceLimit;
-      }
-    }
-
-    // Weight by the surface. Roulette below the threshold: survive with probability
-    // w / threshold and carry the threshold on. Weight windows take the threshold from the
-    // importance map and split heavy paths. Either way the mean is unchanged and w <= 1.
-    float weight = path.weight * factor;
-    if (!(weight > 0.0f)) return PathEnd::kAbsorbed;
-    float threshold = settings.roulette_threshold;
-    if (settings.importance != nullptr) {
-      const float importance = settings.importance->Lookup(hit.position, normal);
-      threshold =
-          importance > 0.0f && settings.window_scale > 0.0f
-              ? (settings.window_scale < importance ? settings.window_scale / importance : 1.0f)
-              : 1.0f;
-    }
-    int copies = 1;
-    if (settings.russian_roulette && weight < threshold) {
-      if (!(u.u[2] * threshold < weight)) return PathEnd::kRoulette;
-      weight = threshold;
-    } else if (settings.importance != nullptr && !transmit && weight > 2.0f * threshold) {
-      copies = static_cast<int>(weight / threshold);
-      if (copies > kMaxSplit) copies = kMaxSplit;
-      if (copies > pending_capacity - *pending_count + 1) {
-        copies = pending_capacity - *pending_count + 1;
-      }
-      weight /= static_cast<float>(copies);
-    }
-    path.weight = weight;
-    if (weight > stats->max_weight) stats->max_weight = weight;
-
-    // Continue straight through, or cosine-sampled about the incoming side's normal; the
-    // copies of a split leave the same point in directions of their own
-    if (transmit) {
-      path.origin = OffsetRayOrigin(hit.position, -normal);
-      path.cosine = 0.0f;
-      continue;
-    }
-    path.origin = OffsetRayOrigin(hit.position, normal);
-    path.direction = SampleCosineHemisphere(normal, u.u[0], u.u[1]);
-    path.cosine = Dot(normal, path.direction);
-    ++path.reflections;
-    for (int c = 1; c < copies; ++c) {
-      PathState copy = path;
-      copy.vertex = ++*interactions;
-      const Uniform4 v = random.Draw(copy.vertex, 0);
-      copy.direction = SampleCosineHemisphere(normal, v.u[0], v.u[1]);
-      copy.cosine = Dot(normal, copy.direction);
-      pending[(*pending_count)++] = copy;
-    }
+  PathEnd end = PathEnd::kEscaped;
+  while (StepBranch(scene, surfaces, settings, random, mode, path, interactions, pending,
+                    pending_capacity, pending_count, stats, &end)) {
   }
+  return end;
 }
 
 }  // namespace path_internal
@@ -233,17 +271,16 @@ template <class Intersector, class Mode, int kPendingCapacity = kMaxPendingBranc
 FENESTRA_CPU_GPU inline PathStats TracePath(const Intersector& scene, const SurfaceTable& surfaces,
                                             const PathSettings& settings, const PathRandom& random,
                                             Mode& mode) {
-  PathState path = mode.Start(scene, random);
-  PathStats stats{0, path.weight, PathEnd::kEscaped, 0, {0, 0, 0, 0, 0, 0}};
+  PathStats stats;
+  PathState path = path_internal::StartPath(scene, random, mode, &stats);
   PathState pending[kPendingCapacity > 0 ? kPendingCapacity : 1];
   int pending_count = 0;
   uint32_t interactions = path.vertex;
   for (;;) {
-    stats.end =
+    path_internal::EndBranch(
         path_internal::FollowBranch(scene, surfaces, settings, random, mode, path, &interactions,
-                                    pending, kPendingCapacity, &pending_count, &stats);
-    ++stats.branches;
-    ++stats.ends[static_cast<int>(stats.end)];
+                                    pending, kPendingCapacity, &pending_count, &stats),
+        &stats);
     if (pending_count == 0) break;
     path = pending[--pending_count];
   }

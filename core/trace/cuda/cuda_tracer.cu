@@ -110,12 +110,38 @@ struct ThreadCounts {
   }
 };
 
-// One path without splitting (no weight windows on the GPU): small per-thread state.
+// Traces the paths first, first + stride, ... below last of random stream `stream`, one
+// ray per turn of the loop: a lane whose path ends starts its next path at once (path
+// regeneration), so a warp's lanes stay busy rather than wait, path by path, for the
+// warp's longest path. No splitting (no weight windows on the GPU): small per-lane state.
 template <class Mode>
-__device__ PathStats TraceGpuPath(const BvhIntersector& scene, const SurfaceTable& surfaces,
-                                  const PathSettings& settings, const PathRandom& random,
-                                  Mode& mode) {
-  return TracePath<BvhIntersector, Mode, 0>(scene, surfaces, settings, random, mode);
+__device__ void TracePaths(const BvhIntersector& scene, const SurfaceTable& surfaces,
+                           const PathSettings& settings, Mode& mode, uint64_t seed, uint32_t stream,
+                           uint64_t first, uint64_t last, uint64_t stride, ThreadCounts& counts) {
+  PathRandom random(seed, stream, first);
+  PathState path;
+  PathStats stats;
+  uint32_t interactions = 0;
+  bool live = false;
+  for (uint64_t p = first;;) {
+    if (!live) {
+      if (p >= last) return;
+      random = PathRandom(seed, stream, p);
+      path = path_internal::StartPath(scene, random, mode, &stats);
+      interactions = path.vertex;
+      live = true;
+    }
+    int pending_count = 0;
+    PathEnd end;
+    if (!path_internal::StepBranch(scene, surfaces, settings, random, mode, path, &interactions,
+                                   nullptr, 0, &pending_count, &stats, &end)) {
+      path_internal::EndBranch(end, &stats);
+      mode.Finish(stats);
+      counts.Add(stats);
+      live = false;
+      p += stride;
+    }
+  }
 }
 
 // Rows are (sensor, batch): row s * batches + b holds the paths [b N / batches,
@@ -134,10 +160,9 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   SharedSink sink{row, row + kTregenzaBinCount};
   OneStageMode<SharedSink> mode{sensors[s].position, sensors[s].normal, &sink};
   ThreadCounts counts;
-  for (uint64_t p = first + blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x; p < last;
-       p += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
-    counts.Add(TraceGpuPath(scene, surfaces, settings, PathRandom(seed, s, p), mode));
-  }
+  TracePaths(scene, surfaces, settings, mode, seed, s,
+             first + blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x, last,
+             static_cast<uint64_t>(gridDim.x) * blockDim.x, counts);
   counts.Flush(block_counters);
   const size_t offset = static_cast<size_t>(blockIdx.y) * kTregenzaBinCount;
   EndRow(row, kTregenzaBinCount, sum + offset, block_counters, counters);
@@ -161,11 +186,9 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   SharedSink sink{row, row + kTregenzaBinCount};
   OutdoorMode<SharedSink> mode{window, &shared_basis, cell, &sink};
   ThreadCounts counts;
-  for (uint64_t p = blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x;
-       p < paths_per_cell; p += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
-    counts.Add(TraceGpuPath(scene, surfaces, settings,
-                            PathRandom(seed, kOutdoorStreamBase + cell, p), mode));
-  }
+  TracePaths(scene, surfaces, settings, mode, seed, kOutdoorStreamBase + cell,
+             blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x, paths_per_cell,
+             static_cast<uint64_t>(gridDim.x) * blockDim.x, counts);
   counts.Flush(block_counters);
   EndRow(row, kTregenzaBinCount, sum + cell * kTregenzaBinCount, block_counters, counters);
   for (int i = threadIdx.x; i < kTregenzaBinCount; i += blockDim.x) {
@@ -194,10 +217,9 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   IndoorMode<SharedSink> mode{sensors[s].position, sensors[s].normal,    window,
                               &shared_basis,       settings.max_bounces, &sink};
   ThreadCounts counts;
-  for (uint64_t p = first + blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x; p < last;
-       p += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
-    counts.Add(TraceGpuPath(scene, surfaces, settings, PathRandom(seed, s, p), mode));
-  }
+  TracePaths(scene, surfaces, settings, mode, seed, s,
+             first + blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x, last,
+             static_cast<uint64_t>(gridDim.x) * blockDim.x, counts);
   counts.Flush(block_counters);
   EndRow(row, cells, sum + (static_cast<size_t>(b) * sensor_count + s) * cells, block_counters,
          counters);
@@ -313,10 +335,19 @@ struct CudaTracer::Impl {
   BvhIntersector Scene() const { return {nodes.get(), triangles.get()}; }
   SurfaceTable Surfaces() const { return {materials.get(), triangle_material.get()}; }
 
-  // Blocks along x for `rows` rows of `paths` paths: enough to fill the device twice.
-  unsigned int BlocksPerRow(uint64_t paths, unsigned int rows) const {
+  // Blocks along x for `rows` rows of `paths` paths: as many as the device holds at once
+  // (each thread then loops over paths, starting the next as soon as one ends), or fewer
+  // where there are not that many paths.
+  template <class Kernel>
+  unsigned int BlocksPerRow(Kernel kernel, size_t shared, uint64_t paths, unsigned int rows) const {
+    int resident = 0;
+    if (cudaOccupancyMaxActiveBlocksPerMultiprocessor(&resident, kernel, kThreads, shared) !=
+        cudaSuccess) {
+      resident = 1;
+    }
     const uint64_t wanted = (paths + kThreads - 1) / kThreads;
-    const uint64_t fill = std::max<uint64_t>(1, 16ull * multiprocessors / std::max(1u, rows));
+    const uint64_t fill = std::max<uint64_t>(
+        1, static_cast<uint64_t>(std::max(1, resident)) * multiprocessors / std::max(1u, rows));
     return static_cast<unsigned int>(std::max<uint64_t>(1, std::min(wanted, fill)));
   }
 
@@ -421,7 +452,7 @@ std::string CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
   Impl& d = *impl_;
   if (cudaError_t e = d.sensors.Upload(sensors, sensor_count); e != cudaSuccess) return Error(e);
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
-  const dim3 grid(d.BlocksPerRow(paths_per_sensor / batches + 1, rows), rows);
+  const dim3 grid(d.BlocksPerRow(OneStageKernel, 0, paths_per_sensor / batches + 1, rows), rows);
   return d.Run(
       static_cast<size_t>(rows) * kTregenzaBinCount, true,
       [&] {
@@ -437,7 +468,7 @@ std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis
                                 double* sum, double* sum_squares, CudaCounters* counters) {
   Impl& d = *impl_;
   const int cells = WindowCellCount(window, basis);
-  const dim3 grid(d.BlocksPerRow(paths_per_cell, cells), cells);
+  const dim3 grid(d.BlocksPerRow(OutdoorKernel, 0, paths_per_cell, cells), cells);
   return d.Run(
       static_cast<size_t>(cells) * kTregenzaBinCount, true,
       [&] {
@@ -455,7 +486,6 @@ std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
   Impl& d = *impl_;
   if (cudaError_t e = d.sensors.Upload(sensors, sensor_count); e != cudaSuccess) return Error(e);
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
-  const dim3 grid(d.BlocksPerRow(paths_per_sensor / batches + 1, rows), rows);
   const int cells = WindowCellCount(window, basis);
   const size_t shared = static_cast<size_t>(cells) * sizeof(double);
   if (shared > kDefaultShared) {
@@ -481,6 +511,7 @@ std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
       return Error(e);
     }
   }
+  const dim3 grid(d.BlocksPerRow(IndoorKernel, shared, paths_per_sensor / batches + 1, rows), rows);
   return d.Run(
       static_cast<size_t>(batches) * sensor_count * cells, false,
       [&] {
