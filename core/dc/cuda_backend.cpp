@@ -150,7 +150,8 @@ class CudaBackend : public DcBackend {
                                      uint64_t paths_per_sensor, int batches, uint64_t seed,
                                      const PathSettings& path, int) override {
     const auto start = std::chrono::steady_clock::now();
-    FENESTRA_RETURN_IF_ERROR(Upload(geometry));
+    // A room and its blind, built anew for every design of a search
+    FENESTRA_RETURN_IF_ERROR(Upload(geometry, BvhQuality::kMedium));
     IndoorTally tally;
     tally.sensors = static_cast<int>(sensors.size());
     tally.cells = WindowCellCount(window, basis);
@@ -185,8 +186,8 @@ class CudaBackend : public DcBackend {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 
-  absl::Status Upload(const TraceGeometry& geometry) {
-    FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(geometry));
+  absl::Status Upload(const TraceGeometry& geometry, BvhQuality quality = BvhQuality::kHigh) {
+    FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(geometry, quality));
     return Check(tracer_->SetScene(bvh, geometry.triangle_material.data(),
                                    geometry.triangle_material.size(), geometry.materials.data(),
                                    geometry.materials.size()));

@@ -56,6 +56,68 @@ void* CreateLeaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* primiti
   return leaf;
 }
 
+// The bounds of the parts of primitive p's triangle on either side of the plane
+// x[dimension] = position, clipped to p's bounds (p may already be a piece of a split
+// triangle): the spatial splits of a high-quality build (Stich, Friedrich and Dietrich,
+// "Spatial Splits in Bounding Volume Hierarchies", HPG 2009). Thin tilted slats, whose boxes
+// would overlap their neighbours', get tight boxes this way.
+void SplitPrimitive(const RTCBuildPrimitive* p, unsigned int dimension, float position,
+                    RTCBounds* left, RTCBounds* right, void* user) {
+  const auto& geometry = *static_cast<const TraceGeometry*>(user);
+  const Vec3f* v = &geometry.vertices[3 * static_cast<size_t>(p->primID)];
+  const float inf = std::numeric_limits<float>::infinity();
+  float lo[2][3] = {{inf, inf, inf}, {inf, inf, inf}};
+  float hi[2][3] = {{-inf, -inf, -inf}, {-inf, -inf, -inf}};
+  auto grow = [&](int side, const Vec3f& q) {
+    for (int k = 0; k < 3; ++k) {
+      lo[side][k] = std::min(lo[side][k], q[k]);
+      hi[side][k] = std::max(hi[side][k], q[k]);
+    }
+  };
+  for (int i = 0; i < 3; ++i) {
+    const Vec3f& a = v[i];
+    const Vec3f& b = v[(i + 1) % 3];
+    const float da = a[static_cast<int>(dimension)], db = b[static_cast<int>(dimension)];
+    if (da <= position) grow(0, a);
+    if (da >= position) grow(1, a);
+    // An edge that crosses the plane adds the crossing point to both sides
+    if ((da < position && db > position) || (da > position && db < position)) {
+      const float f = (position - da) / (db - da);
+      Vec3f q = a + (b - a) * f;
+      if (dimension == 0) q.x = position;
+      if (dimension == 1) q.y = position;
+      if (dimension == 2) q.z = position;
+      grow(0, q);
+      grow(1, q);
+    }
+  }
+  const float box_lo[3] = {p->lower_x, p->lower_y, p->lower_z};
+  const float box_hi[3] = {p->upper_x, p->upper_y, p->upper_z};
+  RTCBounds* out[2] = {left, right};
+  for (int side = 0; side < 2; ++side) {
+    float l[3], h[3];
+    for (int k = 0; k < 3; ++k) {
+      l[k] = std::max(lo[side][k], box_lo[k]);
+      h[k] = std::min(hi[side][k], box_hi[k]);
+    }
+    // The split plane bounds each side exactly
+    if (side == 0) h[dimension] = std::min(h[dimension], position);
+    if (side == 1) l[dimension] = std::max(l[dimension], position);
+    *out[side] = RTCBounds{l[0], l[1], l[2], 0, h[0], h[1], h[2], 0};
+  }
+}
+
+// Primitive references a high-quality build may make per triangle, spatial splits included.
+constexpr size_t kSplitCapacity = 2;
+
+// One Embree device per thread for every build (creating one per build costs more than
+// building a small scene's BVH).
+RTCDevice BuilderDevice() {
+  thread_local std::unique_ptr<RTCDeviceTy, void (*)(RTCDevice)> device(rtcNewDevice("threads=1"),
+                                                                        rtcReleaseDevice);
+  return device.get();
+}
+
 class Flattener {
  public:
   Flattener(const TraceGeometry& geometry, BvhLayout& layout)
@@ -116,7 +178,7 @@ class Flattener {
 
 }  // namespace
 
-absl::StatusOr<BvhLayout> BuildBvh(const TraceGeometry& geometry) {
+absl::StatusOr<BvhLayout> BuildBvh(const TraceGeometry& geometry, BvhQuality quality) {
   std::vector<RTCBuildPrimitive> primitives;
   for (size_t t = 0; t < geometry.TriangleCount(); ++t) {
     if (!HasArea(geometry, t)) continue;  // never hit
@@ -142,12 +204,12 @@ absl::StatusOr<BvhLayout> BuildBvh(const TraceGeometry& geometry) {
     return layout;
   }
 
-  std::unique_ptr<RTCDeviceTy, void (*)(RTCDevice)> device(rtcNewDevice("threads=1"),
-                                                           rtcReleaseDevice);
+  RTCDevice device = BuilderDevice();
   if (!device) return absl::InternalError("Embree: cannot create a device for the BVH builder");
-  std::unique_ptr<RTCBVHTy, void (*)(RTCBVH)> bvh(rtcNewBVH(device.get()), rtcReleaseBVH);
+  std::unique_ptr<RTCBVHTy, void (*)(RTCBVH)> bvh(rtcNewBVH(device), rtcReleaseBVH);
   RTCBuildArguments args = rtcDefaultBuildArguments();
-  args.buildQuality = RTC_BUILD_QUALITY_HIGH;
+  const bool high = quality == BvhQuality::kHigh;
+  args.buildQuality = high ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM;
   args.maxBranchingFactor = 2;
   args.maxDepth = 48;
   args.minLeafSize = 1;
@@ -155,9 +217,14 @@ absl::StatusOr<BvhLayout> BuildBvh(const TraceGeometry& geometry) {
   args.traversalCost = 1.0f;
   args.intersectionCost = 1.0f;
   args.bvh = bvh.get();
+  // Room for the pieces of spatial splits
+  const size_t count = primitives.size();
+  primitives.resize((high ? kSplitCapacity : 1) * count);
   args.primitives = primitives.data();
-  args.primitiveCount = primitives.size();
+  args.primitiveCount = count;
   args.primitiveArrayCapacity = primitives.size();
+  args.splitPrimitive = high ? SplitPrimitive : nullptr;
+  args.userPtr = const_cast<TraceGeometry*>(&geometry);
   args.createNode = CreateNode;
   args.setNodeChildren = SetNodeChildren;
   args.setNodeBounds = SetNodeBounds;
@@ -165,7 +232,7 @@ absl::StatusOr<BvhLayout> BuildBvh(const TraceGeometry& geometry) {
   const BuildNode* root = static_cast<const BuildNode*>(rtcBuildBVH(&args));
   if (!root) {
     return absl::InternalError(
-        absl::StrCat("Embree BVH builder failed (error ", rtcGetDeviceError(device.get()), ")"));
+        absl::StrCat("Embree BVH builder failed (error ", rtcGetDeviceError(device), ")"));
   }
 
   // Flatten depth-first; a root that is a leaf becomes a node with one child
@@ -176,7 +243,8 @@ absl::StatusOr<BvhLayout> BuildBvh(const TraceGeometry& geometry) {
     Vec3f lo{std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
              std::numeric_limits<float>::infinity()};
     Vec3f hi = -lo;
-    for (const RTCBuildPrimitive& p : primitives) {
+    for (size_t i = 0; i < count; ++i) {
+      const RTCBuildPrimitive& p = primitives[i];
       lo = {std::min(lo.x, p.lower_x), std::min(lo.y, p.lower_y), std::min(lo.z, p.lower_z)};
       hi = {std::max(hi.x, p.upper_x), std::max(hi.y, p.upper_y), std::max(hi.z, p.upper_z)};
     }

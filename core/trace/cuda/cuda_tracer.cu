@@ -1,6 +1,7 @@
 // The GPU tracer (see cuda_tracer.h). Each kernel gives every block one row of the result
 // (a sensor, a window cell, or a sensor's batch) and accumulates that row in shared memory
 // in double precision, then adds it to global memory once per block.
+#include <cooperative_groups.h>
 #include <cuda_runtime.h>
 
 #include <algorithm>
@@ -110,21 +111,33 @@ struct ThreadCounts {
   }
 };
 
-// Traces the paths first, first + stride, ... below last of random stream `stream`, one
-// ray per turn of the loop: a lane whose path ends starts its next path at once (path
-// regeneration), so a warp's lanes stay busy rather than wait, path by path, for the
-// warp's longest path. No splitting (no weight windows on the GPU): small per-lane state.
+// The next path of a row for each calling lane: the lanes that ask together take
+// consecutive indices with one atomic operation.
+__device__ uint64_t NextPath(unsigned long long* next_path) {
+  const cooperative_groups::coalesced_group lanes = cooperative_groups::coalesced_threads();
+  unsigned long long base = 0;
+  if (lanes.thread_rank() == 0) base = atomicAdd(next_path, lanes.size());
+  return lanes.shfl(base, 0) + lanes.thread_rank();
+}
+
+// Traces paths first + i of random stream `stream`, for i = 0, 1, ... below last - first as
+// the row's lanes take them, one ray per turn of the loop: a lane whose path ends takes
+// the row's next path at once (path regeneration), so lanes and blocks stay busy until the
+// row runs out of paths rather than wait for the longest path of their warp or the
+// longest list of a thread. No splitting (no weight windows on the GPU): small per-lane
+// state.
 template <class Mode>
 __device__ void TracePaths(const BvhIntersector& scene, const SurfaceTable& surfaces,
                            const PathSettings& settings, Mode& mode, uint64_t seed, uint32_t stream,
-                           uint64_t first, uint64_t last, uint64_t stride, ThreadCounts& counts) {
+                           uint64_t first, uint64_t last, unsigned long long* next_path,
+                           ThreadCounts& counts) {
   PathRandom random(seed, stream, first);
   PathState path;
   PathStats stats;
   uint32_t interactions = 0;
-  bool live = false;
-  for (uint64_t p = first;;) {
+  for (bool live = false;;) {
     if (!live) {
+      const uint64_t p = first + NextPath(next_path);
       if (p >= last) return;
       random = PathRandom(seed, stream, p);
       path = path_internal::StartPath(scene, random, mode, &stats);
@@ -139,7 +152,6 @@ __device__ void TracePaths(const BvhIntersector& scene, const SurfaceTable& surf
       mode.Finish(stats);
       counts.Add(stats);
       live = false;
-      p += stride;
     }
   }
 }
@@ -149,7 +161,8 @@ __device__ void TracePaths(const BvhIntersector& scene, const SurfaceTable& surf
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     OneStageKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
                    const TraceSensor* sensors, uint64_t paths_per_sensor, int batches,
-                   uint64_t seed, double* sum, double* sum_squares, unsigned long long* counters) {
+                   uint64_t seed, double* sum, double* sum_squares, unsigned long long* counters,
+                   unsigned long long* next_path) {
   __shared__ double row[2 * kTregenzaBinCount];
   __shared__ unsigned long long block_counters[kCounters];
   BeginRow(row, 2 * kTregenzaBinCount, block_counters);
@@ -160,9 +173,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   SharedSink sink{row, row + kTregenzaBinCount};
   OneStageMode<SharedSink> mode{sensors[s].position, sensors[s].normal, &sink};
   ThreadCounts counts;
-  TracePaths(scene, surfaces, settings, mode, seed, s,
-             first + blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x, last,
-             static_cast<uint64_t>(gridDim.x) * blockDim.x, counts);
+  TracePaths(scene, surfaces, settings, mode, seed, s, first, last, next_path + blockIdx.y, counts);
   counts.Flush(block_counters);
   const size_t offset = static_cast<size_t>(blockIdx.y) * kTregenzaBinCount;
   EndRow(row, kTregenzaBinCount, sum + offset, block_counters, counters);
@@ -176,7 +187,8 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     OutdoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
                   TraceWindow window, HemisphereBasis basis, uint64_t paths_per_cell, uint64_t seed,
-                  double* sum, double* sum_squares, unsigned long long* counters) {
+                  double* sum, double* sum_squares, unsigned long long* counters,
+                  unsigned long long* next_path) {
   __shared__ double row[2 * kTregenzaBinCount];
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
@@ -186,9 +198,8 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   SharedSink sink{row, row + kTregenzaBinCount};
   OutdoorMode<SharedSink> mode{window, &shared_basis, cell, &sink};
   ThreadCounts counts;
-  TracePaths(scene, surfaces, settings, mode, seed, kOutdoorStreamBase + cell,
-             blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x, paths_per_cell,
-             static_cast<uint64_t>(gridDim.x) * blockDim.x, counts);
+  TracePaths(scene, surfaces, settings, mode, seed, kOutdoorStreamBase + cell, 0, paths_per_cell,
+             next_path + cell, counts);
   counts.Flush(block_counters);
   EndRow(row, kTregenzaBinCount, sum + cell * kTregenzaBinCount, block_counters, counters);
   for (int i = threadIdx.x; i < kTregenzaBinCount; i += blockDim.x) {
@@ -202,7 +213,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     IndoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
                  const TraceSensor* sensors, int sensor_count, TraceWindow window,
                  HemisphereBasis basis, uint64_t paths_per_sensor, int batches, uint64_t seed,
-                 double* sum, unsigned long long* counters) {
+                 double* sum, unsigned long long* counters, unsigned long long* next_path) {
   extern __shared__ double row[];  // window cells
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
@@ -217,9 +228,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   IndoorMode<SharedSink> mode{sensors[s].position, sensors[s].normal,    window,
                               &shared_basis,       settings.max_bounces, &sink};
   ThreadCounts counts;
-  TracePaths(scene, surfaces, settings, mode, seed, s,
-             first + blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x, last,
-             static_cast<uint64_t>(gridDim.x) * blockDim.x, counts);
+  TracePaths(scene, surfaces, settings, mode, seed, s, first, last, next_path + blockIdx.y, counts);
   counts.Flush(block_counters);
   EndRow(row, cells, sum + (static_cast<size_t>(b) * sensor_count + s) * cells, block_counters,
          counters);
@@ -326,7 +335,8 @@ struct CudaTracer::Impl {
   DeviceBuffer<TraceSensor> sensors;
   DeviceBuffer<double> sum, sum_squares;
   DeviceBuffer<unsigned long long> counters;
-  PinnedBuffer staging;  // large transfers
+  DeviceBuffer<unsigned long long> next_path;  // per row: paths taken so far
+  PinnedBuffer staging;                        // large transfers
   bool has_scene = false;
   // The annual product: O transposed, S, the indoor rows, I O and E
   DeviceBuffer<double> outdoor_transposed, sky, indoor, through_window, illuminance;
@@ -353,13 +363,14 @@ struct CudaTracer::Impl {
 
   // Zeroes the outputs, runs `launch`, times it, downloads.
   template <class Launch>
-  std::string Run(size_t sum_size, bool squares, Launch launch, double* host_sum,
+  std::string Run(size_t rows, size_t sum_size, bool squares, Launch launch, double* host_sum,
                   double* host_sum_squares, CudaCounters* out) {
     if (!has_scene) return "CUDA tracer: no scene uploaded";
     cudaError_t e = cudaSetDevice(device);
     if (e == cudaSuccess) e = sum.Zero(sum_size);
     if (e == cudaSuccess && squares) e = sum_squares.Zero(sum_size);
     if (e == cudaSuccess) e = counters.Zero(kCounters);
+    if (e == cudaSuccess) e = next_path.Zero(rows);
     if (e != cudaSuccess) return Error(e);
     cudaEvent_t start, stop;
     cudaEventCreate(&start);
@@ -454,11 +465,11 @@ std::string CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
   const dim3 grid(d.BlocksPerRow(OneStageKernel, 0, paths_per_sensor / batches + 1, rows), rows);
   return d.Run(
-      static_cast<size_t>(rows) * kTregenzaBinCount, true,
+      rows, static_cast<size_t>(rows) * kTregenzaBinCount, true,
       [&] {
-        OneStageKernel<<<grid, kThreads>>>(d.Scene(), d.Surfaces(), path, d.sensors.get(),
-                                           paths_per_sensor, batches, seed, d.sum.get(),
-                                           d.sum_squares.get(), d.counters.get());
+        OneStageKernel<<<grid, kThreads>>>(
+            d.Scene(), d.Surfaces(), path, d.sensors.get(), paths_per_sensor, batches, seed,
+            d.sum.get(), d.sum_squares.get(), d.counters.get(), d.next_path.get());
       },
       sum, sum_squares, counters);
 }
@@ -470,11 +481,11 @@ std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis
   const int cells = WindowCellCount(window, basis);
   const dim3 grid(d.BlocksPerRow(OutdoorKernel, 0, paths_per_cell, cells), cells);
   return d.Run(
-      static_cast<size_t>(cells) * kTregenzaBinCount, true,
+      cells, static_cast<size_t>(cells) * kTregenzaBinCount, true,
       [&] {
         OutdoorKernel<<<grid, kThreads>>>(d.Scene(), d.Surfaces(), path, window, basis,
                                           paths_per_cell, seed, d.sum.get(), d.sum_squares.get(),
-                                          d.counters.get());
+                                          d.counters.get(), d.next_path.get());
       },
       sum, sum_squares, counters);
 }
@@ -513,11 +524,11 @@ std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
   }
   const dim3 grid(d.BlocksPerRow(IndoorKernel, shared, paths_per_sensor / batches + 1, rows), rows);
   return d.Run(
-      static_cast<size_t>(batches) * sensor_count * cells, false,
+      rows, static_cast<size_t>(batches) * sensor_count * cells, false,
       [&] {
-        IndoorKernel<<<grid, kThreads, shared>>>(d.Scene(), d.Surfaces(), path, d.sensors.get(),
-                                                 sensor_count, window, basis, paths_per_sensor,
-                                                 batches, seed, d.sum.get(), d.counters.get());
+        IndoorKernel<<<grid, kThreads, shared>>>(
+            d.Scene(), d.Surfaces(), path, d.sensors.get(), sensor_count, window, basis,
+            paths_per_sensor, batches, seed, d.sum.get(), d.counters.get(), d.next_path.get());
       },
       sum, nullptr, counters);
 }
