@@ -1,11 +1,12 @@
 // The annual product E_b = (I_b O) S on the CPU: every batch in one pair of Eigen products
-// (on all cores with OpenMP).
+// (on all cores with OpenMP); the default tallies of E for the metrics.
 #include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
 #include "core/dc/dc_backend.h"
+#include "core/metrics/metric_errors.h"
 
 namespace fenestra {
 namespace {
@@ -25,6 +26,12 @@ class CpuAnnualProduct : public AnnualProduct {
 };
 
 }  // namespace
+
+absl::StatusOr<std::vector<HourTally>> AnnualProduct::Tally(
+    const std::vector<Matrix>& indoor_batches, const MetricOptions& options) {
+  FENESTRA_ASSIGN_OR_RETURN(illuminance, Apply(indoor_batches));
+  return TallyBatchVersions(illuminance, options);
+}
 
 absl::StatusOr<std::unique_ptr<AnnualProduct>> DcBackend::MakeAnnualProduct(const Matrix& outdoor,
                                                                             const Matrix& sky) {

@@ -11,6 +11,7 @@
 #include "core/geometry/hemisphere_basis.h"
 #include "core/geometry/mesh.h"
 #include "core/geometry/scene.h"
+#include "core/metrics/annual_metrics.h"
 #include "core/trace/trace_geometry.h"
 #include "core/trace/two_stage_cpu.h"
 
@@ -84,6 +85,11 @@ class AnnualProduct {
   virtual ~AnnualProduct() = default;
   // InvalidArgument when a batch's columns are not O's rows.
   virtual absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) = 0;
+  // The tallies of E of the mean of the B >= 2 batches, then of each leave-one-out mean
+  // (TallyBatchVersions in core/metrics/metric_errors.h), every column of S an analysed hour.
+  // By default from Apply; a GPU can tally where E is. InvalidArgument as Apply, or B < 2.
+  virtual absl::StatusOr<std::vector<HourTally>> Tally(const std::vector<Matrix>& indoor_batches,
+                                                       const MetricOptions& options);
 };
 
 // A tracer backend for daylight coefficients (Embree on the CPU, CUDA on a GPU), chosen at

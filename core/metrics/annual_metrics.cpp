@@ -28,28 +28,6 @@ constexpr std::array<std::pair<SceneMetric, std::string_view>, 11> kSceneMetricN
     {SceneMetric::kMeanIlluminance, "mean_illuminance"},
 }};
 
-absl::Status CheckOptions(const MetricOptions& o) {
-  if (!(o.udi_lower_lux >= 0 && o.udi_lower_lux <= o.udi_upper_lux) ||
-      !std::isfinite(o.udi_upper_lux)) {
-    return absl::InvalidArgumentError(absl::StrCat("UDI range [", o.udi_lower_lux, ", ",
-                                                   o.udi_upper_lux,
-                                                   "] lx: need 0 <= lower <= upper < inf"));
-  }
-  if (!(o.da_threshold_lux > 0) || !std::isfinite(o.da_threshold_lux)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("DA threshold ", o.da_threshold_lux, " lx: must be positive"));
-  }
-  if (!(o.sda_min_da_percent >= 0 && o.sda_min_da_percent <= 100)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("sDA minimum DA ", o.sda_min_da_percent, "%: must be in [0, 100]"));
-  }
-  if (!(o.ase_threshold_lux >= 0) || !std::isfinite(o.ase_threshold_lux) || o.ase_min_hours < 0) {
-    return absl::InvalidArgumentError(absl::StrCat("ASE threshold ", o.ase_threshold_lux, " lx / ",
-                                                   o.ase_min_hours, " h: must not be negative"));
-  }
-  return absl::OkStatus();
-}
-
 }  // namespace
 
 double SceneMetricValue(const SceneMetrics& s, SceneMetric metric) {
@@ -97,6 +75,139 @@ absl::StatusOr<SceneMetric> SceneMetricFromName(std::string_view name) {
                                                  "'; one of: ", absl::StrJoin(names, ", ")));
 }
 
+absl::Status CheckMetricOptions(const MetricOptions& o) {
+  if (!(o.udi_lower_lux >= 0 && o.udi_lower_lux <= o.udi_upper_lux) ||
+      !std::isfinite(o.udi_upper_lux)) {
+    return absl::InvalidArgumentError(absl::StrCat("UDI range [", o.udi_lower_lux, ", ",
+                                                   o.udi_upper_lux,
+                                                   "] lx: need 0 <= lower <= upper < inf"));
+  }
+  if (!(o.da_threshold_lux > 0) || !std::isfinite(o.da_threshold_lux)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("DA threshold ", o.da_threshold_lux, " lx: must be positive"));
+  }
+  if (!(o.sda_min_da_percent >= 0 && o.sda_min_da_percent <= 100)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("sDA minimum DA ", o.sda_min_da_percent, "%: must be in [0, 100]"));
+  }
+  if (!(o.ase_threshold_lux >= 0) || !std::isfinite(o.ase_threshold_lux) || o.ase_min_hours < 0) {
+    return absl::InvalidArgumentError(absl::StrCat("ASE threshold ", o.ase_threshold_lux, " lx / ",
+                                                   o.ase_min_hours, " h: must not be negative"));
+  }
+  return absl::OkStatus();
+}
+
+int AnalysedHours(const std::vector<bool>& occupied, HourBasis hours) {
+  if (hours == HourBasis::kAllHours) return static_cast<int>(occupied.size());
+  return static_cast<int>(std::count(occupied.begin(), occupied.end(), true));
+}
+
+HourTally TallyHours(const Matrix& illuminance_lux, const MetricOptions& options) {
+  const Matrix& e = illuminance_lux;
+  const double a = options.udi_lower_lux;
+  const double b = options.udi_upper_lux;
+  const double da = options.da_threshold_lux;
+  const Eigen::Index hours = e.cols();
+  HourTally tally;
+  tally.hours = hours;
+  tally.sensors.resize(e.rows());
+  std::vector<uint8_t> any_below(hours, 0);
+  std::vector<uint8_t> any_above(hours, 0);
+
+  // Count per sensor; note per hour whether some sensor left the range
+  for (Eigen::Index i = 0; i < e.rows(); ++i) {
+    const double* row = e.data() + i * hours;
+    // Without branches: the comparisons are data, not control flow (hours fall either side
+    // of the limits at random, which a branch predictor cannot learn)
+    int64_t below = 0, above = 0, da_hours = 0;
+    double credit = 0, sum = 0;
+    for (Eigen::Index h = 0; h < hours; ++h) {
+      const double v = row[h];
+      const uint8_t is_below = v<a, is_above = v> b;
+      below += is_below;
+      above += is_above;
+      any_below[h] |= is_below;
+      any_above[h] |= is_above;
+      da_hours += v >= da;
+      credit += std::min(v / da, 1.0);
+      sum += v;
+    }
+    tally.sensors[i] = {below, above, da_hours, credit, sum};
+  }
+  for (Eigen::Index h = 0; h < hours; ++h) {
+    tally.all_in += !any_below[h] && !any_above[h];
+    tally.any_below += any_below[h];
+    tally.any_above += any_above[h];
+  }
+  return tally;
+}
+
+AnnualMetrics MetricsFromTally(const HourTally& tally, int analysed_hours,
+                               const MetricOptions& options) {
+  const double dark_hours = analysed_hours - static_cast<double>(tally.hours);
+  const double to_percent = 100.0 / analysed_hours;
+  const bool dark_in_range = 0.0 >= options.udi_lower_lux;  // E = 0 falls short or is in range
+  const size_t n = tally.sensors.size();
+
+  AnnualMetrics result;
+  result.analysed_hours = analysed_hours;
+  result.sensors.resize(n);
+  SceneMetrics& scene = result.scene;
+  for (size_t i = 0; i < n; ++i) {
+    const SensorHourTally& t = tally.sensors[i];
+    const double lit_in_range = static_cast<double>(tally.hours - t.below - t.above);
+    const double in_range = lit_in_range + (dark_in_range ? dark_hours : 0);
+    const double below = static_cast<double>(t.below) + (dark_in_range ? 0 : dark_hours);
+    const double da_hours = static_cast<double>(t.da);
+    SensorMetrics& s = result.sensors[i];
+    s.udi_percent = in_range * to_percent;
+    s.udi_fell_short_percent = below * to_percent;
+    s.udi_exceeded_percent = static_cast<double>(t.above) * to_percent;
+    s.da_percent = da_hours * to_percent;
+    s.cda_percent = t.credit * to_percent;
+    s.mean_illuminance_lux = t.sum / analysed_hours;
+    // Compare counts, not rounded percentages, for the sDA cut
+    scene.sda_percent += da_hours * 100.0 >= options.sda_min_da_percent * analysed_hours;
+    scene.udi_mean_percent += s.udi_percent;
+    scene.udi_mean_fell_short_percent += s.udi_fell_short_percent;
+    scene.udi_mean_exceeded_percent += s.udi_exceeded_percent;
+    scene.da_mean_percent += s.da_percent;
+    scene.cda_mean_percent += s.cda_percent;
+    scene.mean_illuminance_lux += s.mean_illuminance_lux;
+  }
+
+  // Average over sensors; the hours in which every sensor was in range, dark ones included
+  const double per_sensor = 1.0 / static_cast<double>(n);
+  scene.udi_mean_percent *= per_sensor;
+  scene.udi_mean_fell_short_percent *= per_sensor;
+  scene.udi_mean_exceeded_percent *= per_sensor;
+  scene.da_mean_percent *= per_sensor;
+  scene.cda_mean_percent *= per_sensor;
+  scene.mean_illuminance_lux *= per_sensor;
+  scene.sda_percent *= 100.0 * per_sensor;
+  const double all_in = static_cast<double>(tally.all_in) + (dark_in_range ? dark_hours : 0);
+  const double all_below = static_cast<double>(tally.any_below) + (dark_in_range ? 0 : dark_hours);
+  scene.udi_all_percent = all_in * to_percent;
+  scene.udi_all_fell_short_percent = all_below * to_percent;
+  scene.udi_all_exceeded_percent = static_cast<double>(tally.any_above) * to_percent;
+  return result;
+}
+
+void AddAse(const Matrix& direct_illuminance_lux, const MetricOptions& options,
+            AnnualMetrics* metrics) {
+  metrics->has_ase = true;
+  double sensors_with_ase = 0;
+  for (size_t i = 0; i < metrics->sensors.size(); ++i) {
+    const Eigen::Index row = static_cast<Eigen::Index>(i);
+    const int sun_hours = static_cast<int>(
+        (direct_illuminance_lux.row(row).array() > options.ase_threshold_lux).count());
+    metrics->sensors[i].ase_hours = sun_hours;
+    sensors_with_ase += sun_hours >= options.ase_min_hours;
+  }
+  metrics->scene.ase_percent =
+      sensors_with_ase * (100.0 * (1.0 / static_cast<double>(metrics->sensors.size())));
+}
+
 absl::StatusOr<AnnualMetrics> ComputeAnnualMetrics(const Matrix& illuminance_lux,
                                                    std::span<const int> columns,
                                                    const std::vector<bool>& occupied,
@@ -117,107 +228,31 @@ absl::StatusOr<AnnualMetrics> ComputeAnnualMetrics(const Matrix& illuminance_lux
   }
   const absl::Status columns_ok = CheckColumns(columns, static_cast<int>(occupied.size()));
   if (!columns_ok.ok()) return columns_ok;
-  const absl::Status options_ok = CheckOptions(options);
+  const absl::Status options_ok = CheckMetricOptions(options);
   if (!options_ok.ok()) return options_ok;
   if (!e.allFinite() ||
       (direct_illuminance_lux != nullptr && !direct_illuminance_lux->allFinite())) {
     return absl::InvalidArgumentError("illuminance has a non-finite value");
   }
-
-  // Pick the analysed steps: those in `columns`, and the dark rest
-  const bool all_hours = options.hours == HourBasis::kAllHours;
-  int analysed_hours = 0;
-  for (const bool o : occupied) analysed_hours += (all_hours || o) ? 1 : 0;
+  const int analysed_hours = AnalysedHours(occupied, options.hours);
   if (analysed_hours == 0) return absl::InvalidArgumentError("no occupied hours to analyse");
+
+  // Keep the analysed steps among `columns` (the dark rest is counted, not stored)
   std::vector<Eigen::Index> used;  // positions in `columns`
   for (size_t c = 0; c < columns.size(); ++c) {
-    if (all_hours || occupied[columns[c]]) used.push_back(static_cast<Eigen::Index>(c));
-  }
-  const double dark_hours = analysed_hours - static_cast<double>(used.size());
-
-  const double a = options.udi_lower_lux;
-  const double b = options.udi_upper_lux;
-  const double da = options.da_threshold_lux;
-  const double to_percent = 100.0 / analysed_hours;
-  const bool dark_in_range = 0.0 >= a;  // E = 0 can only fall short or be in range
-
-  AnnualMetrics result;
-  result.analysed_hours = analysed_hours;
-  result.has_ase = direct_illuminance_lux != nullptr;
-  result.sensors.resize(n);
-  std::vector<uint8_t> any_below(used.size(), 0);
-  std::vector<uint8_t> any_above(used.size(), 0);
-
-  // Count per sensor; note per hour whether some sensor left the range
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double* row = e.data() + i * e.cols();
-    // Without branches: the comparisons are data, not control flow (hours fall either side
-    // of the limits at random, which a branch predictor cannot learn)
-    int64_t lit_below = 0, lit_above = 0, lit_da = 0;
-    double credit = 0, sum = 0;
-    for (size_t u = 0; u < used.size(); ++u) {
-      const double v = row[used[u]];
-      const uint8_t is_below = v<a, is_above = v> b;
-      lit_below += is_below;
-      lit_above += is_above;
-      any_below[u] |= is_below;
-      any_above[u] |= is_above;
-      lit_da += v >= da;
-      credit += std::min(v / da, 1.0);
-      sum += v;
+    if (options.hours == HourBasis::kAllHours || occupied[columns[c]]) {
+      used.push_back(static_cast<Eigen::Index>(c));
     }
-    const double lit_in_range = static_cast<double>(used.size() - lit_below - lit_above);
-    const double in_range = lit_in_range + (dark_in_range ? dark_hours : 0);
-    const double below = static_cast<double>(lit_below) + (dark_in_range ? 0 : dark_hours);
-    const double above = static_cast<double>(lit_above);
-    const double da_hours = static_cast<double>(lit_da);
-    SensorMetrics& s = result.sensors[i];
-    s.udi_percent = in_range * to_percent;
-    s.udi_fell_short_percent = below * to_percent;
-    s.udi_exceeded_percent = above * to_percent;
-    s.da_percent = da_hours * to_percent;
-    s.cda_percent = credit * to_percent;
-    s.mean_illuminance_lux = sum / analysed_hours;
-    if (direct_illuminance_lux != nullptr) {
-      const double* direct = direct_illuminance_lux->data() + i * e.cols();
-      int sun_hours = 0;
-      for (const Eigen::Index c : used) sun_hours += direct[c] > options.ase_threshold_lux;
-      s.ase_hours = sun_hours;
-    }
-    // Compare counts, not rounded percentages, for the sDA cut
-    SceneMetrics& scene = result.scene;
-    scene.sda_percent += da_hours * 100.0 >= options.sda_min_da_percent * analysed_hours;
-    scene.ase_percent += result.has_ase && s.ase_hours >= options.ase_min_hours;
-    scene.udi_mean_percent += s.udi_percent;
-    scene.udi_mean_fell_short_percent += s.udi_fell_short_percent;
-    scene.udi_mean_exceeded_percent += s.udi_exceeded_percent;
-    scene.da_mean_percent += s.da_percent;
-    scene.cda_mean_percent += s.cda_percent;
-    scene.mean_illuminance_lux += s.mean_illuminance_lux;
   }
-
-  // Average over sensors; count the hours in which every sensor was in range
-  SceneMetrics& scene = result.scene;
-  const double per_sensor = 1.0 / static_cast<double>(n);
-  scene.udi_mean_percent *= per_sensor;
-  scene.udi_mean_fell_short_percent *= per_sensor;
-  scene.udi_mean_exceeded_percent *= per_sensor;
-  scene.da_mean_percent *= per_sensor;
-  scene.cda_mean_percent *= per_sensor;
-  scene.mean_illuminance_lux *= per_sensor;
-  scene.sda_percent *= 100.0 * per_sensor;
-  scene.ase_percent *= 100.0 * per_sensor;
-  double all_in = dark_in_range ? dark_hours : 0;
-  double all_below = dark_in_range ? 0 : dark_hours;
-  double all_above = 0;
-  for (size_t u = 0; u < used.size(); ++u) {
-    all_in += !any_below[u] && !any_above[u];
-    all_below += any_below[u];
-    all_above += any_above[u];
+  const bool every_column = used.size() == columns.size();
+  const Matrix selected = every_column ? Matrix() : Matrix(e(Eigen::all, used));
+  AnnualMetrics result =
+      MetricsFromTally(TallyHours(every_column ? e : selected, options), analysed_hours, options);
+  if (direct_illuminance_lux != nullptr) {
+    AddAse(every_column ? *direct_illuminance_lux
+                        : Matrix((*direct_illuminance_lux)(Eigen::all, used)),
+           options, &result);
   }
-  scene.udi_all_percent = all_in * to_percent;
-  scene.udi_all_fell_short_percent = all_below * to_percent;
-  scene.udi_all_exceeded_percent = all_above * to_percent;
   return result;
 }
 

@@ -16,6 +16,7 @@
 // percentages, 0-100.
 #pragma once
 
+#include <cstdint>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -98,6 +99,46 @@ double SceneMetricValue(const SceneMetrics& scene, SceneMetric metric);
 std::string_view SceneMetricName(SceneMetric metric);
 // InvalidArgument listing the valid names when `name` is none of them.
 absl::StatusOr<SceneMetric> SceneMetricFromName(std::string_view name);
+
+// InvalidArgument naming the first inconsistent option.
+absl::Status CheckMetricOptions(const MetricOptions& options);
+
+// The analysed hours, the denominator of every share: the occupied steps, or with
+// HourBasis::kAllHours every step (occupied.size()).
+int AnalysedHours(const std::vector<bool>& occupied, HourBasis hours);
+
+// One sensor's counts over the tallied hours: E < udi_lower_lux (below), E > udi_upper_lux
+// (above), E >= da_threshold_lux (da); sums of min(E / da_threshold_lux, 1) (credit) and of
+// E (sum, lx h).
+struct SensorHourTally {
+  int64_t below = 0, above = 0, da = 0;
+  double credit = 0, sum = 0;
+};
+
+// All the UDI, DA, cDA, sDA and mean-illuminance metrics need of an illuminance: a few
+// numbers per sensor, small enough for a GPU to reduce E to on the device. `hours` is the
+// number of tallied (lit, analysed) hours; all_in / any_below / any_above count the hours
+// in which every sensor is in [a, b] / some sensor falls short / some sensor exceeds.
+struct HourTally {
+  std::vector<SensorHourTally> sensors;
+  int64_t hours = 0;
+  int64_t all_in = 0, any_below = 0, any_above = 0;
+};
+
+// The tally of `illuminance_lux` (n sensors x hours, lx), every column an analysed hour.
+// Assumes valid options (CheckMetricOptions).
+HourTally TallyHours(const Matrix& illuminance_lux, const MetricOptions& options);
+
+// The metrics of a tally over `analysed_hours` >= tally.hours (> 0) hours, those beyond the
+// tally being dark (E = 0). Without ASE (has_ase false; see AddAse). Assumes valid options.
+AnnualMetrics MetricsFromTally(const HourTally& tally, int analysed_hours,
+                               const MetricOptions& options);
+
+// Sets ASE in `metrics` (has_ase, each sensor's ase_hours, scene.ase_percent) from the
+// direct-sun-only illuminance `direct_illuminance_lux` (n sensors x lit analysed hours, lx;
+// the other analysed hours are dark).
+void AddAse(const Matrix& direct_illuminance_lux, const MetricOptions& options,
+            AnnualMetrics* metrics);
 
 // Metrics of `illuminance_lux` (n sensors x columns.size(); column c is time step
 // columns[c]). `occupied` has one flag per time step of the year and so also gives the

@@ -2,7 +2,6 @@
 
 #include <array>
 #include <cmath>
-#include <functional>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -71,53 +70,36 @@ absl::StatusOr<AnalysedColumns> SelectAnalysed(std::span<const int> columns,
   return selected;
 }
 
-// The jackknife over batches. `full` is E of the mean of all batches and `batch(b)` gives
-// E_b, both over the analysed steps only.
-absl::StatusOr<AnnualMetricsEstimate> Jackknife(
-    int batches, const Matrix& full, const std::function<absl::StatusOr<Matrix>(int)>& batch,
-    const AnalysedColumns& analysed, size_t column_count, const std::vector<bool>& occupied,
-    const MetricOptions& options, const Matrix* direct_illuminance_lux) {
-  Matrix direct;
+// Metrics and standard errors of the analysed columns of B >= 2 batch illuminances, with
+// ASE from the analysed columns of the direct-only illuminance (n x column_count) if given.
+absl::StatusOr<AnnualMetricsEstimate> Jackknife(std::span<const Matrix> batches,
+                                                const AnalysedColumns& analysed,
+                                                size_t column_count,
+                                                const std::vector<bool>& occupied,
+                                                const MetricOptions& options,
+                                                const Matrix* direct_illuminance_lux) {
+  const Eigen::Index n = batches[0].rows();
   if (direct_illuminance_lux != nullptr) {
-    if (direct_illuminance_lux->rows() != full.rows() ||
+    if (direct_illuminance_lux->rows() != n ||
         direct_illuminance_lux->cols() != static_cast<Eigen::Index>(column_count)) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "direct-only illuminance is ", direct_illuminance_lux->rows(), " x ",
-          direct_illuminance_lux->cols(), ", expected ", full.rows(), " x ", column_count));
+      return absl::InvalidArgumentError(
+          absl::StrCat("direct-only illuminance is ", direct_illuminance_lux->rows(), " x ",
+                       direct_illuminance_lux->cols(), ", expected ", n, " x ", column_count));
     }
-    direct = (*direct_illuminance_lux)(Eigen::all, analysed.positions);
+    if (!direct_illuminance_lux->allFinite()) {
+      return absl::InvalidArgumentError("illuminance has a non-finite value");
+    }
   }
-  const Matrix* direct_used = direct_illuminance_lux != nullptr ? &direct : nullptr;
-  const std::span<const int> steps(analysed.steps);
-
-  AnnualMetricsEstimate estimate;
-  estimate.batches = batches;
-  FENESTRA_ASSIGN_OR_RETURN(value,
-                            ComputeAnnualMetrics(full, steps, occupied, options, direct_used));
-  estimate.value = std::move(value);
-
-  // Leave each batch out in turn
-  const size_t fields = kSceneFields.size() + kSensorFields.size() * estimate.value.sensors.size();
-  Matrix loo(batches, static_cast<Eigen::Index>(fields));
-  const double scale = 1.0 / (batches - 1);
-  for (int b = 0; b < batches; ++b) {
-    FENESTRA_ASSIGN_OR_RETURN(e_b, batch(b));
-    const Matrix e_loo = (batches * full - e_b) * scale;
-    FENESTRA_ASSIGN_OR_RETURN(m_b,
-                              ComputeAnnualMetrics(e_loo, steps, occupied, options, direct_used));
-    Flatten(m_b, loo.row(b).data());
+  FENESTRA_RETURN_IF_ERROR(CheckMetricOptions(options));
+  FENESTRA_ASSIGN_OR_RETURN(versions, TallyBatchVersions(batches, options));
+  FENESTRA_ASSIGN_OR_RETURN(
+      estimate,
+      AnnualMetricsFromTallies(versions, AnalysedHours(occupied, options.hours), options));
+  // The direct-only illuminance is exact: ASE has no standard error
+  if (direct_illuminance_lux != nullptr) {
+    AddAse((*direct_illuminance_lux)(Eigen::all, analysed.positions), options, &estimate.value);
+    estimate.standard_error.has_ase = true;
   }
-
-  std::vector<double> se(fields);
-  std::vector<double> column(batches);
-  for (size_t f = 0; f < fields; ++f) {
-    for (int b = 0; b < batches; ++b) column[b] = loo(b, static_cast<Eigen::Index>(f));
-    se[f] = JackknifeStandardError(column);
-  }
-  estimate.standard_error.analysed_hours = estimate.value.analysed_hours;
-  estimate.standard_error.has_ase = estimate.value.has_ase;
-  estimate.standard_error.sensors.resize(estimate.value.sensors.size());
-  Unflatten(se.data(), estimate.standard_error);
   return estimate;
 }
 
@@ -132,6 +114,85 @@ double JackknifeStandardError(std::span<const double> leave_one_out_values) {
   double squares = 0;
   for (const double v : leave_one_out_values) squares += (v - mean) * (v - mean);
   return std::sqrt(squares * static_cast<double>(b - 1) / static_cast<double>(b));
+}
+
+absl::StatusOr<std::vector<HourTally>> TallyBatchVersions(
+    std::span<const Matrix> illuminance_batches_lux, const MetricOptions& options) {
+  const int batches = static_cast<int>(illuminance_batches_lux.size());
+  if (batches < 2) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("standard errors need at least 2 batches, got ", batches));
+  }
+  const Matrix& first = illuminance_batches_lux[0];
+  for (const Matrix& e : illuminance_batches_lux) {
+    if (e.rows() != first.rows() || e.cols() != first.cols()) {
+      return absl::InvalidArgumentError(absl::StrCat("illuminance batches of ", first.rows(), " x ",
+                                                     first.cols(), " and ", e.rows(), " x ",
+                                                     e.cols()));
+    }
+    if (!e.allFinite()) return absl::InvalidArgumentError("illuminance has a non-finite value");
+  }
+
+  // E of the mean of all batches, then of the mean without each batch in turn
+  Matrix full = first;
+  for (int b = 1; b < batches; ++b) full += illuminance_batches_lux[b];
+  full /= batches;
+  std::vector<HourTally> versions;
+  versions.reserve(batches + 1);
+  versions.push_back(TallyHours(full, options));
+  const double scale = 1.0 / (batches - 1);
+  for (const Matrix& e_b : illuminance_batches_lux) {
+    versions.push_back(TallyHours((batches * full - e_b) * scale, options));
+  }
+  return versions;
+}
+
+absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromTallies(std::span<const HourTally> versions,
+                                                               int analysed_hours,
+                                                               const MetricOptions& options) {
+  if (versions.size() < 3) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("standard errors need the tallies of the mean and of at least 2 "
+                     "leave-one-out versions, got ",
+                     versions.size(), " tallies"));
+  }
+  const HourTally& mean = versions[0];
+  if (mean.sensors.empty()) return absl::InvalidArgumentError("no sensors");
+  for (const HourTally& v : versions) {
+    if (v.sensors.size() != mean.sensors.size() || v.hours != mean.hours) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("tallies of ", mean.sensors.size(), " sensors x ", mean.hours, " hours and ",
+                       v.sensors.size(), " sensors x ", v.hours, " hours"));
+    }
+  }
+  if (analysed_hours < 1) return absl::InvalidArgumentError("no occupied hours to analyse");
+  if (mean.hours > analysed_hours) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "tallies of ", mean.hours, " hours, more than the ", analysed_hours, " analysed hours"));
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckMetricOptions(options));
+
+  const int batches = static_cast<int>(versions.size()) - 1;
+  AnnualMetricsEstimate estimate;
+  estimate.batches = batches;
+  estimate.value = MetricsFromTally(mean, analysed_hours, options);
+
+  // Leave each batch out in turn
+  const size_t fields = kSceneFields.size() + kSensorFields.size() * mean.sensors.size();
+  Matrix loo(batches, static_cast<Eigen::Index>(fields));
+  for (int b = 0; b < batches; ++b) {
+    Flatten(MetricsFromTally(versions[1 + b], analysed_hours, options), loo.row(b).data());
+  }
+  std::vector<double> se(fields);
+  std::vector<double> column(batches);
+  for (size_t f = 0; f < fields; ++f) {
+    for (int b = 0; b < batches; ++b) column[b] = loo(b, static_cast<Eigen::Index>(f));
+    se[f] = JackknifeStandardError(column);
+  }
+  estimate.standard_error.analysed_hours = analysed_hours;
+  estimate.standard_error.sensors.resize(mean.sensors.size());
+  Unflatten(se.data(), estimate.standard_error);
+  return estimate;
 }
 
 absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsWithErrors(
@@ -162,12 +223,10 @@ absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsWithErrors(
   for (int b = 0; b < batches; ++b) stacked.middleRows(b * n, n) = dc_batches[b];
   FENESTRA_ASSIGN_OR_RETURN(
       all, Illuminance(std::span<const Matrix>(&stacked, 1), sky_channels, analysed.steps));
-  Matrix full = all.middleRows(0, n);
-  for (int b = 1; b < batches; ++b) full += all.middleRows(b * n, n);
-  full /= batches;
-  auto batch = [&](int b) -> absl::StatusOr<Matrix> { return Matrix(all.middleRows(b * n, n)); };
-  return Jackknife(batches, full, batch, analysed, columns.size(), occupied, options,
-                   direct_illuminance_lux);
+  std::vector<Matrix> e(batches);
+  for (int b = 0; b < batches; ++b) e[b] = all.middleRows(b * n, n);
+  all.resize(0, 0);
+  return Jackknife(e, analysed, columns.size(), occupied, options, direct_illuminance_lux);
 }
 
 absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromIlluminanceBatches(
@@ -189,15 +248,11 @@ absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromIlluminanceBatches(
   }
   FENESTRA_ASSIGN_OR_RETURN(analysed, SelectAnalysed(columns, occupied, options));
 
-  Matrix full = illuminance_batches_lux[0](Eigen::all, analysed.positions);
-  for (int b = 1; b < batches; ++b)
-    full += illuminance_batches_lux[b](Eigen::all, analysed.positions);
-  full /= batches;
-  auto batch = [&](int b) -> absl::StatusOr<Matrix> {
-    return Matrix(illuminance_batches_lux[b](Eigen::all, analysed.positions));
-  };
-  return Jackknife(batches, full, batch, analysed, columns.size(), occupied, options,
-                   direct_illuminance_lux);
+  std::vector<Matrix> e;
+  for (const Matrix& batch : illuminance_batches_lux) {
+    e.emplace_back(batch(Eigen::all, analysed.positions));
+  }
+  return Jackknife(e, analysed, columns.size(), occupied, options, direct_illuminance_lux);
 }
 
 }  // namespace fenestra

@@ -9,7 +9,9 @@
 // thresholds in UDI, DA, sDA that make the metrics non-linear in D; for a linear metric
 // it equals the classical standard error of a mean of B batch values. Illuminance is
 // linear in D, so E_(-b) = (B E - E_b) / (B - 1) from E = D S and E_b = D_b S: one product
-// per batch, and only the analysed time steps are multiplied.
+// per batch, and only the analysed time steps are multiplied. Each version of E (the mean
+// and the B leave-one-out) is reduced to an HourTally (annual_metrics.h) before its metrics
+// are taken, so a GPU can form and tally the versions where E is and return only tallies.
 //
 // The direct-only illuminance for ASE, when given, is taken as exact (no batches): the ASE
 // standard errors come out 0.
@@ -33,6 +35,21 @@ struct AnnualMetricsEstimate {
 // The jackknife standard error from the B leave-one-out values; 0 when B < 2.
 double JackknifeStandardError(std::span<const double> leave_one_out_values);
 
+// The tallies of the versions of E that AnnualMetricsFromTallies takes, from B >= 2 batch
+// illuminances (each n x hours, lx, every column an analysed hour): E = mean of the E_b,
+// then each E_(-b) = (B E - E_b) / (B - 1). Assumes valid options (CheckMetricOptions).
+// InvalidArgument for fewer than 2 batches, batches of different shapes or a non-finite value.
+absl::StatusOr<std::vector<HourTally>> TallyBatchVersions(
+    std::span<const Matrix> illuminance_batches_lux, const MetricOptions& options);
+
+// Metrics and standard errors from the tallies of the versions of E: versions[0] of the mean
+// of the B >= 2 batches, versions[1 + b] of E_(-b), the hours beyond them dark as in
+// MetricsFromTally; no ASE. InvalidArgument for fewer than 3 versions, versions that differ
+// in sensors or hours, no sensors, analysed_hours < 1 or below the tallied hours, bad options.
+absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromTallies(std::span<const HourTally> versions,
+                                                               int analysed_hours,
+                                                               const MetricOptions& options);
+
 // Metrics and standard errors from B >= 2 batch estimates of grey daylight coefficients
 // (each n x m) under a sky of 1 or 3 channels (illuminance.h); `columns`, `occupied`,
 // `options` and `direct_illuminance_lux` (n x columns.size(), may be null) as in
@@ -43,8 +60,7 @@ absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsWithErrors(
     const MetricOptions& options = {}, const Matrix* direct_illuminance_lux = nullptr);
 
 // The same from B >= 2 batch illuminances (each n x columns.size(), lx) formed by the
-// caller, e.g. from coloured coefficients. Holds all B matrices; the overload above keeps
-// two at a time.
+// caller, e.g. from coloured coefficients.
 absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromIlluminanceBatches(
     std::span<const Matrix> illuminance_batches_lux, std::span<const int> columns,
     const std::vector<bool>& occupied, const MetricOptions& options = {},

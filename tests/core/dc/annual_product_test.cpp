@@ -1,10 +1,13 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <memory>
 #include <vector>
 
 #include "core/dc/dc_backend.h"
 #include "core/dc/two_stage.h"
+#include "core/metrics/annual_metrics.h"
 #include "tests/example_scene.h"
 
 namespace fenestra {
@@ -40,6 +43,57 @@ TEST(AnnualProductTest, IsDTimesTheSky) {
   std::vector<Matrix> wrong = {Matrix::Zero(9, 288)};
   EXPECT_EQ((*product)->Apply(wrong).status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_FALSE(backend->MakeAnnualProduct(o->coefficients, Matrix::Zero(10, 4)).ok());
+}
+
+// The default tallies are those of the mean and leave-one-out E formed from Apply's E.
+TEST(AnnualProductTest, TalliesTheVersionsOfE) {
+  const int batches = 4, sensors = 5, cells = 12, hours = 40;
+  std::srand(7);
+  const Matrix outdoor = Matrix::Random(cells, kDaylightBins).cwiseAbs();
+  // Hours from dim to bright, so E crosses 100, 300 and 3000 lx
+  Matrix sky = Matrix::Random(kDaylightBins, hours).cwiseAbs();
+  for (int h = 0; h < hours; ++h) sky.col(h) *= 0.2 * std::pow(1.13, h);
+  std::vector<Matrix> indoor;
+  for (int b = 0; b < batches; ++b) indoor.push_back(Matrix::Random(sensors, cells).cwiseAbs());
+  std::unique_ptr<DcBackend> backend = MakeEmbreeBackend();
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> product = backend->MakeAnnualProduct(outdoor, sky);
+  ASSERT_TRUE(product.ok()) << product.status();
+  absl::StatusOr<std::vector<Matrix>> e = (*product)->Apply(indoor);
+  ASSERT_TRUE(e.ok()) << e.status();
+  const MetricOptions options;
+  absl::StatusOr<std::vector<HourTally>> tallies = (*product)->Tally(indoor, options);
+  ASSERT_TRUE(tallies.ok()) << tallies.status();
+  ASSERT_EQ(tallies->size(), batches + 1u);
+
+  Matrix mean = Matrix::Zero(sensors, hours);
+  for (const Matrix& e_b : *e) mean += e_b;
+  mean /= batches;
+  EXPECT_LT(mean.minCoeff(), 100);
+  EXPECT_GT(mean.maxCoeff(), 3000);
+  for (int v = 0; v <= batches; ++v) {
+    SCOPED_TRACE(v);
+    const Matrix version = v == 0 ? mean : Matrix((batches * mean - (*e)[v - 1]) / (batches - 1.0));
+    const HourTally expected = TallyHours(version, options);
+    const HourTally& got = (*tallies)[v];
+    EXPECT_EQ(got.hours, hours);
+    EXPECT_EQ(got.all_in, expected.all_in);
+    EXPECT_EQ(got.any_below, expected.any_below);
+    EXPECT_EQ(got.any_above, expected.any_above);
+    ASSERT_EQ(got.sensors.size(), static_cast<size_t>(sensors));
+    for (int i = 0; i < sensors; ++i) {
+      EXPECT_EQ(got.sensors[i].below, expected.sensors[i].below);
+      EXPECT_EQ(got.sensors[i].above, expected.sensors[i].above);
+      EXPECT_EQ(got.sensors[i].da, expected.sensors[i].da);
+      EXPECT_NEAR(got.sensors[i].credit, expected.sensors[i].credit, 1e-9);
+      EXPECT_NEAR(got.sensors[i].sum, expected.sensors[i].sum, 1e-9 * expected.sensors[i].sum);
+    }
+  }
+  // One batch has no leave-one-out; a batch of another window split is rejected
+  EXPECT_EQ((*product)->Tally({indoor[0]}, options).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(
+      (*product)->Tally({Matrix::Zero(sensors, cells + 1), indoor[1]}, options).status().code(),
+      absl::StatusCode::kInvalidArgument);
 }
 
 }  // namespace

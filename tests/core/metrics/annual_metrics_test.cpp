@@ -196,6 +196,110 @@ TEST(AnnualMetricsTest, FullYearHas3650HoursAndAse250) {
   EXPECT_DOUBLE_EQ(m->scene.ase_percent, 50);
 }
 
+// Every number of two results, exactly.
+void ExpectSameMetrics(const AnnualMetrics& a, const AnnualMetrics& b) {
+  EXPECT_EQ(a.analysed_hours, b.analysed_hours);
+  EXPECT_EQ(a.has_ase, b.has_ase);
+  ASSERT_EQ(a.sensors.size(), b.sensors.size());
+  for (size_t i = 0; i < a.sensors.size(); ++i) {
+    const SensorMetrics &s = a.sensors[i], &t = b.sensors[i];
+    EXPECT_EQ(s.udi_percent, t.udi_percent) << i;
+    EXPECT_EQ(s.udi_fell_short_percent, t.udi_fell_short_percent) << i;
+    EXPECT_EQ(s.udi_exceeded_percent, t.udi_exceeded_percent) << i;
+    EXPECT_EQ(s.da_percent, t.da_percent) << i;
+    EXPECT_EQ(s.cda_percent, t.cda_percent) << i;
+    EXPECT_EQ(s.mean_illuminance_lux, t.mean_illuminance_lux) << i;
+    EXPECT_EQ(s.ase_hours, t.ase_hours) << i;
+  }
+  for (SceneMetric metric :
+       {SceneMetric::kUdiAll, SceneMetric::kUdiAllFellShort, SceneMetric::kUdiAllExceeded,
+        SceneMetric::kUdiMean, SceneMetric::kUdiMeanFellShort, SceneMetric::kUdiMeanExceeded,
+        SceneMetric::kDaMean, SceneMetric::kCdaMean, SceneMetric::kSda, SceneMetric::kAse,
+        SceneMetric::kMeanIlluminance}) {
+    EXPECT_EQ(SceneMetricValue(a.scene, metric), SceneMetricValue(b.scene, metric))
+        << SceneMetricName(metric);
+  }
+}
+
+// Sensor 0 has hours at both UDI limits and at the DA threshold, sensor 1 is always dark
+// (out of range), sensor 2 in range but for one hour.
+const std::vector<std::vector<double>> kTallyCase = {
+    {100, 3000, 99.9, 3000.5, 300, 299.9, 0, 5000, 1500, 50},
+    std::vector<double>(10, 0),
+    {500, 500, 500, 500, 500, 500, 500, 500, 500, 4000}};
+
+TEST(AnnualMetricsTest, TallyCountsEachSensorAndHour) {
+  const Matrix e = OneDay(kTallyCase)(Eigen::all, Eigen::seq(2, 11));  // the occupied hours
+  const HourTally t = TallyHours(e, MetricOptions{});
+  EXPECT_EQ(t.hours, 10);
+  ASSERT_EQ(t.sensors.size(), 3u);
+  EXPECT_EQ(t.sensors[0].below, 3);  // 99.9, 0, 50
+  EXPECT_EQ(t.sensors[0].above, 2);  // 3000.5, 5000
+  EXPECT_EQ(t.sensors[0].da, 5);     // 3000, 3000.5, 300, 5000, 1500
+  EXPECT_NEAR(t.sensors[0].credit, 5 + (100 + 99.9 + 299.9 + 50) / 300.0, 1e-12);
+  EXPECT_NEAR(t.sensors[0].sum, 13350.3, 1e-9);
+  EXPECT_EQ(t.sensors[1].below, 10);
+  EXPECT_EQ(t.sensors[1].da, 0);
+  EXPECT_EQ(t.sensors[1].credit, 0);
+  EXPECT_EQ(t.sensors[2].above, 1);
+  EXPECT_EQ(t.sensors[2].da, 10);
+  EXPECT_EQ(t.sensors[2].credit, 10);
+  EXPECT_EQ(t.sensors[2].sum, 8500);
+  // Sensor 1 is below in every hour
+  EXPECT_EQ(t.all_in, 0);
+  EXPECT_EQ(t.any_below, 10);
+  EXPECT_EQ(t.any_above, 3);
+  // Without it, sensors 0 and 2 are both in range in hours 0, 1, 4, 5, 8
+  const std::vector<int> rows = {0, 2};
+  const HourTally two = TallyHours(e(rows, Eigen::all), MetricOptions{});
+  EXPECT_EQ(two.all_in, 5);
+  EXPECT_EQ(two.any_below, 3);
+  EXPECT_EQ(two.any_above, 3);
+}
+
+TEST(AnnualMetricsTest, MetricsFromTallyCountDarkHoursAsComputeAnnualMetricsDoes) {
+  // Two days: the first day's occupied hours lit, the second's dark
+  const Matrix e = OneDay(kTallyCase);
+  const Matrix lit = e(Eigen::all, Eigen::seq(2, 11));
+  const std::vector<bool> occupied = Occupied(2);
+  MetricOptions zero_lower;
+  zero_lower.udi_lower_lux = 0;  // dark hours in range
+  for (const MetricOptions& options : {MetricOptions{}, zero_lower}) {
+    absl::StatusOr<AnnualMetrics> expected =
+        ComputeAnnualMetrics(e, DaytimeColumns(1), occupied, options);
+    ASSERT_TRUE(expected.ok()) << expected.status();
+    const AnnualMetrics m = MetricsFromTally(TallyHours(lit, options), 20, options);
+    ExpectSameMetrics(m, *expected);
+    // The analysed hours beyond the tally are E = 0 exactly
+    Matrix with_dark = Matrix::Zero(3, 20);
+    with_dark.leftCols(10) = lit;
+    ExpectSameMetrics(MetricsFromTally(TallyHours(with_dark, options), 20, options), m);
+  }
+
+  // By hand, with the default options
+  const AnnualMetrics m = MetricsFromTally(TallyHours(lit, MetricOptions{}), 20, MetricOptions{});
+  EXPECT_EQ(m.analysed_hours, 20);
+  EXPECT_DOUBLE_EQ(m.sensors[0].udi_percent, 25);
+  EXPECT_DOUBLE_EQ(m.sensors[0].udi_fell_short_percent, 65);
+  EXPECT_DOUBLE_EQ(m.sensors[0].udi_exceeded_percent, 10);
+  EXPECT_DOUBLE_EQ(m.sensors[0].da_percent, 25);
+  EXPECT_NEAR(m.sensors[0].mean_illuminance_lux, 13350.3 / 20, 1e-9);
+  EXPECT_DOUBLE_EQ(m.sensors[1].udi_fell_short_percent, 100);
+  EXPECT_DOUBLE_EQ(m.sensors[2].udi_percent, 45);
+  EXPECT_DOUBLE_EQ(m.sensors[2].cda_percent, 50);
+  EXPECT_DOUBLE_EQ(m.scene.udi_all_percent, 0);
+  EXPECT_DOUBLE_EQ(m.scene.udi_all_fell_short_percent, 100);
+  EXPECT_DOUBLE_EQ(m.scene.udi_all_exceeded_percent, 15);
+  EXPECT_DOUBLE_EQ(m.scene.sda_percent, 100.0 / 3);  // sensor 2 only
+  EXPECT_FALSE(m.has_ase);
+
+  // With the lower limit at 0, the dark sensor and the dark hours are in range
+  const AnnualMetrics z = MetricsFromTally(TallyHours(lit, zero_lower), 20, zero_lower);
+  EXPECT_DOUBLE_EQ(z.sensors[1].udi_percent, 100);
+  EXPECT_DOUBLE_EQ(z.sensors[0].udi_percent, 90);  // 8 lit hours + 10 dark
+  EXPECT_DOUBLE_EQ(z.scene.udi_all_percent, 85);   // hours 0, 1, 2, 4, 5, 6, 8 + 10 dark
+}
+
 TEST(AnnualMetricsTest, RejectsBadInput) {
   const std::vector<int> columns = DaytimeColumns(1);
   const std::vector<bool> occupied = Occupied(1);

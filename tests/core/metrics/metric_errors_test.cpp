@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <span>
 #include <vector>
 
 #include "core/metrics/illuminance.h"
@@ -153,6 +154,115 @@ TEST(MetricErrorsTest, IlluminanceBatchesAgreeWithCoefficientBatches) {
   EXPECT_EQ(a->standard_error.scene.ase_percent, 0);
   EXPECT_TRUE(a->standard_error.has_ase);
   EXPECT_EQ(a->standard_error.analysed_hours, 10);
+}
+
+TEST(MetricErrorsTest, TalliesOfTheVersionsGiveTheBatchEstimate) {
+  const int batches = 5;
+  const Day day = MakeDay(3, 10);
+  const std::vector<Matrix> dc = RandomBatches(batches, 4, 3, 2.0, 11);
+  std::vector<Matrix> e;
+  for (const Matrix& d : dc) e.push_back(*Illuminance(d, day.sky, day.columns));
+  MetricOptions all_hours;  // 24 analysed hours, 10 of them dark
+  all_hours.hours = HourBasis::kAllHours;
+  for (const MetricOptions& options : {MetricOptions{}, all_hours}) {
+    absl::StatusOr<AnnualMetricsEstimate> expected =
+        AnnualMetricsFromIlluminanceBatches(e, day.columns, day.occupied, options);
+    ASSERT_TRUE(expected.ok()) << expected.status();
+
+    // The versions formed and tallied here, over the analysed columns only
+    std::vector<int> steps, positions;
+    for (size_t c = 0; c < day.columns.size(); ++c) {
+      if (options.hours == HourBasis::kAllHours || day.occupied[day.columns[c]]) {
+        steps.push_back(day.columns[c]);
+        positions.push_back(static_cast<int>(c));
+      }
+    }
+    Matrix mean = Matrix::Zero(4, static_cast<int>(steps.size()));
+    for (const Matrix& e_b : e) mean += e_b(Eigen::all, positions);
+    mean /= batches;
+    std::vector<Matrix> versions = {mean};
+    for (const Matrix& e_b : e) {
+      versions.push_back((batches * mean - e_b(Eigen::all, positions)) / (batches - 1.0));
+    }
+    std::vector<HourTally> tallies;
+    for (const Matrix& v : versions) tallies.push_back(TallyHours(v, options));
+    const int analysed_hours = options.hours == HourBasis::kAllHours ? 24 : 10;
+    absl::StatusOr<AnnualMetricsEstimate> got =
+        AnnualMetricsFromTallies(tallies, analysed_hours, options);
+    ASSERT_TRUE(got.ok()) << got.status();
+    EXPECT_EQ(got->batches, batches);
+    EXPECT_EQ(got->value.analysed_hours, analysed_hours);
+    EXPECT_EQ(got->standard_error.analysed_hours, analysed_hours);
+
+    // The value and the jackknife over ComputeAnnualMetrics of each version
+    std::vector<AnnualMetrics> direct;
+    for (const Matrix& v : versions) {
+      absl::StatusOr<AnnualMetrics> m = ComputeAnnualMetrics(v, steps, day.occupied, options);
+      ASSERT_TRUE(m.ok()) << m.status();
+      direct.push_back(*m);
+    }
+    auto jackknife = [&](auto field) {
+      std::vector<double> values;
+      for (int b = 1; b <= batches; ++b) values.push_back(field(direct[b]));
+      return JackknifeStandardError(values);
+    };
+    for (SceneMetric metric :
+         {SceneMetric::kUdiAll, SceneMetric::kUdiAllFellShort, SceneMetric::kUdiAllExceeded,
+          SceneMetric::kUdiMean, SceneMetric::kUdiMeanFellShort, SceneMetric::kUdiMeanExceeded,
+          SceneMetric::kDaMean, SceneMetric::kCdaMean, SceneMetric::kSda,
+          SceneMetric::kMeanIlluminance}) {
+      SCOPED_TRACE(SceneMetricName(metric));
+      const double value = SceneMetricValue(got->value.scene, metric);
+      const double se = SceneMetricValue(got->standard_error.scene, metric);
+      EXPECT_NEAR(value, SceneMetricValue(direct[0].scene, metric), 1e-9);
+      EXPECT_NEAR(
+          se, jackknife([&](const AnnualMetrics& m) { return SceneMetricValue(m.scene, metric); }),
+          1e-9);
+      EXPECT_NEAR(value, SceneMetricValue(expected->value.scene, metric), 1e-9);
+      EXPECT_NEAR(se, SceneMetricValue(expected->standard_error.scene, metric), 1e-9);
+    }
+    ASSERT_EQ(got->standard_error.sensors.size(), 4u);
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_NEAR(got->value.sensors[i].udi_percent, expected->value.sensors[i].udi_percent, 1e-9);
+      EXPECT_NEAR(got->standard_error.sensors[i].da_percent,
+                  jackknife([&](const AnnualMetrics& m) { return m.sensors[i].da_percent; }), 1e-9);
+      EXPECT_NEAR(got->standard_error.sensors[i].cda_percent,
+                  expected->standard_error.sensors[i].cda_percent, 1e-9);
+    }
+    EXPECT_GT(got->standard_error.scene.mean_illuminance_lux, 0);
+  }
+}
+
+TEST(MetricErrorsTest, TalliesRejectBadVersions) {
+  const Day day = MakeDay(3, 12);
+  std::vector<Matrix> e;
+  for (const Matrix& d : RandomBatches(3, 2, 3, 1, 13)) {
+    e.push_back(*Illuminance(d, day.sky, day.columns));
+  }
+  absl::StatusOr<std::vector<HourTally>> tallies = TallyBatchVersions(e, MetricOptions{});
+  ASSERT_TRUE(tallies.ok()) << tallies.status();
+  ASSERT_EQ(tallies->size(), 4u);
+  EXPECT_TRUE(AnnualMetricsFromTallies(*tallies, 14, {}).ok());
+  for (size_t count : {0, 1, 2}) {
+    const std::span<const HourTally> few(tallies->data(), count);
+    EXPECT_EQ(AnnualMetricsFromTallies(few, 14, {}).status().code(),
+              absl::StatusCode::kInvalidArgument)
+        << count;
+  }
+  std::vector<HourTally> other_sensors = *tallies;
+  other_sensors[2].sensors.pop_back();
+  EXPECT_EQ(AnnualMetricsFromTallies(other_sensors, 14, {}).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_FALSE(AnnualMetricsFromTallies(*tallies, 13, {}).ok());  // fewer than tallied
+  EXPECT_FALSE(AnnualMetricsFromTallies(*tallies, 0, {}).ok());
+  MetricOptions inverted;
+  inverted.udi_lower_lux = 3000;
+  inverted.udi_upper_lux = 100;
+  EXPECT_FALSE(AnnualMetricsFromTallies(*tallies, 14, inverted).ok());
+  // The versions need two batches of one shape
+  EXPECT_FALSE(TallyBatchVersions(std::span<const Matrix>(e.data(), 1), {}).ok());
+  e[1] = Matrix::Ones(2, 13);
+  EXPECT_FALSE(TallyBatchVersions(e, {}).ok());
 }
 
 TEST(MetricErrorsTest, RejectsBadInput) {
