@@ -354,17 +354,23 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   const v1::Job& spec = job.job;
   v1::JobResult result;
 
-  // Sky matrix, its lit columns and the occupied hours
+  // Sky matrix, the occupied hours and the lit analysed ones (the rest are dark or not counted)
   if (callbacks.stage) callbacks.stage("sky");
   FENESTRA_ASSIGN_OR_RETURN(weather, ReadEpw(job.weather_file));
   SkyMatrixOptions sky_options;
   sky_options.ground_reflectance = job.scene.site.ground_reflectance;
   FENESTRA_ASSIGN_OR_RETURN(sky, BuildSkyMatrix(weather, sky_options));
-  const std::vector<int> columns = LitColumns(sky.radiance);
   std::vector<double> hours;
   for (const SkyStep& step : sky.steps) hours.push_back(step.hour);
   FENESTRA_ASSIGN_OR_RETURN(occupied, OccupiedSteps(hours, {spec.metrics().occupied_start_h(),
                                                             spec.metrics().occupied_end_h()}));
+  const HourBasis hour_basis =
+      spec.metrics().all_hours() ? HourBasis::kAllHours : HourBasis::kOccupied;
+  std::vector<int> columns;
+  for (const int c : LitColumns(sky.radiance)) {
+    if (hour_basis == HourBasis::kAllHours || occupied[c]) columns.push_back(c);
+  }
+  const int analysed_hours = AnalysedHours(occupied, hour_basis);
   result.mutable_timings()->set_sky_seconds(Since(start));
 
   // Outdoor matrix: the cached one, or traced now
@@ -390,7 +396,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   metric_options.udi_upper_lux = spec.metrics().udi_upper_lux();
   metric_options.da_threshold_lux = spec.metrics().da_threshold_lux();
   metric_options.sda_min_da_percent = spec.metrics().sda_time_fraction_percent();
-  metric_options.hours = spec.metrics().all_hours() ? HourBasis::kAllHours : HourBasis::kOccupied;
+  metric_options.hours = hour_basis;
   FENESTRA_ASSIGN_OR_RETURN(metric, ToSceneMetric(spec.objective().metric()));
   IndoorOptions indoor_options;
   indoor_options.paths_per_sensor = spec.sampling().indoor_paths_per_sensor();
@@ -399,7 +405,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   indoor_options.basis_cells = spec.sampling().basis_cells();
   indoor_options.parts = SamplingWindowParts(spec.sampling(), job.scene.window);
   indoor_options.batches = spec.sampling().batches();
-  // E_b = (I_b O) S over the lit hours, in lux, where the backend computes
+  // E_b = (I_b O) S over the lit analysed hours, in lux, where the backend computes
   if (!(outdoor->parts == indoor_options.parts)) {
     return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
   }
@@ -424,9 +430,9 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     FENESTRA_ASSIGN_OR_RETURN(indoor, indoor_stages->Compute(DesignAt(job, x)));
-    FENESTRA_ASSIGN_OR_RETURN(illuminance, product->Apply(indoor.batches));
-    FENESTRA_ASSIGN_OR_RETURN(metrics, AnnualMetricsFromIlluminanceBatches(
-                                           illuminance, columns, occupied, metric_options));
+    FENESTRA_ASSIGN_OR_RETURN(tallies, product->Tally(indoor.batches, metric_options));
+    FENESTRA_ASSIGN_OR_RETURN(metrics,
+                              AnnualMetricsFromTallies(tallies, analysed_hours, metric_options));
     return MetricEvaluation(std::move(metrics), metric);
   };
 
