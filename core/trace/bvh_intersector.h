@@ -129,12 +129,15 @@ struct BvhIntersector {
     float t_best = t_max;
     float best_b1 = 0, best_b2 = 0;
     int32_t best = -1;
+    // Waiting nodes with the distance at which the ray enters them: one that lies beyond
+    // the closest hit found since is dropped without being fetched
     int32_t stack[kStackSize];
+    float stack_near[kStackSize];
     int sp = 0;
     int32_t node = 0;
     for (;;) {
       const BvhNode n = LoadNode(nodes + node);
-      float near0, near1;
+      float near0 = 0, near1 = 0;
       const bool enter0 = n.child[0] != kBvhEmptyChild && Slab(n, 0, origin, inv, t_best, &near0);
       const bool enter1 = n.child[1] != kBvhEmptyChild && Slab(n, 1, origin, inv, t_best, &near1);
       // Nearer child first: leaves are tested at once, inner children wait their turn
@@ -143,6 +146,7 @@ struct BvhIntersector {
       const int32_t second = swap ? n.child[0] : n.child[1];
       const bool enter_first = swap ? enter1 : enter0;
       const bool enter_second = swap ? enter0 : enter1;
+      const float near_second = swap ? near0 : near1;
       int32_t next = -1, later = -1;
       if (enter_first) {
         if (first >= 0) {
@@ -158,14 +162,16 @@ struct BvhIntersector {
           return true;
         }
       }
-      if (later >= 0 && sp < kStackSize) stack[sp++] = later;
-      if (next >= 0) {
-        node = next;
-      } else if (sp > 0) {
-        node = stack[--sp];
-      } else {
-        break;
+      if (later >= 0 && sp < kStackSize) {
+        stack[sp] = later;
+        stack_near[sp++] = near_second;
       }
+      if (next < 0) {
+        while (sp > 0 && stack_near[sp - 1] > t_best) --sp;
+        if (sp == 0) break;
+        next = stack[--sp];
+      }
+      node = next;
     }
     if (best < 0) return false;
     const BvhTriangle& tri = triangles[best];
