@@ -9,6 +9,7 @@
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
 #include "core/dc/dc_backend.h"
+#include "core/dc/two_stage.h"
 #include "core/trace/one_stage_cpu.h"
 
 #if FENESTRA_WITH_CUDA
@@ -25,6 +26,53 @@ absl::Status Check(const std::string& error) {
   return error.empty() ? absl::OkStatus() : absl::InternalError(error);
 }
 
+// Builds the geometry's BVH and hands it to the tracer to trace next.
+absl::Status UploadScene(CudaTracer& tracer, const TraceGeometry& geometry, BvhQuality quality) {
+  FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(geometry, quality));
+  return Check(tracer.SetScene(bvh, geometry.triangle_material.data(),
+                               geometry.triangle_material.size(), geometry.materials.data(),
+                               geometry.materials.size()));
+}
+
+// Host buffers for the tallies the tracer reduces E to (CudaTracer::TallyRequest).
+struct DeviceTallies {
+  DeviceTallies(int batches, int sensors, const MetricOptions& options)
+      : batches(batches),
+        sensors(sensors),
+        counts(3 * static_cast<size_t>(batches + 1) * sensors),
+        hours(4 * static_cast<size_t>(batches + 1)),
+        sums(2 * static_cast<size_t>(batches + 1) * sensors),
+        request{options.udi_lower_lux, options.udi_upper_lux, options.da_threshold_lux,
+                counts.data(),         sums.data(),           hours.data()} {}
+
+  // The versions as HourTally, each over `steps` hours; InvalidArgument for a non-finite E.
+  absl::StatusOr<std::vector<HourTally>> Versions(int64_t steps) const {
+    std::vector<HourTally> versions(batches + 1);
+    for (int v = 0; v <= batches; ++v) {
+      if (hours[4 * v + 3] > 0) {
+        return absl::InvalidArgumentError("illuminance has a non-finite value");
+      }
+      HourTally& tally = versions[v];
+      tally.hours = steps;
+      tally.all_in = hours[4 * v];
+      tally.any_below = hours[4 * v + 1];
+      tally.any_above = hours[4 * v + 2];
+      tally.sensors.resize(sensors);
+      for (int i = 0; i < sensors; ++i) {
+        const size_t k = static_cast<size_t>(v) * sensors + i;
+        tally.sensors[i] = {counts[3 * k], counts[3 * k + 1], counts[3 * k + 2], sums[2 * k],
+                            sums[2 * k + 1]};
+      }
+    }
+    return versions;
+  }
+
+  int batches, sensors;
+  std::vector<int64_t> counts, hours;
+  std::vector<double> sums;
+  CudaTracer::TallyRequest request;
+};
+
 // The annual product on the GPU. The tracer holds one product's O and S at a time; a
 // product whose matrices were replaced by a later one uploads its own again.
 class CudaAnnualProduct : public AnnualProduct {
@@ -39,23 +87,90 @@ class CudaAnnualProduct : public AnnualProduct {
   absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
     if (indoor_batches.empty()) return std::vector<Matrix>{};
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, outdoor_.rows()));
-    if (*current_ != generation_) {
-      FENESTRA_RETURN_IF_ERROR(
-          Check(tracer_->SetAnnualProduct(outdoor_.data(), static_cast<int>(outdoor_.rows()),
-                                          sky_.data(), static_cast<int>(sky_.cols()))));
-      *current_ = generation_;
-    }
+    FENESTRA_RETURN_IF_ERROR(Hold());
     Matrix illuminance(stacked.rows(), sky_.cols());
     FENESTRA_RETURN_IF_ERROR(Check(tracer_->AnnualProduct(
         stacked.data(), static_cast<int>(stacked.rows()), illuminance.data())));
     return SplitBatches(illuminance, indoor_batches.size());
   }
 
+  // E is formed and tallied on the device; only the tallies come back.
+  absl::StatusOr<std::vector<HourTally>> Tally(const std::vector<Matrix>& indoor_batches,
+                                               const MetricOptions& options) override {
+    const int batches = static_cast<int>(indoor_batches.size());
+    FENESTRA_RETURN_IF_ERROR(CheckBatches(batches));
+    FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, outdoor_.rows()));
+    FENESTRA_RETURN_IF_ERROR(Hold());
+    const int sensors = static_cast<int>(indoor_batches[0].rows());
+    DeviceTallies tallies(batches, sensors, options);
+    FENESTRA_RETURN_IF_ERROR(
+        Check(tracer_->AnnualTally(stacked.data(), batches, sensors, tallies.request)));
+    return tallies.Versions(sky_.cols());
+  }
+
+  // Makes the tracer hold this product's O and S (a later product may have replaced them).
+  absl::Status Hold() {
+    if (*current_ == generation_) return absl::OkStatus();
+    FENESTRA_RETURN_IF_ERROR(
+        Check(tracer_->SetAnnualProduct(outdoor_.data(), static_cast<int>(outdoor_.rows()),
+                                        sky_.data(), static_cast<int>(sky_.cols()))));
+    *current_ = generation_;
+    return absl::OkStatus();
+  }
+
+  static absl::Status CheckBatches(int batches) {
+    if (batches >= 2) return absl::OkStatus();
+    return absl::InvalidArgumentError(
+        absl::StrCat("standard errors need at least 2 batches, got ", batches));
+  }
+
+  Eigen::Index steps() const { return sky_.cols(); }
+
  private:
   CudaTracer* tracer_;
   int* current_;
   int generation_;
   Matrix outdoor_, sky_;
+};
+
+// A search's objective on the GPU: per design the room and blind are uploaded, then the
+// indoor kernel's sums become I, E and E's tallies on the device.
+class CudaDesignTallies : public DesignTallies {
+ public:
+  CudaDesignTallies(CudaTracer* tracer, Scene scene, const IndoorOptions& options,
+                    const HemisphereBasis& basis, std::unique_ptr<CudaAnnualProduct> product)
+      : tracer_(tracer),
+        scene_(std::move(scene)),
+        options_(options),
+        basis_(basis),
+        product_(std::move(product)) {}
+
+  absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
+                                               const MetricOptions& options) override {
+    FENESTRA_ASSIGN_OR_RETURN(
+        geometry, PrepareTraceGeometry(SelectSide(AssembleMesh(scene_, design), Side::kIndoor),
+                                       scene_.materials));
+    FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, geometry, BvhQuality::kMedium));
+    FENESTRA_RETURN_IF_ERROR(product_->Hold());
+    const std::vector<TraceSensor> sensors = LocalSensors(geometry, scene_.sensors);
+    PathSettings path = IndoorPathSettings(options_);
+    path.importance = nullptr;
+    DeviceTallies tallies(options_.batches, static_cast<int>(sensors.size()), options);
+    CudaCounters counters;
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->IndoorAnnualTally(
+        sensors.data(), static_cast<int>(sensors.size()),
+        LocalWindow(geometry, scene_.window, options_.parts), basis_,
+        static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, options_.seed, path,
+        tallies.request, &counters)));
+    return tallies.Versions(product_->steps());
+  }
+
+ private:
+  CudaTracer* tracer_;
+  Scene scene_;
+  IndoorOptions options_;
+  HemisphereBasis basis_;
+  std::unique_ptr<CudaAnnualProduct> product_;
 };
 
 class CudaBackend : public DcBackend {
@@ -66,12 +181,27 @@ class CudaBackend : public DcBackend {
 
   absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(const Matrix& outdoor,
                                                                    const Matrix& sky) override {
-    if (outdoor.cols() != kDaylightBins || sky.rows() != kDaylightBins) {
-      return absl::InvalidArgumentError(absl::StrCat("the outdoor matrix has ", outdoor.cols(),
-                                                     " sky bins, the sky ", sky.rows()));
-    }
+    FENESTRA_RETURN_IF_ERROR(CheckProduct(outdoor, sky));
     return std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_current_,
                                                ++annual_generation_, outdoor, sky);
+  }
+
+  absl::StatusOr<std::unique_ptr<DesignTallies>> MakeDesignTallies(const Scene& scene,
+                                                                   const IndoorOptions& options,
+                                                                   const Matrix& outdoor,
+                                                                   const Matrix& sky) override {
+    FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
+    FENESTRA_RETURN_IF_ERROR(CheckProduct(outdoor, sky));
+    if (outdoor.rows() !=
+        static_cast<Eigen::Index>(options.parts.columns) * options.parts.rows * basis.cell_count) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "the outdoor matrix has ", outdoor.rows(), " window cells, the indoor stage ",
+          options.parts.columns * options.parts.rows * basis.cell_count));
+    }
+    auto product = std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_current_,
+                                                       ++annual_generation_, outdoor, sky);
+    return std::make_unique<CudaDesignTallies>(tracer_.get(), scene, options, basis,
+                                               std::move(product));
   }
 
   absl::StatusOr<OneStageResult> OneStage(const TriangleMesh& mesh,
@@ -173,6 +303,11 @@ class CudaBackend : public DcBackend {
   }
 
  private:
+  static absl::Status CheckProduct(const Matrix& outdoor, const Matrix& sky) {
+    if (outdoor.cols() == kDaylightBins && sky.rows() == kDaylightBins) return absl::OkStatus();
+    return absl::InvalidArgumentError(
+        absl::StrCat("the outdoor matrix has ", outdoor.cols(), " sky bins, the sky ", sky.rows()));
+  }
   static PathSettings WithoutImportance(PathSettings path) {
     path.importance = nullptr;
     return path;
@@ -187,10 +322,7 @@ class CudaBackend : public DcBackend {
   }
 
   absl::Status Upload(const TraceGeometry& geometry, BvhQuality quality = BvhQuality::kHigh) {
-    FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(geometry, quality));
-    return Check(tracer_->SetScene(bvh, geometry.triangle_material.data(),
-                                   geometry.triangle_material.size(), geometry.materials.data(),
-                                   geometry.materials.size()));
+    return UploadScene(*tracer_, geometry, quality);
   }
 
   std::unique_ptr<CudaTracer> tracer_;

@@ -92,6 +92,17 @@ class AnnualProduct {
                                                        const MetricOptions& options);
 };
 
+// A search's objective per design (core/optimize/job.cpp): the design's indoor stage, then
+// the tallies of its E = (I O) S for the annual metrics (AnnualProduct::Tally). Made by
+// DcBackend::MakeDesignTallies.
+class DesignTallies {
+ public:
+  virtual ~DesignTallies() = default;
+  // InvalidArgument for a design the stage refuses (IndoorStages::Compute).
+  virtual absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
+                                                       const MetricOptions& options) = 0;
+};
+
 // A tracer backend for daylight coefficients (Embree on the CPU, CUDA on a GPU), chosen at
 // run time. Implementations are thread-compatible: one call at a time per object.
 class DcBackend {
@@ -133,6 +144,13 @@ class DcBackend {
   // (core/dc/indoor_replay.h). Must not outlive the backend.
   virtual absl::StatusOr<std::unique_ptr<IndoorStages>> MakeIndoorStages(
       const Scene& scene, const IndoorOptions& options);
+
+  // A search's objective (DesignTallies) for the designs within `scene`'s blind ranges, with
+  // `outdoor` and `sky` as MakeAnnualProduct takes them: by default MakeIndoorStages and
+  // MakeAnnualProduct in turn; the GPU keeps I and E on the device. Must not outlive the
+  // backend.
+  virtual absl::StatusOr<std::unique_ptr<DesignTallies>> MakeDesignTallies(
+      const Scene& scene, const IndoorOptions& options, const Matrix& outdoor, const Matrix& sky);
 };
 
 // The Embree CPU backend (always available).

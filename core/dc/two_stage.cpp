@@ -297,7 +297,30 @@ class TracedIndoorStages : public IndoorStages {
   DcBackend* backend_;
 };
 
+// The indoor stage, then the annual product's tallies.
+class StagedDesignTallies : public DesignTallies {
+ public:
+  StagedDesignTallies(std::unique_ptr<IndoorStages> stages, std::unique_ptr<AnnualProduct> product)
+      : stages_(std::move(stages)), product_(std::move(product)) {}
+  absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
+                                               const MetricOptions& options) override {
+    FENESTRA_ASSIGN_OR_RETURN(indoor, stages_->Compute(design));
+    return product_->Tally(indoor.batches, options);
+  }
+
+ private:
+  std::unique_ptr<IndoorStages> stages_;
+  std::unique_ptr<AnnualProduct> product_;
+};
+
 }  // namespace
+
+absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::MakeDesignTallies(
+    const Scene& scene, const IndoorOptions& options, const Matrix& outdoor, const Matrix& sky) {
+  FENESTRA_ASSIGN_OR_RETURN(stages, MakeIndoorStages(scene, options));
+  FENESTRA_ASSIGN_OR_RETURN(product, MakeAnnualProduct(outdoor, sky));
+  return std::make_unique<StagedDesignTallies>(std::move(stages), std::move(product));
+}
 
 absl::StatusOr<std::unique_ptr<IndoorStages>> DcBackend::MakeIndoorStages(
     const Scene& scene, const IndoorOptions& options) {

@@ -405,18 +405,18 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   indoor_options.basis_cells = spec.sampling().basis_cells();
   indoor_options.parts = SamplingWindowParts(spec.sampling(), job.scene.window);
   indoor_options.batches = spec.sampling().batches();
-  // E_b = (I_b O) S over the lit analysed hours, in lux, where the backend computes
   if (!(outdoor->parts == indoor_options.parts)) {
     return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
   }
+  // S over the lit analysed hours, in lux
   Matrix lit_sky(sky.radiance.rows(), static_cast<Eigen::Index>(columns.size()));
   for (size_t c = 0; c < columns.size(); ++c) {
     lit_sky.col(c) = kWhiteEfficacyLumensPerWatt * sky.radiance.col(columns[c]);
   }
-  FENESTRA_ASSIGN_OR_RETURN(product, backend->MakeAnnualProduct(outdoor->coefficients, lit_sky));
 
-  // The indoor stage for the designs within the job's ranges, as the backend does it best
-  // (on the CPU: the paths recorded once, then replayed per design)
+  // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O) S, as
+  // the backend does it best (on the CPU the paths recorded once, then replayed per design;
+  // on the GPU I and E never leave the device), for the designs within the job's ranges
   if (callbacks.stage) callbacks.stage("indoor paths");
   Scene ranged = job.scene;
   if (ranged.blind) {
@@ -426,11 +426,12 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
       range.max = std::max(range.max, v.upper());
     }
   }
-  FENESTRA_ASSIGN_OR_RETURN(indoor_stages, backend->MakeIndoorStages(ranged, indoor_options));
+  FENESTRA_ASSIGN_OR_RETURN(
+      design_tallies,
+      backend->MakeDesignTallies(ranged, indoor_options, outdoor->coefficients, lit_sky));
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
-    FENESTRA_ASSIGN_OR_RETURN(indoor, indoor_stages->Compute(DesignAt(job, x)));
-    FENESTRA_ASSIGN_OR_RETURN(tallies, product->Tally(indoor.batches, metric_options));
+    FENESTRA_ASSIGN_OR_RETURN(tallies, design_tallies->Tally(DesignAt(job, x), metric_options));
     FENESTRA_ASSIGN_OR_RETURN(metrics,
                               AnnualMetricsFromTallies(tallies, analysed_hours, metric_options));
     return MetricEvaluation(std::move(metrics), metric);

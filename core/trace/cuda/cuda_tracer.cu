@@ -280,6 +280,85 @@ void Multiply(const double* a, const double* b, double* c, int m, int k, int n) 
   MultiplyKernel<<<grid, block>>>(a, b, c, m, k, n);
 }
 
+// I from the indoor kernel's sums: row (b, s) divided by batch b's paths, as the host
+// divides them (IndoorResultFromTally).
+__global__ void BatchMeanKernel(const double* sum, int sensors, int cells,
+                                uint64_t paths_per_sensor, int batches, double* indoor) {
+  const int cell = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  if (cell >= cells) return;
+  const int row = static_cast<int>(blockIdx.y);
+  const uint64_t b = static_cast<uint64_t>(row / sensors);
+  const uint64_t paths = (b + 1) * paths_per_sensor / batches - b * paths_per_sensor / batches;
+  const size_t k = static_cast<size_t>(row) * cells + cell;
+  indoor[k] = __ddiv_rn(sum[k], static_cast<double>(paths));
+}
+
+// The metric thresholds of AnnualTally.
+struct TallyLimits {
+  double lower, upper, da;
+  double batches, leave_one_out_scale;  // B and 1 / (B - 1)
+};
+
+// One thread per (hour, version): E of the version (formed as the CPU forms it, without
+// contracted multiply-adds, so both classify every hour alike), classified per sensor;
+// warps add their counts and sums to the version's totals.
+__global__ void TallyKernel(const double* e, int batches, int sensors, int steps,
+                            TallyLimits limits, unsigned long long* counts, double* sums,
+                            unsigned long long* hours) {
+  const int version = static_cast<int>(blockIdx.y);
+  const int t = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  const bool active = t < steps;
+  const unsigned all = 0xffffffffu;
+  const bool leader = threadIdx.x % 32 == 0;
+  bool any_below = false, any_above = false, non_finite = false;
+  for (int i = 0; i < sensors; ++i) {
+    double value = 0;
+    if (active) {
+      double total = 0;
+      for (int b = 0; b < batches; ++b) {
+        total = __dadd_rn(total, e[(static_cast<size_t>(b) * sensors + i) * steps + t]);
+      }
+      value = __ddiv_rn(total, limits.batches);
+      if (version > 0) {
+        const double left_out = e[(static_cast<size_t>(version - 1) * sensors + i) * steps + t];
+        value = __dmul_rn(__dsub_rn(__dmul_rn(limits.batches, value), left_out),
+                          limits.leave_one_out_scale);
+      }
+    }
+    const bool below = active && value < limits.lower, above = active && value > limits.upper;
+    any_below |= below;
+    any_above |= above;
+    non_finite |= active && !isfinite(value);
+    double credit = active ? fmin(value / limits.da, 1.0) : 0.0, sum = value;
+    for (int offset = 16; offset > 0; offset /= 2) {
+      credit += __shfl_down_sync(all, credit, offset);
+      sum += __shfl_down_sync(all, sum, offset);
+    }
+    const unsigned below_count = __popc(__ballot_sync(all, below));
+    const unsigned above_count = __popc(__ballot_sync(all, above));
+    const unsigned da_count = __popc(__ballot_sync(all, active && value >= limits.da));
+    if (leader) {
+      const size_t k = static_cast<size_t>(version) * sensors + i;
+      if (below_count) atomicAdd(&counts[3 * k], below_count);
+      if (above_count) atomicAdd(&counts[3 * k + 1], above_count);
+      if (da_count) atomicAdd(&counts[3 * k + 2], da_count);
+      atomicAdd(&sums[2 * k], credit);
+      atomicAdd(&sums[2 * k + 1], sum);
+    }
+  }
+  const unsigned in_range = __popc(__ballot_sync(all, active && !any_below && !any_above));
+  const unsigned below = __popc(__ballot_sync(all, any_below));
+  const unsigned above = __popc(__ballot_sync(all, any_above));
+  const unsigned bad = __popc(__ballot_sync(all, non_finite));
+  if (leader) {
+    unsigned long long* h = hours + 4 * version;
+    if (in_range) atomicAdd(&h[0], in_range);
+    if (below) atomicAdd(&h[1], below);
+    if (above) atomicAdd(&h[2], above);
+    if (bad) atomicAdd(&h[3], bad);
+  }
+}
+
 // Page-locked host memory for fast transfers of large results; grows on demand.
 class PinnedBuffer {
  public:
@@ -320,6 +399,8 @@ class PinnedBuffer {
   size_t capacity_ = 0;
 };
 
+constexpr char kNoAnnualProduct[] = "CUDA tracer: no annual product set";
+
 std::string Error(cudaError_t e) { return std::string("CUDA: ") + cudaGetErrorString(e); }
 
 }  // namespace
@@ -338,9 +419,23 @@ struct CudaTracer::Impl {
   DeviceBuffer<unsigned long long> next_path;  // per row: paths taken so far
   PinnedBuffer staging;                        // large transfers
   bool has_scene = false;
-  // The annual product: O transposed, S, the indoor rows, I O and E
+  // The annual product: O transposed, S, the indoor rows, I O and E; E's tallies
   DeviceBuffer<double> outdoor_transposed, sky, indoor, through_window, illuminance;
+  DeviceBuffer<unsigned long long> tally_counts, tally_hours;
+  DeviceBuffer<double> tally_sums;
   int cells = 0, steps = 0;
+
+  // The indoor stage's paths (CudaTracer::Indoor); the sums stay on the device without
+  // host_sum.
+  std::string TraceIndoor(const TraceSensor* host_sensors, int sensor_count,
+                          const TraceWindow& window, const HemisphereBasis& basis,
+                          uint64_t paths_per_sensor, int batches, uint64_t seed,
+                          const PathSettings& path, double* host_sum, CudaCounters* out);
+  // The annual product and its tallies (after SetAnnualProduct): `rows` indoor rows from the
+  // host into `indoor`; E = (I O) S from `indoor` into `illuminance`; E's tallies.
+  cudaError_t UploadIndoor(const double* host_indoor, int rows);
+  cudaError_t FormIlluminance(int rows);
+  std::string Tally(int batches, int sensors, const TallyRequest& request);
 
   BvhIntersector Scene() const { return {nodes.get(), triangles.get()}; }
   SurfaceTable Surfaces() const { return {materials.get(), triangle_material.get()}; }
@@ -361,7 +456,8 @@ struct CudaTracer::Impl {
     return static_cast<unsigned int>(std::max<uint64_t>(1, std::min(wanted, fill)));
   }
 
-  // Zeroes the outputs, runs `launch`, times it, downloads.
+  // Zeroes the outputs, runs `launch`, times it, downloads (the sums only where host_sum is
+  // given: else they stay in `sum`).
   template <class Launch>
   std::string Run(size_t rows, size_t sum_size, bool squares, Launch launch, double* host_sum,
                   double* host_sum_squares, CudaCounters* out) {
@@ -386,7 +482,8 @@ struct CudaTracer::Impl {
     cudaEventDestroy(stop);
     if (e == cudaSuccess) e = cudaDeviceSynchronize();
     unsigned long long host_counters[kCounters] = {};
-    if (e == cudaSuccess) e = staging.Download(sum.get(), host_sum, sum_size);
+    if (e == cudaSuccess && host_sum != nullptr)
+      e = staging.Download(sum.get(), host_sum, sum_size);
     if (e == cudaSuccess && squares) {
       e = staging.Download(sum_squares.get(), host_sum_squares, sum_size);
     }
@@ -490,12 +587,14 @@ std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis
       sum, sum_squares, counters);
 }
 
-std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
-                               const TraceWindow& window, const HemisphereBasis& basis,
-                               uint64_t paths_per_sensor, int batches, uint64_t seed,
-                               const PathSettings& path, double* sum, CudaCounters* counters) {
-  Impl& d = *impl_;
-  if (cudaError_t e = d.sensors.Upload(sensors, sensor_count); e != cudaSuccess) return Error(e);
+std::string CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int sensor_count,
+                                          const TraceWindow& window, const HemisphereBasis& basis,
+                                          uint64_t paths_per_sensor, int batches, uint64_t seed,
+                                          const PathSettings& path, double* host_sum,
+                                          CudaCounters* out) {
+  Impl& d = *this;
+  if (cudaError_t e = d.sensors.Upload(host_sensors, sensor_count); e != cudaSuccess)
+    return Error(e);
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
   const int cells = WindowCellCount(window, basis);
   const size_t shared = static_cast<size_t>(cells) * sizeof(double);
@@ -530,7 +629,40 @@ std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
             d.Scene(), d.Surfaces(), path, d.sensors.get(), sensor_count, window, basis,
             paths_per_sensor, batches, seed, d.sum.get(), d.counters.get(), d.next_path.get());
       },
-      sum, nullptr, counters);
+      host_sum, nullptr, out);
+}
+
+std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
+                               const TraceWindow& window, const HemisphereBasis& basis,
+                               uint64_t paths_per_sensor, int batches, uint64_t seed,
+                               const PathSettings& path, double* sum, CudaCounters* counters) {
+  if (sum == nullptr) return "CUDA tracer: no buffer for the indoor sums";
+  return impl_->TraceIndoor(sensors, sensor_count, window, basis, paths_per_sensor, batches, seed,
+                            path, sum, counters);
+}
+
+std::string CudaTracer::IndoorAnnualTally(const TraceSensor* sensors, int sensor_count,
+                                          const TraceWindow& window, const HemisphereBasis& basis,
+                                          uint64_t paths_per_sensor, int batches, uint64_t seed,
+                                          const PathSettings& path, const TallyRequest& request,
+                                          CudaCounters* counters) {
+  Impl& d = *impl_;
+  if (d.cells == 0) return kNoAnnualProduct;
+  if (d.cells != WindowCellCount(window, basis)) {
+    return "CUDA tracer: the annual product has " + std::to_string(d.cells) +
+           " window cells, the indoor stage " + std::to_string(WindowCellCount(window, basis));
+  }
+  std::string error = d.TraceIndoor(sensors, sensor_count, window, basis, paths_per_sensor, batches,
+                                    seed, path, nullptr, counters);
+  if (!error.empty()) return error;
+  const int rows = batches * sensor_count;
+  cudaError_t e = d.indoor.Reserve(static_cast<size_t>(rows) * d.cells);
+  if (e != cudaSuccess) return Error(e);
+  const int threads = 256;
+  const dim3 grid((d.cells + threads - 1) / threads, rows);
+  BatchMeanKernel<<<grid, threads>>>(d.sum.get(), sensor_count, d.cells, paths_per_sensor, batches,
+                                     d.indoor.get());
+  return d.Tally(batches, sensor_count, request);
 }
 
 std::string CudaTracer::SetAnnualProduct(const double* outdoor, int cells, const double* sky,
@@ -554,22 +686,65 @@ std::string CudaTracer::SetAnnualProduct(const double* outdoor, int cells, const
 
 std::string CudaTracer::AnnualProduct(const double* indoor, int rows, double* illuminance) {
   Impl& d = *impl_;
-  if (d.cells == 0) return "CUDA tracer: no annual product set";
-  cudaError_t e = cudaSetDevice(d.device);
-  if (e == cudaSuccess) e = d.indoor.Reserve(static_cast<size_t>(rows) * d.cells);
-  if (e == cudaSuccess) {
-    e = d.staging.Upload(indoor, d.indoor.get(), static_cast<size_t>(rows) * d.cells);
-  }
-  if (e == cudaSuccess) e = d.through_window.Reserve(static_cast<size_t>(rows) * kTregenzaBinCount);
-  if (e == cudaSuccess) e = d.illuminance.Reserve(static_cast<size_t>(rows) * d.steps);
-  if (e != cudaSuccess) return Error(e);
-  MultiplyTransposed(d.indoor.get(), d.outdoor_transposed.get(), d.through_window.get(), rows,
-                     d.cells, kTregenzaBinCount);
-  Multiply(d.through_window.get(), d.sky.get(), d.illuminance.get(), rows, kTregenzaBinCount,
-           d.steps);
-  e = cudaGetLastError();
+  if (d.cells == 0) return kNoAnnualProduct;
+  cudaError_t e = d.UploadIndoor(indoor, rows);
+  if (e == cudaSuccess) e = d.FormIlluminance(rows);
   if (e == cudaSuccess) {
     e = d.staging.Download(d.illuminance.get(), illuminance, static_cast<size_t>(rows) * d.steps);
+  }
+  return e == cudaSuccess ? "" : Error(e);
+}
+
+std::string CudaTracer::AnnualTally(const double* indoor, int batches, int sensors,
+                                    const TallyRequest& request) {
+  Impl& d = *impl_;
+  if (d.cells == 0) return kNoAnnualProduct;
+  if (cudaError_t e = d.UploadIndoor(indoor, batches * sensors); e != cudaSuccess) return Error(e);
+  return d.Tally(batches, sensors, request);
+}
+
+cudaError_t CudaTracer::Impl::UploadIndoor(const double* host_indoor, int rows) {
+  cudaError_t e = cudaSetDevice(device);
+  if (e == cudaSuccess) e = indoor.Reserve(static_cast<size_t>(rows) * cells);
+  if (e == cudaSuccess) {
+    e = staging.Upload(host_indoor, indoor.get(), static_cast<size_t>(rows) * cells);
+  }
+  return e;
+}
+
+cudaError_t CudaTracer::Impl::FormIlluminance(int rows) {
+  cudaError_t e = through_window.Reserve(static_cast<size_t>(rows) * kTregenzaBinCount);
+  if (e == cudaSuccess) e = illuminance.Reserve(static_cast<size_t>(rows) * steps);
+  if (e != cudaSuccess) return e;
+  MultiplyTransposed(indoor.get(), outdoor_transposed.get(), through_window.get(), rows, cells,
+                     kTregenzaBinCount);
+  Multiply(through_window.get(), sky.get(), illuminance.get(), rows, kTregenzaBinCount, steps);
+  return cudaGetLastError();
+}
+
+std::string CudaTracer::Impl::Tally(int batches, int sensors, const TallyRequest& request) {
+  const int versions = batches + 1;
+  const size_t per_sensor = static_cast<size_t>(versions) * sensors;
+  cudaError_t e = FormIlluminance(batches * sensors);
+  if (e == cudaSuccess) e = tally_counts.Zero(3 * per_sensor);
+  if (e == cudaSuccess) e = tally_sums.Zero(2 * per_sensor);
+  if (e == cudaSuccess) e = tally_hours.Zero(4 * static_cast<size_t>(versions));
+  if (e != cudaSuccess) return Error(e);
+  const int threads = 256;
+  const dim3 grid((steps + threads - 1) / threads, versions);
+  const TallyLimits limits{request.lower_lux, request.upper_lux, request.da_lux,
+                           static_cast<double>(batches), 1.0 / (batches - 1)};
+  TallyKernel<<<grid, threads>>>(illuminance.get(), batches, sensors, steps, limits,
+                                 tally_counts.get(), tally_sums.get(), tally_hours.get());
+  e = cudaGetLastError();
+  static_assert(sizeof(int64_t) == sizeof(unsigned long long));
+  if (e == cudaSuccess) {
+    e = tally_counts.Download(reinterpret_cast<unsigned long long*>(request.counts),
+                              3 * per_sensor);
+  }
+  if (e == cudaSuccess) e = tally_sums.Download(request.sums, 2 * per_sensor);
+  if (e == cudaSuccess) {
+    e = tally_hours.Download(reinterpret_cast<unsigned long long*>(request.hours), 4 * versions);
   }
   return e == cudaSuccess ? "" : Error(e);
 }

@@ -67,6 +67,31 @@ class CudaTracer {
   std::string SetAnnualProduct(const double* outdoor, int cells, const double* sky, int steps);
   std::string AnnualProduct(const double* indoor, int rows, double* illuminance);
 
+  // What the annual metrics need of E (core/metrics/annual_metrics.h, HourTally), reduced on
+  // the device so that E never leaves it. Version 0 is E of the mean of the batches,
+  // version 1 + b the mean of the others (B E - E_b) / (B - 1). Per version v and sensor i,
+  // counts[(v * sensors + i) * 3 + k] gets the hours below `lower_lux`, above `upper_lux`
+  // and at or above `da_lux`, sums[(v * sensors + i) * 2 + k] the sums of min(E / da_lux, 1)
+  // and of E; hours[v * 4 + k] the hours with every sensor in range, some below, some above,
+  // and the entries that are not finite.
+  struct TallyRequest {
+    double lower_lux, upper_lux, da_lux;
+    int64_t* counts;
+    double* sums;
+    int64_t* hours;
+  };
+  // The tallies of E = (I O) S for `indoor`, batches x sensors stacked rows (batch-major).
+  // "" or the error.
+  std::string AnnualTally(const double* indoor, int batches, int sensors,
+                          const TallyRequest& request);
+  // Indoor's paths, then the tallies of their I (each batch's sums over its paths), without
+  // I leaving the device. "" or the error.
+  std::string IndoorAnnualTally(const TraceSensor* sensors, int sensor_count,
+                                const TraceWindow& window, const HemisphereBasis& basis,
+                                uint64_t paths_per_sensor, int batches, uint64_t seed,
+                                const PathSettings& path, const TallyRequest& request,
+                                CudaCounters* counters);
+
   std::string device_name() const;
 
  private:

@@ -2,13 +2,16 @@
 // The GPU cases skip on hosts without a CUDA device.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 
 #include "core/dc/dc_backend.h"
 #include "core/dc/one_stage.h"
 #include "core/dc/two_stage.h"
+#include "core/metrics/metric_errors.h"
 #include "tests/example_scene.h"
 
 namespace fenestra {
@@ -130,6 +133,114 @@ TEST(CudaBackendTest, AnnualProductMatchesCpu) {
     EXPECT_LT(((*e_gpu)[b] - (*e_cpu)[b]).cwiseAbs().maxCoeff(),
               1e-12 * (*e_cpu)[b].cwiseAbs().maxCoeff());
     EXPECT_EQ((*e_zero)[b].cwiseAbs().maxCoeff(), 0.0);
+  }
+}
+
+// Tallies of E formed and reduced on the device equal the CPU's tallies of the same E.
+TEST(CudaBackendTest, AnnualTallyMatchesCpu) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const int cells = 3456, sensors = 9, batches = 8, steps = 3000;
+  const Matrix outdoor = Matrix::Random(cells, kDaylightBins).cwiseAbs();
+  const Matrix sky = Matrix::Random(kDaylightBins, steps).cwiseAbs();
+  std::vector<Matrix> indoor;
+  for (int b = 0; b < batches; ++b) indoor.push_back(Matrix::Random(sensors, cells).cwiseAbs());
+  std::unique_ptr<DcBackend> cpu = MakeEmbreeBackend();
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> on_cpu = cpu->MakeAnnualProduct(outdoor, sky);
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> on_gpu = gpu->MakeAnnualProduct(outdoor, sky);
+  ASSERT_TRUE(on_cpu.ok() && on_gpu.ok());
+  absl::StatusOr<std::vector<Matrix>> e = (*on_gpu)->Apply(indoor);
+  ASSERT_TRUE(e.ok()) << e.status();
+
+  // Limits at quartiles of E, so every count is far from 0 and from all
+  std::vector<double> values((*e)[0].data(), (*e)[0].data() + (*e)[0].size());
+  std::sort(values.begin(), values.end());
+  MetricOptions options;
+  options.udi_lower_lux = values[values.size() / 4];
+  options.da_threshold_lux = values[values.size() / 2];
+  options.udi_upper_lux = values[3 * values.size() / 4];
+  absl::StatusOr<std::vector<HourTally>> expected = TallyBatchVersions(*e, options);
+  absl::StatusOr<std::vector<HourTally>> from_cpu = (*on_cpu)->Tally(indoor, options);
+  absl::StatusOr<std::vector<HourTally>> from_gpu = (*on_gpu)->Tally(indoor, options);
+  ASSERT_TRUE(expected.ok() && from_cpu.ok() && from_gpu.ok()) << from_gpu.status();
+  ASSERT_EQ(from_gpu->size(), static_cast<size_t>(batches + 1));
+  for (const std::vector<HourTally>* other : {&*expected, &*from_cpu}) {
+    for (int v = 0; v <= batches; ++v) {
+      const HourTally &a = (*from_gpu)[v], &b = (*other)[v];
+      EXPECT_EQ(a.hours, b.hours);
+      EXPECT_EQ(a.all_in, b.all_in) << "version " << v;
+      EXPECT_EQ(a.any_below, b.any_below) << "version " << v;
+      EXPECT_EQ(a.any_above, b.any_above) << "version " << v;
+      ASSERT_EQ(a.sensors.size(), b.sensors.size());
+      for (int i = 0; i < sensors; ++i) {
+        const SensorHourTally &x = a.sensors[i], &y = b.sensors[i];
+        EXPECT_EQ(x.below, y.below) << "version " << v << " sensor " << i;
+        EXPECT_EQ(x.above, y.above) << "version " << v << " sensor " << i;
+        EXPECT_EQ(x.da, y.da) << "version " << v << " sensor " << i;
+        EXPECT_NEAR(x.credit, y.credit, 1e-10 * y.credit);
+        EXPECT_NEAR(x.sum, y.sum, 1e-10 * y.sum);
+      }
+    }
+  }
+  EXPECT_GT((*from_gpu)[0].any_below, 0);
+  EXPECT_GT((*from_gpu)[0].any_above, 0);
+  EXPECT_GT((*from_gpu)[0].sensors[0].below, steps / 10);
+
+  // A non-finite coefficient is an error, as on the CPU
+  indoor[3](2, 7) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ((*on_gpu)->Tally(indoor, options).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ((*on_cpu)->Tally(indoor, options).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+// A search's objective on the GPU, with I and E kept on the device, gives the tallies of
+// the indoor stage and annual product taken in turn.
+TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const Scene scene = LoadExample("city_office");
+  OutdoorOptions outdoor;
+  outdoor.paths = 500'000;
+  outdoor.parts = AutomaticWindowParts(scene.window);
+  absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor, gpu.get());
+  ASSERT_TRUE(o.ok()) << o.status();
+  const Matrix sky = 1e5 * Matrix::Random(kDaylightBins, 500).cwiseAbs();
+  IndoorOptions indoor;
+  indoor.paths_per_sensor = 40'000;
+  indoor.batches = 4;
+  indoor.parts = outdoor.parts;
+  absl::StatusOr<std::unique_ptr<DesignTallies>> on_device =
+      gpu->MakeDesignTallies(scene, indoor, o->coefficients, sky);
+  absl::StatusOr<std::unique_ptr<DesignTallies>> in_turn =
+      gpu->DcBackend::MakeDesignTallies(scene, indoor, o->coefficients, sky);
+  ASSERT_TRUE(on_device.ok() && in_turn.ok()) << on_device.status();
+  MetricOptions options;
+  options.udi_lower_lux = 1000;
+  options.udi_upper_lux = 2000;
+  for (const double alpha : {0.0, 0.8}) {
+    const BlindDesign design = *DesignWithOverrides(scene, {{"alpha", alpha}});
+    absl::StatusOr<std::vector<HourTally>> a = (*on_device)->Tally(design, options);
+    absl::StatusOr<std::vector<HourTally>> b = (*in_turn)->Tally(design, options);
+    ASSERT_TRUE(a.ok() && b.ok()) << a.status() << b.status();
+    ASSERT_EQ(a->size(), 5u);
+    ASSERT_EQ(a->size(), b->size());
+    for (size_t v = 0; v < a->size(); ++v) {
+      EXPECT_EQ((*a)[v].hours, 500);
+      EXPECT_EQ((*a)[v].all_in, (*b)[v].all_in);
+      EXPECT_EQ((*a)[v].any_below, (*b)[v].any_below);
+      EXPECT_EQ((*a)[v].any_above, (*b)[v].any_above);
+      for (size_t i = 0; i < scene.sensors.size(); ++i) {
+        const SensorHourTally &x = (*a)[v].sensors[i], &y = (*b)[v].sensors[i];
+        EXPECT_EQ(x.below, y.below);
+        EXPECT_EQ(x.above, y.above);
+        EXPECT_EQ(x.da, y.da);
+        // The kernel's sums differ in the order of their atomic additions only
+        EXPECT_NEAR(x.sum, y.sum, 1e-9 * y.sum);
+        EXPECT_NEAR(x.credit, y.credit, 1e-9 * y.credit);
+      }
+    }
+    // Not a trivial case: sensors fall on either side of the limits
+    EXPECT_GT((*a)[0].any_below, 0);
+    EXPECT_GT((*a)[0].any_above, 0);
   }
 }
 
