@@ -7,6 +7,7 @@
 #include <string>
 
 #include "bench/bench_util.h"
+#include "core/dc/backend_support.h"
 #include "core/dc/dc_backend.h"
 #include "core/dc/one_stage.h"
 #include "core/dc/two_stage.h"
@@ -17,6 +18,9 @@
 #include "core/sky/epw.h"
 #include "core/sky/sky_matrix.h"
 #include "core/trace/bvh.h"
+#include "core/trace/bvh_intersector.h"
+#include "core/trace/cuda/cuda_tracer.h"
+#include "core/trace/trace_geometry.h"
 
 namespace fenestra {
 namespace {
@@ -49,6 +53,76 @@ void OneStage(DcBackend& gpu, const std::string& name, const BlindDesign* design
   std::printf("\n");
 }
 
+// Records every closest-hit query of the paths it serves.
+struct RecordingIntersector {
+  const BvhIntersector* scene;
+  std::vector<Vec3f>* origins;
+  std::vector<Vec3f>* directions;
+  bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const {
+    origins->push_back(origin);
+    directions->push_back(direction);
+    return scene->Intersect(origin, direction, hit);
+  }
+  bool Occluded(Vec3f origin, Vec3f direction, float distance) const {
+    return scene->Occluded(origin, direction, distance);
+  }
+};
+
+struct NoSink {
+  void Add(int, double) {}
+  void EndPath() {}
+};
+
+// The traversal alone, on the rays of one-stage paths (recorded on the CPU, 30 bounces):
+// each lane its own ray, then every lane of a warp the same ray, which takes divergence and
+// scattered reads away and leaves the instructions a ray costs.
+void TraversalAlone(const std::string& name, const BlindDesign* design) {
+  const Scene scene = ValueOrExit(LoadScene(kRoot + "/examples/" + name + "/scene.json"));
+  const TraceGeometry geometry = ValueOrExit(PrepareTraceGeometry(
+      AssembleMesh(scene, design ? *design : DefaultDesign(scene)), scene.materials));
+  const BvhLayout bvh = ValueOrExit(BuildBvh(geometry));
+  const BvhIntersector cpu{bvh.nodes.data(), bvh.triangles.data()};
+  std::vector<Vec3f> origins, directions;
+  const RecordingIntersector recorder{&cpu, &origins, &directions};
+  OneStageOptions options;
+  options.max_bounces = 30;
+  const PathSettings settings = PathSettingsFor(options);
+  const std::vector<TraceSensor> sensors = LocalSensors(geometry, scene.sensors);
+  NoSink sink;
+  for (uint64_t p = 0; origins.size() < 4'000'000; ++p) {
+    for (size_t s = 0; s < sensors.size(); ++s) {
+      OneStageMode<NoSink> mode{sensors[s].position, sensors[s].normal, &sink};
+      TracePath<RecordingIntersector, OneStageMode<NoSink>, 0>(
+          recorder, geometry.Surfaces(), settings, PathRandom(1, static_cast<uint32_t>(s), p),
+          mode);
+    }
+  }
+  std::string error;
+  const std::unique_ptr<CudaTracer> tracer = CudaTracer::Create(0, &error);
+  if (!tracer ||
+      !tracer
+           ->SetScene(bvh, geometry.triangle_material.data(), geometry.triangle_material.size(),
+                      geometry.materials.data(), geometry.materials.size())
+           .empty()) {
+    std::printf("traversal alone: %s\n", error.c_str());
+    return;
+  }
+  std::vector<float> distance(origins.size());
+  double seconds[2] = {};
+  for (const bool same : {false, true}) {
+    for (int run = 0; run < 2; ++run) {  // the first warms up
+      const std::string e = tracer->IntersectRays(origins.data(), directions.data(), origins.size(),
+                                                  same, distance.data(), &seconds[same]);
+      if (!e.empty()) std::printf("traversal alone: %s\n", e.c_str());
+    }
+  }
+  std::printf(
+      "traversal alone, %-12s %zu triangles, %zu recorded path rays: %.2f G rays/s; every lane "
+      "of a warp on the same ray: %.2f G rays/s\n",
+      name.c_str(), geometry.TriangleCount(), origins.size(), origins.size() / seconds[0] / 1e9,
+      origins.size() / seconds[1] / 1e9);
+}
+
 }  // namespace
 }  // namespace fenestra
 
@@ -65,6 +139,8 @@ int main(int argc, char** argv) {
   const BlindDesign open =
       ValueOrExit(DesignWithOverrides(office, {{"alpha", 0.6}, {"spacing", 0.05}}));
   OneStage(*gpu, "city_office", &open, 2'000'000, 30);
+  TraversalAlone("lightwell", nullptr);
+  TraversalAlone("city_office", &open);
 
   // The city-office outdoor stage
   // The window in its default parts (4 x 3), as jobs trace it

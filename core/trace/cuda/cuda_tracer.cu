@@ -234,6 +234,18 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
          counters);
 }
 
+// One closest-hit query per thread (CudaTracer::IntersectRays).
+__global__ void IntersectKernel(BvhIntersector scene, const Vec3f* origins, const Vec3f* directions,
+                                size_t count, bool same_ray_per_warp, float* distance) {
+  const size_t i = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
+  const size_t ray = same_ray_per_warp ? i & ~static_cast<size_t>(31) : i;
+  if (ray >= count || i >= count) return;
+  SurfaceHit hit;
+  const Vec3f origin = origins[ray];
+  distance[i] =
+      scene.Intersect(origin, directions[ray], &hit) ? Length(hit.position - origin) : INFINITY;
+}
+
 // C = A B for row-major A (m x k) and B (k x n), in 16 x 16 tiles through shared memory.
 constexpr int kTile = 16;
 __global__ void MultiplyKernel(const double* a, const double* b, double* c, int m, int k, int n) {
@@ -399,6 +411,25 @@ class PinnedBuffer {
   size_t capacity_ = 0;
 };
 
+// Runs `launch` (kernel launches) and waits for it; *seconds gets its time on the device.
+template <class Launch>
+cudaError_t TimeKernels(Launch launch, double* seconds) {
+  cudaEvent_t start, stop;
+  cudaEventCreate(&start);
+  cudaEventCreate(&stop);
+  cudaEventRecord(start);
+  launch();
+  cudaError_t e = cudaGetLastError();
+  cudaEventRecord(stop);
+  if (e == cudaSuccess) e = cudaEventSynchronize(stop);
+  float ms = 0;
+  cudaEventElapsedTime(&ms, start, stop);
+  cudaEventDestroy(start);
+  cudaEventDestroy(stop);
+  *seconds = ms / 1000.0;
+  return e;
+}
+
 constexpr char kNoAnnualProduct[] = "CUDA tracer: no annual product set";
 
 std::string Error(cudaError_t e) { return std::string("CUDA: ") + cudaGetErrorString(e); }
@@ -414,6 +445,8 @@ struct CudaTracer::Impl {
   DeviceBuffer<uint32_t> triangle_material;
   DeviceBuffer<TraceMaterial> materials;
   DeviceBuffer<TraceSensor> sensors;
+  DeviceBuffer<Vec3f> ray_origins, ray_directions;
+  DeviceBuffer<float> ray_distances;
   DeviceBuffer<double> sum, sum_squares;
   DeviceBuffer<unsigned long long> counters;
   DeviceBuffer<unsigned long long> next_path;  // per row: paths taken so far
@@ -468,18 +501,8 @@ struct CudaTracer::Impl {
     if (e == cudaSuccess) e = counters.Zero(kCounters);
     if (e == cudaSuccess) e = next_path.Zero(rows);
     if (e != cudaSuccess) return Error(e);
-    cudaEvent_t start, stop;
-    cudaEventCreate(&start);
-    cudaEventCreate(&stop);
-    cudaEventRecord(start);
-    launch();
-    e = cudaGetLastError();
-    cudaEventRecord(stop);
-    if (e == cudaSuccess) e = cudaEventSynchronize(stop);
-    float ms = 0;
-    cudaEventElapsedTime(&ms, start, stop);
-    cudaEventDestroy(start);
-    cudaEventDestroy(stop);
+    double seconds = 0;
+    e = TimeKernels(launch, &seconds);
     if (e == cudaSuccess) e = cudaDeviceSynchronize();
     unsigned long long host_counters[kCounters] = {};
     if (e == cudaSuccess && host_sum != nullptr)
@@ -491,7 +514,7 @@ struct CudaTracer::Impl {
     if (e != cudaSuccess) return Error(e);
     out->rays = host_counters[0];
     for (int i = 0; i < 6; ++i) out->ends[i] = host_counters[1 + i];
-    out->kernel_seconds = ms / 1000.0;
+    out->kernel_seconds = seconds;
     return "";
   }
 };
@@ -550,6 +573,30 @@ std::string CudaTracer::SetScene(const BvhLayout& bvh, const uint32_t* triangle_
     e = impl_->materials.Upload(materials, material_count);
   }
   impl_->has_scene = e == cudaSuccess;
+  return e == cudaSuccess ? "" : Error(e);
+}
+
+std::string CudaTracer::IntersectRays(const Vec3f* origins, const Vec3f* directions, size_t count,
+                                      bool same_ray_per_warp, float* distance,
+                                      double* kernel_seconds) {
+  Impl& d = *impl_;
+  if (!d.has_scene) return "CUDA tracer: no scene uploaded";
+  cudaError_t e = cudaSetDevice(d.device);
+  if (e == cudaSuccess) e = d.ray_origins.Upload(origins, count);
+  if (e == cudaSuccess) e = d.ray_directions.Upload(directions, count);
+  if (e == cudaSuccess) e = d.ray_distances.Reserve(count);
+  if (e != cudaSuccess) return Error(e);
+  const unsigned int blocks = static_cast<unsigned int>((count + kThreads - 1) / kThreads);
+  e = TimeKernels(
+      [&] {
+        IntersectKernel<<<std::max(1u, blocks), kThreads>>>(
+            d.Scene(), d.ray_origins.get(), d.ray_directions.get(), count, same_ray_per_warp,
+            d.ray_distances.get());
+      },
+      kernel_seconds);
+  if (e == cudaSuccess) {
+    e = cudaMemcpy(distance, d.ray_distances.get(), count * sizeof(float), cudaMemcpyDeviceToHost);
+  }
   return e == cudaSuccess ? "" : Error(e);
 }
 

@@ -42,6 +42,14 @@ class CudaTracer {
                        size_t triangle_count, const TraceMaterial* materials,
                        size_t material_count);
 
+  // Closest hits of `count` rays (origins and unit directions in the scene's frame) in the
+  // uploaded scene: distance[i] gets the distance to ray i's hit, INFINITY on a miss. With
+  // same_ray_per_warp, every lane of a warp traces the warp's first ray: the traversal's
+  // cost without divergence or scattered memory reads, a yardstick for benchmarks.
+  // "" or the error.
+  std::string IntersectRays(const Vec3f* origins, const Vec3f* directions, size_t count,
+                            bool same_ray_per_warp, float* distance, double* kernel_seconds);
+
   // One-stage paths of each sensor in `batches` contiguous batches; sum and sum_squares
   // get [(sensor * batches + batch) * kTregenzaBinCount + bin].
   std::string OneStage(const TraceSensor* sensors, int sensor_count, uint64_t paths_per_sensor,
