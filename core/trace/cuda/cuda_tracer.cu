@@ -414,18 +414,20 @@ class PinnedBuffer {
 // Runs `launch` (kernel launches) and waits for it; *seconds gets its time on the device.
 template <class Launch>
 cudaError_t TimeKernels(Launch launch, double* seconds) {
-  cudaEvent_t start, stop;
-  cudaEventCreate(&start);
-  cudaEventCreate(&stop);
-  cudaEventRecord(start);
-  launch();
-  cudaError_t e = cudaGetLastError();
-  cudaEventRecord(stop);
+  cudaEvent_t start = nullptr, stop = nullptr;
+  cudaError_t e = cudaEventCreate(&start);
+  if (e == cudaSuccess) e = cudaEventCreate(&stop);
+  if (e == cudaSuccess) e = cudaEventRecord(start);
+  if (e == cudaSuccess) {
+    launch();
+    e = cudaGetLastError();
+  }
+  if (e == cudaSuccess) e = cudaEventRecord(stop);
   if (e == cudaSuccess) e = cudaEventSynchronize(stop);
   float ms = 0;
-  cudaEventElapsedTime(&ms, start, stop);
-  cudaEventDestroy(start);
-  cudaEventDestroy(stop);
+  if (e == cudaSuccess) e = cudaEventElapsedTime(&ms, start, stop);
+  if (start != nullptr) cudaEventDestroy(start);
+  if (stop != nullptr) cudaEventDestroy(stop);
   *seconds = ms / 1000.0;
   return e;
 }
