@@ -44,6 +44,9 @@ struct DeviceTallies {
         sums(2 * static_cast<size_t>(batches + 1) * sensors),
         request{options.udi_lower_lux, options.udi_upper_lux, options.da_threshold_lux,
                 counts.data(),         sums.data(),           hours.data()} {}
+  // `request` points into the buffers
+  DeviceTallies(const DeviceTallies&) = delete;
+  DeviceTallies& operator=(const DeviceTallies&) = delete;
 
   // The versions as HourTally, each over `steps` hours; InvalidArgument for a non-finite E.
   absl::StatusOr<std::vector<HourTally>> Versions(int64_t steps) const {
@@ -98,7 +101,10 @@ class CudaAnnualProduct : public AnnualProduct {
   absl::StatusOr<std::vector<HourTally>> Tally(const std::vector<Matrix>& indoor_batches,
                                                const MetricOptions& options) override {
     const int batches = static_cast<int>(indoor_batches.size());
-    FENESTRA_RETURN_IF_ERROR(CheckBatches(batches));
+    if (batches < 2) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("standard errors need at least 2 batches, got ", batches));
+    }
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, outdoor_.rows()));
     FENESTRA_RETURN_IF_ERROR(Hold());
     const int sensors = static_cast<int>(indoor_batches[0].rows());
@@ -116,12 +122,6 @@ class CudaAnnualProduct : public AnnualProduct {
                                         sky_.data(), static_cast<int>(sky_.cols()))));
     *current_ = generation_;
     return absl::OkStatus();
-  }
-
-  static absl::Status CheckBatches(int batches) {
-    if (batches >= 2) return absl::OkStatus();
-    return absl::InvalidArgumentError(
-        absl::StrCat("standard errors need at least 2 batches, got ", batches));
   }
 
   Eigen::Index steps() const { return sky_.cols(); }
