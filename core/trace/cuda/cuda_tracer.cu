@@ -1,6 +1,7 @@
 // The GPU tracer (see cuda_tracer.h). Each kernel gives every block one row of the result
 // (a sensor, a window cell, or a sensor's batch) and accumulates that row in shared memory
-// in double precision, then adds it to global memory once per block.
+// in double precision, then adds it to global memory once per block. A launch holds as
+// many blocks as the device runs at once; the blocks of a row share its paths.
 #include <cooperative_groups.h>
 #include <cuda_runtime.h>
 

@@ -1,7 +1,8 @@
 #pragma once
 
 // The GPU tracer: the shared per-path code (core/trace/path.h, two_stage_modes.h) with the
-// BVH traversal of core/trace/bvh_intersector.h, one CUDA thread per path. Host-only
+// BVH traversal of core/trace/bvh_intersector.h; each thread traces paths one ray at a time
+// and starts its row's next path as soon as one ends. Host-only
 // declarations (no CUDA headers), so C++ code includes it; errors come back as text and
 // the caller turns them into a status.
 #include <cstdint>
