@@ -1,12 +1,17 @@
 // Closest-hit traversal of a flattened BVH (core/trace/bvh.h), for the CPU and the GPU.
 //
-// Stack-based, nearer child first. Triangles use the watertight ray/triangle test of
-// S. Woop, C. Benthin, I. Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013:
-// edges shared by two triangles are hit by exactly one of them, so no ray slips through a
-// seam; a ray exactly on an edge falls back to double precision as the paper prescribes.
-// Box tests are conservative (the slab distances are widened by a few ulps), so a ray
-// grazing a box is never culled. Hit points are placed as the CPU backend places them
-// (SurfacePoint, core/trace/ray_offset.h).
+// Stack-based, nearer child first, in the while-while form of T. Aila and S. Laine,
+// "Understanding the Efficiency of Ray Traversal on GPUs", HPG 2009, ordered: a leaf met is
+// held back while the ray has inner nodes nearer than it to visit, then tested before
+// anything farther. The lanes of a warp so test their leaves together instead of each
+// leaving the others idle, and the closest hit found so far still culls every node beyond
+// it (a waiting node keeps the distance at which the ray enters it). Triangles use the
+// watertight ray/triangle test of S. Woop, C. Benthin, I. Wald, "Watertight Ray/Triangle
+// Intersection", JCGT 2(1), 2013: edges shared by two triangles are hit by exactly one of
+// them, so no ray slips through a seam; a ray exactly on an edge falls back to double
+// precision as the paper prescribes. Box tests are conservative (the slab distances are
+// widened by a few ulps), so a ray grazing a box is never culled. Hit points are placed as
+// the CPU backend places them (SurfacePoint, core/trace/ray_offset.h).
 #pragma once
 
 #include <math.h>
@@ -129,49 +134,41 @@ struct BvhIntersector {
     float t_best = t_max;
     float best_b1 = 0, best_b2 = 0;
     int32_t best = -1;
-    // Waiting nodes with the distance at which the ray enters them: one that lies beyond
-    // the closest hit found since is dropped without being fetched
-    int32_t stack[kStackSize];
-    float stack_near[kStackSize];
-    int sp = 0;
-    int32_t node = 0;
-    for (;;) {
-      const BvhNode n = LoadNode(nodes + node);
-      float near0 = 0, near1 = 0;
-      const bool enter0 = n.child[0] != kBvhEmptyChild && Slab(n, 0, origin, inv, t_best, &near0);
-      const bool enter1 = n.child[1] != kBvhEmptyChild && Slab(n, 1, origin, inv, t_best, &near1);
-      // Nearer child first: leaves are tested at once, inner children wait their turn
-      const bool swap = enter0 && enter1 && near1 < near0;
-      const int32_t first = swap ? n.child[1] : n.child[0];
-      const int32_t second = swap ? n.child[0] : n.child[1];
-      const bool enter_first = swap ? enter1 : enter0;
-      const bool enter_second = swap ? enter0 : enter1;
-      const float near_second = swap ? near0 : near1;
-      int32_t next = -1, later = -1;
-      if (enter_first) {
-        if (first >= 0) {
-          next = first;
-        } else if (Leaf(ray, first, any_hit, &t_best, &best, &best_b1, &best_b2) && any_hit) {
-          return true;
+    TraversalStack stack;
+    int32_t node = 0;  // the next node to visit: inner (>= 0), a leaf (< 0) or kDone
+    float node_near = 0;
+    int32_t leaf = 0;  // a leaf held back (< 0), or none
+    float leaf_near = INFINITY;
+    while (node != TraversalStack::kDone) {
+      if (node < 0 && leaf == 0) {
+        leaf = node, leaf_near = node_near;
+        stack.Pop(t_best, &node, &node_near);
+      }
+      // Inner nodes, as long as they lie nearer than the leaf held back
+      while (node >= 0 && node != TraversalStack::kDone && !(leaf != 0 && node_near >= leaf_near)) {
+        const BvhNode n = LoadNode(nodes + node);
+        float near0 = 0, near1 = 0;
+        const bool enter0 = n.child[0] != kBvhEmptyChild && Slab(n, 0, origin, inv, t_best, &near0);
+        const bool enter1 = n.child[1] != kBvhEmptyChild && Slab(n, 1, origin, inv, t_best, &near1);
+        if (!enter0 && !enter1) {
+          stack.Pop(t_best, &node, &node_near);
+        } else {
+          // The nearer child next, the other waits
+          const bool take1 = !enter0 || (enter1 && near1 < near0);
+          node = take1 ? n.child[1] : n.child[0], node_near = take1 ? near1 : near0;
+          if (enter0 && enter1) stack.Push(take1 ? n.child[0] : n.child[1], take1 ? near0 : near1);
+        }
+        if (node < 0 && leaf == 0) {
+          leaf = node, leaf_near = node_near;
+          stack.Pop(t_best, &node, &node_near);
         }
       }
-      if (enter_second) {
-        if (second >= 0) {
-          (next < 0 ? next : later) = second;
-        } else if (Leaf(ray, second, any_hit, &t_best, &best, &best_b1, &best_b2) && any_hit) {
-          return true;
-        }
+      // The leaf held back, before anything farther
+      if (leaf < 0) {
+        if (Leaf(ray, leaf, any_hit, &t_best, &best, &best_b1, &best_b2) && any_hit) return true;
+        leaf = 0, leaf_near = INFINITY;
       }
-      if (later >= 0 && sp < kStackSize) {
-        stack[sp] = later;
-        stack_near[sp++] = near_second;
-      }
-      if (next < 0) {
-        while (sp > 0 && stack_near[sp - 1] > t_best) --sp;
-        if (sp == 0) break;
-        next = stack[--sp];
-      }
-      node = next;
+      if (node != TraversalStack::kDone && node_near > t_best) stack.Pop(t_best, &node, &node_near);
     }
     if (best < 0) return false;
     const BvhTriangle& tri = triangles[best];
@@ -180,6 +177,29 @@ struct BvhIntersector {
     hit->triangle = tri.index;
     return true;
   }
+
+  // Nodes waiting to be visited with the distance at which the ray enters them; kDone at the
+  // bottom ends the traversal.
+  struct TraversalStack {
+    static constexpr int32_t kDone = INT32_MAX;
+    int32_t node[kStackSize];
+    float near[kStackSize];
+    int size = 1;
+    FENESTRA_CPU_GPU TraversalStack() {
+      node[0] = kDone;
+      near[0] = -INFINITY;
+    }
+    FENESTRA_CPU_GPU void Push(int32_t n, float t) {
+      if (size < kStackSize) node[size] = n, near[size++] = t;
+    }
+    // The last pushed node the ray enters before t_best (those beyond it are dropped
+    // unfetched), or kDone.
+    FENESTRA_CPU_GPU void Pop(float t_best, int32_t* n, float* t) {
+      while (near[size - 1] > t_best) --size;
+      --size;
+      *n = node[size], *t = near[size];
+    }
+  };
 
   // Whether the ray meets child i's box before t_best; *t_near = where it enters. Slab
   // distances are widened by 2 ulps each way (Ize, "Robust BVH Ray Traversal", 2013).

@@ -122,6 +122,62 @@ TEST(BvhTest, AgreesWithBruteForceOnTheCityOffice) {
   CompareWithBruteForce("city_office", BvhQuality::kMedium);
 }
 
+// Queries the BVH and every triangle for each ray a path asks for, and counts where they
+// differ.
+struct CheckedIntersector {
+  const BvhIntersector* bvh;
+  const BruteForceIntersector* every_triangle;
+  int* rays;
+  int* disagreements;
+  bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const {
+    SurfaceHit expected;
+    const bool found = bvh->Intersect(origin, direction, hit);
+    const bool should = every_triangle->Intersect(origin, direction, &expected);
+    const float t = Length(hit->position - origin), t_expected = Length(expected.position - origin);
+    ++*rays;
+    *disagreements +=
+        found != should || (found && std::abs(t - t_expected) > 1e-4f * std::max(1.0f, t_expected));
+    return found;
+  }
+  bool Occluded(Vec3f origin, Vec3f direction, float distance) const {
+    return bvh->Occluded(origin, direction, distance);
+  }
+};
+
+struct NoSink {
+  void Add(int, double) {}
+  void EndPath() {}
+};
+
+// The rays paths trace (from points just off surfaces, into corners, 30 bounces): the BVH
+// finds the same closest hits as testing every triangle.
+TEST(BvhTest, AgreesWithBruteForceOnPathRays) {
+  for (const std::string name : {"lightwell", "city_office"}) {
+    const Scene scene = LoadExample(name);
+    const TraceGeometry geometry = Load(name);
+    absl::StatusOr<BvhLayout> bvh = BuildBvh(geometry);
+    ASSERT_TRUE(bvh.ok());
+    const BvhIntersector fast{bvh->nodes.data(), bvh->triangles.data()};
+    const BruteForceIntersector slow{geometry.vertices.data(),
+                                     static_cast<uint32_t>(geometry.TriangleCount())};
+    int rays = 0, disagreements = 0;
+    const CheckedIntersector checked{&fast, &slow, &rays, &disagreements};
+    const PathSettings settings{30, true, 0.25f, 1000};
+    NoSink sink;
+    for (uint32_t s = 0; s < scene.sensors.size(); ++s) {
+      const Vec3d n = Normalize(scene.sensors[s].direction);
+      OneStageMode<NoSink> mode{geometry.ToLocal(scene.sensors[s].position),
+                                Vec3f{float(n.x), float(n.y), float(n.z)}, &sink};
+      for (uint64_t p = 0; p < 10'000; ++p) {
+        TracePath<CheckedIntersector, OneStageMode<NoSink>, 0>(checked, geometry.Surfaces(),
+                                                               settings, PathRandom(1, s, p), mode);
+      }
+    }
+    EXPECT_GT(rays, 100'000) << name;
+    EXPECT_LE(disagreements, 2) << name << ": " << rays << " rays";
+  }
+}
+
 // Rays aimed exactly at the diagonal shared by a quad's two triangles always hit.
 TEST(BvhTest, SharedEdgesAreWatertight) {
   TraceGeometry geometry;
