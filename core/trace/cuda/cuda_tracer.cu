@@ -26,45 +26,61 @@ constexpr int kCounters = 7;  // rays, then paths by PathEnd
 // Shared memory a block may use without opting in to more.
 constexpr size_t kDefaultShared = 48 * 1024;
 
-// A device allocation freed on scope exit; grows on demand.
-template <typename T>
-class DeviceBuffer {
+// Where an allocation lives: device memory, or page-locked host memory.
+struct DeviceMemory {
+  static cudaError_t Allocate(void** data, size_t bytes) { return cudaMalloc(data, bytes); }
+  static void Free(void* data) { cudaFree(data); }
+};
+struct PinnedMemory {
+  static cudaError_t Allocate(void** data, size_t bytes) { return cudaMallocHost(data, bytes); }
+  static void Free(void* data) { cudaFreeHost(data); }
+};
+
+// `T`s in `Memory`, freed on scope exit; grows on demand (without keeping its contents).
+template <typename T, class Memory>
+class Allocation {
  public:
-  DeviceBuffer() = default;
-  ~DeviceBuffer() {
-    if (data_ != nullptr) cudaFree(data_);
+  Allocation() = default;
+  ~Allocation() {
+    if (data_ != nullptr) Memory::Free(data_);
   }
-  DeviceBuffer(const DeviceBuffer&) = delete;
-  DeviceBuffer& operator=(const DeviceBuffer&) = delete;
+  Allocation(const Allocation&) = delete;
+  Allocation& operator=(const Allocation&) = delete;
 
   cudaError_t Reserve(size_t count) {
     count = std::max<size_t>(count, 1);
     if (count <= capacity_) return cudaSuccess;
-    if (data_ != nullptr) cudaFree(data_);
+    if (data_ != nullptr) Memory::Free(data_);
     data_ = nullptr;
     capacity_ = 0;
-    const cudaError_t e = cudaMalloc(reinterpret_cast<void**>(&data_), count * sizeof(T));
+    const cudaError_t e = Memory::Allocate(reinterpret_cast<void**>(&data_), count * sizeof(T));
     if (e == cudaSuccess) capacity_ = count;
     return e;
-  }
-  cudaError_t Upload(const T* host, size_t count) {
-    const cudaError_t e = Reserve(count);
-    if (e != cudaSuccess || count == 0) return e;
-    return cudaMemcpy(data_, host, count * sizeof(T), cudaMemcpyHostToDevice);
-  }
-  cudaError_t Zero(size_t count) {
-    const cudaError_t e = Reserve(count);
-    if (e != cudaSuccess) return e;
-    return cudaMemset(data_, 0, count * sizeof(T));
-  }
-  cudaError_t Download(T* host, size_t count) const {
-    return cudaMemcpy(host, data_, count * sizeof(T), cudaMemcpyDeviceToHost);
   }
   T* get() const { return data_; }
 
  private:
   T* data_ = nullptr;
   size_t capacity_ = 0;
+};
+
+// A device allocation with transfers from and to the host.
+template <typename T>
+class DeviceBuffer : public Allocation<T, DeviceMemory> {
+ public:
+  cudaError_t Upload(const T* host, size_t count) {
+    const cudaError_t e = this->Reserve(count);
+    if (e != cudaSuccess || count == 0) return e;
+    return cudaMemcpy(this->get(), host, count * sizeof(T), cudaMemcpyHostToDevice);
+  }
+  cudaError_t Zero(size_t count) {
+    const cudaError_t e = this->Reserve(count);
+    if (e != cudaSuccess) return e;
+    return cudaMemset(this->get(), 0, count * sizeof(T));
+  }
+  cudaError_t Download(T* host, size_t count) const {
+    return cudaMemcpy(host, this->get(), count * sizeof(T), cudaMemcpyDeviceToHost);
+  }
 };
 
 // Adds into a block's shared-memory row. Squares are taken per Add: right while a path
@@ -111,6 +127,12 @@ struct ThreadCounts {
     }
   }
 };
+
+// The first of batch b's paths when `paths` are split into `batches` contiguous batches
+// (BatchStart on the host).
+__device__ uint64_t BatchFirst(uint64_t paths, int batches, uint64_t b) {
+  return b * paths / static_cast<uint64_t>(batches);
+}
 
 // The next path of a row for each calling lane: the lanes that ask together take
 // consecutive indices with one atomic operation.
@@ -169,8 +191,8 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   BeginRow(row, 2 * kTregenzaBinCount, block_counters);
   const uint32_t s = blockIdx.y / batches;
   const uint32_t b = blockIdx.y % batches;
-  const uint64_t first = b * paths_per_sensor / batches;
-  const uint64_t last = (b + 1) * paths_per_sensor / batches;
+  const uint64_t first = BatchFirst(paths_per_sensor, batches, b);
+  const uint64_t last = BatchFirst(paths_per_sensor, batches, b + 1);
   SharedSink sink{row, row + kTregenzaBinCount};
   OneStageMode<SharedSink> mode{sensors[s].position, sensors[s].normal, &sink};
   ThreadCounts counts;
@@ -223,8 +245,8 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   BeginRow(row, cells, block_counters);
   const int s = static_cast<int>(blockIdx.y) / batches;
   const int b = static_cast<int>(blockIdx.y) % batches;
-  const uint64_t first = b * paths_per_sensor / batches;
-  const uint64_t last = (b + 1) * paths_per_sensor / batches;
+  const uint64_t first = BatchFirst(paths_per_sensor, batches, b);
+  const uint64_t last = BatchFirst(paths_per_sensor, batches, b + 1);
   SharedSink sink{row, nullptr};
   IndoorMode<SharedSink> mode{sensors[s].position, sensors[s].normal,    window,
                               &shared_basis,       settings.max_bounces, &sink};
@@ -301,7 +323,8 @@ __global__ void BatchMeanKernel(const double* sum, int sensors, int cells,
   if (cell >= cells) return;
   const int row = static_cast<int>(blockIdx.y);
   const uint64_t b = static_cast<uint64_t>(row / sensors);
-  const uint64_t paths = (b + 1) * paths_per_sensor / batches - b * paths_per_sensor / batches;
+  const uint64_t paths =
+      BatchFirst(paths_per_sensor, batches, b + 1) - BatchFirst(paths_per_sensor, batches, b);
   const size_t k = static_cast<size_t>(row) * cells + cell;
   indoor[k] = __ddiv_rn(sum[k], static_cast<double>(paths));
 }
@@ -372,44 +395,25 @@ __global__ void TallyKernel(const double* e, int batches, int sensors, int steps
   }
 }
 
-// Page-locked host memory for fast transfers of large results; grows on demand.
-class PinnedBuffer {
+// Page-locked host memory for fast transfers of large results.
+class PinnedBuffer : public Allocation<double, PinnedMemory> {
  public:
-  PinnedBuffer() = default;
-  ~PinnedBuffer() {
-    if (data_ != nullptr) cudaFreeHost(data_);
-  }
-  PinnedBuffer(const PinnedBuffer&) = delete;
-  PinnedBuffer& operator=(const PinnedBuffer&) = delete;
-
-  cudaError_t Reserve(size_t bytes) {
-    if (bytes <= capacity_) return cudaSuccess;
-    if (data_ != nullptr) cudaFreeHost(data_);
-    data_ = nullptr;
-    capacity_ = 0;
-    const cudaError_t e = cudaMallocHost(&data_, bytes);
-    if (e == cudaSuccess) capacity_ = bytes;
-    return e;
-  }
   // Device to host through this buffer.
   cudaError_t Download(const double* device, double* host, size_t count) {
-    cudaError_t e = Reserve(count * sizeof(double));
-    if (e == cudaSuccess)
-      e = cudaMemcpy(data_, device, count * sizeof(double), cudaMemcpyDeviceToHost);
-    if (e == cudaSuccess) std::memcpy(host, data_, count * sizeof(double));
+    cudaError_t e = Reserve(count);
+    if (e == cudaSuccess) {
+      e = cudaMemcpy(get(), device, count * sizeof(double), cudaMemcpyDeviceToHost);
+    }
+    if (e == cudaSuccess) std::memcpy(host, get(), count * sizeof(double));
     return e;
   }
   // Host to device through this buffer.
   cudaError_t Upload(const double* host, double* device, size_t count) {
-    cudaError_t e = Reserve(count * sizeof(double));
+    cudaError_t e = Reserve(count);
     if (e != cudaSuccess) return e;
-    std::memcpy(data_, host, count * sizeof(double));
-    return cudaMemcpy(device, data_, count * sizeof(double), cudaMemcpyHostToDevice);
+    std::memcpy(get(), host, count * sizeof(double));
+    return cudaMemcpy(device, get(), count * sizeof(double), cudaMemcpyHostToDevice);
   }
-
- private:
-  void* data_ = nullptr;
-  size_t capacity_ = 0;
 };
 
 // Runs `launch` (kernel launches) and waits for it; *seconds gets its time on the device.
@@ -597,9 +601,7 @@ std::string CudaTracer::IntersectRays(const Vec3f* origins, const Vec3f* directi
             d.ray_distances.get());
       },
       kernel_seconds);
-  if (e == cudaSuccess) {
-    e = cudaMemcpy(distance, d.ray_distances.get(), count * sizeof(float), cudaMemcpyDeviceToHost);
-  }
+  if (e == cudaSuccess) e = d.ray_distances.Download(distance, count);
   return e == cudaSuccess ? "" : Error(e);
 }
 
