@@ -109,16 +109,42 @@ TEST(CudaBackendTest, TwoStageMatchesEmbree) {
               o_cpu->wall_seconds, o_gpu->wall_seconds, i_cpu->wall_seconds, i_gpu->wall_seconds);
 }
 
+// A city-office-sized annual product with random entries: O (window cells x bins), S (bins x
+// steps) and 8 indoor batches of 9 sensors.
+struct RandomInputs {
+  Matrix outdoor, sky;
+  std::vector<Matrix> indoor;
+};
+RandomInputs RandomProduct(int steps) {
+  const int cells = 3456, sensors = 9, batches = 8;
+  RandomInputs inputs{Matrix::Random(cells, kDaylightBins).cwiseAbs(),
+                      Matrix::Random(kDaylightBins, steps).cwiseAbs(),
+                      {}};
+  for (int b = 0; b < batches; ++b) {
+    inputs.indoor.push_back(Matrix::Random(sensors, cells).cwiseAbs());
+  }
+  return inputs;
+}
+
+// UDI limits and DA threshold at the quartiles and median of `illuminance`, so that every
+// count lies far from none and from all.
+MetricOptions QuartileLimits(const Matrix& illuminance) {
+  std::vector<double> values(illuminance.data(), illuminance.data() + illuminance.size());
+  std::sort(values.begin(), values.end());
+  MetricOptions options;
+  options.udi_lower_lux = values[values.size() / 4];
+  options.da_threshold_lux = values[values.size() / 2];
+  options.udi_upper_lux = values[3 * values.size() / 4];
+  return options;
+}
+
 // The annual product (I_b O) S on the GPU equals the CPU's, and a second product on the
 // same backend does not disturb the first.
 TEST(CudaBackendTest, AnnualProductMatchesCpu) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
-  const int cells = 3456, sensors = 9, batches = 8, steps = 4380;
-  const Matrix outdoor = Matrix::Random(cells, kDaylightBins).cwiseAbs();
-  const Matrix sky = Matrix::Random(kDaylightBins, steps).cwiseAbs();
-  std::vector<Matrix> indoor;
-  for (int b = 0; b < batches; ++b) indoor.push_back(Matrix::Random(sensors, cells).cwiseAbs());
+  const auto [outdoor, sky, indoor] = RandomProduct(4380);
+  const int cells = static_cast<int>(outdoor.rows()), batches = static_cast<int>(indoor.size());
   std::unique_ptr<DcBackend> cpu = MakeEmbreeBackend();
   absl::StatusOr<std::unique_ptr<AnnualProduct>> expected = cpu->MakeAnnualProduct(outdoor, sky);
   absl::StatusOr<std::unique_ptr<AnnualProduct>> first = gpu->MakeAnnualProduct(outdoor, sky);
@@ -140,11 +166,9 @@ TEST(CudaBackendTest, AnnualProductMatchesCpu) {
 TEST(CudaBackendTest, AnnualTallyMatchesCpu) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
-  const int cells = 3456, sensors = 9, batches = 8, steps = 3000;
-  const Matrix outdoor = Matrix::Random(cells, kDaylightBins).cwiseAbs();
-  const Matrix sky = Matrix::Random(kDaylightBins, steps).cwiseAbs();
-  std::vector<Matrix> indoor;
-  for (int b = 0; b < batches; ++b) indoor.push_back(Matrix::Random(sensors, cells).cwiseAbs());
+  const int steps = 3000;
+  auto [outdoor, sky, indoor] = RandomProduct(steps);
+  const int sensors = static_cast<int>(indoor[0].rows()), batches = static_cast<int>(indoor.size());
   std::unique_ptr<DcBackend> cpu = MakeEmbreeBackend();
   absl::StatusOr<std::unique_ptr<AnnualProduct>> on_cpu = cpu->MakeAnnualProduct(outdoor, sky);
   absl::StatusOr<std::unique_ptr<AnnualProduct>> on_gpu = gpu->MakeAnnualProduct(outdoor, sky);
@@ -153,12 +177,7 @@ TEST(CudaBackendTest, AnnualTallyMatchesCpu) {
   ASSERT_TRUE(e.ok()) << e.status();
 
   // Limits at quartiles of E, so every count is far from 0 and from all
-  std::vector<double> values((*e)[0].data(), (*e)[0].data() + (*e)[0].size());
-  std::sort(values.begin(), values.end());
-  MetricOptions options;
-  options.udi_lower_lux = values[values.size() / 4];
-  options.da_threshold_lux = values[values.size() / 2];
-  options.udi_upper_lux = values[3 * values.size() / 4];
+  const MetricOptions options = QuartileLimits((*e)[0]);
   absl::StatusOr<std::vector<HourTally>> expected = TallyBatchVersions(*e, options);
   absl::StatusOr<std::vector<HourTally>> from_cpu = (*on_cpu)->Tally(indoor, options);
   absl::StatusOr<std::vector<HourTally>> from_gpu = (*on_gpu)->Tally(indoor, options);
@@ -217,13 +236,7 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
   absl::StatusOr<IndoorResult> i =
       ComputeIndoorStage(scene, DefaultDesign(scene), indoor, gpu.get());
   ASSERT_TRUE(i.ok());
-  const Matrix e = i->coefficients * o->coefficients * sky;
-  std::vector<double> values(e.data(), e.data() + e.size());
-  std::sort(values.begin(), values.end());
-  MetricOptions options;
-  options.udi_lower_lux = values[values.size() / 4];
-  options.da_threshold_lux = values[values.size() / 2];
-  options.udi_upper_lux = values[3 * values.size() / 4];
+  const MetricOptions options = QuartileLimits(i->coefficients * o->coefficients * sky);
   for (const double alpha : {0.0, 0.8}) {
     const BlindDesign design = *DesignWithOverrides(scene, {{"alpha", alpha}});
     absl::StatusOr<std::vector<HourTally>> a = (*on_device)->Tally(design, options);
