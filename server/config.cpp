@@ -66,6 +66,11 @@ absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
            fill(limits.max_queued_jobs(), 64, "max_queued_jobs",
                 [&](int v) { limits.set_max_queued_jobs(v); }),
            fill(limits.max_sites(), 1000, "max_sites", [&](int v) { limits.set_max_sites(v); }),
+           fill(limits.max_data_dir_bytes(), kDefaultMaxDataDirBytes, "max_data_dir_bytes",
+                [&](int64_t v) { limits.set_max_data_dir_bytes(v); }),
+           fill(limits.max_concurrent_heavy_requests(), kDefaultMaxConcurrentHeavyRequests,
+                "max_concurrent_heavy_requests",
+                [&](int v) { limits.set_max_concurrent_heavy_requests(v); }),
        }) {
     if (!s.ok()) return s;
   }

@@ -17,8 +17,8 @@ int main(int argc, char** argv) {
   std::string config_file, port_file;
   std::string listen, data_dir, backend, log_level;
   int workers = 0, max_sensors = 0, max_evaluations = 0, max_message_bytes = 0, max_queued_jobs = 0,
-      max_sites = 0;
-  int64_t max_outdoor_paths = 0, max_indoor_paths = 0, max_triangles = 0;
+      max_sites = 0, max_heavy_requests = 0;
+  int64_t max_outdoor_paths = 0, max_indoor_paths = 0, max_triangles = 0, max_data_dir_bytes = 0;
   double grace = 0;
   app.add_option("--config", config_file, "JSON configuration file (fenestra.v1.DaemonConfig)");
   app.add_option("--listen", listen, "host:port to listen on [localhost:50051]");
@@ -36,6 +36,10 @@ int main(int argc, char** argv) {
   app.add_option("--max-message-bytes", max_message_bytes, "limit: request size [64 MiB]");
   app.add_option("--max-queued-jobs", max_queued_jobs, "limit: jobs waiting [64]");
   app.add_option("--max-sites", max_sites, "limit: registered sites [1000]");
+  app.add_option("--max-data-dir-bytes", max_data_dir_bytes,
+                 "limit: bytes under the data directory [10 GiB]");
+  app.add_option("--max-heavy-requests", max_heavy_requests,
+                 "limit: registrations and submissions of 1 MiB or more processed at once [2]");
   app.add_option("--shutdown-grace", grace,
                  "seconds running jobs may go on after SIGTERM before they are interrupted [10]");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error [info]");
@@ -71,6 +75,8 @@ int main(int argc, char** argv) {
   if (max_message_bytes) l.set_max_message_bytes(max_message_bytes);
   if (max_queued_jobs) l.set_max_queued_jobs(max_queued_jobs);
   if (max_sites) l.set_max_sites(max_sites);
+  if (max_data_dir_bytes) l.set_max_data_dir_bytes(max_data_dir_bytes);
+  if (max_heavy_requests) l.set_max_concurrent_heavy_requests(max_heavy_requests);
   absl::StatusOr<fenestra::v1::DaemonConfig> resolved = fenestra::ResolveConfig(config);
   if (!resolved.ok()) {
     spdlog::critical("{}", std::string(resolved.status().message()));

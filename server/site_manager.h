@@ -1,24 +1,25 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "fenestra/v1/daemon.pb.h"
 #include "fenestra/v1/service.pb.h"
+#include "server/data_dir.h"
+#include "server/heavy_requests.h"
 #include "server/job_store.h"
 #include "server/outdoor_cache.h"
 #include "server/work_queue.h"
 
 namespace fenestra {
-
-// Stores an uploaded EPW file as <dir>/<sha256>.epw (once per content); returns its path.
-absl::StatusOr<std::string> SaveUploadedWeather(const std::string& dir, const std::string& bytes);
 
 // Milliseconds since the Unix epoch.
 int64_t NowUnixMs();
@@ -26,15 +27,23 @@ int64_t NowUnixMs();
 // Mean of standard_error / coefficient over the entries at least 1% of the largest [-].
 double MeanRelativeStandardError(const OutdoorMatrix& matrix);
 
+// Client text (names, messages that may quote a request) as the daemon stores and logs it:
+// at most this many bytes [bytes], cut at a character boundary, control characters shown
+// as '?'.
+inline constexpr size_t kMaxStoredTextBytes = 1024;
+std::string StorableText(absl::string_view text);
+
 // The registered sites: their outdoor matrices are computed by tasks on the work queue
-// and kept in the outdoor cache; the sites themselves live in the job store.
+// and kept in the outdoor cache; the sites live in the job store, and in memory without
+// their scenes (read from the store when a computation or a Get needs one).
 class SiteManager {
  public:
-  SiteManager(const v1::DaemonConfig& config, JobStore& store, OutdoorCache& cache,
-              WorkQueue& queue);
+  SiteManager(const v1::DaemonConfig& config, const DataDir& data_dir, JobStore& store,
+              OutdoorCache& cache, UploadStore& weather, WorkQueue& queue, HeavyRequests& heavy);
 
-  // Loads the stored sites. Those computing, or ready but missing from the cache (a file
-  // found corrupt), are queued for computation again.
+  // Loads the stored sites (those that do not parse are quarantined and logged) and counts
+  // their weather files' references. Those computing, or ready but missing from the cache
+  // (a file found corrupt), are queued for computation again.
   absl::Status Recover();
 
   // Registers a site (see SiteService.Register).
@@ -43,7 +52,9 @@ class SiteManager {
   absl::StatusOr<v1::SiteInfo> Get(const std::string& id, bool with_scene = true) const;
   // Every site, oldest first, without scenes.
   std::vector<v1::SiteInfo> List() const;
-  // Forgets a site; a running computation of it stops at its next checkpoint.
+  // Forgets a site and drops its weather file's reference; a running computation of it
+  // stops at its next checkpoint. Its cached matrix stays until the data directory needs
+  // the room.
   absl::Status Delete(const std::string& id);
 
   // What a job on a site needs from it.
@@ -55,6 +66,8 @@ class SiteManager {
   absl::StatusOr<ForJob> Lookup(const std::string& id) const;
   // Counts a job that reused the site's matrix.
   void NoteReuse(const std::string& id);
+  // Whether a site uses the outdoor matrix with `key`.
+  bool UsesKey(const std::string& key) const;
 
   // Registrations are refused from now on (Unavailable).
   void BeginShutdown() { shutting_down_ = true; }
@@ -64,7 +77,7 @@ class SiteManager {
 
  private:
   struct Site {
-    v1::SiteInfo info;  // scene included
+    v1::SiteInfo info;  // without the scene
     std::string weather_path;
     std::shared_ptr<std::atomic<bool>> deleted = std::make_shared<std::atomic<bool>>(false);
   };
@@ -72,11 +85,23 @@ class SiteManager {
   absl::Status QueueCompute(const std::string& id);
   // A work queue task: computes (or finds) the matrix and marks the site ready or failed.
   void Compute(const std::string& id);
+  // Traces (or finds) the matrix of a site from its stored scene.
+  absl::StatusOr<OutdoorCache::Lookup> ComputeMatrix(const std::string& id,
+                                                     const v1::SiteInfo& info,
+                                                     const std::function<bool()>& cancelled);
+  // Stores what `update` makes of a site's info, then shows it; while the storage is full,
+  // tries again every second until the site is deleted or the daemon stops. True when
+  // stored.
+  bool StoreUntilDone(const std::string& id, const std::atomic<bool>& deleted,
+                      const std::function<void(v1::SiteInfo&)>& update);
 
   const v1::DaemonConfig config_;
+  const DataDir& data_dir_;
   JobStore& store_;
   OutdoorCache& cache_;
+  UploadStore& weather_;
   WorkQueue& queue_;
+  HeavyRequests& heavy_;
   std::atomic<bool> shutting_down_{false};
   std::atomic<bool> interrupted_{false};
   mutable std::mutex mutex_;

@@ -42,11 +42,13 @@ TEST(JobStoreTest, JobsAndEventsSurviveReopening) {
   ASSERT_TRUE(store.ok());
   auto jobs = (*store)->LoadJobs();
   ASSERT_TRUE(jobs.ok()) << jobs.status();
-  ASSERT_EQ(jobs->size(), 1u);
-  EXPECT_EQ((*jobs)[0].info.id(), "job-1");
-  EXPECT_EQ((*jobs)[0].info.state(), v1::JOB_STATE_RUNNING);
-  EXPECT_EQ((*jobs)[0].info.last_sequence(), 3);
-  EXPECT_EQ((*jobs)[0].job.name(), "tilt");
+  ASSERT_EQ(jobs->jobs.size(), 1u);
+  EXPECT_TRUE(jobs->quarantined.empty());
+  EXPECT_EQ(jobs->jobs[0].id(), "job-1");
+  EXPECT_EQ(jobs->jobs[0].state(), v1::JOB_STATE_RUNNING);
+  EXPECT_EQ(jobs->jobs[0].last_sequence(), 3);
+  EXPECT_EQ((*store)->LoadJob("job-1")->name(), "tilt");
+  EXPECT_EQ((*store)->LoadJob("job-2").status().code(), absl::StatusCode::kNotFound);
   auto events = (*store)->LoadEvents("job-1");
   ASSERT_TRUE(events.ok());
   ASSERT_EQ(events->size(), 3u);
@@ -61,17 +63,21 @@ TEST(JobStoreTest, Sites) {
   ASSERT_TRUE(store.ok());
   v1::SiteInfo a, b;
   a.set_name("montevideo");
-  ASSERT_EQ(*(*store)->InsertSite(a, "/data/weather/x.epw"), "site-1");
-  ASSERT_EQ(*(*store)->InsertSite(b, ""), "site-2");
+  v1::Scene scene;
+  scene.set_name("courtyard");
+  ASSERT_EQ(*(*store)->InsertSite(a, "/data/weather/x.epw", scene), "site-1");
+  ASSERT_EQ(*(*store)->InsertSite(b, "", v1::Scene()), "site-2");
   a.set_state(v1::SITE_STATE_READY);
   ASSERT_TRUE((*store)->UpdateSite(a).ok());
   ASSERT_TRUE((*store)->DeleteSite("site-2").ok());
   auto sites = (*store)->LoadSites();
   ASSERT_TRUE(sites.ok());
-  ASSERT_EQ(sites->size(), 1u);
-  EXPECT_EQ((*sites)[0].info.state(), v1::SITE_STATE_READY);
-  EXPECT_EQ((*sites)[0].info.name(), "montevideo");
-  EXPECT_EQ((*sites)[0].weather_path, "/data/weather/x.epw");
+  ASSERT_EQ(sites->sites.size(), 1u);
+  EXPECT_EQ(sites->sites[0].info.state(), v1::SITE_STATE_READY);
+  EXPECT_EQ(sites->sites[0].info.name(), "montevideo");
+  EXPECT_FALSE(sites->sites[0].info.has_scene());
+  EXPECT_EQ(sites->sites[0].weather_path, "/data/weather/x.epw");
+  EXPECT_EQ((*store)->LoadSiteScene("site-1")->name(), "courtyard");
 }
 
 TEST(JobStoreTest, UnwritablePathIsAnError) {
