@@ -11,8 +11,10 @@
 
 #include "server/config.h"
 #include "server/daemon.h"
+#include "server/heavy_requests.h"
 
 int main(int argc, char** argv) {
+  fenestra::ReleaseLargeBlocksWhenFreed();
   CLI::App app{"fenestrad: the Fenestra daylight optimization service"};
   std::string config_file, port_file;
   std::string listen, data_dir, backend, log_level;

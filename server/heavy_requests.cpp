@@ -8,6 +8,8 @@ namespace fenestra {
 
 void ReleaseFreeMemory() { malloc_trim(0); }
 
+void ReleaseLargeBlocksWhenFreed() { mallopt(M_MMAP_THRESHOLD, 1 << 20); }
+
 HeavyRequests::Pass::~Pass() {
   if (!gate_) return;
   {

@@ -15,6 +15,12 @@ inline constexpr size_t kHeavyRequestBytes = size_t{1} << 20;
 // after a large request or a trace, so the daemon's resident memory falls back.
 void ReleaseFreeMemory();
 
+// Makes glibc's malloc map blocks of 1 MiB or more on their own, so they go back to the
+// system when freed (M_MMAP_THRESHOLD; set, it also stops the threshold and the heaps' trim
+// threshold from growing after large frees, which left freed scenes resident in the
+// threads' arenas, where malloc_trim does not reach). Call once at start.
+void ReleaseLargeBlocksWhenFreed();
+
 // Bounds the heavy requests processed at once (limits.max_concurrent_heavy_requests); one
 // beyond it is refused at once rather than held, since its message already sits in memory.
 // Thread-safe.
