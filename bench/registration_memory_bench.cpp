@@ -5,9 +5,8 @@
 // and after each step: the registration and its outdoor matrix, two more registrations,
 // deleting every site. A SiteService.List during a registration is timed too.
 //
-//   registration_memory_bench [--triangles N] [--outdoor-paths N]
+//   registration_memory_bench [--triangles N] [--outdoor-paths N] [--fenestrad PATH]
 #include <fcntl.h>
-#include <google/protobuf/util/json_util.h>
 #include <grpcpp/grpcpp.h>
 #include <signal.h>
 #include <sys/prctl.h>
@@ -25,6 +24,7 @@
 #include <vector>
 
 #include "fenestra/v1/service.grpc.pb.h"
+#include "tests/server/large_registration.h"
 
 namespace fenestra {
 namespace {
@@ -51,34 +51,6 @@ double StatusMiB(pid_t pid, const std::string& field) {
 
 double Seconds(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-// The city office with `triangles` more outdoor triangles (a grid under the ground, shifted
-// by `shift_m` so each request has its own outdoor key).
-v1::RegisterSiteRequest LargeRegistration(int triangles, int64_t outdoor_paths, double shift_m) {
-  v1::RegisterSiteRequest request;
-  const auto status = google::protobuf::util::JsonStringToMessage(
-      ReadFile(FENESTRA_SOURCE_DIR "/examples/city_office/scene.json"), request.mutable_scene());
-  if (!status.ok()) std::exit(1);
-  request.mutable_scene()->mutable_site()->clear_weather_file();
-  const int row = 1000;
-  for (int i = 0; i < triangles; ++i) {
-    v1::Surface& s = *request.mutable_scene()->add_surfaces();
-    s.set_name("t");
-    s.set_material("city");
-    s.set_side(v1::SIDE_OUTDOOR);
-    const double x = -50 + 0.1 * (i % row) + shift_m, y = -50 + 0.1 * (i / row);
-    for (const auto& [dx, dy] : {std::pair{0.0, 0.0}, {0.08, 0.0}, {0.0, 0.08}}) {
-      v1::Vec3& v = *s.mutable_polygon()->add_vertices();
-      v.set_x(x + dx);
-      v.set_y(y + dy);
-      v.set_z(-0.5);
-    }
-  }
-  request.set_name("large");
-  request.mutable_sampling()->set_outdoor_paths(outdoor_paths);
-  request.mutable_sampling()->set_backend("cpu");
-  return request;
 }
 
 // Samples the daemon's VmRSS every 5 ms while alive; Peak() is the largest since Reset().
@@ -109,9 +81,11 @@ class RssSampler {
 int Main(int argc, char** argv) {
   int triangles = 600'000;
   int64_t outdoor_paths = 20'000;
+  std::string fenestrad = FENESTRAD;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (std::string(argv[i]) == "--triangles") triangles = std::stoi(argv[i + 1]);
     if (std::string(argv[i]) == "--outdoor-paths") outdoor_paths = std::stoll(argv[i + 1]);
+    if (std::string(argv[i]) == "--fenestrad") fenestrad = argv[i + 1];
   }
   const std::string dir =
       fs::temp_directory_path() / ("registration_memory_bench." + std::to_string(getpid()));
@@ -123,8 +97,9 @@ int Main(int argc, char** argv) {
     prctl(PR_SET_PDEATHSIG, SIGKILL);
     const int log = open((dir + "/fenestrad.log").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     dup2(log, STDERR_FILENO);
-    execl(FENESTRAD, FENESTRAD, "--listen", "127.0.0.1:0", "--data-dir", (dir + "/data").c_str(),
-          "--port-file", port_file.c_str(), "--workers", "1", "--backend", "cpu", nullptr);
+    execl(fenestrad.c_str(), fenestrad.c_str(), "--listen", "127.0.0.1:0", "--data-dir",
+          (dir + "/data").c_str(), "--port-file", port_file.c_str(), "--workers", "1", "--backend",
+          "cpu", nullptr);
     _exit(127);
   }
   while (!fs::exists(port_file)) std::this_thread::sleep_for(std::chrono::milliseconds(20));

@@ -41,7 +41,8 @@ int main(int argc, char** argv) {
   app.add_option("--max-data-dir-bytes", max_data_dir_bytes,
                  "limit: bytes under the data directory [10 GiB]");
   app.add_option("--max-heavy-requests", max_heavy_requests,
-                 "limit: registrations and submissions of 1 MiB or more processed at once [2]");
+                 "limit: requests of 1 MiB or more (registrations, submissions, site "
+                 "scenes sent back) processed at once [2]");
   app.add_option("--shutdown-grace", grace,
                  "seconds running jobs may go on after SIGTERM before they are interrupted [10]");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error [info]");

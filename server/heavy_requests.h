@@ -7,8 +7,8 @@
 
 namespace fenestra {
 
-// Registrations and submissions of at least this size are heavy [bytes] (daemon.proto,
-// limits.max_concurrent_heavy_requests).
+// Registrations, submissions and site scenes sent back of at least this size are heavy
+// [bytes] (daemon.proto, limits.max_concurrent_heavy_requests).
 inline constexpr size_t kHeavyRequestBytes = size_t{1} << 20;
 
 // Hands the free memory of every malloc arena back to the system (glibc's malloc_trim):

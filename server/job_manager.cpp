@@ -145,10 +145,41 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
   }
   absl::StatusOr<HeavyRequests::Pass> pass = heavy_.Enter(request.ByteSizeLong());
   if (!pass.ok()) return pass.status();
-  const v1::Limits& limits = config_.limits();
-  v1::Job job = request.job();
+  absl::StatusOr<std::optional<SiteManager::ForJob>> site = CheckSubmission(request);
+  if (!site.ok()) return site.status();
 
-  // Check the message itself and the limits before any work
+  // Room for the job, then its weather file: the upload, or the site's
+  if (absl::Status s = data_dir_.MakeRoom(static_cast<int64_t>(request.job().ByteSizeLong()));
+      !s.ok()) {
+    return s;
+  }
+  absl::StatusOr<std::string> weather_path = TakeWeather(request, *site);
+  if (!weather_path.ok()) return weather_path.status();
+  // Until the job is queued, the reference is this call's
+  absl::Cleanup release_weather = [&] { weather_.Unref(*weather_path); };
+  v1::Job job = request.job();
+  job.set_weather_file(*weather_path);
+  job.mutable_scene()->mutable_site()->clear_weather_file();
+  if (job.sampling().backend().empty()) {
+    job.mutable_sampling()->set_backend(
+        request.default_backend().empty() ? config_.backend() : request.default_backend());
+  }
+  absl::StatusOr<Admission> admitted = Admit(job, request.site_id(), *site);
+  if (!admitted.ok()) return admitted.status();
+  absl::StatusOr<v1::JobInfo> queued = StoreAndQueue(job, admitted->info, *weather_path);
+  if (!queued.ok()) return queued.status();
+  std::move(release_weather).Cancel();
+  spdlog::info("job {} queued ({}): {} evaluations at most, {} indoor paths per sensor{}",
+               queued->id(), queued->name(), admitted->max_evaluations,
+               admitted->indoor_paths_per_sensor,
+               site->has_value() ? absl::StrCat(", site ", request.site_id()) : "");
+  return queued;
+}
+
+absl::StatusOr<std::optional<SiteManager::ForJob>> JobManager::CheckSubmission(
+    const v1::SubmitJobRequest& request) const {
+  const v1::Limits& limits = config_.limits();
+  const v1::Job& job = request.job();
   if (!job.scene_file().empty()) {
     return absl::InvalidArgumentError(absl::StrCat(
         "job.scene_file '", StorableText(job.scene_file()),
@@ -166,7 +197,7 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
   if (absl::Status s = CheckSceneLimits(job.scene(), limits, min_slat_width_m); !s.ok()) return s;
   if (absl::Status s = CheckBudgetLimits(job.budget(), limits); !s.ok()) return s;
 
-  // The site
+  // The site, and a weather file from somewhere
   std::optional<SiteManager::ForJob> site;
   if (!request.site_id().empty()) {
     absl::StatusOr<SiteManager::ForJob> found = sites_.Lookup(request.site_id());
@@ -190,63 +221,53 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
         "the job has no weather file: send one in weather_epw, or give a site registered with "
         "one");
   }
+  return site;
+}
 
-  // Room for the job, then the weather file: the upload, or the site's
-  if (absl::Status s = data_dir_.MakeRoom(static_cast<int64_t>(job.ByteSizeLong())); !s.ok()) {
-    return s;
+absl::StatusOr<std::string> JobManager::TakeWeather(
+    const v1::SubmitJobRequest& request, const std::optional<SiteManager::ForJob>& site) {
+  if (!request.weather_epw().empty()) return weather_.Add(request.weather_epw());
+  weather_.Ref(site->weather_path);
+  if (!sites_.Lookup(request.site_id()).ok()) {  // deleted meanwhile
+    weather_.Unref(site->weather_path);
+    return absl::NotFoundError(absl::StrCat("no site '", request.site_id(), "' any more"));
   }
-  std::string weather_path;
-  if (!request.weather_epw().empty()) {
-    absl::StatusOr<std::string> saved = weather_.Add(request.weather_epw());
-    if (!saved.ok()) return saved.status();
-    weather_path = *saved;
-  } else {
-    weather_path = site->weather_path;
-    weather_.Ref(weather_path);
-    if (!sites_.Lookup(request.site_id()).ok()) {  // deleted meanwhile
-      weather_.Unref(weather_path);
-      return absl::NotFoundError(absl::StrCat("no site '", request.site_id(), "' any more"));
-    }
-  }
-  // Until the job is queued, the weather file is this call's
-  absl::Cleanup release_weather = [&] { weather_.Unref(weather_path); };
-  job.set_weather_file(weather_path);
-  job.mutable_scene()->mutable_site()->clear_weather_file();
-  if (job.sampling().backend().empty()) {
-    job.mutable_sampling()->set_backend(
-        request.default_backend().empty() ? config_.backend() : request.default_backend());
-  }
+  return site->weather_path;
+}
 
-  // Sampling limits, then the full validation
+absl::StatusOr<JobManager::Admission> JobManager::Admit(
+    const v1::Job& job, const std::string& site_id,
+    const std::optional<SiteManager::ForJob>& site) const {
+  const v1::Limits& limits = config_.limits();
   absl::StatusOr<v1::Sampling> sampling = ResolveSampling(job.sampling());
   if (!sampling.ok()) return sampling.status();
   if (absl::Status s = CheckSamplingLimits(*sampling, limits, /*indoor=*/true); !s.ok()) return s;
-  v1::JobInfo info;
-  int max_evaluations = 0;
-  int64_t indoor_paths = 0;
-  {
-    absl::StatusOr<PreparedJob> prepared = PrepareJob(job, "");
-    if (!prepared.ok()) return prepared.status();
-    if (absl::Status s = CheckBudgetLimits(prepared->job.budget(), limits); !s.ok()) return s;
-    info.set_outdoor_key(OutdoorMatrixKey(prepared->scene, prepared->job.sampling()));
-    info.set_name(StorableText(job.name().empty() ? prepared->scene.name : job.name()));
-    info.set_backend(prepared->job.sampling().backend());
-    max_evaluations = prepared->job.budget().max_evaluations();
-    indoor_paths = prepared->job.sampling().indoor_paths_per_sensor();
-  }
+  absl::StatusOr<PreparedJob> prepared = PrepareJob(job, "");
+  if (!prepared.ok()) return prepared.status();
+  if (absl::Status s = CheckBudgetLimits(prepared->job.budget(), limits); !s.ok()) return s;
+  Admission admitted;
+  v1::JobInfo& info = admitted.info;
+  info.set_outdoor_key(OutdoorMatrixKey(prepared->scene, prepared->job.sampling()));
+  info.set_name(StorableText(job.name().empty() ? prepared->scene.name : job.name()));
+  info.set_backend(prepared->job.sampling().backend());
+  info.set_site_id(site_id);
+  admitted.max_evaluations = prepared->job.budget().max_evaluations();
+  admitted.indoor_paths_per_sensor = prepared->job.sampling().indoor_paths_per_sensor();
   if (site && info.outdoor_key() != site->info.outdoor_key()) {
     return absl::InvalidArgumentError(absl::StrCat(
-        "the job does not match site ", request.site_id(),
+        "the job does not match site ", site_id,
         ": its outdoor surfaces, materials, window or outdoor sampling (outdoor_paths, "
         "outdoor_bounces, seed, basis_cells, window parts) differ from the site's, so the site's "
         "outdoor matrix cannot be reused (job key ",
         info.outdoor_key().substr(0, 16), ", site key ", site->info.outdoor_key().substr(0, 16),
         ")"));
   }
+  return admitted;
+}
 
-  // Store it with its first event, then queue it
+absl::StatusOr<v1::JobInfo> JobManager::StoreAndQueue(const v1::Job& job, v1::JobInfo info,
+                                                      const std::string& weather_path) {
   info.set_state(v1::JOB_STATE_QUEUED);
-  info.set_site_id(request.site_id());
   info.set_stage("queued");
   info.set_created_unix_ms(NowUnixMs());
   info.set_last_sequence(1);
@@ -280,10 +301,6 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
     }
     return s;
   }
-  std::move(release_weather).Cancel();
-  spdlog::info("job {} queued ({}): {} evaluations at most, {} indoor paths per sensor{}", *id,
-               info.name(), max_evaluations, indoor_paths,
-               site ? absl::StrCat(", site ", request.site_id()) : "");
   return InfoOf(*record);
 }
 
@@ -294,7 +311,6 @@ absl::Status JobManager::Store(Record& r, std::optional<v1::JobEvent> event, boo
     r.wanted.set_last_sequence(event->sequence());
   }
   const absl::Status stored = store_.UpdateJob(r.wanted, event ? &*event : nullptr, durable);
-  NoteStore(r, stored);
   if (!stored.ok()) {
     r.wanted.set_last_sequence(r.info.last_sequence());
     return stored;
@@ -308,14 +324,15 @@ absl::Status JobManager::Store(Record& r, std::optional<v1::JobEvent> event, boo
   return absl::OkStatus();
 }
 
-void JobManager::NoteStore(Record& r, const absl::Status& stored) {
+void JobManager::Report(Record& r, std::optional<v1::JobEvent> event, bool durable) {
+  const absl::Status stored = Store(r, std::move(event), durable);
   if (!stored.ok() && !r.store_failing) {
     spdlog::error(
         "job {}: cannot store its progress ({}); it goes on, and what it reports "
         "waits until the store takes it",
         r.info.id(), std::string(stored.message()));
   } else if (stored.ok() && r.store_failing) {
-    spdlog::info("job {}: stored again", r.info.id());
+    spdlog::info("job {}: its progress is stored again", r.info.id());
   }
   r.store_failing = !stored.ok();
 }
@@ -396,7 +413,7 @@ void JobManager::RunStarted(Record& r) {
     v1::JobEvent event;
     event.mutable_stage()->set_name("outdoor");
     event.mutable_stage()->set_cached(cache_.Contains(key));
-    (void)Store(r, event);
+    Report(r, event);
   }
   const auto outdoor_start = std::chrono::steady_clock::now();
   absl::StatusOr<OutdoorCache::Lookup> lookup = cache_.GetOrCompute(
@@ -411,7 +428,7 @@ void JobManager::RunStarted(Record& r) {
     std::lock_guard lock(r.mutex);
     r.wanted.set_outdoor_reused(!lookup->computed);
     r.wanted.set_outdoor_seconds(outdoor_seconds);
-    (void)Store(r);
+    Report(r, std::nullopt);
     spdlog::info("job {}: outdoor matrix {} in {:.3f} s", r.info.id(),
                  lookup->computed ? "traced" : "reused from the cache", outdoor_seconds);
   }
@@ -425,14 +442,14 @@ void JobManager::RunStarted(Record& r) {
     r.wanted.set_stage(stage);
     v1::JobEvent event;
     event.mutable_stage()->set_name(stage);
-    (void)Store(r, event);
+    Report(r, event);
   };
   callbacks.progress = [&](const JobProgress& progress) {
     std::lock_guard lock(r.mutex);
     v1::JobEvent event;
     *event.mutable_progress() = ToProto(progress);
     *r.wanted.mutable_progress() = event.progress();
-    (void)Store(r, event, /*durable=*/false);
+    Report(r, event, /*durable=*/false);
   };
   callbacks.cancelled = cancelled;
   absl::StatusOr<v1::JobResult> result = RunJob(*prepared, lookup->matrix.get(), callbacks);

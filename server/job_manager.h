@@ -79,9 +79,28 @@ class JobManager {
     std::string weather_path;         // referenced while the job is queued or running
     std::deque<v1::JobEvent> events;  // the latest stored events, for watchers
     std::atomic<bool> cancel_requested{false};
-    bool store_failing = false;  // the last store failed (logged once)
+    bool store_failing = false;  // the last Report failed (logged once)
     int watchers = 0;            // Watch streams open
   };
+  // What Admit found: the new job's info (name, site, outdoor key, backend) and, for the
+  // log, its budget and indoor sampling.
+  struct Admission {
+    v1::JobInfo info;
+    int max_evaluations = 0;
+    int64_t indoor_paths_per_sensor = 0;
+  };
+  // Submit's checks of the message and the limits before any work; the site, if any.
+  absl::StatusOr<std::optional<SiteManager::ForJob>> CheckSubmission(
+      const v1::SubmitJobRequest& request) const;
+  // A reference to the job's weather file: its upload stored, or its site's.
+  absl::StatusOr<std::string> TakeWeather(const v1::SubmitJobRequest& request,
+                                          const std::optional<SiteManager::ForJob>& site);
+  // The full validation of `job` (weather file in place) and its match with its site.
+  absl::StatusOr<Admission> Admit(const v1::Job& job, const std::string& site_id,
+                                  const std::optional<SiteManager::ForJob>& site) const;
+  // Stores a new job with its queued event and queues it; its info with its id.
+  absl::StatusOr<v1::JobInfo> StoreAndQueue(const v1::Job& job, v1::JobInfo info,
+                                            const std::string& weather_path);
   std::shared_ptr<Record> Find(const std::string& id) const;
   // Stores `wanted` and `event` (numbered after the last stored event; none: the info
   // alone) in one transaction; once stored they are shown. `durable` = false for progress.
@@ -89,8 +108,9 @@ class JobManager {
   // (Record mutex held.)
   absl::Status Store(Record& record, std::optional<v1::JobEvent> event = std::nullopt,
                      bool durable = true);
-  // Logs the first of a run of failed stores, and the first store after them.
-  void NoteStore(Record& record, const absl::Status& stored);
+  // Store for what a running job reports (stage, outdoor matrix, progress): a failure is
+  // logged, the first of a run of them, and the job goes on.
+  void Report(Record& record, std::optional<v1::JobEvent> event, bool durable = true);
   // Ends a job (record mutex held): final state, time and event, stored; once stored, shown
   // and logged, and the weather file's reference dropped. A failed store is tried again
   // every second by the committer thread (`retry`), or returned with nothing changed.

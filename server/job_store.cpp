@@ -101,7 +101,7 @@ absl::StatusOr<std::unique_ptr<JobStore>> JobStore::Open(const std::string& path
     return absl::FailedPreconditionError(
         absl::StrCat(path, ": the job store is read-only (not writable)"));
   }
-  sqlite3_busy_timeout(db, 2000);
+  sqlite3_busy_timeout(db, 500);
   // The daemon is the database's only user: an exclusive lock keeps a second daemon out
   // and the WAL index in memory (no -shm file, so a full disk still lets it read)
   for (const char* sql : {
@@ -419,6 +419,16 @@ absl::StatusOr<v1::Scene> JobStore::LoadSiteScene(const std::string& id) {
     return info.scene();  // stored before scenes had their own column
   }
   return absl::DataLossError(absl::StrCat("the stored scene of site ", id, " does not parse"));
+}
+
+absl::StatusOr<int64_t> JobStore::SiteSceneBytes(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  Statement select(db_, "SELECT COALESCE(length(scene), length(info)) FROM sites WHERE id = ?");
+  select.BindText(1, id);
+  const int rc = select.Step();
+  if (rc == SQLITE_DONE) return absl::NotFoundError(absl::StrCat("no site '", id, "' is stored"));
+  if (rc != SQLITE_ROW) return select.Error();
+  return select.Int(0);
 }
 
 absl::Status JobStore::Quarantine(const std::string& table, const std::string& id,

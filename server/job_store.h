@@ -85,6 +85,8 @@ class JobStore {
   absl::StatusOr<StoredSites> LoadSites();
   // A site's registered scene. DataLoss when its record does not parse.
   absl::StatusOr<v1::Scene> LoadSiteScene(const std::string& id);
+  // The size of a site's stored scene [bytes], without reading it.
+  absl::StatusOr<int64_t> SiteSceneBytes(const std::string& id);
 
   // Moves a job (`table` "jobs", its events stay) or a site ("sites") to the quarantine
   // table with `reason`.

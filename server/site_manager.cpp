@@ -112,40 +112,9 @@ absl::StatusOr<v1::SiteInfo> SiteManager::Register(const v1::RegisterSiteRequest
   }
   absl::StatusOr<HeavyRequests::Pass> pass = heavy_.Enter(request.ByteSizeLong());
   if (!pass.ok()) return pass.status();
-  const v1::Limits& limits = config_.limits();
-  {
-    std::lock_guard lock(mutex_);
-    if (static_cast<int>(sites_.size()) >= limits.max_sites()) {
-      return absl::ResourceExhaustedError(
-          absl::StrCat("this server holds ", sites_.size(),
-                       " sites, its limit max_sites; delete one first (fenestra site rm)"));
-    }
-  }
-  if (!request.has_scene()) return absl::InvalidArgumentError("scene: is required");
-  if (absl::Status s = CheckInlineScene(request.scene()); !s.ok()) return s;
-  if (absl::Status s = CheckSceneLimits(request.scene(), limits); !s.ok()) return s;
-
-  v1::Sampling sampling = request.sampling();
-  if (sampling.backend().empty()) sampling.set_backend(config_.backend());
-  absl::StatusOr<v1::Sampling> resolved = ResolveSampling(sampling);
-  if (!resolved.ok()) return resolved.status();
-  if (absl::Status s = CheckSamplingLimits(*resolved, limits, /*indoor=*/false); !s.ok()) {
-    return s;
-  }
-  v1::SiteInfo info;
-  {
-    // The site's weather_file only names a file; building does not read it
-    absl::StatusOr<Scene> scene = BuildScene(request.scene(), "scene");
-    if (!scene.ok()) return scene.status();
-    info.set_name(StorableText(request.name().empty() ? scene->name : request.name()));
-    info.set_outdoor_key(OutdoorMatrixKey(*scene, *resolved));
-    info.set_latitude_deg(scene->site.latitude_deg);
-    info.set_longitude_deg(scene->site.longitude_deg);
-    info.set_outdoor_triangles(OutdoorTriangles(*scene));
-  }
-  *info.mutable_sampling() = *resolved;
-  info.set_weather_name(StorableText(request.weather_name()));
-  info.set_created_unix_ms(NowUnixMs());
+  absl::StatusOr<v1::SiteInfo> described = Describe(request);
+  if (!described.ok()) return described.status();
+  v1::SiteInfo& info = *described;
 
   // Room for the scene, then the weather file
   if (absl::Status s = data_dir_.MakeRoom(static_cast<int64_t>(request.scene().ByteSizeLong()));
@@ -169,23 +138,59 @@ absl::StatusOr<v1::SiteInfo> SiteManager::Register(const v1::RegisterSiteRequest
   } else {
     info.set_state(v1::SITE_STATE_COMPUTING);
   }
+  // Stored outside the lock: a large scene takes a while, and List goes on meanwhile
+  absl::StatusOr<std::string> id = store_.InsertSite(info, weather_path, request.scene());
+  if (!id.ok()) {
+    if (!weather_path.empty()) weather_.Unref(weather_path);
+    return id.status();
+  }
   {
     std::lock_guard lock(mutex_);
-    absl::StatusOr<std::string> id = store_.InsertSite(info, weather_path, request.scene());
-    if (!id.ok()) {
-      if (!weather_path.empty()) weather_.Unref(weather_path);
-      return id.status();
-    }
     order_.push_back(*id);
     sites_[*id] = Site{info, weather_path};
   }
   spdlog::info("site {} registered ({}): {} outdoor triangles, {} outdoor paths, key {}; {}",
-               info.id(), info.name(), info.outdoor_triangles(), resolved->outdoor_paths(),
+               info.id(), info.name(), info.outdoor_triangles(), info.sampling().outdoor_paths(),
                info.outdoor_key().substr(0, 16),
                cached ? "outdoor matrix already cached" : "outdoor matrix queued");
   if (!cached) {
     if (absl::Status s = QueueCompute(info.id()); !s.ok()) return s;
   }
+  return info;
+}
+
+absl::StatusOr<v1::SiteInfo> SiteManager::Describe(const v1::RegisterSiteRequest& request) const {
+  const v1::Limits& limits = config_.limits();
+  {
+    std::lock_guard lock(mutex_);
+    if (static_cast<int>(sites_.size()) >= limits.max_sites()) {
+      return absl::ResourceExhaustedError(
+          absl::StrCat("this server holds ", sites_.size(),
+                       " sites, its limit max_sites; delete one first (fenestra site rm)"));
+    }
+  }
+  if (!request.has_scene()) return absl::InvalidArgumentError("scene: is required");
+  if (absl::Status s = CheckInlineScene(request.scene()); !s.ok()) return s;
+  if (absl::Status s = CheckSceneLimits(request.scene(), limits); !s.ok()) return s;
+  v1::Sampling sampling = request.sampling();
+  if (sampling.backend().empty()) sampling.set_backend(config_.backend());
+  absl::StatusOr<v1::Sampling> resolved = ResolveSampling(sampling);
+  if (!resolved.ok()) return resolved.status();
+  if (absl::Status s = CheckSamplingLimits(*resolved, limits, /*indoor=*/false); !s.ok()) {
+    return s;
+  }
+  // The site's weather_file only names a file; building does not read it
+  absl::StatusOr<Scene> scene = BuildScene(request.scene(), "scene");
+  if (!scene.ok()) return scene.status();
+  v1::SiteInfo info;
+  info.set_name(StorableText(request.name().empty() ? scene->name : request.name()));
+  info.set_outdoor_key(OutdoorMatrixKey(*scene, *resolved));
+  info.set_latitude_deg(scene->site.latitude_deg);
+  info.set_longitude_deg(scene->site.longitude_deg);
+  info.set_outdoor_triangles(OutdoorTriangles(*scene));
+  *info.mutable_sampling() = *resolved;
+  info.set_weather_name(StorableText(request.weather_name()));
+  info.set_created_unix_ms(NowUnixMs());
   return info;
 }
 
@@ -309,7 +314,12 @@ absl::StatusOr<v1::SiteInfo> SiteManager::Get(const std::string& id, bool with_s
     info = it->second.info;
   }
   if (with_scene) {
-    // Read outside the lock, so a large scene does not hold up the other calls
+    // Read outside the lock, so a large scene does not hold up the other calls; large
+    // scenes count as heavy requests
+    absl::StatusOr<int64_t> bytes = store_.SiteSceneBytes(id);
+    if (!bytes.ok()) return bytes.status();
+    absl::StatusOr<HeavyRequests::Pass> pass = heavy_.Enter(static_cast<size_t>(*bytes));
+    if (!pass.ok()) return pass.status();
     absl::StatusOr<v1::Scene> scene = store_.LoadSiteScene(id);
     if (!scene.ok()) return scene.status();
     *info.mutable_scene() = *std::move(scene);

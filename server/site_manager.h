@@ -48,7 +48,8 @@ class SiteManager {
 
   // Registers a site (see SiteService.Register).
   absl::StatusOr<v1::SiteInfo> Register(const v1::RegisterSiteRequest& request);
-  // A site by id; NotFound when unknown. `with_scene` includes the registered scene.
+  // A site by id; NotFound when unknown. `with_scene` includes the registered scene, read
+  // from the store (a scene of 1 MiB or more counts as a heavy request).
   absl::StatusOr<v1::SiteInfo> Get(const std::string& id, bool with_scene = true) const;
   // Every site, oldest first, without scenes.
   std::vector<v1::SiteInfo> List() const;
@@ -81,6 +82,9 @@ class SiteManager {
     std::string weather_path;
     std::shared_ptr<std::atomic<bool>> deleted = std::make_shared<std::atomic<bool>>(false);
   };
+  // Register's checks of the message and the limits, and the new site's info from its
+  // scene (built, then dropped).
+  absl::StatusOr<v1::SiteInfo> Describe(const v1::RegisterSiteRequest& request) const;
   // Queues the computation of a site's matrix.
   absl::Status QueueCompute(const std::string& id);
   // A work queue task: computes (or finds) the matrix and marks the site ready or failed.
