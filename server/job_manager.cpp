@@ -405,7 +405,7 @@ void JobManager::RunStarted(Record& r) {
   }
   if (!prepared.ok()) return fail(std::string(prepared.status().message()));
   prepared->job.clear_scene();
-  const std::string key = r.info.outdoor_key();
+  const std::string key = OutdoorMatrixKey(prepared->scene, prepared->job.sampling());
 
   // The outdoor matrix: cached, being computed by another task, or traced here
   {
