@@ -202,9 +202,13 @@ absl::Status FenestraClient::ToStatus(const grpc::Status& status) const {
     case grpc::StatusCode::UNAVAILABLE:
       // fenestrad's own UNAVAILABLE (shutting down) starts with its name
       if (absl::StartsWith(message, "fenestrad")) break;
-      return absl::UnavailableError(absl::StrCat(
-          "cannot reach fenestrad at ", address, " (", message, "); is it running",
-          options_.tls_ca_file.empty() ? "" : ", with a certificate --tls-ca verifies", "?"));
+      if (absl::StrContains(absl::AsciiStrToLower(message), "handshake")) {
+        return absl::UnavailableError(absl::StrCat(
+            "cannot reach fenestrad at ", address, ": the TLS handshake failed (", message,
+            "); does it serve TLS with a certificate signed by the --tls-ca CA?"));
+      }
+      return absl::UnavailableError(
+          absl::StrCat("cannot reach fenestrad at ", address, " (", message, "); is it running?"));
     case grpc::StatusCode::DEADLINE_EXCEEDED:
       return absl::DeadlineExceededError(absl::StrCat("fenestrad at ", address,
                                                       " did not answer within ",
