@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -27,7 +28,7 @@ class PythonClientTest : public testing::Test {
     ASSERT_EQ(grpc.exit_code, 0) << "/usr/bin/python3 needs python3-grpcio "
                                     "(deploy/debian_packages.sh):\n"
                                  << grpc.output;
-    dir_ = new std::string(testing::TempDir() + "/python_client_test");
+    dir_ = new std::string(testing::TempDir() + "/python_client_test_" + std::to_string(getpid()));
     fs::remove_all(*dir_);
     fs::create_directories(*dir_);
     const absl::StatusOr<TestCertificates>& made = ProcessTestCertificates();
