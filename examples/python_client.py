@@ -11,6 +11,10 @@ proto3 `optional` fields, hence the order).
 
   /usr/bin/python3 examples/python_client.py --server localhost:50051 \
       examples/city_office/alpha_max_quick.json
+
+A daemon with TLS and tokens (the default beyond loopback) needs --tls-ca (the CA file
+that signed the server's certificate) and a token (--token-file, or FENESTRA_TOKEN), sent
+as "authorization: Bearer <token>" with every call.
 """
 import argparse
 import importlib
@@ -60,7 +64,14 @@ def main():
     parser.add_argument("--indoor-paths", type=int,
                         help="override sampling.indoor_paths_per_sensor")
     parser.add_argument("--evaluations", type=int, help="override budget.max_evaluations")
+    parser.add_argument("--tls-ca", help="connect with TLS, trusting this CA file (PEM)")
+    parser.add_argument("--token-file", help="file holding the token (default: $FENESTRA_TOKEN)")
     args = parser.parse_args()
+    token = os.environ.get("FENESTRA_TOKEN", "")
+    if args.token_file:
+        with open(args.token_file) as f:
+            token = f.read().strip()
+    metadata = [("authorization", "Bearer " + token)] if token else []
 
     with tempfile.TemporaryDirectory() as stubs:
         job_pb2, scene_pb2, service_pb2, service_grpc = generate_stubs(stubs)
@@ -92,8 +103,14 @@ def main():
         if args.evaluations:
             job.budget.max_evaluations = args.evaluations
 
-        channel = grpc.insecure_channel(args.server, options=[
-            ("grpc.keepalive_time_ms", 30000), ("grpc.max_receive_message_length", 1 << 28)])
+        options = [("grpc.keepalive_time_ms", 30000),
+                   ("grpc.max_receive_message_length", 1 << 28)]
+        if args.tls_ca:
+            with open(args.tls_ca, "rb") as f:
+                credentials = grpc.ssl_channel_credentials(root_certificates=f.read())
+            channel = grpc.secure_channel(args.server, credentials, options=options)
+        else:
+            channel = grpc.insecure_channel(args.server, options=options)
         sites = service_grpc.SiteServiceStub(channel)
         jobs = service_grpc.JobServiceStub(channel)
         try:
@@ -101,11 +118,12 @@ def main():
             site = sites.Register(service_pb2.RegisterSiteRequest(
                 name=job.scene.name, scene=job.scene, sampling=job.sampling,
                 weather_epw=weather_epw, weather_name=os.path.basename(weather)),
-                timeout=args.timeout)
+                timeout=args.timeout, metadata=metadata)
             print(f"{site.id} registered", flush=True)
             while site.state == service_pb2.SITE_STATE_COMPUTING:
                 time.sleep(0.25)
-                site = sites.Get(service_pb2.GetSiteRequest(id=site.id), timeout=args.timeout)
+                site = sites.Get(service_pb2.GetSiteRequest(id=site.id), timeout=args.timeout,
+                                 metadata=metadata)
             if site.state != service_pb2.SITE_STATE_READY:
                 sys.exit(f"error: {site.id} failed: {site.error}")
             print(f"{site.id} ready: outdoor matrix traced in {site.compute_seconds:.2f} s, "
@@ -114,9 +132,9 @@ def main():
 
             # The job on that site, and its events
             info = jobs.Submit(service_pb2.SubmitJobRequest(job=job, site_id=site.id),
-                               timeout=args.timeout)
+                               timeout=args.timeout, metadata=metadata)
             print(f"{info.id} submitted", flush=True)
-            for event in jobs.Watch(service_pb2.WatchJobRequest(id=info.id)):
+            for event in jobs.Watch(service_pb2.WatchJobRequest(id=info.id), metadata=metadata):
                 kind = event.WhichOneof("kind")
                 if kind == "snapshot":
                     print(f"{info.id}: {service_pb2.JobState.Name(event.snapshot.state)}")
