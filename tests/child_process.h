@@ -2,6 +2,7 @@
 // fenestrad on a free loopback port with a data directory of its own.
 #pragma once
 
+#include <algorithm>
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -85,6 +86,10 @@ class FenestradProcess {
     std::filesystem::remove(port_file);
     std::vector<std::string> argv = {fenestrad, "--listen",    "127.0.0.1:0", "--data-dir",
                                      data_dir,  "--port-file", port_file};
+    // One local user unless the test asks for tokens (loopback only, as the daemon requires)
+    if (std::find(flags.begin(), flags.end(), "--auth") == flags.end()) {
+      argv.insert(argv.end(), {"--auth", "none"});
+    }
     argv.insert(argv.end(), flags.begin(), flags.end());
     pid_ = fork();
     if (pid_ == 0) {

@@ -472,7 +472,7 @@ TEST_F(FenestradAuthTest, PythonClientWithTlsAndAToken) {
   args.insert(args.end(), {"--tls-ca", certs_->ca});
   r = Daemon::RunCli(args);
   EXPECT_NE(r.code, 0);
-  EXPECT_THAT(r.out + r.err, HasSubstr("UNAUTHENTICATED"));
+  EXPECT_THAT(r.out + r.err, HasSubstr("fenestrad wants a token"));
 }
 
 }  // namespace
