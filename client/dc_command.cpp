@@ -2,6 +2,8 @@
 // two-stage, for a number of paths or until a target error.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -114,6 +116,7 @@ void PrintRound(const Scene& scene, const RoundReport& r, bool two_stage) {
   fmt::print("round {}: {}, {:.2f} s; largest relative SE {:.2f}% at {}{}\n", r.round + 1, paths,
              r.elapsed_seconds, 100 * r.max_relative_error, scene.sensors[r.worst_sensor].name,
              share);
+  std::fflush(stdout);  // live when piped
 }
 
 // Says how tracing to the target ended; true when it reached the target.

@@ -34,32 +34,7 @@ void SetRoulette(const DcFlags& flags, Options& options) {
   if (Given(flags, "--roulette-threshold")) options.roulette_threshold = flags.roulette_threshold;
 }
 
-}  // namespace
-
-void AddDcFlags(CLI::App* command, DcFlags* flags, int64_t paths_divisor) {
-  const v1::Sampling& job = JobSamplingDefaults();
-  flags->command = command;
-  flags->paths /= paths_divisor;
-  flags->seed = job.seed();
-  flags->outdoor_paths = job.outdoor_paths() / paths_divisor;
-  flags->indoor_paths = job.indoor_paths_per_sensor() / paths_divisor;
-  flags->outdoor_bounces = job.outdoor_bounces();
-  flags->indoor_bounces = job.indoor_bounces();
-  flags->basis = job.basis_cells();
-
-  command->add_option("SCENE", flags->scene, "Scene file (JSON)")->required();
-  command->add_option("--method", flags->method, "one-stage, or two-stage (D = I O)")
-      ->check(CLI::IsMember({"one-stage", "two-stage"}))
-      ->capture_default_str();
-  command->add_option("--set", flags->set, "Blind design values, e.g. alpha=0.5,width=0.12");
-  command->add_option("--backend", flags->backend, "cpu, cuda or auto (a GPU when there is one)")
-      ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
-      ->capture_default_str();
-  command->add_option("--seed", flags->seed, "Random seed")->capture_default_str();
-  command->add_option("--threads", flags->threads, "CPU threads (0 = all cores)")
-      ->capture_default_str();
-
-  // One-stage
+void AddOneStageFlags(CLI::App* command, DcFlags* flags) {
   command->add_option("--paths", flags->paths, "One-stage: paths per sensor")
       ->capture_default_str();
   command
@@ -78,15 +53,17 @@ void AddDcFlags(CLI::App* command, DcFlags* flags, int64_t paths_divisor) {
                                "two-stage: both stages, by default {}",
                                OutdoorOptions{}.roulette_threshold))
       ->capture_default_str();
+}
 
-  // Two-stage
+// `paths_default` says where the path counts' defaults come from.
+void AddTwoStageFlags(CLI::App* command, DcFlags* flags, const std::string& paths_default) {
   command
       ->add_option("--outdoor-paths", flags->outdoor_paths,
-                   "Two-stage: outdoor paths in total (the jobs' default)")
+                   fmt::format("Two-stage: outdoor paths in total ({})", paths_default))
       ->capture_default_str();
   command
       ->add_option("--indoor-paths", flags->indoor_paths,
-                   "Two-stage: indoor paths per sensor (the jobs' default)")
+                   fmt::format("Two-stage: indoor paths per sensor ({})", paths_default))
       ->capture_default_str();
   command
       ->add_option("--outdoor-bounces", flags->outdoor_bounces,
@@ -116,6 +93,37 @@ void AddDcFlags(CLI::App* command, DcFlags* flags, int64_t paths_divisor) {
                    "indoor stage's share of the standard errors")
       ->check(CLI::Range(2, 1024))
       ->capture_default_str();
+}
+
+}  // namespace
+
+void AddDcFlags(CLI::App* command, DcFlags* flags, int64_t paths_divisor) {
+  const v1::Sampling& job = JobSamplingDefaults();
+  flags->command = command;
+  flags->paths /= paths_divisor;
+  flags->seed = job.seed();
+  flags->outdoor_paths = job.outdoor_paths() / paths_divisor;
+  flags->indoor_paths = job.indoor_paths_per_sensor() / paths_divisor;
+  flags->outdoor_bounces = job.outdoor_bounces();
+  flags->indoor_bounces = job.indoor_bounces();
+  flags->basis = job.basis_cells();
+
+  command->add_option("SCENE", flags->scene, "Scene file (JSON)")->required();
+  command->add_option("--method", flags->method, "one-stage, or two-stage (D = I O)")
+      ->check(CLI::IsMember({"one-stage", "two-stage"}))
+      ->capture_default_str();
+  command->add_option("--set", flags->set, "Blind design values, e.g. alpha=0.5,width=0.12");
+  command->add_option("--backend", flags->backend, "cpu, cuda or auto (a GPU when there is one)")
+      ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
+      ->capture_default_str();
+  command->add_option("--seed", flags->seed, "Random seed")->capture_default_str();
+  command->add_option("--threads", flags->threads, "CPU threads (0 = all cores)")
+      ->capture_default_str();
+
+  AddOneStageFlags(command, flags);
+  AddTwoStageFlags(command, flags,
+                   paths_divisor == 1 ? std::string("the jobs' default")
+                                      : fmt::format("the jobs' default / {}", paths_divisor));
 }
 
 absl::Status CheckMethodFlags(const DcFlags& flags) {

@@ -90,22 +90,23 @@ struct Plan {
   std::vector<double> max_paths;  // limits, per stage
 };
 
-// Caps the plan's growth at kMaxRoundGrowth and scales it into the limits; the stop reason
-// when too little of a round would remain.
+// Scales the plan's growth, every stage's by one fraction (so the split between the stages
+// stays the chosen one), to at most kMaxRoundGrowth, the time left and the path limits; the
+// stop reason when too little of a round would remain.
 std::string LimitPlan(Plan& plan, double remaining_seconds) {
-  double wanted = 1, wanted_seconds = 0, path_seconds = 0, overhead = 0;
+  double wanted = 1, wanted_seconds = 0, overhead = 0;
   for (size_t s = 0; s < plan.factor.size(); ++s) {
     wanted = std::max(wanted, plan.factor[s]);
     wanted_seconds += (plan.factor[s] - 1) * plan.seconds[s];
-    plan.factor[s] = std::min(plan.factor[s], kMaxRoundGrowth);
-    path_seconds += (plan.factor[s] - 1) * plan.seconds[s];
     if (plan.factor[s] > 1) overhead += plan.overhead[s];
   }
-  const double growth = *std::max_element(plan.factor.begin(), plan.factor.end());
-  // Shrink every stage's growth by one fraction so the split stays the best one
+  double fraction = wanted > kMaxRoundGrowth ? (kMaxRoundGrowth - 1) / (wanted - 1) : 1.0;
+  const char* limit = "";
   const double time_left = std::max(0.0, remaining_seconds - overhead);
-  double fraction = path_seconds > time_left ? time_left / path_seconds : 1.0;
-  const char* limit = fraction < 1 ? "the maximum time" : "";
+  if (wanted_seconds * fraction > time_left) {
+    fraction = time_left / wanted_seconds;
+    limit = "the maximum time";
+  }
   for (size_t s = 0; s < plan.factor.size(); ++s) {
     const double room = std::max(0.0, plan.max_paths[s] / plan.paths[s] - 1);
     if (plan.factor[s] > 1 && room < (plan.factor[s] - 1) * fraction) {
@@ -114,7 +115,7 @@ std::string LimitPlan(Plan& plan, double remaining_seconds) {
     }
   }
   for (double& f : plan.factor) f = 1 + (f - 1) * fraction;
-  if (fraction < 1 && (growth - 1) * fraction < kMinRoundShare) {
+  if (*limit != '\0' && (wanted - 1) * fraction < kMinRoundShare) {
     return StopMessage(limit, wanted, wanted_seconds);
   }
   return "";

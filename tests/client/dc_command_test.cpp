@@ -1,6 +1,7 @@
 // fenestra dc, run as a user would.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -157,18 +158,20 @@ TEST_F(DcCommandTest, OneStageTargetErrorLandsJustBelowIt) {
   EXPECT_TRUE(fs::exists(d));
 }
 
+// 3% rather than 2%: the outdoor paths of the light well (up to 30 reflections between its walls)
+// would take most of the test's time
 TEST_F(DcCommandTest, TwoStageTargetErrorLandsJustBelowIt) {
   const CliRun run = Fenestra("dc " + kLightwell +
                               " --method two-stage --outdoor-paths 1000000 --indoor-paths 10000 "
-                              "--target-error 0.02 -o " +
+                              "--target-error 0.03 -o " +
                               (dir_ / "D.mtx").string());
   ASSERT_EQ(run.exit_code, 0) << run.output;
-  EXPECT_NE(run.output.find("target 2.00% reached in"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("target 3.00% reached in"), std::string::npos) << run.output;
   const std::vector<double> errors = PrintedRelativeErrors(run.output);
   ASSERT_EQ(errors.size(), 3u) << run.output;
   const double largest = *std::max_element(errors.begin(), errors.end());
-  EXPECT_LE(largest, 2.0) << run.output;
-  EXPECT_GE(largest, 1.4) << run.output;
+  EXPECT_LE(largest, 3.0) << run.output;
+  EXPECT_GE(largest, 2.1) << run.output;
 }
 
 TEST_F(DcCommandTest, TargetOutOfReachStopsAtTheLimitWithExitCode2) {
