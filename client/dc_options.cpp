@@ -34,6 +34,16 @@ void SetRoulette(const DcFlags& flags, Options& options) {
   if (Given(flags, "--roulette-threshold")) options.roulette_threshold = flags.roulette_threshold;
 }
 
+// What both stages of the two-stage method take from the flags alike.
+template <class StageOptions>
+void SetStageOptions(const DcFlags& flags, WindowParts parts, StageOptions& options) {
+  options.seed = flags.seed;
+  options.threads = flags.threads;
+  options.basis_cells = flags.basis;
+  options.parts = parts;
+  SetRoulette(flags, options);
+}
+
 void AddOneStageFlags(CLI::App* command, DcFlags* flags) {
   command->add_option("--paths", flags->paths, "One-stage: paths per sensor")
       ->capture_default_str();
@@ -184,11 +194,7 @@ OutdoorOptions OutdoorOptionsFrom(const DcFlags& flags, WindowParts parts) {
   OutdoorOptions options;
   options.paths = flags.outdoor_paths;
   options.max_bounces = flags.outdoor_bounces;
-  options.seed = flags.seed;
-  options.threads = flags.threads;
-  options.basis_cells = flags.basis;
-  options.parts = parts;
-  SetRoulette(flags, options);
+  SetStageOptions(flags, parts, options);
   return options;
 }
 
@@ -196,12 +202,8 @@ IndoorOptions IndoorOptionsFrom(const DcFlags& flags, WindowParts parts) {
   IndoorOptions options;
   options.paths_per_sensor = flags.indoor_paths;
   options.max_bounces = flags.indoor_bounces;
-  options.seed = flags.seed;
-  options.threads = flags.threads;
-  options.basis_cells = flags.basis;
-  options.parts = parts;
   options.batches = flags.batches;
-  SetRoulette(flags, options);
+  SetStageOptions(flags, parts, options);
   return options;
 }
 
