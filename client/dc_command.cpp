@@ -15,6 +15,7 @@
 #include "core/dc/one_stage.h"
 #include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
+#include "core/trace/room_check.h"
 
 namespace fenestra {
 namespace {
@@ -186,7 +187,7 @@ void AddDcCommand(CLI::App& app) {
       }
       if (const absl::Status s = CheckWritable(path, flag); !s.ok()) Fail(s);
     }
-    const Scene scene = ValueOrFail(LoadScene(args->scene));
+    const Scene scene = ValueOrFail(LoadValidScene(args->scene));
     const BlindDesign design =
         ValueOrFail(DesignWithOverrides(scene, ValueOrFail(ParseDesignValues(args->set))));
     std::unique_ptr<DcBackend> backend = ValueOrFail(MakeBackend(args->backend));

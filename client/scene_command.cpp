@@ -11,6 +11,7 @@
 #include "client/commands.h"
 #include "core/geometry/obj_io.h"
 #include "core/geometry/scene.h"
+#include "core/trace/room_check.h"
 
 namespace fenestra {
 namespace {
@@ -75,7 +76,7 @@ void AddSceneCommand(CLI::App& app) {
   CLI::App* check = scene->add_subcommand("check", "Validate a scene and print a summary");
   check->add_option("FILE", *check_file, "Scene file (JSON)")->required();
   check->callback([check_file] {
-    const Scene s = ValueOrFail(LoadScene(*check_file));
+    const Scene s = ValueOrFail(LoadValidScene(*check_file));
     PrintSummary(s, DefaultDesign(s));
   });
 
@@ -88,7 +89,7 @@ void AddSceneCommand(CLI::App& app) {
   exp->add_option("--obj", args->obj, "Output OBJ file")->required();
   exp->add_option("--set", args->set, "Design values, e.g. alpha=0.5,width=0.12");
   exp->callback([args] {
-    const Scene s = ValueOrFail(LoadScene(args->file));
+    const Scene s = ValueOrFail(LoadValidScene(args->file));
     const BlindDesign design =
         ValueOrFail(DesignWithOverrides(s, ValueOrFail(ParseDesignValues(args->set))));
     const TriangleMesh mesh = AssembleMesh(s, design);

@@ -5,6 +5,7 @@
 #include <chrono>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/text.h"
 
 namespace fenestra {
 namespace {
@@ -15,7 +16,8 @@ grpc::Status ToGrpcStatus(const absl::Status& status) {
 }
 
 // Runs one handler body, logs "rpc <method> <peer> <target> -> <code> (<ms> ms)" and
-// converts its status.
+// converts its status. Client text in the line (target, message) is escaped: one request,
+// one log line.
 template <typename Body>
 grpc::Status Handle(const char* method, grpc::ServerContext* context, const std::string& target,
                     Body&& body) {
@@ -23,11 +25,12 @@ grpc::Status Handle(const char* method, grpc::ServerContext* context, const std:
   const absl::Status status = body();
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const std::string shown = LoggableText(target, kMaxNameBytes);
   if (status.ok()) {
-    spdlog::info("rpc {} {} {} -> OK ({:.1f} ms)", method, context->peer(), target, ms);
+    spdlog::info("rpc {} {} {} -> OK ({:.1f} ms)", method, context->peer(), shown, ms);
   } else {
-    spdlog::info("rpc {} {} {} -> {}: {} ({:.1f} ms)", method, context->peer(), target,
-                 absl::StatusCodeToString(status.code()), std::string(status.message()), ms);
+    spdlog::info("rpc {} {} {} -> {}: {} ({:.1f} ms)", method, context->peer(), shown,
+                 absl::StatusCodeToString(status.code()), LoggableText(status.message()), ms);
   }
   return ToGrpcStatus(status);
 }

@@ -97,30 +97,19 @@ absl::StatusOr<v1::SiteInfo> SiteManager::Register(const v1::RegisterSiteRequest
   if (shutting_down_) {
     return absl::UnavailableError("fenestrad is shutting down; register the site when it is back");
   }
-  const v1::Limits& limits = config_.limits();
   {
     std::lock_guard lock(mutex_);
-    if (static_cast<int>(sites_.size()) >= limits.max_sites()) {
+    if (static_cast<int>(sites_.size()) >= config_.limits().max_sites()) {
       return absl::ResourceExhaustedError(
           absl::StrCat("this server holds ", sites_.size(),
                        " sites, its limit max_sites; delete one first (fenestra site rm)"));
     }
   }
-  if (!request.has_scene()) return absl::InvalidArgumentError("scene: is required");
-  if (absl::Status s = CheckInlineScene(request.scene()); !s.ok()) return s;
-  if (absl::Status s = CheckSceneLimits(request.scene(), limits); !s.ok()) return s;
-
-  v1::Sampling sampling = request.sampling();
-  if (sampling.backend().empty()) sampling.set_backend(config_.backend());
-  absl::StatusOr<v1::Sampling> resolved = ResolveSampling(sampling);
-  if (!resolved.ok()) return resolved.status();
-  if (absl::Status s = CheckSamplingLimits(*resolved, limits, /*indoor=*/false); !s.ok()) {
-    return s;
-  }
-  v1::Scene scene_proto = request.scene();
-  scene_proto.mutable_site()->clear_weather_file();
-  absl::StatusOr<Scene> scene = BuildScene(scene_proto, "scene");
-  if (!scene.ok()) return scene.status();
+  // Everything checked before anything is stored
+  absl::StatusOr<CheckedSite> checked = CheckSiteRequest(request, config_);
+  if (!checked.ok()) return checked.status();
+  const Scene* scene = &checked->scene;
+  const v1::Sampling* resolved = &checked->sampling;
 
   std::string weather_path;
   if (!request.weather_epw().empty()) {

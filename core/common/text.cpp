@@ -128,4 +128,12 @@ std::string QuoteText(absl::string_view text, size_t max_bytes) {
   return absl::StrCat("'", absl::CHexEscape(text.substr(0, max_bytes)), cut ? "...'" : "'");
 }
 
+std::string LoggableText(absl::string_view text, size_t max_bytes) {
+  const bool cut = text.size() > max_bytes;
+  const absl::string_view kept = text.substr(0, max_bytes);
+  std::string out =
+      CheckText(kept, "", max_bytes).ok() ? std::string(kept) : absl::CHexEscape(kept);
+  return cut ? out + "..." : out;
+}
+
 }  // namespace fenestra

@@ -32,4 +32,8 @@ absl::Status CheckMessageText(const google::protobuf::Message& message, absl::st
 // ASCII as \xNN escapes, "..." when cut.
 std::string QuoteText(absl::string_view text, size_t max_bytes = 64);
 
+// `text` for a log line: unchanged when it is valid UTF-8 without control characters,
+// else with bytes outside printable ASCII as \xNN escapes; cut to `max_bytes` ("...").
+std::string LoggableText(absl::string_view text, size_t max_bytes = 1024);
+
 }  // namespace fenestra
