@@ -1,6 +1,7 @@
 // fenestrad: the Fenestra daemon. Serves SiteService and JobService (gRPC), runs jobs on
 // worker threads, caches outdoor matrices and keeps jobs in data_dir/fenestra.db.
 // Configuration: a JSON file (fenestra.v1.DaemonConfig, --config) and flags, which win.
+#include <google/protobuf/stubs/logging.h>
 #include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -45,6 +46,11 @@ int main(int argc, char** argv) {
   auto logger = spdlog::stderr_color_mt("fenestrad");
   spdlog::set_default_logger(logger);
   spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
+  // Protobuf's own complaints (a request whose strings are not UTF-8) in the same format
+  google::protobuf::SetLogHandler(
+      [](google::protobuf::LogLevel, const char*, int, const std::string& message) {
+        spdlog::warn("protobuf: {}", message);
+      });
 
   // The file first, then the flags given
   fenestra::v1::DaemonConfig config;
