@@ -89,7 +89,7 @@ void AddSceneCommand(CLI::App& app) {
   exp->add_option("--obj", args->obj, "Output OBJ file")->required();
   exp->add_option("--set", args->set, "Design values, e.g. alpha=0.5,width=0.12");
   exp->callback([args] {
-    const Scene s = ValueOrFail(LoadValidScene(args->file));
+    const Scene s = ValueOrFail(LoadScene(args->file));
     const BlindDesign design =
         ValueOrFail(DesignWithOverrides(s, ValueOrFail(ParseDesignValues(args->set))));
     const TriangleMesh mesh = AssembleMesh(s, design);

@@ -214,8 +214,13 @@ absl::StatusOr<Window> BuildWindow(const v1::Scene& proto, const Checker& check)
   if (std::abs(Dot(normal, up)) > kShapeTolerance) {
     return check.Error("window.up", "must be perpendicular to window.outward_normal");
   }
-  FENESTRA_RETURN_IF_ERROR(check.Positive(w.width_m(), "window.width_m"));
-  FENESTRA_RETURN_IF_ERROR(check.Positive(w.height_m(), "window.height_m"));
+  for (const auto& [side, field] :
+       {std::pair{w.width_m(), "window.width_m"}, std::pair{w.height_m(), "window.height_m"}}) {
+    if (!(side >= kMinWindowSideM)) {
+      return check.Error(field,
+                         absl::StrCat("must be at least ", kMinWindowSideM, " m, got ", side));
+    }
+  }
   if (!(w.depth_m() >= 0 && w.depth_m() <= kMaxWindowDepthM)) {
     return check.Error("window.depth_m",
                        absl::StrCat("must be in [0, ", kMaxWindowDepthM,

@@ -20,6 +20,9 @@ namespace fenestra {
 // scene that reaches further loses the blind's geometry. 100 km also holds any site model
 // (a city, a ground plane to the horizon).
 inline constexpr double kMaxCoordinateM = 1e5;
+// Narrowest window side [m]: a slit below 1 cm lets in no daylight worth simulating, and
+// the tracer divides by the window's area.
+inline constexpr double kMinWindowSideM = 0.01;
 // Thickest wall a window may sit in (`Window::depth_m`) [m]; castle walls reach 3 m.
 inline constexpr double kMaxWindowDepthM = 5.0;
 // Most sensors in a scene, grids expanded: bounds the memory of a scene file's grid (the

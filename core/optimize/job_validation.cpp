@@ -13,6 +13,7 @@
 #include "core/metrics/occupancy.h"
 #include "core/optimize/design_variables.h"
 #include "core/optimize/job.h"
+#include "core/optimize/vns.h"
 #include "core/trace/room_check.h"
 
 namespace fenestra {
@@ -23,7 +24,6 @@ constexpr double kMaxIlluminanceLux = 1e6;
 // Surface reflections per path: the reference cases use 30, Radiance's -ab rarely 10; past
 // 1000 even a white room (reflectance 0.99) has no light left to carry.
 constexpr int kMaxBounces = 1000;
-constexpr int kDefaultFailedCycles = 10;
 constexpr int kDefaultBasisCells = 288;
 constexpr int kDefaultBatches = 8;
 constexpr int64_t kDefaultOutdoorPaths = 20'000'000;
@@ -100,7 +100,9 @@ absl::Status FillBudget(v1::Budget& budget) {
   if (!(std::isfinite(budget.max_seconds()) && budget.max_seconds() >= 0)) {
     return Invalid("budget.max_seconds", "must be a finite number >= 0 (0 = no limit)");
   }
-  if (budget.failed_cycles_to_stop() == 0) budget.set_failed_cycles_to_stop(kDefaultFailedCycles);
+  if (budget.failed_cycles_to_stop() == 0) {
+    budget.set_failed_cycles_to_stop(VnsOptions().failed_cycles_to_stop);
+  }
   if (budget.failed_cycles_to_stop() < -1) {
     return Invalid("budget.failed_cycles_to_stop", "must be >= -1");
   }

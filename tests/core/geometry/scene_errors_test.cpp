@@ -98,7 +98,10 @@ TEST_F(SceneErrorsTest, NonFiniteCoordinates) {
 }
 
 TEST_F(SceneErrorsTest, DegenerateWindow) {
-  ExpectError(Scene(R"("widthM": 1)", R"("widthM": 0)"), {"window.width_m", "> 0"});
+  ExpectError(Scene(R"("widthM": 1)", R"("widthM": 0)"),
+              {"window.width_m", "must be at least 0.01 m, got 0"});
+  ExpectError(Scene(R"("heightM": 1)", R"("heightM": 1e-300)"),
+              {"window.height_m", "must be at least 0.01 m, got 1e-300"});
   ExpectError(Scene(R"("up": {"x": 0, "y": 0, "z": 1})", R"("up": {"x": 0, "y": 1, "z": 0})"),
               {"window.up", "perpendicular"});
   ExpectError(Scene(R"("outwardNormal": {"x": 0, "y": 1, "z": 0})",
