@@ -8,6 +8,7 @@
 #include "client/cli_util.h"
 #include "core/common/status_macros.h"
 #include "core/optimize/job.h"
+#include "core/trace/room_check.h"
 
 namespace fenestra {
 namespace {
@@ -163,7 +164,7 @@ absl::Status CheckMethodFlags(const DcFlags& flags) {
 
 absl::StatusOr<DcInput> LoadDcInput(const DcFlags& flags) {
   DcInput input;
-  FENESTRA_ASSIGN_OR_RETURN(scene, LoadScene(flags.scene));
+  FENESTRA_ASSIGN_OR_RETURN(scene, LoadValidScene(flags.scene));
   input.scene = std::move(scene);
   FENESTRA_ASSIGN_OR_RETURN(values, ParseDesignValues(flags.set));
   FENESTRA_ASSIGN_OR_RETURN(design, DesignWithOverrides(input.scene, values));

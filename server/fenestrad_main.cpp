@@ -2,6 +2,7 @@
 // worker threads, caches outdoor matrices and keeps jobs in data_dir/fenestra.db.
 // Configuration: a JSON file (fenestra.v1.DaemonConfig, --config) and flags, which win.
 // `fenestrad user add|list|revoke` manage the users of a daemon with token auth.
+#include <google/protobuf/stubs/logging.h>
 #include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -15,6 +16,7 @@
 #include "absl/time/time.h"
 #include "server/config.h"
 #include "server/daemon.h"
+#include "server/log_safe.h"
 #include "server/users.h"
 
 namespace {
@@ -216,6 +218,11 @@ int main(int argc, char** argv) {
   auto logger = spdlog::stderr_color_mt("fenestrad");
   spdlog::set_default_logger(logger);
   spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
+  // Protobuf's own complaints (a request whose strings are not UTF-8) in the same format
+  google::protobuf::SetLogHandler(
+      [](google::protobuf::LogLevel, const char*, int, const std::string& message) {
+        spdlog::warn("protobuf: {}", fenestra::LogSafe(message));
+      });
 
   // The file first, then the flags given
   fenestra::v1::DaemonConfig config;

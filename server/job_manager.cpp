@@ -113,26 +113,11 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
   if (shutting_down_) {
     return absl::UnavailableError("fenestrad is shutting down; submit the job when it is back");
   }
-  const v1::Limits& limits = config_.limits();
-  v1::Job job = request.job();
-
-  // Check the message itself and the limits before any work
-  if (!job.scene_file().empty()) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "job.scene_file '", job.scene_file(),
-        "' is a path on the client; send the scene inline in job.scene (fenestra job submit "
-        "does this)"));
-  }
-  if (!job.has_scene()) {
-    return absl::InvalidArgumentError("job.scene: is required (the scene, inline)");
-  }
-  if (absl::Status s = CheckInlineScene(job.scene()); !s.ok()) return s;
-  double min_slat_width_m = 0;
-  for (const v1::DesignVariable& v : job.variables()) {
-    if (v.name() == "width") min_slat_width_m = v.fixed() ? v.start() : v.lower();
-  }
-  if (absl::Status s = CheckSceneLimits(job.scene(), limits, min_slat_width_m); !s.ok()) return s;
-  if (absl::Status s = CheckBudgetLimits(job.budget(), limits); !s.ok()) return s;
+  // Everything checked before anything is stored
+  absl::StatusOr<CheckedJob> checked = CheckJobRequest(request, config_);
+  if (!checked.ok()) return checked.status();
+  v1::Job& job = checked->job;
+  const PreparedJob* prepared = &checked->prepared;
 
   // The site, and the weather file
   std::optional<SiteManager::ForJob> site;
@@ -145,39 +130,18 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
     }
     site = *std::move(found);
   }
-  std::string weather_path;
-  if (!request.weather_epw().empty()) {
-    absl::StatusOr<std::string> saved = SaveUploadedWeather(
-        (std::filesystem::path(config_.data_dir()) / "weather").string(), request.weather_epw());
-    if (!saved.ok()) return saved.status();
-    weather_path = *saved;
-  } else if (site && !site->weather_path.empty()) {
-    weather_path = site->weather_path;
-  } else if (!job.weather_file().empty() || !job.scene().site().weather_file().empty()) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "weather file '",
-        job.weather_file().empty() ? job.scene().site().weather_file() : job.weather_file(),
-        "' is a path on the client; send its content in weather_epw (fenestra job submit "
-        "does this)"));
-  } else {
+  if (request.weather_epw().empty() && !(site && !site->weather_path.empty())) {
+    if (!job.weather_file().empty() || !job.scene().site().weather_file().empty()) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "weather file '",
+          job.weather_file().empty() ? job.scene().site().weather_file() : job.weather_file(),
+          "' is a path on the client; send its content in weather_epw (fenestra job submit "
+          "does this)"));
+    }
     return absl::InvalidArgumentError(
         "the job has no weather file: send one in weather_epw, or give a site registered with "
         "one");
   }
-  job.set_weather_file(weather_path);
-  job.mutable_scene()->mutable_site()->clear_weather_file();
-  if (job.sampling().backend().empty()) {
-    job.mutable_sampling()->set_backend(
-        request.default_backend().empty() ? config_.backend() : request.default_backend());
-  }
-
-  // Sampling limits, then the full validation
-  absl::StatusOr<v1::Sampling> sampling = ResolveSampling(job.sampling());
-  if (!sampling.ok()) return sampling.status();
-  if (absl::Status s = CheckSamplingLimits(*sampling, limits, /*indoor=*/true); !s.ok()) return s;
-  absl::StatusOr<PreparedJob> prepared = PrepareJob(job, "");
-  if (!prepared.ok()) return prepared.status();
-  if (absl::Status s = CheckBudgetLimits(prepared->job.budget(), limits); !s.ok()) return s;
   const std::string key = OutdoorMatrixKey(prepared->scene, prepared->job.sampling());
   if (site && key != site->info.outdoor_key()) {
     return absl::InvalidArgumentError(absl::StrCat(
@@ -189,9 +153,25 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
         key.substr(0, 16), ", site key ", site->info.outdoor_key().substr(0, 16), ")"));
   }
 
-  // Store and queue it; its upload counts against its owner until it ends
+  // Its upload counts against its owner until it ends
   const int64_t upload_bytes = static_cast<int64_t>(request.weather_epw().size());
   if (absl::Status s = uploads_.Reserve(caller.name, upload_bytes); !s.ok()) return s;
+  std::string weather_path;
+  if (!request.weather_epw().empty()) {
+    absl::StatusOr<std::string> saved = SaveUploadedWeather(
+        (std::filesystem::path(config_.data_dir()) / "weather").string(), request.weather_epw());
+    if (!saved.ok()) {
+      uploads_.Release(caller.name, upload_bytes);
+      return saved.status();
+    }
+    weather_path = *saved;
+  } else {
+    weather_path = site->weather_path;
+  }
+  job.set_weather_file(weather_path);
+  job.mutable_scene()->mutable_site()->clear_weather_file();
+
+  // Store and queue it
   auto record = std::make_shared<Record>();
   record->job = job;
   record->owner = caller.name;

@@ -126,26 +126,15 @@ absl::StatusOr<v1::SiteInfo> SiteManager::Register(const v1::RegisterSiteRequest
   if (shutting_down_) {
     return absl::UnavailableError("fenestrad is shutting down; register the site when it is back");
   }
-  const v1::Limits& limits = config_.limits();
   {
     std::lock_guard lock(mutex_);
     if (absl::Status s = CheckSiteCount(caller.name); !s.ok()) return s;
   }
-  if (!request.has_scene()) return absl::InvalidArgumentError("scene: is required");
-  if (absl::Status s = CheckInlineScene(request.scene()); !s.ok()) return s;
-  if (absl::Status s = CheckSceneLimits(request.scene(), limits); !s.ok()) return s;
-
-  v1::Sampling sampling = request.sampling();
-  if (sampling.backend().empty()) sampling.set_backend(config_.backend());
-  absl::StatusOr<v1::Sampling> resolved = ResolveSampling(sampling);
-  if (!resolved.ok()) return resolved.status();
-  if (absl::Status s = CheckSamplingLimits(*resolved, limits, /*indoor=*/false); !s.ok()) {
-    return s;
-  }
-  v1::Scene scene_proto = request.scene();
-  scene_proto.mutable_site()->clear_weather_file();
-  absl::StatusOr<Scene> scene = BuildScene(scene_proto, "scene");
-  if (!scene.ok()) return scene.status();
+  // Everything checked before anything is stored
+  absl::StatusOr<CheckedSite> checked = CheckSiteRequest(request, config_);
+  if (!checked.ok()) return checked.status();
+  const Scene* scene = &checked->scene;
+  const v1::Sampling* resolved = &checked->sampling;
 
   const int64_t upload_bytes = static_cast<int64_t>(request.weather_epw().size());
   if (absl::Status s = uploads_.Reserve(caller.name, upload_bytes); !s.ok()) return s;

@@ -462,5 +462,184 @@ TEST_F(FenestradTest, PythonClientRegistersASiteAndRunsAJob) {
   EXPECT_THAT(r.out, HasSubstr("best design: alpha="));
 }
 
+// What a hostile tester sent, each refused at the door: INVALID_ARGUMENT naming the field,
+// no server path in the message, nothing stored (no job, no site, no weather file), and
+// the daemon serves on.
+TEST_F(FenestradTest, BadInputIsRefusedBeforeAnythingIsStored) {
+  auto d = StartDaemon();
+  const std::string weather =
+      ReadFile(FENESTRA_SOURCE_DIR "/examples/weather/URY_Montevideo.865800_IWEC.epw");
+  const auto expect_refused = [&](const grpc::Status& s, const std::string& what,
+                                  const std::string& field) {
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT)
+        << what << ": " << s.error_message();
+    EXPECT_THAT(s.error_message(), HasSubstr(field)) << what;
+    EXPECT_THAT(s.error_message(), ::testing::Not(HasSubstr(d->data_dir()))) << what;
+  };
+  using SceneEdit = std::function<void(v1::Scene&)>;
+  const std::vector<std::tuple<std::string, SceneEdit, std::string>> scene_cases = {
+      {"side 99", [](v1::Scene& s) { s.mutable_surfaces(0)->set_side(static_cast<v1::Side>(99)); },
+       "surfaces[0].side: must be SIDE_INDOOR or SIDE_OUTDOOR, got 99"},
+      {"orientation 7",
+       [](v1::Scene& s) {
+         s.mutable_blind()->set_orientation(static_cast<v1::VenetianBlind::Orientation>(7));
+       },
+       "blind.orientation"},
+      {"sensor 50 m away",
+       [](v1::Scene& s) { s.mutable_sensors(3)->mutable_position()->set_y(-50); },
+       "sensors[3] (\"S4\") at (-1, -50, 6.7) is outside the room"},
+      {"sensor at 1e9 m",
+       [](v1::Scene& s) { s.mutable_sensors(0)->mutable_position()->set_x(1e9); },
+       "sensors[0].position"},
+      {"1e6 m window", [](v1::Scene& s) { s.mutable_window()->set_width_m(1e6); }, "window"},
+      {"window off the wall", [](v1::Scene& s) { s.mutable_window()->mutable_center()->set_y(-3); },
+       "window: it does not lie at an opening"},
+      {"side margin 1e9", [](v1::Scene& s) { s.mutable_blind()->set_side_margin_m(1e9); },
+       "blind.side_margin_m"},
+      {"slats thicker than wide",
+       [](v1::Scene& s) { s.mutable_blind()->mutable_slat_thickness_m()->set_max(0.08); },
+       "a slat must be thinner than it is wide"},
+      {"tilt beyond pi/2", [](v1::Scene& s) { s.mutable_blind()->mutable_tilt_rad()->set_max(4); },
+       "blind.tilt_rad"},
+      {"huge coordinate",
+       [](v1::Scene& s) { s.mutable_surfaces(22)->mutable_box()->mutable_max()->set_x(1e7); },
+       "surfaces[22].box.max"},
+      {"material name with a newline",
+       [](v1::Scene& s) { s.mutable_materials(0)->set_name("office\nforged log line"); },
+       "materials[0].name: holds the control character U+000A"},
+      {"long scene name", [](v1::Scene& s) { s.set_name(std::string(300, 'n')); },
+       "scene.name: is 300 bytes long"},
+  };
+  using JobEdit = std::function<void(v1::SubmitJobRequest&)>;
+  std::vector<std::tuple<std::string, JobEdit, std::string>> job_cases = {
+      {"goal 42",
+       [](v1::SubmitJobRequest& r) {
+         r.mutable_job()->mutable_objective()->set_goal(static_cast<v1::Goal>(42));
+       },
+       "job objective.goal"},
+      {"occupied 25 h",
+       [](v1::SubmitJobRequest& r) {
+         r.mutable_job()->mutable_metrics()->set_occupied_start_h(25);
+       },
+       "metrics.occupied_start_h"},
+      {"occupied NaN",
+       [](v1::SubmitJobRequest& r) {
+         r.mutable_job()->mutable_metrics()->set_occupied_end_h(std::nan(""));
+       },
+       "metrics.occupied_end_h"},
+      {"sDA 1e300",
+       [](v1::SubmitJobRequest& r) {
+         r.mutable_job()->mutable_metrics()->set_sda_time_fraction_percent(1e300);
+       },
+       "metrics.sda_time_fraction_percent"},
+      {"UDI lower >= upper",
+       [](v1::SubmitJobRequest& r) { r.mutable_job()->mutable_metrics()->set_udi_lower_lux(5000); },
+       "udi_lower_lux"},
+      {"negative DA threshold",
+       [](v1::SubmitJobRequest& r) {
+         r.mutable_job()->mutable_metrics()->set_da_threshold_lux(-1);
+       },
+       "metrics.da_threshold_lux"},
+      {"job name with a newline",
+       [](v1::SubmitJobRequest& r) { r.mutable_job()->set_name("a\n[info] job-1 succeeded"); },
+       "job.name: holds the control character U+000A"},
+      {"garbage weather",
+       [](v1::SubmitJobRequest& r) {
+         r.set_weather_epw(
+             "\x7f"
+             "ELF garbage");
+       },
+       "weather_epw ('URY_Montevideo.865800_IWEC.epw'), line 1"},
+      {"truncated weather",
+       [&](v1::SubmitJobRequest& r) { r.set_weather_epw(weather.substr(0, weather.size() / 3)); },
+       "(truncated row)"},
+      {"weather full of NaN",
+       [&](v1::SubmitJobRequest& r) {
+         std::string nan = weather;
+         for (size_t at = nan.find(",0,0,0,"); at != std::string::npos;
+              at = nan.find(",0,0,0,", at + 1)) {
+           nan.replace(at, 7, ",nan,nan,nan,");
+         }
+         r.set_weather_epw(nan);
+       },
+       "is not a number: 'nan'"},
+  };
+  for (const auto& [what, edit, field] : scene_cases) {
+    job_cases.push_back(
+        {what, [edit](v1::SubmitJobRequest& r) { edit(*r.mutable_job()->mutable_scene()); },
+         field});
+  }
+  for (const auto& [what, edit, field] : job_cases) {
+    v1::SubmitJobRequest request = InlineRequest(TinyJob());
+    request.set_weather_name("URY_Montevideo.865800_IWEC.epw");
+    edit(request);
+    grpc::ClientContext context;
+    v1::JobInfo info;
+    expect_refused(d->jobs().Submit(&context, request, &info), "Submit: " + what, field);
+  }
+
+  // Sites: the same scenes, and weather that used to make a site ready
+  const auto site_request = [&] {
+    v1::RegisterSiteRequest request;
+    const v1::SubmitJobRequest job = InlineRequest(TinyJob());
+    *request.mutable_scene() = job.job().scene();
+    *request.mutable_sampling() = job.job().sampling();
+    request.set_weather_epw(weather);
+    request.set_weather_name("URY_Montevideo.865800_IWEC.epw");
+    return request;
+  };
+  std::vector<std::tuple<std::string, std::function<void(v1::RegisterSiteRequest&)>, std::string>>
+      site_cases = {
+          {"garbage weather", [](v1::RegisterSiteRequest& r) { r.set_weather_epw("not a file"); },
+           "weather_epw ('URY_Montevideo.865800_IWEC.epw'), line 1"},
+          {"truncated weather",
+           [&](v1::RegisterSiteRequest& r) { r.set_weather_epw(weather.substr(0, 5000)); },
+           "weather_epw"},
+          {"site name with a control character",
+           [](v1::RegisterSiteRequest& r) { r.set_name("site\x1b[2J"); },
+           "name: holds the control character U+001B"},
+      };
+  for (const auto& [what, edit, field] : scene_cases) {
+    site_cases.push_back(
+        {what, [edit](v1::RegisterSiteRequest& r) { edit(*r.mutable_scene()); }, field});
+  }
+  for (const auto& [what, edit, field] : site_cases) {
+    v1::RegisterSiteRequest request = site_request();
+    edit(request);
+    grpc::ClientContext context;
+    v1::SiteInfo info;
+    expect_refused(d->sites().Register(&context, request, &info), "Register: " + what, field);
+  }
+
+  // Strings that are not UTF-8 never reach the handlers: gRPC's protobuf parser refuses them
+  {
+    v1::SubmitJobRequest request = InlineRequest(TinyJob());
+    request.mutable_job()->set_name("\xff\xfe");
+    grpc::ClientContext context;
+    v1::JobInfo info;
+    EXPECT_FALSE(d->jobs().Submit(&context, request, &info).ok());
+  }
+
+  // Nothing stored
+  EXPECT_THAT(d->Cli({"job", "list"}).out, ::testing::Not(HasSubstr("job-")));
+  EXPECT_THAT(d->Cli({"site", "list"}).out, ::testing::Not(HasSubstr("site-")));
+  const fs::path weather_dir = d->data_dir() + "/weather";
+  EXPECT_TRUE(!fs::exists(weather_dir) || fs::is_empty(weather_dir));
+  // No client text broke a log line: every line the daemon wrote is one of its own
+  std::istringstream log(d->Log());
+  for (std::string line; std::getline(log, line);) {
+    EXPECT_THAT(line, ::testing::MatchesRegex("[0-9]{4}-[0-9]{2}-[0-9]{2} [0-9:.]+ [a-z]+ .*"));
+  }
+
+  // Still serving: a good site and a good job are taken
+  grpc::ClientContext context;
+  v1::SiteInfo site;
+  ASSERT_TRUE(d->sites().Register(&context, site_request(), &site).ok());
+  const CliResult r =
+      d->Cli({"job", "submit", WriteJob("tiny", TinyJob()), "--site", site.id(), "--watch"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("best design:"));
+}
+
 }  // namespace
 }  // namespace fenestra
