@@ -18,7 +18,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -32,23 +31,6 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// A /proc/PID/status field in MiB (VmRSS, VmHWM), or -1.
-double StatusMiB(pid_t pid, const std::string& field) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind(field + ":", 0) == 0) return std::stod(line.substr(field.size() + 1)) / 1024;
-  }
-  return -1;
-}
-
 double Seconds(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -61,13 +43,13 @@ class RssSampler {
     stop_ = true;
     thread_.join();
   }
-  void Reset() { peak_ = StatusMiB(pid_, "VmRSS"); }
+  void Reset() { peak_ = ProcessStatusMiB(pid_, "VmRSS"); }
   double Peak() const { return peak_; }
 
  private:
   void Loop() {
     while (!stop_) {
-      const double rss = StatusMiB(pid_, "VmRSS");
+      const double rss = ProcessStatusMiB(pid_, "VmRSS");
       if (rss > peak_) peak_ = rss;
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
@@ -99,18 +81,19 @@ int Main(int argc, char** argv) {
     dup2(log, STDERR_FILENO);
     execl(fenestrad.c_str(), fenestrad.c_str(), "--listen", "127.0.0.1:0", "--data-dir",
           (dir + "/data").c_str(), "--port-file", port_file.c_str(), "--workers", "1", "--backend",
-          "cpu", nullptr);
+          "cpu", "--auth", "none", nullptr);
     _exit(127);
   }
   while (!fs::exists(port_file)) std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  auto channel =
-      grpc::CreateCustomChannel("127.0.0.1:" + std::to_string(std::stoi(ReadFile(port_file))),
-                                grpc::InsecureChannelCredentials(), [] {
-                                  grpc::ChannelArguments args;
-                                  args.SetMaxSendMessageSize(128 << 20);
-                                  args.SetMaxReceiveMessageSize(128 << 20);
-                                  return args;
-                                }());
+  int port = 0;
+  std::ifstream(port_file) >> port;
+  auto channel = grpc::CreateCustomChannel("127.0.0.1:" + std::to_string(port),
+                                           grpc::InsecureChannelCredentials(), [] {
+                                             grpc::ChannelArguments args;
+                                             args.SetMaxSendMessageSize(128 << 20);
+                                             args.SetMaxReceiveMessageSize(128 << 20);
+                                             return args;
+                                           }());
   auto sites = v1::SiteService::NewStub(channel);
   RssSampler sampler(pid);
   const auto list = [&] {
@@ -133,7 +116,7 @@ int Main(int argc, char** argv) {
   const auto settle_and_report = [&](const std::string& step, double before, double seconds) {
     std::this_thread::sleep_for(std::chrono::seconds(1));
     std::printf("%-44s %8.0f %8.0f %8.0f %8.0f %7.1f\n", step.c_str(), before, sampler.Peak(),
-                StatusMiB(pid, "VmRSS"), StatusMiB(pid, "VmHWM"), seconds);
+                ProcessStatusMiB(pid, "VmRSS"), ProcessStatusMiB(pid, "VmHWM"), seconds);
     std::fflush(stdout);
   };
 
@@ -142,7 +125,7 @@ int Main(int argc, char** argv) {
   std::this_thread::sleep_for(std::chrono::seconds(1));
   for (int k = 0; k < 3; ++k) {
     const v1::RegisterSiteRequest request = LargeRegistration(triangles, outdoor_paths, 0.01 * k);
-    const double before = StatusMiB(pid, "VmRSS");
+    const double before = ProcessStatusMiB(pid, "VmRSS");
     sampler.Reset();
     const auto start = Clock::now();
     // A List while the registration is processed
@@ -173,7 +156,7 @@ int Main(int argc, char** argv) {
         "took %.3f s\n",
         register_seconds, register_peak, list_seconds.load());
   }
-  const double before = StatusMiB(pid, "VmRSS");
+  const double before = ProcessStatusMiB(pid, "VmRSS");
   sampler.Reset();
   const auto start = Clock::now();
   const v1::ListSitesResponse listed = list();

@@ -42,6 +42,17 @@ std::string FormatProgress(const JobProgress& p) {
                      Clock(p.elapsed_seconds), Clock(p.remaining_seconds));
 }
 
+JobProgress FromProto(const v1::JobProgress& p) {
+  JobProgress progress;
+  progress.evaluations = p.evaluations();
+  progress.max_evaluations = p.max_evaluations();
+  progress.current = p.current();
+  progress.best = p.best();
+  progress.elapsed_seconds = p.elapsed_seconds();
+  progress.remaining_seconds = p.remaining_seconds();
+  return progress;
+}
+
 void ShowProgress(const JobProgress& progress) {
   const std::string line = FormatProgress(progress);
   if (isatty(STDOUT_FILENO)) {

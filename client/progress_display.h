@@ -3,6 +3,7 @@
 #include <string>
 
 #include "core/optimize/job.h"
+#include "fenestra/v1/service.pb.h"
 
 namespace fenestra {
 
@@ -12,6 +13,9 @@ std::string FormatProgress(const JobProgress& progress);
 
 // The design as "alpha=0.580 width=0.130".
 std::string FormatDesign(const google::protobuf::Map<std::string, double>& design);
+
+// A progress event from fenestrad as FormatProgress takes it.
+JobProgress FromProto(const v1::JobProgress& progress);
 
 // Prints the line: rewritten in place on a terminal, one line per update otherwise.
 void ShowProgress(const JobProgress& progress);

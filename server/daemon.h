@@ -13,13 +13,15 @@
 #include "server/outdoor_cache.h"
 #include "server/services.h"
 #include "server/site_manager.h"
+#include "server/upload_quota.h"
+#include "server/users.h"
 #include "server/work_queue.h"
 
 namespace fenestra {
 
-// fenestrad assembled: data directory, job store, outdoor cache, uploaded weather files,
-// work queue, sites, jobs and the gRPC server (SiteService, JobService, health checking,
-// reflection).
+// fenestrad assembled: data directory, job store (with the users), outdoor cache, uploaded
+// weather files, work queue, sites, jobs and the gRPC server (SiteService, JobService,
+// health checking, and reflection with auth none), over TLS when configured.
 class Daemon {
  public:
   // Opens the data directory (FailedPrecondition naming it when it is not writable),
@@ -46,6 +48,8 @@ class Daemon {
   std::unique_ptr<UploadStore> weather_;
   std::unique_ptr<HeavyRequests> heavy_;
   std::unique_ptr<WorkQueue> queue_;
+  std::unique_ptr<UploadQuota> uploads_;
+  std::unique_ptr<Authenticator> auth_;
   std::unique_ptr<SiteManager> sites_;
   std::unique_ptr<JobManager> jobs_;
   std::unique_ptr<SiteServiceImpl> site_service_;

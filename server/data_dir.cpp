@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <spdlog/spdlog.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -89,6 +90,20 @@ absl::StatusOr<std::unique_ptr<DataDir>> DataDir::Open(const fs::path& root, int
         absl::StrCat("cannot create the data directory ", root.string(), ": ", ec.message()));
   }
 
+  // One daemon per folder: a second one would run the same jobs and drop files the first
+  // still uses
+  d->lock_fd_ = open(root.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (d->lock_fd_ < 0) return not_writable(errno);
+  if (flock(d->lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    if (errno == EWOULDBLOCK) {
+      return absl::FailedPreconditionError(absl::StrCat(
+          "the data directory ", root.string(),
+          " is in use by another process (another fenestrad on this data directory?)"));
+    }
+    return absl::FailedPreconditionError(
+        absl::StrCat("cannot lock the data directory ", root.string(), ": ", std::strerror(errno)));
+  }
+
   // Whether a file can be created and written there
   const fs::path probe = root / ".fenestrad-write-test";
   const int fd = open(probe.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
@@ -116,6 +131,10 @@ absl::StatusOr<std::unique_ptr<DataDir>> DataDir::Open(const fs::path& root, int
     }
   }
   return d;
+}
+
+DataDir::~DataDir() {
+  if (lock_fd_ >= 0) close(lock_fd_);
 }
 
 int64_t DataDir::UsedBytes() const {

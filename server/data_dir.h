@@ -34,12 +34,17 @@ absl::Status WriteFileDurably(const std::filesystem::path& path, std::string_vie
 // The data directory. Thread-safe.
 class DataDir {
  public:
-  // Creates the folder and its subfolders when missing, checks that fenestrad may write
-  // there and removes the temporaries of interrupted writes. FailedPrecondition naming the
-  // folder when it is read-only or not writable. A full disk is no error: the daemon
-  // serves reads and refuses writes (full_at_start() says so).
+  // Creates the folder and its subfolders when missing, locks the folder for this process
+  // (flock, released when the DataDir is destroyed: one daemon per data directory), checks
+  // that fenestrad may write there and removes the temporaries of interrupted writes.
+  // FailedPrecondition naming the folder when another process holds it or it is read-only
+  // or not writable. A full disk is no error: the daemon serves reads and refuses writes
+  // (full_at_start() says so).
   static absl::StatusOr<std::unique_ptr<DataDir>> Open(const std::filesystem::path& root,
                                                        int64_t max_bytes);
+  ~DataDir();
+  DataDir(const DataDir&) = delete;
+  DataDir& operator=(const DataDir&) = delete;
 
   const std::filesystem::path& root() const { return root_; }
   std::filesystem::path db_path() const { return root_ / "fenestra.db"; }
@@ -67,6 +72,7 @@ class DataDir {
 
   const std::filesystem::path root_;
   const int64_t max_bytes_;
+  int lock_fd_ = -1;  // the folder, flock'ed
   bool full_at_start_ = false;
   int temporaries_removed_ = 0;
   mutable std::mutex mutex_;

@@ -11,6 +11,7 @@
 #include "absl/strings/str_join.h"
 #include "core/optimize/job.h"
 #include "server/limits.h"
+#include "server/log_safe.h"
 
 namespace fenestra {
 namespace {
@@ -40,6 +41,11 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// The answer for an unknown job, and for another user's.
+absl::Status NoJob(const std::string& id) {
+  return absl::NotFoundError(absl::StrCat("no job '", id, "' (fenestra job list shows them)"));
+}
+
 }  // namespace
 
 bool IsTerminal(v1::JobState state) {
@@ -49,7 +55,7 @@ bool IsTerminal(v1::JobState state) {
 
 JobManager::JobManager(const v1::DaemonConfig& config, const DataDir& data_dir, JobStore& store,
                        OutdoorCache& cache, UploadStore& weather, WorkQueue& queue,
-                       SiteManager& sites, HeavyRequests& heavy)
+                       SiteManager& sites, HeavyRequests& heavy, UploadQuota& uploads)
     : config_(config),
       data_dir_(data_dir),
       store_(store),
@@ -58,6 +64,7 @@ JobManager::JobManager(const v1::DaemonConfig& config, const DataDir& data_dir, 
       queue_(queue),
       sites_(sites),
       heavy_(heavy),
+      uploads_(uploads),
       committer_([this] { Commit(); }) {}
 
 JobManager::~JobManager() {
@@ -76,13 +83,15 @@ absl::Status JobManager::Recover() {
     spdlog::error(
         "job {}: its stored record does not parse ({}); moved to the quarantine "
         "table, the daemon goes on without it",
-        q.id, q.reason);
+        LogSafe(q.id), q.reason);
   }
   std::vector<std::shared_ptr<Record>> queued;
   for (v1::JobInfo& info : stored->jobs) {
     auto record = std::make_shared<Record>();
     const std::string id = info.id();
     record->info = std::move(info);
+    if (record->info.owner().empty()) record->info.set_owner(kLocalUser);  // stored before owners
+    record->owner = record->info.owner();
     record->wanted = record->info;
     const v1::JobState state = record->info.state();
     if (state == v1::JOB_STATE_QUEUED) {
@@ -110,6 +119,10 @@ absl::Status JobManager::Recover() {
         }
       }
     }
+    // An unfinished job's upload counts against its owner until it ends (Ended)
+    if (!IsTerminal(state)) {
+      (void)uploads_.Reserve(record->owner, record->info.upload_bytes(), /*force=*/true);
+    }
     {
       std::lock_guard lock(mutex_);
       if (state == v1::JOB_STATE_QUEUED) active_keys_.insert(record->info.outdoor_key());
@@ -132,88 +145,75 @@ absl::Status JobManager::Recover() {
 absl::Status JobManager::Queue(const std::shared_ptr<Record>& record, bool force) {
   std::weak_ptr<Record> weak = record;
   return queue_.Push(
-      record->info.id(),
+      record->info.id(), record->owner,
       [this, weak] {
         if (auto r = weak.lock()) Run(r);
       },
       /*is_job=*/true, force);
 }
 
-absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& request) {
+absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& request,
+                                               const Caller& caller) {
   if (shutting_down_) {
     return absl::UnavailableError("fenestrad is shutting down; submit the job when it is back");
   }
   absl::StatusOr<HeavyRequests::Pass> pass = heavy_.Enter(request.ByteSizeLong());
   if (!pass.ok()) return pass.status();
-  absl::StatusOr<std::optional<SiteManager::ForJob>> site = CheckSubmission(request);
-  if (!site.ok()) return site.status();
+  absl::StatusOr<Admission> admitted = Admit(request, caller);
+  if (!admitted.ok()) return admitted.status();
 
-  // Room for the job, then its weather file: the upload, or the site's
+  // Its upload counts against its owner until it ends; room for the job, then its weather
+  // file: the upload, or the site's
+  const int64_t upload_bytes = admitted->info.upload_bytes();
+  if (absl::Status s = uploads_.Reserve(caller.name, upload_bytes); !s.ok()) return s;
+  absl::Cleanup release_quota = [&] { uploads_.Release(caller.name, upload_bytes); };
   if (absl::Status s = data_dir_.MakeRoom(static_cast<int64_t>(request.job().ByteSizeLong()));
       !s.ok()) {
     return s;
   }
-  absl::StatusOr<std::string> weather_path = TakeWeather(request, *site);
+  absl::StatusOr<std::string> weather_path = TakeWeather(request, admitted->site, caller);
   if (!weather_path.ok()) return weather_path.status();
   // Until the job is queued, the reference is this call's
   absl::Cleanup release_weather = [&] { weather_.Unref(*weather_path); };
-  v1::Job job = request.job();
+  v1::Job& job = admitted->job;
   job.set_weather_file(*weather_path);
   job.mutable_scene()->mutable_site()->clear_weather_file();
-  if (job.sampling().backend().empty()) {
-    job.mutable_sampling()->set_backend(
-        request.default_backend().empty() ? config_.backend() : request.default_backend());
-  }
-  absl::StatusOr<Admission> admitted = Admit(job, request.site_id(), *site);
-  if (!admitted.ok()) return admitted.status();
-  absl::StatusOr<v1::JobInfo> queued = StoreAndQueue(job, admitted->info, *weather_path);
+  absl::StatusOr<v1::JobInfo> queued = StoreAndQueue(job, admitted->info, *weather_path, caller);
   if (!queued.ok()) return queued.status();
   std::move(release_weather).Cancel();
-  spdlog::info("job {} queued ({}): {} evaluations at most, {} indoor paths per sensor{}",
-               queued->id(), queued->name(), admitted->max_evaluations,
+  std::move(release_quota).Cancel();
+  spdlog::info("job {} queued by {} (\"{}\"): {} evaluations at most, {} indoor paths per sensor{}",
+               queued->id(), caller.name, LogSafe(queued->name()), admitted->max_evaluations,
                admitted->indoor_paths_per_sensor,
-               site->has_value() ? absl::StrCat(", site ", request.site_id()) : "");
+               admitted->site ? absl::StrCat(", site ", request.site_id()) : "");
   return queued;
 }
 
-absl::StatusOr<std::optional<SiteManager::ForJob>> JobManager::CheckSubmission(
-    const v1::SubmitJobRequest& request) const {
-  const v1::Limits& limits = config_.limits();
-  const v1::Job& job = request.job();
-  if (!job.scene_file().empty()) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "job.scene_file '", StorableText(job.scene_file()),
-        "' is a path on the client; send the scene inline in job.scene (fenestra job submit "
-        "does this)"));
-  }
-  if (!job.has_scene()) {
-    return absl::InvalidArgumentError("job.scene: is required (the scene, inline)");
-  }
-  if (absl::Status s = CheckInlineScene(job.scene()); !s.ok()) return s;
-  double min_slat_width_m = 0;
-  for (const v1::DesignVariable& v : job.variables()) {
-    if (v.name() == "width") min_slat_width_m = v.fixed() ? v.start() : v.lower();
-  }
-  if (absl::Status s = CheckSceneLimits(job.scene(), limits, min_slat_width_m); !s.ok()) return s;
-  if (absl::Status s = CheckBudgetLimits(job.budget(), limits); !s.ok()) return s;
+absl::StatusOr<JobManager::Admission> JobManager::Admit(const v1::SubmitJobRequest& request,
+                                                        const Caller& caller) const {
+  // Everything checked before anything is stored
+  absl::StatusOr<CheckedJob> checked = CheckJobRequest(request, config_);
+  if (!checked.ok()) return checked.status();
+  const PreparedJob& prepared = checked->prepared;
+  Admission admitted;
 
   // The site, and a weather file from somewhere
-  std::optional<SiteManager::ForJob> site;
   if (!request.site_id().empty()) {
-    absl::StatusOr<SiteManager::ForJob> found = sites_.Lookup(request.site_id());
+    absl::StatusOr<SiteManager::ForJob> found = sites_.Lookup(request.site_id(), caller);
     if (!found.ok()) return found.status();
     if (found->info.state() == v1::SITE_STATE_FAILED) {
       return absl::FailedPreconditionError(absl::StrCat(
           "site ", request.site_id(), " failed (", found->info.error(), "); register it again"));
     }
-    site = *std::move(found);
+    admitted.site = *std::move(found);
   }
+  const std::optional<SiteManager::ForJob>& site = admitted.site;
+  const v1::Job& job = checked->job;
   if (request.weather_epw().empty() && !(site && !site->weather_path.empty())) {
     if (!job.weather_file().empty() || !job.scene().site().weather_file().empty()) {
       return absl::InvalidArgumentError(absl::StrCat(
           "weather file '",
-          StorableText(job.weather_file().empty() ? job.scene().site().weather_file()
-                                                  : job.weather_file()),
+          job.weather_file().empty() ? job.scene().site().weather_file() : job.weather_file(),
           "' is a path on the client; send its content in weather_epw (fenestra job submit "
           "does this)"));
     }
@@ -221,52 +221,44 @@ absl::StatusOr<std::optional<SiteManager::ForJob>> JobManager::CheckSubmission(
         "the job has no weather file: send one in weather_epw, or give a site registered with "
         "one");
   }
-  return site;
-}
 
-absl::StatusOr<std::string> JobManager::TakeWeather(
-    const v1::SubmitJobRequest& request, const std::optional<SiteManager::ForJob>& site) {
-  if (!request.weather_epw().empty()) return weather_.Add(request.weather_epw());
-  weather_.Ref(site->weather_path);
-  if (!sites_.Lookup(request.site_id()).ok()) {  // deleted meanwhile
-    weather_.Unref(site->weather_path);
-    return absl::NotFoundError(absl::StrCat("no site '", request.site_id(), "' any more"));
-  }
-  return site->weather_path;
-}
-
-absl::StatusOr<JobManager::Admission> JobManager::Admit(
-    const v1::Job& job, const std::string& site_id,
-    const std::optional<SiteManager::ForJob>& site) const {
-  const v1::Limits& limits = config_.limits();
-  absl::StatusOr<v1::Sampling> sampling = ResolveSampling(job.sampling());
-  if (!sampling.ok()) return sampling.status();
-  if (absl::Status s = CheckSamplingLimits(*sampling, limits, /*indoor=*/true); !s.ok()) return s;
-  absl::StatusOr<PreparedJob> prepared = PrepareJob(job, "");
-  if (!prepared.ok()) return prepared.status();
-  if (absl::Status s = CheckBudgetLimits(prepared->job.budget(), limits); !s.ok()) return s;
-  Admission admitted;
   v1::JobInfo& info = admitted.info;
-  info.set_outdoor_key(OutdoorMatrixKey(prepared->scene, prepared->job.sampling()));
-  info.set_name(StorableText(job.name().empty() ? prepared->scene.name : job.name()));
-  info.set_backend(prepared->job.sampling().backend());
-  info.set_site_id(site_id);
-  admitted.max_evaluations = prepared->job.budget().max_evaluations();
-  admitted.indoor_paths_per_sensor = prepared->job.sampling().indoor_paths_per_sensor();
+  info.set_owner(caller.name);
+  info.set_upload_bytes(static_cast<int64_t>(request.weather_epw().size()));
+  info.set_outdoor_key(OutdoorMatrixKey(prepared.scene, prepared.job.sampling()));
+  info.set_name(job.name().empty() ? prepared.scene.name : job.name());
+  info.set_backend(prepared.job.sampling().backend());
+  info.set_site_id(request.site_id());
+  admitted.max_evaluations = prepared.job.budget().max_evaluations();
+  admitted.indoor_paths_per_sensor = prepared.job.sampling().indoor_paths_per_sensor();
   if (site && info.outdoor_key() != site->info.outdoor_key()) {
     return absl::InvalidArgumentError(absl::StrCat(
-        "the job does not match site ", site_id,
+        "the job does not match site ", request.site_id(),
         ": its outdoor surfaces, materials, window or outdoor sampling (outdoor_paths, "
         "outdoor_bounces, seed, basis_cells, window parts) differ from the site's, so the site's "
         "outdoor matrix cannot be reused (job key ",
         info.outdoor_key().substr(0, 16), ", site key ", site->info.outdoor_key().substr(0, 16),
         ")"));
   }
+  admitted.job = std::move(checked->job);
   return admitted;
 }
 
+absl::StatusOr<std::string> JobManager::TakeWeather(const v1::SubmitJobRequest& request,
+                                                    const std::optional<SiteManager::ForJob>& site,
+                                                    const Caller& caller) {
+  if (!request.weather_epw().empty()) return weather_.Add(request.weather_epw());
+  weather_.Ref(site->weather_path);
+  if (!sites_.Lookup(request.site_id(), caller).ok()) {  // deleted meanwhile
+    weather_.Unref(site->weather_path);
+    return absl::NotFoundError(absl::StrCat("no site '", request.site_id(), "' any more"));
+  }
+  return site->weather_path;
+}
+
 absl::StatusOr<v1::JobInfo> JobManager::StoreAndQueue(const v1::Job& job, v1::JobInfo info,
-                                                      const std::string& weather_path) {
+                                                      const std::string& weather_path,
+                                                      const Caller& caller) {
   info.set_state(v1::JOB_STATE_QUEUED);
   info.set_stage("queued");
   info.set_created_unix_ms(NowUnixMs());
@@ -278,6 +270,7 @@ absl::StatusOr<v1::JobInfo> JobManager::StoreAndQueue(const v1::Job& job, v1::Jo
   absl::StatusOr<std::string> id = store_.InsertJob(info, job, &queued);
   if (!id.ok()) return id.status();
   auto record = std::make_shared<Record>();
+  record->owner = info.owner();
   record->info = info;
   record->wanted = info;
   record->weather_path = weather_path;
@@ -301,7 +294,7 @@ absl::StatusOr<v1::JobInfo> JobManager::StoreAndQueue(const v1::Job& job, v1::Jo
     }
     return s;
   }
-  return InfoOf(*record);
+  return InfoOf(*record, caller);
 }
 
 absl::Status JobManager::Store(Record& r, std::optional<v1::JobEvent> event, bool durable) {
@@ -367,7 +360,7 @@ bool JobManager::Start(Record& r) {
       event.mutable_started()->set_backend(r.info.backend());
       const absl::Status stored = Store(r, event);
       if (stored.ok()) {
-        spdlog::info("job {} running ({})", r.info.id(), r.info.name());
+        spdlog::info("job {} running (\"{}\")", r.info.id(), LogSafe(r.info.name()));
         return true;
       }
       // Not started: a job runs only once its running state is stored
@@ -471,7 +464,7 @@ absl::Status JobManager::Finish(Record& r, v1::JobState state, const v1::JobResu
   r.wanted.set_finished_unix_ms(NowUnixMs());
   r.wanted.set_queue_position(0);
   if (result) *r.wanted.mutable_result() = *result;
-  r.wanted.set_error(StorableText(error));
+  r.wanted.set_error(error);
   v1::JobEvent event;
   switch (state) {
     case v1::JOB_STATE_SUCCEEDED:
@@ -509,7 +502,8 @@ absl::Status JobManager::Finish(Record& r, v1::JobState state, const v1::JobResu
       r.info.id(), v1::JobState_Name(state), std::string(stored.message()));
   {
     std::lock_guard lock(waiting_mutex_);
-    waiting_.push_back(Find(r.info.id()));
+    std::lock_guard jobs_lock(mutex_);
+    if (auto it = jobs_.find(r.info.id()); it != jobs_.end()) waiting_.push_back(it->second);
   }
   return stored;
 }
@@ -528,6 +522,7 @@ void JobManager::Ended(Record& r) {
   r.changed.notify_all();
   if (!r.weather_path.empty()) weather_.Unref(r.weather_path);
   r.weather_path.clear();
+  uploads_.Release(r.owner, r.info.upload_bytes());
   {
     std::lock_guard lock(mutex_);
     if (auto it = active_keys_.find(r.info.outdoor_key()); it != active_keys_.end()) {
@@ -554,7 +549,7 @@ void JobManager::Ended(Record& r) {
       spdlog::info("job {} interrupted by the shutdown{}", id, best);
       break;
     default:
-      spdlog::warn("job {} failed: {}", id, r.info.error());
+      spdlog::warn("job {} failed: {}", id, LogSafe(r.info.error()));
   }
 }
 
@@ -581,8 +576,8 @@ void JobManager::Commit() {
   }
 }
 
-v1::JobInfo JobManager::InfoOf(const Record& r) const {
-  v1::JobInfo info = r.info;
+v1::JobInfo JobManager::InfoOf(const Record& r, const Caller& caller) const {
+  v1::JobInfo info = ForCaller(r.info, caller);
   if (info.state() == v1::JOB_STATE_QUEUED) {
     info.set_queue_position(std::max(0, queue_.Position(info.id())));
   }
@@ -590,44 +585,48 @@ v1::JobInfo JobManager::InfoOf(const Record& r) const {
   return info;
 }
 
-std::shared_ptr<JobManager::Record> JobManager::Find(const std::string& id) const {
+std::shared_ptr<JobManager::Record> JobManager::Find(const std::string& id,
+                                                     const Caller& caller) const {
   std::lock_guard lock(mutex_);
   auto it = jobs_.find(id);
-  return it == jobs_.end() ? nullptr : it->second;
+  if (it == jobs_.end() || !caller.Owns(it->second->owner)) return nullptr;
+  return it->second;
 }
 
-absl::StatusOr<v1::JobInfo> JobManager::Get(const std::string& id) const {
-  std::shared_ptr<Record> r = Find(id);
-  if (!r)
-    return absl::NotFoundError(absl::StrCat("no job '", id, "' (fenestra job list shows them)"));
+absl::StatusOr<v1::JobInfo> JobManager::Get(const std::string& id, const Caller& caller) const {
+  std::shared_ptr<Record> r = Find(id, caller);
+  if (!r) return NoJob(id);
   std::lock_guard lock(r->mutex);
-  return InfoOf(*r);
+  return InfoOf(*r, caller);
 }
 
-std::vector<v1::JobInfo> JobManager::List(v1::JobState state, int limit) const {
+std::vector<v1::JobInfo> JobManager::List(v1::JobState state, int limit,
+                                          const Caller& caller) const {
   if (limit <= 0) limit = 100;
   std::vector<std::shared_ptr<Record>> records;
   {
     std::lock_guard lock(mutex_);
-    for (auto it = order_.rbegin(); it != order_.rend(); ++it) records.push_back(jobs_.at(*it));
+    for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
+      const std::shared_ptr<Record>& r = jobs_.at(*it);
+      if (caller.Owns(r->owner)) records.push_back(r);
+    }
   }
   std::vector<v1::JobInfo> jobs;
   for (const auto& r : records) {
     if (static_cast<int>(jobs.size()) >= limit) break;
     std::lock_guard lock(r->mutex);
     if (state != v1::JOB_STATE_UNSPECIFIED && r->info.state() != state) continue;
-    jobs.push_back(InfoOf(*r));
+    jobs.push_back(InfoOf(*r, caller));
     jobs.back().clear_result();
   }
   return jobs;
 }
 
-absl::StatusOr<v1::JobInfo> JobManager::Cancel(const std::string& id) {
-  std::shared_ptr<Record> r = Find(id);
-  if (!r)
-    return absl::NotFoundError(absl::StrCat("no job '", id, "' (fenestra job list shows them)"));
+absl::StatusOr<v1::JobInfo> JobManager::Cancel(const std::string& id, const Caller& caller) {
+  std::shared_ptr<Record> r = Find(id, caller);
+  if (!r) return NoJob(id);
   std::lock_guard lock(r->mutex);
-  if (IsTerminal(r->wanted.state())) return InfoOf(*r);  // ended, or its end being stored
+  if (IsTerminal(r->wanted.state())) return InfoOf(*r, caller);  // ended, or its end stored
   if (r->info.state() == v1::JOB_STATE_QUEUED && queue_.Position(id) >= 0) {
     // A waiting job is cancelled at once, once that is stored
     if (absl::Status s = Finish(*r, v1::JOB_STATE_CANCELLED, nullptr, "", /*retry=*/false);
@@ -635,11 +634,12 @@ absl::StatusOr<v1::JobInfo> JobManager::Cancel(const std::string& id) {
       return s;
     }
     queue_.Remove(id);
-    return InfoOf(*r);
+    spdlog::info("job {}: cancelled by {} while queued", id, caller.name);
+    return InfoOf(*r, caller);
   }
   r->cancel_requested = true;
-  spdlog::info("job {}: cancel requested; it stops at its next checkpoint", id);
-  return InfoOf(*r);
+  spdlog::info("job {}: cancel requested by {}; it stops at its next checkpoint", id, caller.name);
+  return InfoOf(*r, caller);
 }
 
 bool JobManager::UsesKey(const std::string& key) const {
@@ -647,12 +647,11 @@ bool JobManager::UsesKey(const std::string& key) const {
   return active_keys_.contains(key);
 }
 
-absl::Status JobManager::Watch(const std::string& id,
+absl::Status JobManager::Watch(const std::string& id, const Caller& caller,
                                const std::function<bool(const v1::JobEvent&)>& write,
                                const std::function<bool()>& client_gone) {
-  std::shared_ptr<Record> r = Find(id);
-  if (!r)
-    return absl::NotFoundError(absl::StrCat("no job '", id, "' (fenestra job list shows them)"));
+  std::shared_ptr<Record> r = Find(id, caller);
+  if (!r) return NoJob(id);
   {
     std::lock_guard lock(r->mutex);
     ++r->watchers;
@@ -679,7 +678,7 @@ absl::Status JobManager::Watch(const std::string& id,
       }
       if (resend_snapshot) {
         v1::JobEvent snapshot;
-        *snapshot.mutable_snapshot() = InfoOf(*r);
+        *snapshot.mutable_snapshot() = InfoOf(*r, caller);
         snapshot.set_sequence(r->info.last_sequence());
         snapshot.set_time_unix_ms(NowUnixMs());
         pending.push_back(std::move(snapshot));

@@ -84,7 +84,7 @@ bool Parse(Message& message, std::string_view bytes) {
 
 }  // namespace
 
-absl::StatusOr<std::unique_ptr<JobStore>> JobStore::Open(const std::string& path) {
+absl::StatusOr<std::unique_ptr<JobStore>> JobStore::Open(const std::string& path, Sharing sharing) {
   sqlite3* db = nullptr;
   const int rc =
       sqlite3_open_v2(path.c_str(), &db,
@@ -102,10 +102,11 @@ absl::StatusOr<std::unique_ptr<JobStore>> JobStore::Open(const std::string& path
         absl::StrCat(path, ": the job store is read-only (not writable)"));
   }
   sqlite3_busy_timeout(db, 500);
-  // The daemon is the database's only user: an exclusive lock keeps a second daemon out
-  // and the WAL index in memory (no -shm file, so a full disk still lets it read)
+  // Exclusive: a lock held from the first access keeps other processes out and the WAL
+  // index in memory (no -shm file, so a full disk still lets it read)
   for (const char* sql : {
-           "PRAGMA locking_mode=EXCLUSIVE",
+           sharing == Sharing::kExclusive ? "PRAGMA locking_mode=EXCLUSIVE"
+                                          : "PRAGMA locking_mode=NORMAL",
            "PRAGMA journal_mode=WAL",
            "PRAGMA synchronous=NORMAL",
            "CREATE TABLE IF NOT EXISTS jobs (number INTEGER PRIMARY KEY AUTOINCREMENT, "
@@ -114,6 +115,9 @@ absl::StatusOr<std::unique_ptr<JobStore>> JobStore::Open(const std::string& path
            "NULL, event BLOB NOT NULL, PRIMARY KEY (job_id, sequence))",
            "CREATE TABLE IF NOT EXISTS sites (number INTEGER PRIMARY KEY AUTOINCREMENT, "
            "id TEXT UNIQUE, info BLOB NOT NULL, weather_path TEXT NOT NULL, scene BLOB)",
+           "CREATE TABLE IF NOT EXISTS users (number INTEGER PRIMARY KEY AUTOINCREMENT, "
+           "name TEXT UNIQUE NOT NULL, token_sha256 BLOB NOT NULL, admin INTEGER NOT NULL, "
+           "created_unix_ms INTEGER NOT NULL, revoked_unix_ms INTEGER NOT NULL DEFAULT 0)",
            "CREATE TABLE IF NOT EXISTS quarantine (number INTEGER PRIMARY KEY AUTOINCREMENT, "
            "source TEXT NOT NULL, id TEXT, reason TEXT NOT NULL, info BLOB, body BLOB, "
            "weather_path TEXT, quarantined_unix_ms INTEGER NOT NULL)",
@@ -466,6 +470,54 @@ absl::Status JobStore::QuarantineLocked(const std::string& table, int64_t number
                                : "DELETE FROM sites WHERE number = ?")
         .Bind(1, number)
         .Run();
+  });
+}
+
+absl::Status JobStore::InsertUser(const UserRecord& user) {
+  std::lock_guard lock(mutex_);
+  return Transaction(/*durable=*/true, [&]() -> absl::Status {
+    Statement insert(db_,
+                     "INSERT INTO users (name, token_sha256, admin, created_unix_ms, "
+                     "revoked_unix_ms) VALUES (?, ?, ?, ?, ?)");
+    const int rc = insert.BindText(1, user.name)
+                       .Bind(2, user.token_sha256)
+                       .Bind(3, int64_t{user.admin})
+                       .Bind(4, user.created_unix_ms)
+                       .Bind(5, user.revoked_unix_ms)
+                       .Step();
+    if ((rc & 0xff) == SQLITE_CONSTRAINT) {
+      return absl::AlreadyExistsError(absl::StrCat("user '", user.name, "' exists"));
+    }
+    return rc == SQLITE_DONE ? absl::OkStatus() : insert.Error();
+  });
+}
+
+absl::StatusOr<std::vector<UserRecord>> JobStore::LoadUsers() {
+  std::lock_guard lock(mutex_);
+  std::vector<UserRecord> users;
+  Statement select(db_,
+                   "SELECT name, token_sha256, admin, created_unix_ms, revoked_unix_ms FROM users "
+                   "ORDER BY number");
+  int rc;
+  while ((rc = select.Step()) == SQLITE_ROW) {
+    users.push_back(UserRecord{select.Text(0), select.Text(1), select.Int(2) != 0, select.Int(3),
+                               select.Int(4)});
+  }
+  if (rc != SQLITE_DONE) return select.Error();
+  return users;
+}
+
+absl::Status JobStore::RevokeUser(const std::string& name, int64_t unix_ms) {
+  std::lock_guard lock(mutex_);
+  return Transaction(/*durable=*/true, [&]() -> absl::Status {
+    Statement update(db_,
+                     "UPDATE users SET revoked_unix_ms = CASE WHEN revoked_unix_ms = 0 THEN ? "
+                     "ELSE revoked_unix_ms END WHERE name = ?");
+    if (absl::Status s = update.Bind(1, unix_ms).BindText(2, name).Run(); !s.ok()) return s;
+    if (sqlite3_changes(db_) == 0) {
+      return absl::NotFoundError(absl::StrCat("no user '", name, "'"));
+    }
+    return absl::OkStatus();
   });
 }
 

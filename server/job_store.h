@@ -14,18 +14,51 @@ struct sqlite3;
 
 namespace fenestra {
 
-// The daemon's persistent state in one SQLite file (WAL journal, held exclusively while
-// the daemon runs): jobs (their submitted form and latest JobInfo, result included), the
-// events of unfinished jobs, sites (their SiteInfo and registered scene), and a quarantine
-// table for records that no longer parse. Every change is one transaction; state changes
-// are synced to disk before the call returns. Errors carry no paths: a full disk is
-// StorageFullError (RESOURCE_EXHAUSTED), anything else Internal. Thread-safe.
-class JobStore {
+// A user of the daemon as stored; the token only as its SHA-256.
+struct UserRecord {
+  std::string name;
+  std::string token_sha256;  // 32 raw bytes
+  bool admin = false;
+  int64_t created_unix_ms = 0;
+  int64_t revoked_unix_ms = 0;  // 0 while the token is valid
+};
+
+// Where the users live. JobStore keeps them in its SQLite file; the interface lets
+// another database take them over.
+class UserStore {
  public:
+  virtual ~UserStore() = default;
+  // Stores a new user; AlreadyExists when the name is taken (revoked users included).
+  virtual absl::Status InsertUser(const UserRecord& user) = 0;
+  // Every user, revoked ones included, oldest first.
+  virtual absl::StatusOr<std::vector<UserRecord>> LoadUsers() = 0;
+  // Marks a user's token revoked at `unix_ms` (a revoked user keeps its first time);
+  // NotFound when there is no such user.
+  virtual absl::Status RevokeUser(const std::string& name, int64_t unix_ms) = 0;
+};
+
+// The daemon's persistent state in one SQLite file (WAL journal): jobs (their submitted
+// form and latest JobInfo, result included), the events of unfinished jobs, sites (their
+// SiteInfo and registered scene), users, and a quarantine table for records that no
+// longer parse. Every change is one transaction; state changes are synced to disk before
+// the call returns. Errors carry no paths: a full disk is StorageFullError
+// (RESOURCE_EXHAUSTED), anything else Internal. Thread-safe.
+class JobStore final : public UserStore {
+ public:
+  // Who else may open the file while this process has it open.
+  enum class Sharing {
+    // Other processes too (`fenestrad user` beside a running daemon); the WAL index lives
+    // in a -shm file next to the database.
+    kShared,
+    // This process alone (another gets FailedPrecondition); the WAL index lives in
+    // memory, so a store on a full disk, where no -shm file can be made, still opens.
+    kExclusive,
+  };
   // Opens or creates the database at `path` and its tables. FailedPrecondition naming the
-  // file when it is read-only or another process holds it.
-  static absl::StatusOr<std::unique_ptr<JobStore>> Open(const std::string& path);
-  ~JobStore();
+  // file when it is read-only or, kExclusive, another process holds it.
+  static absl::StatusOr<std::unique_ptr<JobStore>> Open(const std::string& path,
+                                                        Sharing sharing = Sharing::kShared);
+  ~JobStore() override;
   JobStore(const JobStore&) = delete;
   JobStore& operator=(const JobStore&) = delete;
 
@@ -92,6 +125,11 @@ class JobStore {
   // table with `reason`.
   absl::Status Quarantine(const std::string& table, const std::string& id,
                           const std::string& reason);
+
+  // UserStore
+  absl::Status InsertUser(const UserRecord& user) override;
+  absl::StatusOr<std::vector<UserRecord>> LoadUsers() override;
+  absl::Status RevokeUser(const std::string& name, int64_t unix_ms) override;
 
  private:
   explicit JobStore(sqlite3* db) : db_(db) {}

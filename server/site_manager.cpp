@@ -4,13 +4,14 @@
 
 #include <algorithm>
 #include <chrono>
-#include <filesystem>
 #include <thread>
 
+#include "absl/cleanup/cleanup.h"
 #include "absl/strings/str_cat.h"
 #include "core/geometry/scene.h"
 #include "core/optimize/job.h"
 #include "server/limits.h"
+#include "server/log_safe.h"
 
 namespace fenestra {
 
@@ -24,37 +25,30 @@ double MeanRelativeStandardError(const OutdoorMatrix& matrix) {
   return MeanRelativeError(matrix.coefficients, matrix.standard_error, 0.01, false);
 }
 
-std::string StorableText(absl::string_view text) {
-  if (text.size() > kMaxStoredTextBytes) {
-    size_t end = kMaxStoredTextBytes;
-    while (end > 0 && (static_cast<unsigned char>(text[end]) & 0xc0) == 0x80) --end;
-    text = text.substr(0, end);
-  }
-  std::string out(text);
-  for (char& c : out) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
-  }
-  return out;
-}
-
 namespace {
 
 int64_t OutdoorTriangles(const Scene& scene) {
   return std::count(scene.fixed.side.begin(), scene.fixed.side.end(), Side::kOutdoor);
 }
 
+// The answer for an unknown site, and for another user's.
+absl::Status NoSite(const std::string& id) {
+  return absl::NotFoundError(absl::StrCat("no site '", id, "' (fenestra site list shows them)"));
+}
+
 }  // namespace
 
 SiteManager::SiteManager(const v1::DaemonConfig& config, const DataDir& data_dir, JobStore& store,
                          OutdoorCache& cache, UploadStore& weather, WorkQueue& queue,
-                         HeavyRequests& heavy)
+                         HeavyRequests& heavy, UploadQuota& uploads)
     : config_(config),
       data_dir_(data_dir),
       store_(store),
       cache_(cache),
       weather_(weather),
       queue_(queue),
-      heavy_(heavy) {}
+      heavy_(heavy),
+      uploads_(uploads) {}
 
 absl::Status SiteManager::Recover() {
   absl::StatusOr<JobStore::StoredSites> stored = store_.LoadSites();
@@ -63,7 +57,7 @@ absl::Status SiteManager::Recover() {
     spdlog::error(
         "site {}: its stored record does not parse ({}); moved to the quarantine "
         "table, the daemon goes on without it",
-        q.id, q.reason);
+        LogSafe(q.id), q.reason);
   }
   std::vector<std::string> to_compute;
   {
@@ -72,6 +66,8 @@ absl::Status SiteManager::Recover() {
       v1::SiteInfo& info = s.info;
       const std::string id = info.id();
       if (!s.weather_path.empty()) weather_.Ref(s.weather_path);
+      if (info.owner().empty()) info.set_owner(kLocalUser);  // stored before owners
+      (void)uploads_.Reserve(info.owner(), info.upload_bytes(), /*force=*/true);
       if (info.state() == v1::SITE_STATE_READY) {
         if (cache_.Contains(info.outdoor_key())) {
           info.set_loaded_from_disk(cache_.LoadedFromDisk(info.outdoor_key()));
@@ -94,29 +90,74 @@ absl::Status SiteManager::Recover() {
     }
   }
   for (const std::string& id : to_compute) {
+    std::string owner;
     {
       // The store says ready until this is stored; every start decides the same again
       std::lock_guard lock(mutex_);
       if (absl::Status s = store_.UpdateSite(sites_[id].info); !s.ok()) {
         spdlog::warn("site {}: cannot store its state: {}", id, std::string(s.message()));
       }
+      owner = sites_[id].info.owner();
     }
-    if (absl::Status s = QueueCompute(id); !s.ok()) return s;
+    if (absl::Status s = QueueCompute(id, owner); !s.ok()) return s;
   }
   return absl::OkStatus();
 }
 
-absl::StatusOr<v1::SiteInfo> SiteManager::Register(const v1::RegisterSiteRequest& request) {
+absl::Status SiteManager::CheckSiteCount(const std::string& owner) const {
+  const v1::Limits& limits = config_.limits();
+  int64_t registering = 0;
+  for (const auto& [user, count] : registering_) registering += count;
+  const int64_t total = static_cast<int64_t>(sites_.size()) + registering;
+  if (total >= limits.max_sites()) {
+    return absl::ResourceExhaustedError(
+        absl::StrCat("this server holds ", total,
+                     " sites, its limit max_sites; delete one first (fenestra site rm)"));
+  }
+  auto pending = registering_.find(owner);
+  const int64_t owned =
+      std::count_if(sites_.begin(), sites_.end(),
+                    [&](const auto& site) { return site.second.info.owner() == owner; }) +
+      (pending == registering_.end() ? 0 : pending->second);
+  if (owned >= limits.max_sites_per_user()) {
+    return absl::ResourceExhaustedError(
+        absl::StrCat("limits.max_sites_per_user (", limits.max_sites_per_user(),
+                     ") reached: you have ", owned, " sites; delete one first (fenestra site rm)"));
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<v1::SiteInfo> SiteManager::Register(const v1::RegisterSiteRequest& request,
+                                                   const Caller& caller) {
   if (shutting_down_) {
     return absl::UnavailableError("fenestrad is shutting down; register the site when it is back");
   }
   absl::StatusOr<HeavyRequests::Pass> pass = heavy_.Enter(request.ByteSizeLong());
   if (!pass.ok()) return pass.status();
-  absl::StatusOr<v1::SiteInfo> described = Describe(request);
+  {
+    std::lock_guard lock(mutex_);
+    if (absl::Status s = CheckSiteCount(caller.name); !s.ok()) return s;
+  }
+  absl::StatusOr<v1::SiteInfo> described = Describe(request, caller);
   if (!described.ok()) return described.status();
   v1::SiteInfo& info = *described;
 
-  // Room for the scene, then the weather file
+  // A place among the sites, counted again (other registrations may have come in
+  // meanwhile) and held while the site is stored
+  {
+    std::lock_guard lock(mutex_);
+    if (absl::Status s = CheckSiteCount(caller.name); !s.ok()) return s;
+    ++registering_[caller.name];
+  }
+  absl::Cleanup registered = [&] {
+    std::lock_guard lock(mutex_);
+    if (--registering_[caller.name] == 0) registering_.erase(caller.name);
+  };
+
+  // The owner's upload quota, room for the scene, then the weather file
+  const int64_t upload_bytes = info.upload_bytes();
+  if (absl::Status s = uploads_.Reserve(caller.name, upload_bytes); !s.ok()) return s;
+  absl::Cleanup release_quota = [&] { uploads_.Release(caller.name, upload_bytes); };
   if (absl::Status s = data_dir_.MakeRoom(static_cast<int64_t>(request.scene().ByteSizeLong()));
       !s.ok()) {
     return s;
@@ -144,59 +185,46 @@ absl::StatusOr<v1::SiteInfo> SiteManager::Register(const v1::RegisterSiteRequest
     if (!weather_path.empty()) weather_.Unref(weather_path);
     return id.status();
   }
+  std::move(release_quota).Cancel();  // held by the site until it is deleted
   {
     std::lock_guard lock(mutex_);
     order_.push_back(*id);
     sites_[*id] = Site{info, weather_path};
   }
-  spdlog::info("site {} registered ({}): {} outdoor triangles, {} outdoor paths, key {}; {}",
-               info.id(), info.name(), info.outdoor_triangles(), info.sampling().outdoor_paths(),
-               info.outdoor_key().substr(0, 16),
-               cached ? "outdoor matrix already cached" : "outdoor matrix queued");
+  spdlog::info(
+      "site {} registered by {} (\"{}\"): {} outdoor triangles, {} outdoor paths, key {}; {}",
+      info.id(), caller.name, LogSafe(info.name()), info.outdoor_triangles(),
+      info.sampling().outdoor_paths(), info.outdoor_key().substr(0, 16),
+      cached ? "outdoor matrix already cached" : "outdoor matrix queued");
   if (!cached) {
-    if (absl::Status s = QueueCompute(info.id()); !s.ok()) return s;
+    if (absl::Status s = QueueCompute(info.id(), caller.name); !s.ok()) return s;
   }
-  return info;
+  return ForCaller(std::move(info), caller);
 }
 
-absl::StatusOr<v1::SiteInfo> SiteManager::Describe(const v1::RegisterSiteRequest& request) const {
-  const v1::Limits& limits = config_.limits();
-  {
-    std::lock_guard lock(mutex_);
-    if (static_cast<int>(sites_.size()) >= limits.max_sites()) {
-      return absl::ResourceExhaustedError(
-          absl::StrCat("this server holds ", sites_.size(),
-                       " sites, its limit max_sites; delete one first (fenestra site rm)"));
-    }
-  }
-  if (!request.has_scene()) return absl::InvalidArgumentError("scene: is required");
-  if (absl::Status s = CheckInlineScene(request.scene()); !s.ok()) return s;
-  if (absl::Status s = CheckSceneLimits(request.scene(), limits); !s.ok()) return s;
-  v1::Sampling sampling = request.sampling();
-  if (sampling.backend().empty()) sampling.set_backend(config_.backend());
-  absl::StatusOr<v1::Sampling> resolved = ResolveSampling(sampling);
-  if (!resolved.ok()) return resolved.status();
-  if (absl::Status s = CheckSamplingLimits(*resolved, limits, /*indoor=*/false); !s.ok()) {
-    return s;
-  }
-  // The site's weather_file only names a file; building does not read it
-  absl::StatusOr<Scene> scene = BuildScene(request.scene(), "scene");
-  if (!scene.ok()) return scene.status();
+absl::StatusOr<v1::SiteInfo> SiteManager::Describe(const v1::RegisterSiteRequest& request,
+                                                   const Caller& caller) const {
+  // Everything checked before anything is stored
+  absl::StatusOr<CheckedSite> checked = CheckSiteRequest(request, config_);
+  if (!checked.ok()) return checked.status();
+  const Scene& scene = checked->scene;
   v1::SiteInfo info;
-  info.set_name(StorableText(request.name().empty() ? scene->name : request.name()));
-  info.set_outdoor_key(OutdoorMatrixKey(*scene, *resolved));
-  info.set_latitude_deg(scene->site.latitude_deg);
-  info.set_longitude_deg(scene->site.longitude_deg);
-  info.set_outdoor_triangles(OutdoorTriangles(*scene));
-  *info.mutable_sampling() = *resolved;
-  info.set_weather_name(StorableText(request.weather_name()));
+  info.set_owner(caller.name);
+  info.set_upload_bytes(static_cast<int64_t>(request.weather_epw().size()));
+  info.set_name(request.name().empty() ? scene.name : request.name());
+  info.set_outdoor_key(OutdoorMatrixKey(scene, checked->sampling));
+  info.set_latitude_deg(scene.site.latitude_deg);
+  info.set_longitude_deg(scene.site.longitude_deg);
+  info.set_outdoor_triangles(OutdoorTriangles(scene));
+  *info.mutable_sampling() = checked->sampling;
+  info.set_weather_name(request.weather_name());
   info.set_created_unix_ms(NowUnixMs());
   return info;
 }
 
-absl::Status SiteManager::QueueCompute(const std::string& id) {
+absl::Status SiteManager::QueueCompute(const std::string& id, const std::string& owner) {
   return queue_.Push(
-      id, [this, id] { Compute(id); }, /*is_job=*/false);
+      id, owner, [this, id] { Compute(id); }, /*is_job=*/false);
 }
 
 absl::StatusOr<OutdoorCache::Lookup> SiteManager::ComputeMatrix(
@@ -246,7 +274,7 @@ void SiteManager::Compute(const std::string& id) {
   const bool stored = StoreUntilDone(id, *deleted, [&](v1::SiteInfo& site) {
     if (!lookup.ok()) {
       site.set_state(v1::SITE_STATE_FAILED);
-      site.set_error(StorableText(lookup.status().message()));
+      site.set_error(std::string(lookup.status().message()));
       return;
     }
     const OutdoorMatrix& m = *lookup->matrix;
@@ -271,7 +299,7 @@ void SiteManager::Compute(const std::string& id) {
         id, lookup->computed ? "computed" : "found in the cache", m.wall_seconds, m.backend,
         MeanRelativeStandardError(m));
   } else {
-    spdlog::warn("site {} failed: {}", id, StorableText(lookup.status().message()));
+    spdlog::warn("site {} failed: {}", id, LogSafe(std::string(lookup.status().message())));
   }
 }
 
@@ -302,16 +330,14 @@ bool SiteManager::StoreUntilDone(const std::string& id, const std::atomic<bool>&
   }
 }
 
-absl::StatusOr<v1::SiteInfo> SiteManager::Get(const std::string& id, bool with_scene) const {
+absl::StatusOr<v1::SiteInfo> SiteManager::Get(const std::string& id, const Caller& caller,
+                                              bool with_scene) const {
   v1::SiteInfo info;
   {
     std::lock_guard lock(mutex_);
     auto it = sites_.find(id);
-    if (it == sites_.end()) {
-      return absl::NotFoundError(
-          absl::StrCat("no site '", id, "' (fenestra site list shows them)"));
-    }
-    info = it->second.info;
+    if (it == sites_.end() || !caller.Owns(it->second.info.owner())) return NoSite(id);
+    info = ForCaller(it->second.info, caller);
   }
   if (with_scene) {
     // Read outside the lock, so a large scene does not hold up the other calls; large
@@ -327,41 +353,40 @@ absl::StatusOr<v1::SiteInfo> SiteManager::Get(const std::string& id, bool with_s
   return info;
 }
 
-std::vector<v1::SiteInfo> SiteManager::List() const {
+std::vector<v1::SiteInfo> SiteManager::List(const Caller& caller) const {
   std::lock_guard lock(mutex_);
   std::vector<v1::SiteInfo> sites;
-  sites.reserve(order_.size());
-  for (const std::string& id : order_) sites.push_back(sites_.at(id).info);
+  for (const std::string& id : order_) {
+    const v1::SiteInfo& info = sites_.at(id).info;
+    if (caller.Owns(info.owner())) sites.push_back(ForCaller(info, caller));
+  }
   return sites;
 }
 
-absl::Status SiteManager::Delete(const std::string& id) {
+absl::Status SiteManager::Delete(const std::string& id, const Caller& caller) {
   std::string weather_path;
   {
     std::lock_guard lock(mutex_);
     auto it = sites_.find(id);
-    if (it == sites_.end()) {
-      return absl::NotFoundError(
-          absl::StrCat("no site '", id, "' (fenestra site list shows them)"));
-    }
+    if (it == sites_.end() || !caller.Owns(it->second.info.owner())) return NoSite(id);
     if (absl::Status s = store_.DeleteSite(id); !s.ok()) return s;
     it->second.deleted->store(true);
     queue_.Remove(id);
+    uploads_.Release(it->second.info.owner(), it->second.info.upload_bytes());
     weather_path = it->second.weather_path;
     sites_.erase(it);
     order_.erase(std::find(order_.begin(), order_.end(), id));
   }
   if (!weather_path.empty()) weather_.Unref(weather_path);
-  spdlog::info("site {} deleted", id);
+  spdlog::info("site {} deleted by {}", id, caller.name);
   return absl::OkStatus();
 }
 
-absl::StatusOr<SiteManager::ForJob> SiteManager::Lookup(const std::string& id) const {
+absl::StatusOr<SiteManager::ForJob> SiteManager::Lookup(const std::string& id,
+                                                        const Caller& caller) const {
   std::lock_guard lock(mutex_);
   auto it = sites_.find(id);
-  if (it == sites_.end()) {
-    return absl::NotFoundError(absl::StrCat("no site '", id, "' (fenestra site list shows them)"));
-  }
+  if (it == sites_.end() || !caller.Owns(it->second.info.owner())) return NoSite(id);
   return ForJob{it->second.info, it->second.weather_path};
 }
 

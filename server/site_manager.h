@@ -17,6 +17,8 @@
 #include "server/heavy_requests.h"
 #include "server/job_store.h"
 #include "server/outdoor_cache.h"
+#include "server/upload_quota.h"
+#include "server/users.h"
 #include "server/work_queue.h"
 
 namespace fenestra {
@@ -27,44 +29,46 @@ int64_t NowUnixMs();
 // Mean of standard_error / coefficient over the entries at least 1% of the largest [-].
 double MeanRelativeStandardError(const OutdoorMatrix& matrix);
 
-// Client text (names, messages that may quote a request) as the daemon stores and logs it:
-// at most this many bytes [bytes], cut at a character boundary, control characters shown
-// as '?'.
-inline constexpr size_t kMaxStoredTextBytes = 1024;
-std::string StorableText(absl::string_view text);
-
 // The registered sites: their outdoor matrices are computed by tasks on the work queue
 // and kept in the outdoor cache; the sites live in the job store, and in memory without
-// their scenes (read from the store when a computation or a Get needs one).
+// their scenes (read from the store when a computation or a Get needs one). Each site
+// belongs to the user who registered it: to everyone else (administrators aside) it does
+// not exist, and its id answers NotFound exactly as an unknown id. Matrices stay shared by
+// content key, weather files by content (UploadStore).
 class SiteManager {
  public:
   SiteManager(const v1::DaemonConfig& config, const DataDir& data_dir, JobStore& store,
-              OutdoorCache& cache, UploadStore& weather, WorkQueue& queue, HeavyRequests& heavy);
+              OutdoorCache& cache, UploadStore& weather, WorkQueue& queue, HeavyRequests& heavy,
+              UploadQuota& uploads);
 
   // Loads the stored sites (those that do not parse are quarantined and logged) and counts
   // their weather files' references. Those computing, or ready but missing from the cache
   // (a file found corrupt), are queued for computation again.
   absl::Status Recover();
 
-  // Registers a site (see SiteService.Register).
-  absl::StatusOr<v1::SiteInfo> Register(const v1::RegisterSiteRequest& request);
-  // A site by id; NotFound when unknown. `with_scene` includes the registered scene, read
-  // from the store (a scene of 1 MiB or more counts as a heavy request).
-  absl::StatusOr<v1::SiteInfo> Get(const std::string& id, bool with_scene = true) const;
-  // Every site, oldest first, without scenes.
-  std::vector<v1::SiteInfo> List() const;
-  // Forgets a site and drops its weather file's reference; a running computation of it
-  // stops at its next checkpoint. Its cached matrix stays until the data directory needs
-  // the room.
-  absl::Status Delete(const std::string& id);
+  // Registers a site of `caller` (see SiteService.Register).
+  absl::StatusOr<v1::SiteInfo> Register(const v1::RegisterSiteRequest& request,
+                                        const Caller& caller);
+  // A site by id; NotFound when unknown or not the caller's. `with_scene` includes the
+  // registered scene, read from the store (a scene of 1 MiB or more counts as a heavy
+  // request).
+  absl::StatusOr<v1::SiteInfo> Get(const std::string& id, const Caller& caller,
+                                   bool with_scene = true) const;
+  // The caller's sites (an administrator's: all), oldest first, without scenes.
+  std::vector<v1::SiteInfo> List(const Caller& caller) const;
+  // Forgets a site, drops its weather file's reference and gives its upload bytes back to
+  // its owner; a running computation of it stops at its next checkpoint. Its cached matrix
+  // stays until the data directory needs the room. NotFound when unknown or not the
+  // caller's.
+  absl::Status Delete(const std::string& id, const Caller& caller);
 
   // What a job on a site needs from it.
   struct ForJob {
     v1::SiteInfo info;         // without the scene
     std::string weather_path;  // empty when the site has no weather file
   };
-  // NotFound when unknown.
-  absl::StatusOr<ForJob> Lookup(const std::string& id) const;
+  // NotFound when unknown or not the caller's.
+  absl::StatusOr<ForJob> Lookup(const std::string& id, const Caller& caller) const;
   // Counts a job that reused the site's matrix.
   void NoteReuse(const std::string& id);
   // Whether a site uses the outdoor matrix with `key`.
@@ -82,11 +86,15 @@ class SiteManager {
     std::string weather_path;
     std::shared_ptr<std::atomic<bool>> deleted = std::make_shared<std::atomic<bool>>(false);
   };
-  // Register's checks of the message and the limits, and the new site's info from its
-  // scene (built, then dropped).
-  absl::StatusOr<v1::SiteInfo> Describe(const v1::RegisterSiteRequest& request) const;
+  // Checks the bounds on sites, in all and of `owner`, registrations under way included
+  // (mutex_ held).
+  absl::Status CheckSiteCount(const std::string& owner) const;
+  // Register's checks of the request (CheckSiteRequest) and the new site's info of
+  // `caller` from its scene (built, then dropped).
+  absl::StatusOr<v1::SiteInfo> Describe(const v1::RegisterSiteRequest& request,
+                                        const Caller& caller) const;
   // Queues the computation of a site's matrix.
-  absl::Status QueueCompute(const std::string& id);
+  absl::Status QueueCompute(const std::string& id, const std::string& owner);
   // A work queue task: computes (or finds) the matrix and marks the site ready or failed.
   void Compute(const std::string& id);
   // Traces (or finds) the matrix of a site from its stored scene.
@@ -106,11 +114,13 @@ class SiteManager {
   UploadStore& weather_;
   WorkQueue& queue_;
   HeavyRequests& heavy_;
+  UploadQuota& uploads_;
   std::atomic<bool> shutting_down_{false};
   std::atomic<bool> interrupted_{false};
   mutable std::mutex mutex_;
   std::vector<std::string> order_;  // ids, oldest first
   std::map<std::string, Site> sites_;
+  std::map<std::string, int> registering_;  // registrations being stored, by owner
 };
 
 }  // namespace fenestra

@@ -33,6 +33,20 @@ TEST(DataDirTest, OpenCreatesTheFoldersAndRemovesTemporaries) {
   EXPECT_EQ((*dir)->UsedBytes(), 5);
 }
 
+TEST(DataDirTest, OneDaemonPerFolder) {
+  const fs::path root = FreshDir("lock");
+  {
+    absl::StatusOr<std::unique_ptr<DataDir>> first = DataDir::Open(root, 1 << 20);
+    ASSERT_TRUE(first.ok()) << first.status();
+    absl::StatusOr<std::unique_ptr<DataDir>> second = DataDir::Open(root, 1 << 20);
+    EXPECT_EQ(second.status().code(), absl::StatusCode::kFailedPrecondition);
+    EXPECT_THAT(second.status().message(),
+                HasSubstr("the data directory " + root.string() + " is in use by another process"));
+  }
+  // Released with the first
+  EXPECT_TRUE(DataDir::Open(root, 1 << 20).ok());
+}
+
 TEST(DataDirTest, MakeRoomEvictsThenRefusesNamingTheLimit) {
   const fs::path root = FreshDir("room");
   std::unique_ptr<DataDir> dir = *DataDir::Open(root, 1000);

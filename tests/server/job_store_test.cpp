@@ -84,6 +84,30 @@ TEST(JobStoreTest, Sites) {
   EXPECT_EQ((*store)->LoadSiteScene("site-1")->name(), "courtyard");
 }
 
+TEST(JobStoreTest, UsersSurviveReopening) {
+  const std::string path = FreshDb("users");
+  {
+    auto store = JobStore::Open(path);
+    ASSERT_TRUE(store.ok());
+    ASSERT_TRUE((*store)->InsertUser(UserRecord{"ann", std::string(32, 'a'), false, 5, 0}).ok());
+    ASSERT_TRUE((*store)->InsertUser(UserRecord{"root", std::string(32, 'r'), true, 6, 0}).ok());
+    ASSERT_TRUE((*store)->RevokeUser("ann", 7).ok());
+  }
+  auto store = JobStore::Open(path);
+  ASSERT_TRUE(store.ok());
+  auto users = (*store)->LoadUsers();
+  ASSERT_TRUE(users.ok()) << users.status();
+  ASSERT_EQ(users->size(), 2u);
+  EXPECT_EQ((*users)[0].name, "ann");
+  EXPECT_EQ((*users)[0].token_sha256, std::string(32, 'a'));
+  EXPECT_EQ((*users)[0].created_unix_ms, 5);
+  EXPECT_EQ((*users)[0].revoked_unix_ms, 7);
+  EXPECT_TRUE((*users)[1].admin);
+  EXPECT_EQ((*users)[1].revoked_unix_ms, 0);
+  EXPECT_EQ((*store)->InsertUser(UserRecord{"ann", std::string(32, 'b'), false, 8, 0}).code(),
+            absl::StatusCode::kAlreadyExists);
+}
+
 TEST(JobStoreTest, UnwritablePathIsAnError) {
   EXPECT_FALSE(JobStore::Open("/nonexistent/dir/fenestra.db").ok());
 }
@@ -206,11 +230,27 @@ TEST(JobStoreTest, SitesStoredWithTheSceneInTheirInfoAreRead) {
   EXPECT_EQ((*store)->LoadSiteScene("site-2")->name(), "street");
 }
 
-TEST(JobStoreTest, ASecondProcessOnTheSameFileIsRefused) {
-  const std::string path = FreshDb("exclusive");
-  auto first = JobStore::Open(path);
-  ASSERT_TRUE(first.ok());
+TEST(JobStoreTest, ASharedStoreSeesTheUsersAnotherAddsAnExclusiveOneKeepsOthersOut) {
+  const std::string path = FreshDb("sharing");
+  {
+    // The daemon's store and `fenestrad user add` beside it
+    auto daemon = JobStore::Open(path);
+    ASSERT_TRUE(daemon.ok()) << daemon.status();
+    ASSERT_TRUE((*daemon)->LoadJobs().ok());
+    auto command = JobStore::Open(path);
+    ASSERT_TRUE(command.ok()) << command.status();
+    ASSERT_TRUE((*command)->InsertUser(UserRecord{"ann", std::string(32, 'a'), false, 5, 0}).ok());
+    auto users = (*daemon)->LoadUsers();
+    ASSERT_TRUE(users.ok()) << users.status();
+    ASSERT_EQ(users->size(), 1u);
+    EXPECT_EQ((*users)[0].name, "ann");
+    ASSERT_TRUE((*command)->RevokeUser("ann", 9).ok());
+    EXPECT_EQ((*(*daemon)->LoadUsers())[0].revoked_unix_ms, 9);
+  }
+  auto first = JobStore::Open(path, JobStore::Sharing::kExclusive);
+  ASSERT_TRUE(first.ok()) << first.status();
   ASSERT_TRUE((*first)->LoadJobs().ok());
+  EXPECT_FALSE(std::filesystem::exists(path + "-shm"));
   auto second = JobStore::Open(path);
   EXPECT_EQ(second.status().code(), absl::StatusCode::kFailedPrecondition);
   EXPECT_THAT(std::string(second.status().message()), testing::HasSubstr("in use by another"));

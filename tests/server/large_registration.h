@@ -1,12 +1,15 @@
 #pragma once
 
-// A large site registration, for fenestrad's memory test and registration_memory_bench: the
-// city office with `triangles` more outdoor triangles, a grid under the ground shifted by
-// `shift_m` (so each request has its own outdoor key); 600 000 of them make a 58 MiB request.
+// What fenestrad's memory test and registration_memory_bench share: a large site
+// registration (the city office with `triangles` more outdoor triangles, a grid under the
+// ground shifted by `shift_m` so each request has its own outdoor key; 600 000 of them make
+// a 58 MiB request), and a process's memory as /proc/PID/status tells it.
 #include <google/protobuf/util/json_util.h>
+#include <sys/types.h>
 
 #include <fstream>
 #include <sstream>
+#include <string>
 #include <utility>
 
 #include "fenestra/v1/service.pb.h"
@@ -39,6 +42,16 @@ inline v1::RegisterSiteRequest LargeRegistration(int triangles, int64_t outdoor_
   request.mutable_sampling()->set_outdoor_paths(outdoor_paths);
   request.mutable_sampling()->set_backend("cpu");
   return request;
+}
+
+// A field of /proc/PID/status (VmRSS, VmHWM) [MiB], or -1.
+inline double ProcessStatusMiB(pid_t pid, const std::string& field) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind(field + ":", 0) == 0) return std::stod(line.substr(field.size() + 1)) / 1024;
+  }
+  return -1;
 }
 
 }  // namespace fenestra
