@@ -7,6 +7,7 @@
 #include <map>
 #include <numbers>
 #include <set>
+#include <span>
 
 #include "absl/strings/str_cat.h"
 #include "core/common/content_hash.h"
@@ -17,6 +18,7 @@
 #include "core/metrics/illuminance.h"
 #include "core/metrics/metric_errors.h"
 #include "core/metrics/occupancy.h"
+#include "core/optimize/final_check.h"
 #include "core/optimize/metric_objective.h"
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
@@ -26,6 +28,9 @@ namespace fenestra {
 namespace {
 
 namespace fs = std::filesystem;
+
+// Whether a job checks its best design by the one-stage method when its sampling does not say.
+constexpr bool kFinalCheckByDefault = true;
 
 double Since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -161,7 +166,9 @@ BlindDesign DesignAt(const PreparedJob& job, const std::vector<double>& x) {
   return design;
 }
 
-v1::Evaluation ToProto(const PreparedJob& job, const VnsRecord& record) {
+// `search_start_seconds`: when the search started, in the job's time.
+v1::Evaluation ToProto(const PreparedJob& job, const VnsRecord& record,
+                       double search_start_seconds) {
   v1::Evaluation e;
   e.set_index(record.index);
   for (int i = 0; i < job.job.variables_size(); ++i) {
@@ -173,7 +180,19 @@ v1::Evaluation ToProto(const PreparedJob& job, const VnsRecord& record) {
   e.set_cached(record.cached);
   e.set_improved(record.improved);
   e.set_neighborhood(record.neighborhood);
+  e.set_elapsed_seconds(search_start_seconds + record.elapsed_seconds);
   return e;
+}
+
+// The best value against time: the evaluations that moved the incumbent.
+void AddBestOverTime(v1::JobResult& result) {
+  for (const v1::Evaluation& e : result.history()) {
+    if (!e.improved()) continue;
+    v1::BestSoFar& best = *result.add_best_over_time();
+    best.set_elapsed_seconds(e.elapsed_seconds());
+    best.set_evaluation(e.index());
+    *best.mutable_value() = e.value();
+  }
 }
 
 void SetEstimate(v1::Estimate* out, double value, double standard_error) {
@@ -202,6 +221,43 @@ v1::Metrics ToProto(const AnnualMetricsEstimate& m) {
   return out;
 }
 
+// The final check of the search's best design (final_check.h) into `result` (which holds the
+// search's history), then reported once more with the check. A cancel during the check
+// leaves it out.
+absl::Status CheckBestDesign(const PreparedJob& job, const VnsResult& search,
+                             const DaylightMetric& metric, DcBackend* backend,
+                             const JobCallbacks& callbacks,
+                             std::chrono::steady_clock::time_point start, v1::JobResult& result) {
+  if (callbacks.stage) callbacks.stage("check");
+  FinalCheckOptions options;
+  options.batches = job.job.sampling().batches();
+  options.seed = job.job.sampling().seed();
+  options.cancelled = callbacks.cancelled;
+  absl::StatusOr<FinalCheckOutcome> outcome = RunFinalCheck(
+      job.scene, DesignAt(job, search.best_x), result.best_value(), metric, options, backend);
+  if (absl::IsCancelled(outcome.status())) return absl::OkStatus();
+  if (!outcome.ok()) {
+    return absl::Status(outcome.status().code(),
+                        absl::StrCat("final check: ", outcome.status().message()));
+  }
+  v1::FinalCheck& check = *result.mutable_final_check();
+  check = std::move(outcome->check);
+  if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&outcome->one_stage.payload)) {
+    *check.mutable_one_stage_metrics() = ToProto(*metrics);
+  }
+  if (callbacks.progress) {
+    JobProgress last;
+    last.evaluations = search.evaluations;
+    last.max_evaluations = job.job.budget().max_evaluations();
+    last.current = result.history(result.history_size() - 1);
+    last.best = result.history(search.best_index);
+    last.elapsed_seconds = Since(start);
+    last.final_check = check;
+    callbacks.progress(last);
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<v1::Job> ReadJobFile(const std::string& path) {
@@ -220,6 +276,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   if (s.basis_cells() == 0) s.set_basis_cells(288);
   if (s.backend().empty()) s.set_backend("auto");
   if (s.batches() == 0) s.set_batches(8);
+  if (!s.has_final_check()) s.set_final_check(kFinalCheckByDefault);
   if (s.basis_cells() != 288 && s.basis_cells() != 1152) {
     return Invalid("sampling.basis_cells", "must be 288 or 1152");
   }
@@ -467,19 +524,20 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   vns.seed = spec.sampling().seed();
   VnsCallbacks vns_callbacks;
   vns_callbacks.cancelled = callbacks.cancelled;
+  if (callbacks.stage) callbacks.stage("search");
+  const double search_start = Since(start);
   if (callbacks.progress) {
     vns_callbacks.progress = [&](const VnsProgress& p) {
       JobProgress progress;
       progress.evaluations = p.evaluations;
       progress.max_evaluations = p.max_evaluations;
-      progress.current = ToProto(job, *p.current);
-      progress.best = ToProto(job, *p.best);
+      progress.current = ToProto(job, *p.current, search_start);
+      progress.best = ToProto(job, *p.best, search_start);
       progress.elapsed_seconds = Since(start);
       progress.remaining_seconds = p.remaining_seconds;
       callbacks.progress(progress);
     };
   }
-  if (callbacks.stage) callbacks.stage("search");
   FENESTRA_ASSIGN_OR_RETURN(search, RunVns(variables, objective, vns, vns_callbacks));
 
   // The result
@@ -490,14 +548,31 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&search.best.payload)) {
     *result.mutable_best_metrics() = ToProto(*metrics);
   }
-  for (const VnsRecord& record : search.history) *result.add_history() = ToProto(job, record);
+  for (const VnsRecord& record : search.history) {
+    *result.add_history() = ToProto(job, record, search_start);
+  }
+  AddBestOverTime(result);
   result.set_evaluations(search.evaluations);
   result.set_stop_reason(std::string(StopReasonName(search.stop_reason)));
   result.mutable_timings()->set_evaluation_seconds(search.evaluation_seconds);
-  result.mutable_timings()->set_total_seconds(Since(start));
   result.set_outdoor_mean_relative_standard_error(
       MeanRelativeError(outdoor->coefficients, outdoor->standard_error, 0.01, false));
   result.set_backend(backend->Name());
+
+  // The final check: the best design by the one-stage method, its metrics as the search's
+  if (spec.sampling().final_check() && search.stop_reason != StopReason::kCancelled) {
+    design_tallies.reset();  // the search's recorded paths or device buffers
+    const DaylightMetric one_stage_metric =
+        [&](std::span<const Matrix> dc_batches) -> absl::StatusOr<Evaluation> {
+      FENESTRA_ASSIGN_OR_RETURN(
+          metrics, AnnualMetricsWithErrors(dc_batches, std::span<const Matrix>(&sky.radiance, 1),
+                                           columns, occupied, metric_options));
+      return MetricEvaluation(std::move(metrics), metric);
+    };
+    FENESTRA_RETURN_IF_ERROR(
+        CheckBestDesign(job, search, one_stage_metric, backend.get(), callbacks, start, result));
+  }
+  result.mutable_timings()->set_total_seconds(Since(start));
   return result;
 }
 

@@ -6,6 +6,7 @@
 // local mode and the service's workers run exactly this.
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "absl/status/statusor.h"
@@ -64,7 +65,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& sampling);
 absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1::Sampling& sampling,
                                                    const std::function<bool()>& cancelled = {});
 
-// What a running job reports after each evaluation.
+// What a running job reports after each evaluation, and once more after its final check.
 struct JobProgress {
   int evaluations = 0;
   int max_evaluations = 0;
@@ -72,10 +73,12 @@ struct JobProgress {
   v1::Evaluation best;
   double elapsed_seconds = 0;
   double remaining_seconds = 0;  // estimate
+  // Only in the report after the final check: its result.
+  std::optional<v1::FinalCheck> final_check;
 };
 
 struct JobCallbacks {
-  // A stage starts: "sky", "outdoor", "search".
+  // A stage starts: "sky", "outdoor", "indoor paths", "search", "check" (the final check).
   std::function<void(const std::string& stage)> stage;
   std::function<void(const JobProgress&)> progress;
   // Polled between evaluations; true stops the search at that checkpoint.
@@ -83,8 +86,11 @@ struct JobCallbacks {
 };
 
 // Runs the job. `outdoor` may hold a cached outdoor matrix whose key equals
-// OutdoorMatrixKey(job); otherwise (null) it is computed. A cancelled job returns its
-// result so far with stop_reason "cancelled". `outdoor` with another key is an error.
+// OutdoorMatrixKey(job); otherwise (null) it is computed. After the search the best design
+// is checked by the one-stage method (sampling.final_check, core/optimize/final_check.h),
+// unless the job was cancelled; a cancel during the check leaves it out. A cancelled job
+// returns its result so far with stop_reason "cancelled". `outdoor` with another key is an
+// error.
 absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix* outdoor,
                                      const JobCallbacks& callbacks = {});
 
