@@ -154,6 +154,7 @@ JobProgress FromProto(const v1::JobProgress& p) {
   progress.best = p.best();
   progress.elapsed_seconds = p.elapsed_seconds();
   progress.remaining_seconds = p.remaining_seconds();
+  if (p.has_final_check()) progress.final_check = p.final_check();
   return progress;
 }
 

@@ -122,12 +122,7 @@ int Watch(FenestradClient& client, const std::string& id, bool json) {
       case v1::JobEvent::kStage:
         if (!json) {
           EndProgress();
-          const std::string& stage = event.stage().name();
-          fmt::print("{}...\n", stage == "sky" ? "building the sky matrix"
-                                : stage == "outdoor"
-                                    ? (event.stage().cached() ? "outdoor matrix from the cache"
-                                                              : "tracing the outdoor matrix")
-                                    : "searching");
+          fmt::print("{}...\n", StageText(event.stage().name(), event.stage().cached()));
         }
         break;
       case v1::JobEvent::kProgress:
