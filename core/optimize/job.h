@@ -94,4 +94,12 @@ struct JobCallbacks {
 absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix* outdoor,
                                      const JobCallbacks& callbacks = {});
 
+// The final check (JobResult.final_check, core/optimize/final_check.h) of `design` (variable
+// name -> value, as JobResult.best_design; a variable left out is at its start) against the
+// two-stage estimate `two_stage` of the job's metric, with the job's sky, metric settings,
+// batches, seed and backend: what RunJob does after its search (bench/final_check_bench.cpp).
+absl::StatusOr<v1::FinalCheck> CheckJobDesign(
+    const PreparedJob& job, const google::protobuf::Map<std::string, double>& design,
+    const v1::Estimate& two_stage);
+
 }  // namespace fenestra

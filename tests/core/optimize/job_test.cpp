@@ -131,7 +131,8 @@ TEST(JobTest, FinalCheckIsOnUnlessTheSamplingSaysNo) {
 // Where both methods count the same light (no reflection limits), the one-stage check of the
 // best design agrees with the two-stage value within the errors (seed 1).
 TEST(JobTest, FinalCheckAgreesWhereBothMethodsCountTheSameLight) {
-  const Reported r = RunReporting(QuickJob(8, /*unlimited=*/true));
+  const PreparedJob job = QuickJob(8, /*unlimited=*/true);
+  const Reported r = RunReporting(job);
   ASSERT_TRUE(r.result.has_final_check());
   const v1::FinalCheck& c = r.result.final_check();
   Print(c);
@@ -162,6 +163,15 @@ TEST(JobTest, FinalCheckAgreesWhereBothMethodsCountTheSameLight) {
   EXPECT_EQ(last.best.value().value(), r.result.best_value().value());
   EXPECT_EQ(last.remaining_seconds, 0);
   EXPECT_GE(last.elapsed_seconds, r.progress[r.progress.size() - 2].elapsed_seconds);
+
+  // The same check of the same design, outside the job: the same numbers
+  absl::StatusOr<v1::FinalCheck> again =
+      CheckJobDesign(job, r.result.best_design(), r.result.best_value());
+  ASSERT_TRUE(again.ok()) << again.status();
+  v1::FinalCheck timeless = c;
+  timeless.clear_seconds();
+  again->clear_seconds();
+  EXPECT_EQ(again->SerializeAsString(), timeless.SerializeAsString());
 }
 
 // The quick job as published, with at most 5 indoor and 10 outdoor reflections: the check,
