@@ -8,7 +8,8 @@
 // paths per sensor, within kFinalCheckMaxPaths. A jackknife over B batches knows a standard
 // error to about 1/sqrt(2 (B - 1)) (27% at the jobs' 8), and the paths go with its square, so
 // the pilot uses more batches; the check itself uses the job's, as the search does. In the
-// city office the check's standard error came out within 0.6-1.7 times the target.
+// city office the check's standard error came out within 0.6-1.7 times the target
+// (bench/results/final_check_cpu.txt).
 #pragma once
 
 #include <cstdint>
@@ -32,8 +33,8 @@ inline constexpr int64_t kFinalCheckPilotPaths = 100'000;
 inline constexpr int64_t kFinalCheckMinPathsPerSensor = 1'000;
 // Batches of the pilot: its standard error known to about 13%.
 inline constexpr int kFinalCheckPilotBatches = 32;
-// The most paths of the check, all sensors together: about 4 s on 2 CPU cores in the city
-// office (bench/README.md).
+// The most paths of the check, all sensors together: about 3 s on 2 CPU cores in the city
+// office (bench/results/final_check_cpu.txt).
 inline constexpr int64_t kFinalCheckMaxPaths = 5'000'000;
 
 // The metric and its standard error from B >= 2 batch estimates of the daylight
