@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   fenestra::AddSceneCommand(app);
   fenestra::AddSkyCommand(app);
   fenestra::AddDcCommand(app);
+  fenestra::AddConvergenceCommand(app);
   fenestra::AddOptimizeCommand(app);
   fenestra::AddSiteCommand(app);
   fenestra::AddJobCommand(app);

@@ -1,6 +1,5 @@
 // fenestra optimize --local JOB.json
 #include <fmt/format.h>
-#include <google/protobuf/util/json_util.h>
 
 #include <filesystem>
 #include <iostream>
@@ -14,20 +13,6 @@
 
 namespace fenestra {
 namespace {
-
-absl::Status WriteResult(const std::string& path, const v1::JobResult& result) {
-  std::string json;
-  google::protobuf::util::JsonPrintOptions options;
-  options.add_whitespace = true;
-  options.always_print_primitive_fields = true;
-  options.preserve_proto_field_names = true;
-  const auto status = google::protobuf::util::MessageToJsonString(result, &json, options);
-  if (!status.ok()) return absl::InternalError(std::string(status.message()));
-  return WriteFileAtomically(path, [&](std::ostream& out) {
-    out << json << '\n';
-    return absl::OkStatus();
-  });
-}
 
 // One row per step of the search: its design, value and timing, and the best value so far
 // with its standard error (the job's error against elapsed_seconds).
@@ -87,7 +72,7 @@ void AddOptimizeCommand(CLI::App& app) {
     callbacks.progress = ShowProgress;
     const v1::JobResult result = ValueOrFail(RunJob(prepared, nullptr, callbacks));
     EndProgress();
-    if (absl::Status s = WriteResult(output, result); !s.ok()) Fail(s);
+    if (absl::Status s = WriteJsonFile(output, result); !s.ok()) Fail(s);
     if (absl::Status s = WriteHistoryCsv(csv, result); !s.ok()) Fail(s);
     fmt::print("{}result: {}\nhistory: {}\n", FormatResult(result), output, csv);
   });

@@ -70,6 +70,18 @@ std::string StageText(const std::string& stage, bool cached) {
   return "searching";
 }
 
+JobProgress FromProto(const v1::JobProgress& p) {
+  JobProgress progress;
+  progress.evaluations = p.evaluations();
+  progress.max_evaluations = p.max_evaluations();
+  progress.current = p.current();
+  progress.best = p.best();
+  progress.elapsed_seconds = p.elapsed_seconds();
+  progress.remaining_seconds = p.remaining_seconds();
+  if (p.has_final_check()) progress.final_check = p.final_check();
+  return progress;
+}
+
 void ShowProgress(const JobProgress& progress) {
   const std::string line = FormatProgress(progress);
   if (isatty(STDOUT_FILENO)) {

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "core/optimize/job.h"
+#include "fenestra/v1/service.pb.h"
 
 namespace fenestra {
 
@@ -17,6 +18,9 @@ std::string FormatDesign(const google::protobuf::Map<std::string, double>& desig
 // What a stage ("sky", "outdoor", "search", "check", ...) does, for "...\n" lines; `cached`:
 // the outdoor matrix comes from the cache.
 std::string StageText(const std::string& stage, bool cached = false);
+
+// A progress event from fenestrad as FormatProgress takes it.
+JobProgress FromProto(const v1::JobProgress& progress);
 
 // Prints the line: rewritten in place on a terminal, one line per update otherwise.
 void ShowProgress(const JobProgress& progress);

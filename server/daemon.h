@@ -11,12 +11,15 @@
 #include "server/outdoor_cache.h"
 #include "server/services.h"
 #include "server/site_manager.h"
+#include "server/upload_quota.h"
+#include "server/users.h"
 #include "server/work_queue.h"
 
 namespace fenestra {
 
-// fenestrad assembled: data directory, job store, outdoor cache, work queue, sites, jobs
-// and the gRPC server (SiteService, JobService, health checking, reflection).
+// fenestrad assembled: data directory, job store (with the users), outdoor cache, work
+// queue, sites, jobs and the gRPC server (SiteService, JobService, health checking, and
+// reflection with auth none), over TLS when configured.
 class Daemon {
  public:
   // Opens the data directory, recovers the stored sites and jobs, and starts serving on
@@ -38,6 +41,8 @@ class Daemon {
   std::unique_ptr<JobStore> store_;
   std::unique_ptr<OutdoorCache> cache_;
   std::unique_ptr<WorkQueue> queue_;
+  std::unique_ptr<UploadQuota> uploads_;
+  std::unique_ptr<Authenticator> auth_;
   std::unique_ptr<SiteManager> sites_;
   std::unique_ptr<JobManager> jobs_;
   std::unique_ptr<SiteServiceImpl> site_service_;

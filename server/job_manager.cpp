@@ -10,6 +10,7 @@
 #include "absl/strings/str_join.h"
 #include "core/optimize/job.h"
 #include "server/limits.h"
+#include "server/log_safe.h"
 
 namespace fenestra {
 namespace {
@@ -40,6 +41,11 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// The answer for an unknown job, and for another user's.
+absl::Status NoJob(const std::string& id) {
+  return absl::NotFoundError(absl::StrCat("no job '", id, "' (fenestra job list shows them)"));
+}
+
 }  // namespace
 
 bool IsTerminal(v1::JobState state) {
@@ -48,8 +54,13 @@ bool IsTerminal(v1::JobState state) {
 }
 
 JobManager::JobManager(const v1::DaemonConfig& config, JobStore& store, OutdoorCache& cache,
-                       WorkQueue& queue, SiteManager& sites)
-    : config_(config), store_(store), cache_(cache), queue_(queue), sites_(sites) {}
+                       WorkQueue& queue, SiteManager& sites, UploadQuota& uploads)
+    : config_(config),
+      store_(store),
+      cache_(cache),
+      queue_(queue),
+      sites_(sites),
+      uploads_(uploads) {}
 
 absl::Status JobManager::Recover() {
   absl::StatusOr<std::vector<JobStore::StoredJob>> stored = store_.LoadJobs();
@@ -60,6 +71,11 @@ absl::Status JobManager::Recover() {
     record->info = std::move(s.info);
     record->job = std::move(s.job);
     const std::string id = record->info.id();
+    if (record->info.owner().empty()) record->info.set_owner(kLocalUser);  // stored before owners
+    record->owner = record->info.owner();
+    if (!IsTerminal(record->info.state())) {
+      (void)uploads_.Reserve(record->info.owner(), record->info.upload_bytes(), /*force=*/true);
+    }
     if (record->info.state() == v1::JOB_STATE_RUNNING) {
       // The latest progress is in the event log only
       absl::StatusOr<std::vector<v1::JobEvent>> events = store_.LoadEvents(id);
@@ -87,42 +103,28 @@ absl::Status JobManager::Recover() {
 absl::Status JobManager::Queue(const std::shared_ptr<Record>& record, bool force) {
   std::weak_ptr<Record> weak = record;
   return queue_.Push(
-      record->info.id(),
+      record->info.id(), record->owner,
       [this, weak] {
         if (auto r = weak.lock()) Run(r);
       },
       /*is_job=*/true, force);
 }
 
-absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& request) {
+absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& request,
+                                               const Caller& caller) {
   if (shutting_down_) {
     return absl::UnavailableError("fenestrad is shutting down; submit the job when it is back");
   }
-  const v1::Limits& limits = config_.limits();
-  v1::Job job = request.job();
-
-  // Check the message itself and the limits before any work
-  if (!job.scene_file().empty()) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "job.scene_file '", job.scene_file(),
-        "' is a path on the client; send the scene inline in job.scene (fenestra job submit "
-        "does this)"));
-  }
-  if (!job.has_scene()) {
-    return absl::InvalidArgumentError("job.scene: is required (the scene, inline)");
-  }
-  if (absl::Status s = CheckInlineScene(job.scene()); !s.ok()) return s;
-  double min_slat_width_m = 0;
-  for (const v1::DesignVariable& v : job.variables()) {
-    if (v.name() == "width") min_slat_width_m = v.fixed() ? v.start() : v.lower();
-  }
-  if (absl::Status s = CheckSceneLimits(job.scene(), limits, min_slat_width_m); !s.ok()) return s;
-  if (absl::Status s = CheckBudgetLimits(job.budget(), limits); !s.ok()) return s;
+  // Everything checked before anything is stored
+  absl::StatusOr<CheckedJob> checked = CheckJobRequest(request, config_);
+  if (!checked.ok()) return checked.status();
+  v1::Job& job = checked->job;
+  const PreparedJob* prepared = &checked->prepared;
 
   // The site, and the weather file
   std::optional<SiteManager::ForJob> site;
   if (!request.site_id().empty()) {
-    absl::StatusOr<SiteManager::ForJob> found = sites_.Lookup(request.site_id());
+    absl::StatusOr<SiteManager::ForJob> found = sites_.Lookup(request.site_id(), caller);
     if (!found.ok()) return found.status();
     if (found->info.state() == v1::SITE_STATE_FAILED) {
       return absl::FailedPreconditionError(absl::StrCat(
@@ -130,39 +132,18 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
     }
     site = *std::move(found);
   }
-  std::string weather_path;
-  if (!request.weather_epw().empty()) {
-    absl::StatusOr<std::string> saved = SaveUploadedWeather(
-        (std::filesystem::path(config_.data_dir()) / "weather").string(), request.weather_epw());
-    if (!saved.ok()) return saved.status();
-    weather_path = *saved;
-  } else if (site && !site->weather_path.empty()) {
-    weather_path = site->weather_path;
-  } else if (!job.weather_file().empty() || !job.scene().site().weather_file().empty()) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "weather file '",
-        job.weather_file().empty() ? job.scene().site().weather_file() : job.weather_file(),
-        "' is a path on the client; send its content in weather_epw (fenestra job submit "
-        "does this)"));
-  } else {
+  if (request.weather_epw().empty() && !(site && !site->weather_path.empty())) {
+    if (!job.weather_file().empty() || !job.scene().site().weather_file().empty()) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "weather file '",
+          job.weather_file().empty() ? job.scene().site().weather_file() : job.weather_file(),
+          "' is a path on the client; send its content in weather_epw (fenestra job submit "
+          "does this)"));
+    }
     return absl::InvalidArgumentError(
         "the job has no weather file: send one in weather_epw, or give a site registered with "
         "one");
   }
-  job.set_weather_file(weather_path);
-  job.mutable_scene()->mutable_site()->clear_weather_file();
-  if (job.sampling().backend().empty()) {
-    job.mutable_sampling()->set_backend(
-        request.default_backend().empty() ? config_.backend() : request.default_backend());
-  }
-
-  // Sampling limits, then the full validation
-  absl::StatusOr<v1::Sampling> sampling = ResolveSampling(job.sampling());
-  if (!sampling.ok()) return sampling.status();
-  if (absl::Status s = CheckSamplingLimits(*sampling, limits, /*indoor=*/true); !s.ok()) return s;
-  absl::StatusOr<PreparedJob> prepared = PrepareJob(job, "");
-  if (!prepared.ok()) return prepared.status();
-  if (absl::Status s = CheckBudgetLimits(prepared->job.budget(), limits); !s.ok()) return s;
   const std::string key = OutdoorMatrixKey(prepared->scene, prepared->job.sampling());
   if (site && key != site->info.outdoor_key()) {
     return absl::InvalidArgumentError(absl::StrCat(
@@ -174,10 +155,31 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
         key.substr(0, 16), ", site key ", site->info.outdoor_key().substr(0, 16), ")"));
   }
 
+  // Its upload counts against its owner until it ends
+  const int64_t upload_bytes = static_cast<int64_t>(request.weather_epw().size());
+  if (absl::Status s = uploads_.Reserve(caller.name, upload_bytes); !s.ok()) return s;
+  std::string weather_path;
+  if (!request.weather_epw().empty()) {
+    absl::StatusOr<std::string> saved = SaveUploadedWeather(
+        (std::filesystem::path(config_.data_dir()) / "weather").string(), request.weather_epw());
+    if (!saved.ok()) {
+      uploads_.Release(caller.name, upload_bytes);
+      return saved.status();
+    }
+    weather_path = *saved;
+  } else {
+    weather_path = site->weather_path;
+  }
+  job.set_weather_file(weather_path);
+  job.mutable_scene()->mutable_site()->clear_weather_file();
+
   // Store and queue it
   auto record = std::make_shared<Record>();
   record->job = job;
+  record->owner = caller.name;
   v1::JobInfo& info = record->info;
+  info.set_owner(caller.name);
+  info.set_upload_bytes(upload_bytes);
   info.set_name(job.name().empty() ? prepared->scene.name : job.name());
   info.set_state(v1::JOB_STATE_QUEUED);
   info.set_site_id(request.site_id());
@@ -186,7 +188,10 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
   info.set_outdoor_key(key);
   info.set_backend(prepared->job.sampling().backend());
   absl::StatusOr<std::string> id = store_.InsertJob(info, job);
-  if (!id.ok()) return id.status();
+  if (!id.ok()) {
+    uploads_.Release(caller.name, upload_bytes);
+    return id.status();
+  }
   {
     std::lock_guard lock(mutex_);
     order_.push_back(*id);
@@ -202,16 +207,17 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
     if (absl::Status d = store_.DeleteJob(*id); !d.ok()) {
       spdlog::error("job {}: cannot remove it from the store: {}", *id, d.ToString());
     }
+    uploads_.Release(caller.name, upload_bytes);
     return s;
   }
   v1::JobEvent event;
   event.set_queued(std::max(0, queue_.Position(*id)));
   Emit(*record, event);
-  spdlog::info("job {} queued ({}): {} evaluations at most, {} indoor paths per sensor{}", *id,
-               info.name(), prepared->job.budget().max_evaluations(),
+  spdlog::info("job {} queued by {} (\"{}\"): {} evaluations at most, {} indoor paths per sensor{}",
+               *id, caller.name, LogSafe(info.name()), prepared->job.budget().max_evaluations(),
                prepared->job.sampling().indoor_paths_per_sensor(),
                site ? absl::StrCat(", site ", request.site_id()) : "");
-  return InfoOf(*record);
+  return InfoOf(*record, caller);
 }
 
 void JobManager::Run(const std::shared_ptr<Record>& shared) {
@@ -237,7 +243,7 @@ void JobManager::Run(const std::shared_ptr<Record>& shared) {
     Emit(r, event);
     Save(r);
     job = r.job;
-    spdlog::info("job {} running ({})", r.info.id(), r.info.name());
+    spdlog::info("job {} running (\"{}\")", r.info.id(), LogSafe(r.info.name()));
   }
   try {
     absl::StatusOr<PreparedJob> prepared = PrepareJob(job, "");
@@ -357,6 +363,7 @@ void JobManager::Finish(Record& r, v1::JobState state, const v1::JobResult* resu
   }
   Emit(r, event);
   Save(r);
+  uploads_.Release(r.info.owner(), r.info.upload_bytes());
   const std::string& id = r.info.id();
   const std::string best =
       result && result->evaluations() > 0
@@ -382,7 +389,7 @@ void JobManager::Finish(Record& r, v1::JobState state, const v1::JobResult* resu
       spdlog::info("job {} interrupted by the shutdown{}", id, best);
       break;
     default:
-      spdlog::warn("job {} failed: {}", id, error);
+      spdlog::warn("job {} failed: {}", id, LogSafe(error));
   }
   if (result && result->final_check().disagrees()) {
     const v1::Estimate& d = result->final_check().difference();
@@ -412,8 +419,8 @@ void JobManager::Save(const Record& r) {
   }
 }
 
-v1::JobInfo JobManager::InfoOf(const Record& r) const {
-  v1::JobInfo info = r.info;
+v1::JobInfo JobManager::InfoOf(const Record& r, const Caller& caller) const {
+  v1::JobInfo info = ForCaller(r.info, caller);
   if (info.state() == v1::JOB_STATE_QUEUED) {
     info.set_queue_position(std::max(0, queue_.Position(info.id())));
   }
@@ -421,59 +428,63 @@ v1::JobInfo JobManager::InfoOf(const Record& r) const {
   return info;
 }
 
-std::shared_ptr<JobManager::Record> JobManager::Find(const std::string& id) const {
+std::shared_ptr<JobManager::Record> JobManager::Find(const std::string& id,
+                                                     const Caller& caller) const {
   std::lock_guard lock(mutex_);
   auto it = jobs_.find(id);
-  return it == jobs_.end() ? nullptr : it->second;
+  if (it == jobs_.end() || !caller.Owns(it->second->owner)) return nullptr;
+  return it->second;
 }
 
-absl::StatusOr<v1::JobInfo> JobManager::Get(const std::string& id) const {
-  std::shared_ptr<Record> r = Find(id);
-  if (!r)
-    return absl::NotFoundError(absl::StrCat("no job '", id, "' (fenestra job list shows them)"));
+absl::StatusOr<v1::JobInfo> JobManager::Get(const std::string& id, const Caller& caller) const {
+  std::shared_ptr<Record> r = Find(id, caller);
+  if (!r) return NoJob(id);
   std::lock_guard lock(r->mutex);
-  return InfoOf(*r);
+  return InfoOf(*r, caller);
 }
 
-std::vector<v1::JobInfo> JobManager::List(v1::JobState state, int limit) const {
+std::vector<v1::JobInfo> JobManager::List(v1::JobState state, int limit,
+                                          const Caller& caller) const {
   if (limit <= 0) limit = 100;
   std::vector<std::shared_ptr<Record>> records;
   {
     std::lock_guard lock(mutex_);
-    for (auto it = order_.rbegin(); it != order_.rend(); ++it) records.push_back(jobs_.at(*it));
+    for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
+      const std::shared_ptr<Record>& r = jobs_.at(*it);
+      if (caller.Owns(r->owner)) records.push_back(r);
+    }
   }
   std::vector<v1::JobInfo> jobs;
   for (const auto& r : records) {
     if (static_cast<int>(jobs.size()) >= limit) break;
     std::lock_guard lock(r->mutex);
     if (state != v1::JOB_STATE_UNSPECIFIED && r->info.state() != state) continue;
-    jobs.push_back(InfoOf(*r));
+    jobs.push_back(InfoOf(*r, caller));
     jobs.back().clear_result();
   }
   return jobs;
 }
 
-absl::StatusOr<v1::JobInfo> JobManager::Cancel(const std::string& id) {
-  std::shared_ptr<Record> r = Find(id);
-  if (!r)
-    return absl::NotFoundError(absl::StrCat("no job '", id, "' (fenestra job list shows them)"));
+absl::StatusOr<v1::JobInfo> JobManager::Cancel(const std::string& id, const Caller& caller) {
+  std::shared_ptr<Record> r = Find(id, caller);
+  if (!r) return NoJob(id);
   std::lock_guard lock(r->mutex);
-  if (IsTerminal(r->info.state())) return InfoOf(*r);
+  if (IsTerminal(r->info.state())) return InfoOf(*r, caller);
   r->cancel_requested = true;
   if (r->info.state() == v1::JOB_STATE_QUEUED && queue_.Remove(id)) {
     Finish(*r, v1::JOB_STATE_CANCELLED, nullptr, "");
   } else {
-    spdlog::info("job {}: cancel requested; it stops at its next checkpoint", id);
+    spdlog::info("job {}: cancel requested by {}; it stops at its next checkpoint", id,
+                 caller.name);
   }
-  return InfoOf(*r);
+  return InfoOf(*r, caller);
 }
 
-absl::Status JobManager::Watch(const std::string& id,
+absl::Status JobManager::Watch(const std::string& id, const Caller& caller,
                                const std::function<bool(const v1::JobEvent&)>& write,
                                const std::function<bool()>& client_gone) {
-  std::shared_ptr<Record> r = Find(id);
-  if (!r)
-    return absl::NotFoundError(absl::StrCat("no job '", id, "' (fenestra job list shows them)"));
+  std::shared_ptr<Record> r = Find(id, caller);
+  if (!r) return NoJob(id);
   bool resend_snapshot = true;
   int64_t sent = 0;
   while (true) {
@@ -491,7 +502,7 @@ absl::Status JobManager::Watch(const std::string& id,
       }
       if (resend_snapshot) {
         v1::JobEvent snapshot;
-        *snapshot.mutable_snapshot() = InfoOf(*r);
+        *snapshot.mutable_snapshot() = InfoOf(*r, caller);
         snapshot.set_sequence(r->info.last_sequence());
         snapshot.set_time_unix_ms(NowUnixMs());
         pending.push_back(std::move(snapshot));

@@ -17,6 +17,8 @@
 #include "server/job_store.h"
 #include "server/outdoor_cache.h"
 #include "server/site_manager.h"
+#include "server/upload_quota.h"
+#include "server/users.h"
 #include "server/work_queue.h"
 
 namespace fenestra {
@@ -26,27 +28,32 @@ bool IsTerminal(v1::JobState state);
 
 // The jobs: validated and stored at submission, run by work queue tasks (outdoor matrix
 // from the cache or traced, then RunJob), their events kept in the store and fanned out to
-// watchers.
+// watchers. Each job belongs to the user who submitted it: to everyone else
+// (administrators aside) it does not exist, and its id answers NotFound exactly as an
+// unknown id.
 class JobManager {
  public:
   JobManager(const v1::DaemonConfig& config, JobStore& store, OutdoorCache& cache, WorkQueue& queue,
-             SiteManager& sites);
+             SiteManager& sites, UploadQuota& uploads);
 
   // Loads the stored jobs: those that were running are marked failed ("daemon stopped
   // while running"), queued ones are queued again in their order.
   absl::Status Recover();
 
-  // See JobService.Submit.
-  absl::StatusOr<v1::JobInfo> Submit(const v1::SubmitJobRequest& request);
-  // A job with its result; NotFound when unknown.
-  absl::StatusOr<v1::JobInfo> Get(const std::string& id) const;
-  // Newest first, results left out; `state` UNSPECIFIED = all; `limit` 0 = 100.
-  std::vector<v1::JobInfo> List(v1::JobState state, int limit) const;
-  // See JobService.Cancel.
-  absl::StatusOr<v1::JobInfo> Cancel(const std::string& id);
+  // Submits a job of `caller` (see JobService.Submit).
+  absl::StatusOr<v1::JobInfo> Submit(const v1::SubmitJobRequest& request, const Caller& caller);
+  // A job with its result; NotFound when unknown or not the caller's.
+  absl::StatusOr<v1::JobInfo> Get(const std::string& id, const Caller& caller) const;
+  // The caller's jobs (an administrator's: all), newest first, results left out; `state`
+  // UNSPECIFIED = all; `limit` 0 = 100.
+  std::vector<v1::JobInfo> List(v1::JobState state, int limit, const Caller& caller) const;
+  // See JobService.Cancel; NotFound when unknown or not the caller's.
+  absl::StatusOr<v1::JobInfo> Cancel(const std::string& id, const Caller& caller);
   // Sends a snapshot, then every later event until the job ends, `write` fails or
-  // `client_gone` turns true. Unavailable when the daemon stops before the job ends.
-  absl::Status Watch(const std::string& id, const std::function<bool(const v1::JobEvent&)>& write,
+  // `client_gone` turns true. NotFound when unknown or not the caller's; Unavailable when
+  // the daemon stops before the job ends.
+  absl::Status Watch(const std::string& id, const Caller& caller,
+                     const std::function<bool(const v1::JobEvent&)>& write,
                      const std::function<bool()>& client_gone);
 
   // The shutdown sequence: refuse new jobs; let running jobs go on for up to
@@ -58,21 +65,24 @@ class JobManager {
   struct Record {
     mutable std::mutex mutex;
     std::condition_variable changed;
+    std::string owner;  // info.owner, set before the record is shared and never changed
     v1::JobInfo info;
     v1::Job job;                      // as submitted, weather file resolved on the server
     std::deque<v1::JobEvent> events;  // the latest events, for watchers
     std::atomic<bool> cancel_requested{false};
   };
-  std::shared_ptr<Record> Find(const std::string& id) const;
+  // The job `id` if `caller` may see it, else null.
+  std::shared_ptr<Record> Find(const std::string& id, const Caller& caller) const;
   // Numbers and records an event (the record's mutex held), and wakes the watchers.
   void Emit(Record& record, v1::JobEvent event);
   // Stores the record's JobInfo (its mutex held).
   void Save(const Record& record);
-  // A job's info with its queue position (its mutex held).
-  v1::JobInfo InfoOf(const Record& record) const;
+  // A job's info with its queue position, as `caller` may see it (its mutex held).
+  v1::JobInfo InfoOf(const Record& record, const Caller& caller) const;
   // The work queue task of a job.
   void Run(const std::shared_ptr<Record>& record);
-  // Marks a job ended (its mutex held): state, time, final event, log line.
+  // Marks a job ended (its mutex held): state, time, final event, log line; its upload
+  // no longer counts against its owner.
   void Finish(Record& record, v1::JobState state, const v1::JobResult* result,
               const std::string& error);
   absl::Status Queue(const std::shared_ptr<Record>& record, bool force);
@@ -82,6 +92,7 @@ class JobManager {
   OutdoorCache& cache_;
   WorkQueue& queue_;
   SiteManager& sites_;
+  UploadQuota& uploads_;
   std::atomic<bool> shutting_down_{false};
   std::atomic<bool> interrupted_{false};
   std::atomic<bool> closing_{false};

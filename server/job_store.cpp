@@ -80,6 +80,9 @@ absl::StatusOr<std::unique_ptr<JobStore>> JobStore::Open(const std::string& path
            "NULL, event BLOB NOT NULL, PRIMARY KEY (job_id, sequence))",
            "CREATE TABLE IF NOT EXISTS sites (number INTEGER PRIMARY KEY AUTOINCREMENT, "
            "id TEXT UNIQUE, info BLOB NOT NULL, weather_path TEXT NOT NULL)",
+           "CREATE TABLE IF NOT EXISTS users (number INTEGER PRIMARY KEY AUTOINCREMENT, "
+           "name TEXT UNIQUE NOT NULL, token_sha256 BLOB NOT NULL, admin INTEGER NOT NULL, "
+           "created_unix_ms INTEGER NOT NULL, revoked_unix_ms INTEGER NOT NULL DEFAULT 0)",
        }) {
     if (absl::Status s = store->Exec(sql); !s.ok()) {
       return absl::InternalError(absl::StrCat(path, ": ", s.message()));
@@ -223,6 +226,50 @@ absl::StatusOr<std::vector<JobStore::StoredSite>> JobStore::LoadSites() {
   }
   if (rc != SQLITE_DONE) return select.Error();
   return sites;
+}
+
+absl::Status JobStore::InsertUser(const UserRecord& user) {
+  std::lock_guard lock(mutex_);
+  Statement insert(db_,
+                   "INSERT INTO users (name, token_sha256, admin, created_unix_ms, "
+                   "revoked_unix_ms) VALUES (?, ?, ?, ?, ?)");
+  const int rc = insert.BindText(1, user.name)
+                     .Bind(2, user.token_sha256)
+                     .Bind(3, int64_t{user.admin})
+                     .Bind(4, user.created_unix_ms)
+                     .Bind(5, user.revoked_unix_ms)
+                     .Step();
+  if (rc == SQLITE_CONSTRAINT) {
+    return absl::AlreadyExistsError(absl::StrCat("user '", user.name, "' exists"));
+  }
+  return rc == SQLITE_DONE ? absl::OkStatus() : insert.Error();
+}
+
+absl::StatusOr<std::vector<UserRecord>> JobStore::LoadUsers() {
+  std::lock_guard lock(mutex_);
+  std::vector<UserRecord> users;
+  Statement select(db_,
+                   "SELECT name, token_sha256, admin, created_unix_ms, revoked_unix_ms FROM users "
+                   "ORDER BY number");
+  int rc;
+  while ((rc = select.Step()) == SQLITE_ROW) {
+    users.push_back(UserRecord{select.Blob(0), select.Blob(1), select.Int(2) != 0, select.Int(3),
+                               select.Int(4)});
+  }
+  if (rc != SQLITE_DONE) return select.Error();
+  return users;
+}
+
+absl::Status JobStore::RevokeUser(const std::string& name, int64_t unix_ms) {
+  std::lock_guard lock(mutex_);
+  Statement update(db_,
+                   "UPDATE users SET revoked_unix_ms = CASE WHEN revoked_unix_ms = 0 THEN ? ELSE "
+                   "revoked_unix_ms END WHERE name = ?");
+  if (absl::Status s = update.Bind(1, unix_ms).BindText(2, name).Run(); !s.ok()) return s;
+  if (sqlite3_changes(db_) == 0) {
+    return absl::NotFoundError(absl::StrCat("no user '", name, "'"));
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace fenestra

@@ -14,14 +14,37 @@ struct sqlite3;
 
 namespace fenestra {
 
+// A user of the daemon as stored; the token only as its SHA-256.
+struct UserRecord {
+  std::string name;
+  std::string token_sha256;  // 32 raw bytes
+  bool admin = false;
+  int64_t created_unix_ms = 0;
+  int64_t revoked_unix_ms = 0;  // 0 while the token is valid
+};
+
+// Where the users live. JobStore keeps them in its SQLite file; the interface lets
+// another database take them over.
+class UserStore {
+ public:
+  virtual ~UserStore() = default;
+  // Stores a new user; AlreadyExists when the name is taken (revoked users included).
+  virtual absl::Status InsertUser(const UserRecord& user) = 0;
+  // Every user, revoked ones included, oldest first.
+  virtual absl::StatusOr<std::vector<UserRecord>> LoadUsers() = 0;
+  // Marks a user's token revoked at `unix_ms` (a revoked user keeps its first time);
+  // NotFound when there is no such user.
+  virtual absl::Status RevokeUser(const std::string& name, int64_t unix_ms) = 0;
+};
+
 // The daemon's persistent state in one SQLite file (WAL journal): jobs (their submitted
-// form and latest JobInfo, result included), every job event in order, and sites.
+// form and latest JobInfo, result included), every job event in order, sites and users.
 // Thread-safe.
-class JobStore {
+class JobStore final : public UserStore {
  public:
   // Opens or creates the database at `path` and its tables.
   static absl::StatusOr<std::unique_ptr<JobStore>> Open(const std::string& path);
-  ~JobStore();
+  ~JobStore() override;
   JobStore(const JobStore&) = delete;
   JobStore& operator=(const JobStore&) = delete;
 
@@ -55,6 +78,11 @@ class JobStore {
   };
   // Every site, oldest first.
   absl::StatusOr<std::vector<StoredSite>> LoadSites();
+
+  // UserStore
+  absl::Status InsertUser(const UserRecord& user) override;
+  absl::StatusOr<std::vector<UserRecord>> LoadUsers() override;
+  absl::Status RevokeUser(const std::string& name, int64_t unix_ms) override;
 
  private:
   explicit JobStore(sqlite3* db) : db_(db) {}

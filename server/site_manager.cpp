@@ -12,6 +12,7 @@
 #include "core/optimize/job.h"
 #include "server/checksum.h"
 #include "server/limits.h"
+#include "server/log_safe.h"
 
 namespace fenestra {
 
@@ -47,11 +48,16 @@ int64_t OutdoorTriangles(const Scene& scene) {
   return std::count(scene.fixed.side.begin(), scene.fixed.side.end(), Side::kOutdoor);
 }
 
+// The answer for an unknown site, and for another user's.
+absl::Status NoSite(const std::string& id) {
+  return absl::NotFoundError(absl::StrCat("no site '", id, "' (fenestra site list shows them)"));
+}
+
 }  // namespace
 
 SiteManager::SiteManager(const v1::DaemonConfig& config, JobStore& store, OutdoorCache& cache,
-                         WorkQueue& queue)
-    : config_(config), store_(store), cache_(cache), queue_(queue) {}
+                         WorkQueue& queue, UploadQuota& uploads)
+    : config_(config), store_(store), cache_(cache), queue_(queue), uploads_(uploads) {}
 
 absl::Status SiteManager::Recover() {
   absl::StatusOr<std::vector<JobStore::StoredSite>> stored = store_.LoadSites();
@@ -62,6 +68,8 @@ absl::Status SiteManager::Recover() {
     for (JobStore::StoredSite& s : *stored) {
       v1::SiteInfo& info = s.info;
       const std::string id = info.id();
+      if (info.owner().empty()) info.set_owner(kLocalUser);  // stored before owners
+      (void)uploads_.Reserve(info.owner(), info.upload_bytes(), /*force=*/true);
       if (info.state() == v1::SITE_STATE_READY) {
         if (cache_.Find(info.outdoor_key())) {
           info.set_loaded_from_disk(cache_.LoadedFromDisk(info.outdoor_key()));
@@ -84,53 +92,66 @@ absl::Status SiteManager::Recover() {
     }
   }
   for (const std::string& id : to_compute) {
+    std::string owner;
     {
       std::lock_guard lock(mutex_);
       if (absl::Status s = store_.UpdateSite(sites_[id].info); !s.ok()) return s;
+      owner = sites_[id].info.owner();
     }
-    if (absl::Status s = QueueCompute(id); !s.ok()) return s;
+    if (absl::Status s = QueueCompute(id, owner); !s.ok()) return s;
   }
   return absl::OkStatus();
 }
 
-absl::StatusOr<v1::SiteInfo> SiteManager::Register(const v1::RegisterSiteRequest& request) {
+absl::Status SiteManager::CheckSiteCount(const std::string& owner) const {
+  const v1::Limits& limits = config_.limits();
+  if (static_cast<int>(sites_.size()) >= limits.max_sites()) {
+    return absl::ResourceExhaustedError(
+        absl::StrCat("this server holds ", sites_.size(),
+                     " sites, its limit max_sites; delete one first (fenestra site rm)"));
+  }
+  const auto owned = std::count_if(sites_.begin(), sites_.end(), [&](const auto& site) {
+    return site.second.info.owner() == owner;
+  });
+  if (owned >= limits.max_sites_per_user()) {
+    return absl::ResourceExhaustedError(
+        absl::StrCat("limits.max_sites_per_user (", limits.max_sites_per_user(),
+                     ") reached: you have ", owned, " sites; delete one first (fenestra site rm)"));
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<v1::SiteInfo> SiteManager::Register(const v1::RegisterSiteRequest& request,
+                                                   const Caller& caller) {
   if (shutting_down_) {
     return absl::UnavailableError("fenestrad is shutting down; register the site when it is back");
   }
-  const v1::Limits& limits = config_.limits();
   {
     std::lock_guard lock(mutex_);
-    if (static_cast<int>(sites_.size()) >= limits.max_sites()) {
-      return absl::ResourceExhaustedError(
-          absl::StrCat("this server holds ", sites_.size(),
-                       " sites, its limit max_sites; delete one first (fenestra site rm)"));
-    }
+    if (absl::Status s = CheckSiteCount(caller.name); !s.ok()) return s;
   }
-  if (!request.has_scene()) return absl::InvalidArgumentError("scene: is required");
-  if (absl::Status s = CheckInlineScene(request.scene()); !s.ok()) return s;
-  if (absl::Status s = CheckSceneLimits(request.scene(), limits); !s.ok()) return s;
+  // Everything checked before anything is stored
+  absl::StatusOr<CheckedSite> checked = CheckSiteRequest(request, config_);
+  if (!checked.ok()) return checked.status();
+  const Scene* scene = &checked->scene;
+  const v1::Sampling* resolved = &checked->sampling;
 
-  v1::Sampling sampling = request.sampling();
-  if (sampling.backend().empty()) sampling.set_backend(config_.backend());
-  absl::StatusOr<v1::Sampling> resolved = ResolveSampling(sampling);
-  if (!resolved.ok()) return resolved.status();
-  if (absl::Status s = CheckSamplingLimits(*resolved, limits, /*indoor=*/false); !s.ok()) {
-    return s;
-  }
-  v1::Scene scene_proto = request.scene();
-  scene_proto.mutable_site()->clear_weather_file();
-  absl::StatusOr<Scene> scene = BuildScene(scene_proto, "scene");
-  if (!scene.ok()) return scene.status();
-
+  const int64_t upload_bytes = static_cast<int64_t>(request.weather_epw().size());
+  if (absl::Status s = uploads_.Reserve(caller.name, upload_bytes); !s.ok()) return s;
   std::string weather_path;
   if (!request.weather_epw().empty()) {
     absl::StatusOr<std::string> saved = SaveUploadedWeather(
         (std::filesystem::path(config_.data_dir()) / "weather").string(), request.weather_epw());
-    if (!saved.ok()) return saved.status();
+    if (!saved.ok()) {
+      uploads_.Release(caller.name, upload_bytes);
+      return saved.status();
+    }
     weather_path = *saved;
   }
 
   v1::SiteInfo info;
+  info.set_owner(caller.name);
+  info.set_upload_bytes(upload_bytes);
   info.set_name(request.name().empty() ? scene->name : request.name());
   info.set_outdoor_key(OutdoorMatrixKey(*scene, *resolved));
   *info.mutable_sampling() = *resolved;
@@ -152,26 +173,32 @@ absl::StatusOr<v1::SiteInfo> SiteManager::Register(const v1::RegisterSiteRequest
     info.set_state(v1::SITE_STATE_COMPUTING);
   }
   {
+    // Counted again: other registrations may have come in meanwhile
     std::lock_guard lock(mutex_);
-    absl::StatusOr<std::string> id = store_.InsertSite(info, weather_path);
-    if (!id.ok()) return id.status();
+    absl::Status counted = CheckSiteCount(caller.name);
+    absl::StatusOr<std::string> id = counted.ok() ? store_.InsertSite(info, weather_path) : counted;
+    if (!id.ok()) {
+      uploads_.Release(caller.name, upload_bytes);
+      return id.status();
+    }
     order_.push_back(*id);
     sites_[*id] = Site{info, weather_path};
   }
-  spdlog::info("site {} registered ({}): {} outdoor triangles, {} outdoor paths, key {}; {}",
-               info.id(), info.name(), info.outdoor_triangles(), resolved->outdoor_paths(),
-               info.outdoor_key().substr(0, 16),
-               cached ? "outdoor matrix already cached" : "outdoor matrix queued");
+  spdlog::info(
+      "site {} registered by {} (\"{}\"): {} outdoor triangles, {} outdoor paths, key {}; {}",
+      info.id(), caller.name, LogSafe(info.name()), info.outdoor_triangles(),
+      resolved->outdoor_paths(), info.outdoor_key().substr(0, 16),
+      cached ? "outdoor matrix already cached" : "outdoor matrix queued");
   if (!cached) {
-    if (absl::Status s = QueueCompute(info.id()); !s.ok()) return s;
+    if (absl::Status s = QueueCompute(info.id(), caller.name); !s.ok()) return s;
   }
   info.clear_scene();
-  return info;
+  return ForCaller(std::move(info), caller);
 }
 
-absl::Status SiteManager::QueueCompute(const std::string& id) {
+absl::Status SiteManager::QueueCompute(const std::string& id, const std::string& owner) {
   return queue_.Push(
-      id, [this, id] { Compute(id); }, /*is_job=*/false);
+      id, owner, [this, id] { Compute(id); }, /*is_job=*/false);
 }
 
 void SiteManager::Compute(const std::string& id) {
@@ -238,55 +265,54 @@ void SiteManager::Compute(const std::string& id) {
   } else {
     site.set_state(v1::SITE_STATE_FAILED);
     site.set_error(std::string(lookup.status().message()));
-    spdlog::warn("site {} failed: {}", id, site.error());
+    spdlog::warn("site {} failed: {}", id, LogSafe(site.error()));
   }
   if (absl::Status s = store_.UpdateSite(site); !s.ok()) {
     spdlog::error("site {}: cannot store its state: {}", id, s.ToString());
   }
 }
 
-absl::StatusOr<v1::SiteInfo> SiteManager::Get(const std::string& id, bool with_scene) const {
+absl::StatusOr<v1::SiteInfo> SiteManager::Get(const std::string& id, const Caller& caller,
+                                              bool with_scene) const {
   std::lock_guard lock(mutex_);
   auto it = sites_.find(id);
-  if (it == sites_.end()) {
-    return absl::NotFoundError(absl::StrCat("no site '", id, "' (fenestra site list shows them)"));
-  }
-  v1::SiteInfo info = it->second.info;
+  if (it == sites_.end() || !caller.Owns(it->second.info.owner())) return NoSite(id);
+  v1::SiteInfo info = ForCaller(it->second.info, caller);
   if (!with_scene) info.clear_scene();
   return info;
 }
 
-std::vector<v1::SiteInfo> SiteManager::List() const {
+std::vector<v1::SiteInfo> SiteManager::List(const Caller& caller) const {
   std::lock_guard lock(mutex_);
   std::vector<v1::SiteInfo> sites;
   for (const std::string& id : order_) {
-    sites.push_back(sites_.at(id).info);
+    const v1::SiteInfo& info = sites_.at(id).info;
+    if (!caller.Owns(info.owner())) continue;
+    sites.push_back(ForCaller(info, caller));
     sites.back().clear_scene();
   }
   return sites;
 }
 
-absl::Status SiteManager::Delete(const std::string& id) {
+absl::Status SiteManager::Delete(const std::string& id, const Caller& caller) {
   std::lock_guard lock(mutex_);
   auto it = sites_.find(id);
-  if (it == sites_.end()) {
-    return absl::NotFoundError(absl::StrCat("no site '", id, "' (fenestra site list shows them)"));
-  }
+  if (it == sites_.end() || !caller.Owns(it->second.info.owner())) return NoSite(id);
   if (absl::Status s = store_.DeleteSite(id); !s.ok()) return s;
   it->second.deleted->store(true);
   queue_.Remove(id);
+  uploads_.Release(it->second.info.owner(), it->second.info.upload_bytes());
   sites_.erase(it);
   order_.erase(std::find(order_.begin(), order_.end(), id));
-  spdlog::info("site {} deleted", id);
+  spdlog::info("site {} deleted by {}", id, caller.name);
   return absl::OkStatus();
 }
 
-absl::StatusOr<SiteManager::ForJob> SiteManager::Lookup(const std::string& id) const {
+absl::StatusOr<SiteManager::ForJob> SiteManager::Lookup(const std::string& id,
+                                                        const Caller& caller) const {
   std::lock_guard lock(mutex_);
   auto it = sites_.find(id);
-  if (it == sites_.end()) {
-    return absl::NotFoundError(absl::StrCat("no site '", id, "' (fenestra site list shows them)"));
-  }
+  if (it == sites_.end() || !caller.Owns(it->second.info.owner())) return NoSite(id);
   ForJob site{it->second.info, it->second.weather_path};
   site.info.clear_scene();
   return site;

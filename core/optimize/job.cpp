@@ -5,8 +5,6 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
-#include <numbers>
-#include <set>
 #include <span>
 
 #include "absl/strings/str_cat.h"
@@ -18,6 +16,7 @@
 #include "core/metrics/illuminance.h"
 #include "core/metrics/metric_errors.h"
 #include "core/metrics/occupancy.h"
+#include "core/optimize/design_variables.h"
 #include "core/optimize/final_check.h"
 #include "core/optimize/metric_objective.h"
 #include "core/optimize/vns.h"
@@ -29,38 +28,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Whether a job checks its best design by the one-stage method when its sampling does not say.
-constexpr bool kFinalCheckByDefault = true;
-
 double Since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 absl::Status Invalid(const std::string& field, const std::string& reason) {
   return absl::InvalidArgumentError(absl::StrCat("job ", field, ": ", reason));
-}
-
-// The blind variables a job may set, with their physical limits.
-struct VariableInfo {
-  const char* name;
-  double lowest;
-  double highest;
-  double BlindDesign::*field;
-  ParameterRange BlindSpec::*range;
-};
-constexpr VariableInfo kVariables[] = {
-    {"alpha", -std::numbers::pi / 2, std::numbers::pi / 2, &BlindDesign::tilt_rad,
-     &BlindSpec::tilt_rad},
-    {"width", 1e-6, 1e3, &BlindDesign::slat_width_m, &BlindSpec::slat_width_m},
-    {"spacing", 0, 1e3, &BlindDesign::slat_spacing_m, &BlindSpec::slat_spacing_m},
-    {"thickness", 1e-6, 1e3, &BlindDesign::slat_thickness_m, &BlindSpec::slat_thickness_m},
-};
-
-const VariableInfo* FindVariable(const std::string& name) {
-  for (const VariableInfo& v : kVariables) {
-    if (name == v.name) return &v;
-  }
-  return nullptr;
 }
 
 absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric) {
@@ -85,83 +58,10 @@ absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric) {
   }
 }
 
-absl::Status ValidateVariables(const v1::Job& job, const Scene& scene) {
-  if (job.variables_size() > 0 && !scene.blind) {
-    return Invalid("variables", "the scene has no blind to design");
-  }
-  std::set<std::string> seen;
-  for (int i = 0; i < job.variables_size(); ++i) {
-    const v1::DesignVariable& v = job.variables(i);
-    const std::string field = absl::StrCat("variables[", i, "]");
-    const VariableInfo* info = FindVariable(v.name());
-    if (!info) {
-      return Invalid(field + ".name", absl::StrCat("unknown design variable '", v.name(),
-                                                   "' (known: alpha, width, spacing, thickness)"));
-    }
-    if (!seen.insert(v.name()).second) {
-      return Invalid(field + ".name", absl::StrCat("variable '", v.name(), "' given twice"));
-    }
-    for (double x : {v.lower(), v.upper(), v.start(), v.step()}) {
-      if (!std::isfinite(x)) return Invalid(field, "lower, upper, start and step must be finite");
-    }
-    if (v.lower() > v.upper()) {
-      return Invalid(field,
-                     absl::StrCat("empty design range: lower ", v.lower(), " > upper ", v.upper()));
-    }
-    if (v.start() < v.lower() || v.start() > v.upper()) {
-      return Invalid(field + ".start", absl::StrCat("start ", v.start(), " is outside [", v.lower(),
-                                                    ", ", v.upper(), "]"));
-    }
-    if (v.lower() < info->lowest || v.upper() > info->highest) {
-      return Invalid(field, absl::StrCat(v.name(), " must stay within [", info->lowest, ", ",
-                                         info->highest, "]"));
-    }
-    if (v.step() < 0) return Invalid(field + ".step", "must be >= 0");
-  }
-  return absl::OkStatus();
-}
-
-absl::Status FillDefaults(v1::Job& job) {
-  v1::Budget& budget = *job.mutable_budget();
-  if (budget.max_evaluations() == 0) budget.set_max_evaluations(150);
-  if (budget.max_evaluations() < 1) return Invalid("budget.max_evaluations", "must be >= 1");
-  if (!(budget.max_seconds() >= 0)) return Invalid("budget.max_seconds", "must be >= 0");
-  if (budget.failed_cycles_to_stop() == 0) budget.set_failed_cycles_to_stop(10);
-  if (budget.failed_cycles_to_stop() < -1) {
-    return Invalid("budget.failed_cycles_to_stop", "must be >= -1");
-  }
-  FENESTRA_ASSIGN_OR_RETURN(sampling, ResolveSampling(job.sampling()));
-  *job.mutable_sampling() = sampling;
-
-  v1::MetricSettings& m = *job.mutable_metrics();
-  if (m.udi_lower_lux() == 0) m.set_udi_lower_lux(100);
-  if (m.udi_upper_lux() == 0) m.set_udi_upper_lux(3000);
-  if (m.da_threshold_lux() == 0) m.set_da_threshold_lux(300);
-  if (m.sda_time_fraction_percent() == 0) m.set_sda_time_fraction_percent(50);
-  if (m.occupied_start_h() == 0 && m.occupied_end_h() == 0) {
-    m.set_occupied_start_h(8);
-    m.set_occupied_end_h(18);
-  }
-  if (!(m.udi_lower_lux() >= 0 && m.udi_lower_lux() < m.udi_upper_lux())) {
-    return Invalid("metrics", "need 0 <= udi_lower_lux < udi_upper_lux");
-  }
-  for (int i = 0; i < job.neighborhoods_size(); ++i) {
-    const v1::Neighborhood& n = job.neighborhoods(i);
-    if (n.variables() < 0 || !(n.radius() > 0 && n.radius() <= 1)) {
-      return Invalid(absl::StrCat("neighborhoods[", i, "]"),
-                     "needs variables >= 0 and radius in (0, 1]");
-    }
-  }
-  if (job.objective().goal() == v1::GOAL_TARGET && !std::isfinite(job.objective().target())) {
-    return Invalid("objective.target", "must be finite");
-  }
-  return ToSceneMetric(job.objective().metric()).status();
-}
-
 BlindDesign DesignAt(const PreparedJob& job, const std::vector<double>& x) {
   BlindDesign design = DefaultDesign(job.scene);
   for (int i = 0; i < job.job.variables_size(); ++i) {
-    design.*(FindVariable(job.job.variables(i).name())->field) = x[i];
+    design.*(FindDesignVariable(job.job.variables(i).name())->field) = x[i];
   }
   return design;
 }
@@ -236,10 +136,9 @@ struct AnnualSetting {
 absl::StatusOr<AnnualSetting> MakeAnnualSetting(const PreparedJob& job) {
   const v1::MetricSettings& m = job.job.metrics();
   AnnualSetting setting;
-  FENESTRA_ASSIGN_OR_RETURN(weather, ReadEpw(job.weather_file));
   SkyMatrixOptions sky_options;
   sky_options.ground_reflectance = job.scene.site.ground_reflectance;
-  FENESTRA_ASSIGN_OR_RETURN(sky, BuildSkyMatrix(weather, sky_options));
+  FENESTRA_ASSIGN_OR_RETURN(sky, BuildSkyMatrix(job.weather, sky_options));
   setting.sky = std::move(sky);
   std::vector<double> hours;
   for (const SkyStep& step : setting.sky.steps) hours.push_back(step.hour);
@@ -325,87 +224,19 @@ absl::StatusOr<v1::Job> ReadJobFile(const std::string& path) {
   return job;
 }
 
-absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
-  v1::Sampling s = given;
-  if (s.outdoor_paths() == 0) s.set_outdoor_paths(20'000'000);
-  if (s.outdoor_bounces() == 0) s.set_outdoor_bounces(30);
-  if (s.indoor_paths_per_sensor() == 0) s.set_indoor_paths_per_sensor(200'000);
-  if (s.indoor_bounces() == 0) s.set_indoor_bounces(5);
-  if (s.seed() == 0) s.set_seed(1);
-  if (s.basis_cells() == 0) s.set_basis_cells(288);
-  if (s.backend().empty()) s.set_backend("auto");
-  if (s.batches() == 0) s.set_batches(8);
-  if (!s.has_final_check()) s.set_final_check(kFinalCheckByDefault);
-  if (s.basis_cells() != 288 && s.basis_cells() != 1152) {
-    return Invalid("sampling.basis_cells", "must be 288 or 1152");
-  }
-  if (s.window_columns() < 0 || s.window_columns() > 16 || s.window_rows() < 0 ||
-      s.window_rows() > 16) {
-    return Invalid("sampling.window_columns/window_rows", "must be in [0, 16] (0 = automatic)");
-  }
-  const int64_t window_cells =
-      int64_t{s.basis_cells()} * std::max(1, s.window_columns()) * std::max(1, s.window_rows());
-  if (s.outdoor_paths() < 2 * window_cells) {
-    return Invalid("sampling.outdoor_paths",
-                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ")"));
-  }
-  if (s.batches() < 2 || s.batches() > 64) return Invalid("sampling.batches", "must be in [2, 64]");
-  if (s.indoor_paths_per_sensor() < s.batches()) {
-    return Invalid("sampling.indoor_paths_per_sensor", "must be at least the batch count");
-  }
-  if (s.outdoor_bounces() < -1 || s.indoor_bounces() < -1) {
-    return Invalid("sampling", "bounces must be >= 1, or -1 for unlimited");
-  }
-  if (s.backend() != "auto" && s.backend() != "cpu" && s.backend() != "cuda") {
-    return Invalid("sampling.backend",
-                   absl::StrCat("must be cpu, cuda or auto, got '", s.backend(), "'"));
-  }
-  return s;
-}
-
 absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& base_dir) {
-  PreparedJob prepared;
-  prepared.job = job;
-  const fs::path base(base_dir);
-
-  // The scene: inline or from a file next to the job
-  if (job.has_scene() && !job.scene_file().empty()) {
-    return Invalid("scene", "give either scene or scene_file, not both");
-  }
-  if (!job.scene_file().empty()) {
-    FENESTRA_ASSIGN_OR_RETURN(scene, LoadScene((base / job.scene_file()).string()));
-    prepared.scene = std::move(scene);
-  } else if (job.has_scene()) {
-    FENESTRA_ASSIGN_OR_RETURN(scene, BuildScene(job.scene(), (base / "job.scene").string()));
-    prepared.scene = std::move(scene);
-  } else {
-    return Invalid("scene", "a scene or scene_file is required");
-  }
-
+  FENESTRA_ASSIGN_OR_RETURN(prepared, ValidateJob(job, base_dir));
   // The weather: the job's, else the scene's site
   if (!job.weather_file().empty()) {
-    prepared.weather_file = (base / job.weather_file()).lexically_normal().string();
+    prepared.weather_file = (fs::path(base_dir) / job.weather_file()).lexically_normal().string();
   } else {
     prepared.weather_file = prepared.scene.site.weather_file;
   }
   if (prepared.weather_file.empty()) {
     return Invalid("weather_file", "no weather file (neither the job nor the scene's site)");
   }
-  if (!fs::is_regular_file(prepared.weather_file)) {
-    return Invalid("weather_file", absl::StrCat(prepared.weather_file, ": not found"));
-  }
-  FENESTRA_RETURN_IF_ERROR(ValidateVariables(job, prepared.scene));
-  FENESTRA_RETURN_IF_ERROR(FillDefaults(prepared.job));
-  // Enough outdoor paths for every window cell, the automatic parts resolved
-  const WindowParts parts = SamplingWindowParts(prepared.job.sampling(), prepared.scene.window);
-  const int64_t window_cells =
-      int64_t{prepared.job.sampling().basis_cells()} * parts.columns * parts.rows;
-  if (prepared.job.sampling().outdoor_paths() < 2 * window_cells) {
-    return Invalid("sampling.outdoor_paths",
-                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ": ",
-                                parts.columns, "x", parts.rows, " window parts x ",
-                                prepared.job.sampling().basis_cells(), " direction cells)"));
-  }
+  FENESTRA_ASSIGN_OR_RETURN(weather, ReadEpw(prepared.weather_file));
+  prepared.weather = std::move(weather);
   return prepared;
 }
 
@@ -515,14 +346,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   // the backend does it best (on the CPU the paths recorded once, then replayed per design;
   // on the GPU I and E never leave the device), for the designs within the job's ranges
   if (callbacks.stage) callbacks.stage("indoor paths");
-  Scene ranged = job.scene;
-  if (ranged.blind) {
-    for (const v1::DesignVariable& v : spec.variables()) {
-      ParameterRange& range = (*ranged.blind).*(FindVariable(v.name())->range);
-      range.min = std::min(range.min, v.lower());
-      range.max = std::max(range.max, v.upper());
-    }
-  }
+  const Scene ranged = WithJobRanges(job.scene, spec);
   FENESTRA_ASSIGN_OR_RETURN(
       design_tallies,
       backend->MakeDesignTallies(ranged, indoor_options, outdoor->coefficients, lit_sky));

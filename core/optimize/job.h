@@ -13,6 +13,7 @@
 #include "core/common/radiance_matrix.h"
 #include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
+#include "core/sky/epw.h"
 #include "fenestra/v1/job.pb.h"
 
 namespace fenestra {
@@ -32,20 +33,36 @@ struct OutdoorMatrix {
   std::string key;  // OutdoorMatrixKey of what it was computed from
 };
 
-// A job checked and resolved: scene loaded, weather file found, variables known, defaults
-// filled in. Preparing does all validation, so a job that prepares runs.
+// Objective evaluations of a job whose budget leaves them open (job.proto).
+inline constexpr int kDefaultMaxEvaluations = 150;
+
+// A job checked and resolved: scene loaded, weather read, variables known, defaults filled
+// in. Preparing does all validation, so a job that prepares runs.
 struct PreparedJob {
   v1::Job job;  // with defaults filled in and paths resolved
   Scene scene;
   std::string weather_file;
+  EpwData weather;  // parsed (PrepareJob only)
 };
 
 // Reads a job file (the JSON form of fenestra.v1.Job; unknown fields are errors).
 absl::StatusOr<v1::Job> ReadJobFile(const std::string& path);
 
-// Validates `job` and fills in defaults. Relative scene_file/weather_file paths are taken
-// from `base_dir` (the job file's folder). Errors name the field and the reason.
+// The door for jobs: validates everything but the weather and fills in defaults. Every
+// string (CheckMessageText), the scene (BuildScene; a relative scene_file is taken from
+// `base_dir`), design variables within a real blind's bounds, budget, sampling, metric
+// settings, objective and neighborhoods (finite, in range, known enum values), then the room
+// (CheckRoom) with the blind at every design of the job's ranges. InvalidArgument naming the
+// field and the reason.
+absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& base_dir);
+
+// ValidateJob, then the weather: the job's weather_file (relative to `base_dir`), else the
+// scene's site.weather_file, read and parsed (ReadEpw).
 absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& base_dir);
+
+// `scene` with its blind's ranges widened to the job's design variables: what the search
+// may generate.
+Scene WithJobRanges(const Scene& scene, const v1::Job& job);
 
 // A content hash of everything the outdoor matrix depends on: the outdoor triangles and
 // their materials, the window, and the outdoor sampling settings (paths, bounces, seed,

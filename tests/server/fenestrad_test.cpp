@@ -2,347 +2,18 @@
 // directory, driven through the fenestra client (and, for status codes, a gRPC stub).
 // Jobs use tiny sampling (20000 outdoor paths, 2000 indoor paths per sensor).
 #include <arpa/inet.h>
-#include <fcntl.h>
-#include <gmock/gmock.h>
-#include <google/protobuf/util/json_util.h>
-#include <grpcpp/grpcpp.h>
-#include <grpcpp/impl/codegen/client_unary_call.h>
-#include <grpcpp/impl/codegen/sync_stream.h>
-#include <gtest/gtest.h>
 #include <netinet/in.h>
-#include <poll.h>
-#include <signal.h>
-#include <sys/prctl.h>
 #include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <chrono>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
-#include <functional>
-#include <optional>
-#include <sstream>
-#include <string>
-#include <thread>
-#include <vector>
 
-#include "fenestra/v1/service.grpc.pb.h"
+#include "tests/server/fenestrad_harness.h"
 
 namespace fenestra {
 namespace {
 
-namespace fs = std::filesystem;
+using namespace testing_fenestrad;
 using ::testing::HasSubstr;
-using Clock = std::chrono::steady_clock;
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::vector<char*> Argv(std::vector<std::string>& args) {
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  return argv;
-}
-
-// A child process; its stdout is read line by line through a pipe.
-class Process {
- public:
-  Process(std::vector<std::string> args, const std::string& stderr_path) {
-    int fds[2];
-    EXPECT_EQ(pipe(fds), 0);
-    pid_ = fork();
-    if (pid_ == 0) {
-      dup2(fds[1], STDOUT_FILENO);
-      const int err = open(stderr_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-      dup2(err, STDERR_FILENO);
-      close(fds[0]);
-      std::vector<char*> argv = Argv(args);
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
-    close(fds[1]);
-    out_ = fds[0];
-  }
-  ~Process() {
-    if (pid_ > 0) {
-      kill(pid_, SIGKILL);
-      Wait();
-    }
-    close(out_);
-  }
-  // The next stdout line, or nothing at the end of the output or after `timeout_s`.
-  std::optional<std::string> ReadLine(double timeout_s = 30) {
-    const auto deadline = Clock::now() + std::chrono::duration<double>(timeout_s);
-    while (true) {
-      if (const size_t end = buffer_.find('\n'); end != std::string::npos) {
-        std::string line = buffer_.substr(0, end);
-        buffer_.erase(0, end + 1);
-        return line;
-      }
-      const int left = static_cast<int>(
-          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count());
-      if (left <= 0) return std::nullopt;
-      pollfd p{out_, POLLIN, 0};
-      if (poll(&p, 1, left) <= 0) return std::nullopt;
-      char chunk[4096];
-      const ssize_t n = read(out_, chunk, sizeof chunk);
-      if (n <= 0) return std::nullopt;
-      buffer_.append(chunk, n);
-    }
-  }
-  void Signal(int signal) { kill(pid_, signal); }
-  // The exit code (128 + signal when killed).
-  int Wait() {
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  }
-
- private:
-  pid_t pid_ = -1;
-  int out_ = -1;
-  std::string buffer_;
-};
-
-struct CliResult {
-  int code;
-  std::string out, err;
-};
-
-// A fenestrad child on 127.0.0.1 (a free port) with a data directory of its own.
-class Daemon {
- public:
-  Daemon(std::string data_dir, std::vector<std::string> flags)
-      : data_dir_(std::move(data_dir)), flags_(std::move(flags)) {}
-  ~Daemon() {
-    if (pid_ > 0) Kill();
-  }
-
-  void Start() {
-    const std::string port_file = data_dir_ + ".port";
-    fs::remove(port_file);
-    std::vector<std::string> args = {FENESTRAD, "--listen",    "127.0.0.1:0", "--data-dir",
-                                     data_dir_, "--port-file", port_file};
-    args.insert(args.end(), flags_.begin(), flags_.end());
-    pid_ = fork();
-    if (pid_ == 0) {
-      prctl(PR_SET_PDEATHSIG, SIGKILL);  // no daemon outlives a crashed test
-      const int log = open(log_path().c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-      dup2(log, STDERR_FILENO);
-      dup2(log, STDOUT_FILENO);
-      std::vector<char*> argv = Argv(args);
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
-    const auto deadline = Clock::now() + std::chrono::seconds(20);
-    while (!fs::exists(port_file) && Clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    ASSERT_TRUE(fs::exists(port_file)) << "fenestrad did not start:\n" << Log();
-    address_ = "127.0.0.1:" + std::to_string(std::stoi(ReadFile(port_file)));
-    channel_ = grpc::CreateChannel(address_, grpc::InsecureChannelCredentials());
-    sites_ = v1::SiteService::NewStub(channel_);
-    jobs_ = v1::JobService::NewStub(channel_);
-  }
-  // SIGTERM; the exit code.
-  int Stop() { return Signal(SIGTERM); }
-  int Kill() { return Signal(SIGKILL); }
-
-  const std::string& address() const { return address_; }
-  std::string log_path() const { return data_dir_ + ".log"; }
-  std::string Log() const { return ReadFile(log_path()); }
-  const std::string& data_dir() const { return data_dir_; }
-  std::shared_ptr<grpc::Channel> channel() { return channel_; }
-  v1::SiteService::Stub& sites() { return *sites_; }
-  v1::JobService::Stub& jobs() { return *jobs_; }
-
-  // Runs `fenestra ARGS --server <this daemon>`.
-  CliResult Cli(std::vector<std::string> args) const {
-    args.insert(args.begin(), FENESTRA_CLI);
-    args.push_back("--server");
-    args.push_back(address_);
-    return RunCli(args);
-  }
-  static CliResult RunCli(std::vector<std::string> args) {
-    const std::string base =
-        testing::TempDir() + "/cli." + std::to_string(getpid()) + "." + std::to_string(counter_++);
-    const pid_t pid = fork();
-    if (pid == 0) {
-      const int out = open((base + ".out").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      const int err = open((base + ".err").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      dup2(out, STDOUT_FILENO);
-      dup2(err, STDERR_FILENO);
-      std::vector<char*> argv = Argv(args);
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
-    int status = 0;
-    waitpid(pid, &status, 0);
-    CliResult result{WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status),
-                     ReadFile(base + ".out"), ReadFile(base + ".err")};
-    fs::remove(base + ".out");
-    fs::remove(base + ".err");
-    return result;
-  }
-  // A Process running `fenestra ARGS --server <this daemon>`.
-  std::unique_ptr<Process> Spawn(std::vector<std::string> args) const {
-    args.insert(args.begin(), FENESTRA_CLI);
-    args.push_back("--server");
-    args.push_back(address_);
-    return std::make_unique<Process>(args, data_dir_ + ".client.err");
-  }
-
- private:
-  int Signal(int signal) {
-    if (pid_ <= 0) return -1;
-    kill(pid_, signal);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  }
-
-  std::string data_dir_;
-  std::vector<std::string> flags_;
-  pid_t pid_ = -1;
-  std::string address_;
-  std::shared_ptr<grpc::Channel> channel_;
-  std::unique_ptr<v1::SiteService::Stub> sites_;
-  std::unique_ptr<v1::JobService::Stub> jobs_;
-  static inline int counter_ = 0;
-};
-
-template <typename Message>
-Message FromJson(const std::string& json) {
-  Message m;
-  const auto status = google::protobuf::util::JsonStringToMessage(json, &m);
-  EXPECT_TRUE(status.ok()) << status.message() << "\n" << json;
-  return m;
-}
-
-std::string ToJson(const google::protobuf::Message& m) {
-  std::string json;
-  (void)google::protobuf::util::MessageToJsonString(m, &json);
-  return json;
-}
-
-class FenestradTest : public testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = testing::TempDir() + "/fenestrad_test_" + info->name();
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-
-  void TearDown() override {
-    if (!HasFailure()) fs::remove_all(dir_);
-  }
-
-  std::unique_ptr<Daemon> StartDaemon(std::vector<std::string> flags = {}) {
-    auto daemon = std::make_unique<Daemon>(dir_ + "/data", std::move(flags));
-    daemon->Start();
-    return daemon;
-  }
-
-  // The city-office tilt job with tiny sampling; `edit` changes it further. Returns its
-  // path (a job file next to nothing: the scene is referenced by absolute path).
-  v1::Job TinyJob(int evaluations = 6) const {
-    v1::Job job = FromJson<v1::Job>(
-        ReadFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json"));
-    job.set_scene_file(FENESTRA_SOURCE_DIR "/examples/city_office/scene.json");
-    job.mutable_sampling()->set_outdoor_paths(20000);
-    job.mutable_sampling()->set_indoor_paths_per_sensor(2000);
-    job.mutable_sampling()->set_backend("cpu");
-    job.mutable_budget()->set_max_evaluations(evaluations);
-    job.mutable_budget()->set_failed_cycles_to_stop(-1);
-    return job;
-  }
-  // A job that runs until cancelled (minutes).
-  v1::Job LongJob() const { return TinyJob(5000); }
-
-  std::string WriteJob(const std::string& name, const v1::Job& job) const {
-    const std::string path = dir_ + "/" + name + ".json";
-    std::ofstream(path) << ToJson(job);
-    return path;
-  }
-
-  // The request `fenestra job submit` would send for `job`, built here for stub calls.
-  v1::SubmitJobRequest InlineRequest(const v1::Job& job) const {
-    v1::SubmitJobRequest request;
-    *request.mutable_job() = job;
-    v1::Scene scene = FromJson<v1::Scene>(ReadFile(job.scene_file()));
-    scene.mutable_site()->clear_weather_file();
-    request.mutable_job()->clear_scene_file();
-    *request.mutable_job()->mutable_scene() = scene;
-    request.set_weather_epw(
-        ReadFile(FENESTRA_SOURCE_DIR "/examples/weather/URY_Montevideo.865800_IWEC.epw"));
-    return request;
-  }
-
-  static v1::JobInfo GetJob(Daemon& d, const std::string& id) {
-    grpc::ClientContext context;
-    v1::GetJobRequest request;
-    request.set_id(id);
-    v1::JobInfo info;
-    EXPECT_TRUE(d.jobs().Get(&context, request, &info).ok());
-    return info;
-  }
-  static v1::SiteInfo GetSite(Daemon& d, const std::string& id) {
-    grpc::ClientContext context;
-    v1::GetSiteRequest request;
-    request.set_id(id);
-    v1::SiteInfo info;
-    EXPECT_TRUE(d.sites().Get(&context, request, &info).ok());
-    return info;
-  }
-  // Polls until `done(job)` or 60 s.
-  static v1::JobInfo WaitJob(Daemon& d, const std::string& id,
-                             const std::function<bool(const v1::JobInfo&)>& done) {
-    const auto deadline = Clock::now() + std::chrono::seconds(60);
-    v1::JobInfo info = GetJob(d, id);
-    while (!done(info) && Clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-      info = GetJob(d, id);
-    }
-    EXPECT_TRUE(done(info)) << info.DebugString();
-    return info;
-  }
-  static v1::SiteInfo WaitSiteReady(Daemon& d, const std::string& id) {
-    const auto deadline = Clock::now() + std::chrono::seconds(60);
-    v1::SiteInfo info = GetSite(d, id);
-    while (info.state() == v1::SITE_STATE_COMPUTING && Clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-      info = GetSite(d, id);
-    }
-    EXPECT_EQ(info.state(), v1::SITE_STATE_READY) << info.error();
-    return info;
-  }
-  static bool Running(const v1::JobInfo& j) {
-    return j.state() == v1::JOB_STATE_RUNNING && j.progress().evaluations() >= 2;
-  }
-  // Submits through the client; returns the job id.
-  static std::string Submit(Daemon& d, const std::string& job_file,
-                            std::vector<std::string> extra = {}) {
-    std::vector<std::string> args = {"job", "submit", job_file, "--quiet"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    const CliResult r = d.Cli(args);
-    EXPECT_EQ(r.code, 0) << r.err;
-    std::string id = r.out;
-    while (!id.empty() && id.back() == '\n') id.pop_back();
-    return id;
-  }
-
-  std::string dir_;
-};
 
 TEST_F(FenestradTest, SiteMatrixIsComputedOnceReusedByJobsAndLoadedAfterRestart) {
   auto d = StartDaemon();
@@ -848,6 +519,185 @@ TEST_F(FenestradTest, FinalCheckIsInTheLastProgressEventTheResultAndTheLog) {
   const v1::JobInfo stored = GetJob(*d, "job-1");
   EXPECT_EQ(stored.result().final_check().SerializeAsString(), check.SerializeAsString());
   EXPECT_EQ(stored.progress().final_check().SerializeAsString(), check.SerializeAsString());
+}
+
+// What a hostile tester sent, each refused at the door: INVALID_ARGUMENT naming the field,
+// no server path in the message, nothing stored (no job, no site, no weather file), and
+// the daemon serves on.
+TEST_F(FenestradTest, BadInputIsRefusedBeforeAnythingIsStored) {
+  auto d = StartDaemon();
+  const std::string weather =
+      ReadFile(FENESTRA_SOURCE_DIR "/examples/weather/URY_Montevideo.865800_IWEC.epw");
+  const auto expect_refused = [&](const grpc::Status& s, const std::string& what,
+                                  const std::string& field) {
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT)
+        << what << ": " << s.error_message();
+    EXPECT_THAT(s.error_message(), HasSubstr(field)) << what;
+    EXPECT_THAT(s.error_message(), ::testing::Not(HasSubstr(d->data_dir()))) << what;
+  };
+  using SceneEdit = std::function<void(v1::Scene&)>;
+  const std::vector<std::tuple<std::string, SceneEdit, std::string>> scene_cases = {
+      {"side 99", [](v1::Scene& s) { s.mutable_surfaces(0)->set_side(static_cast<v1::Side>(99)); },
+       "surfaces[0].side: must be SIDE_INDOOR or SIDE_OUTDOOR, got 99"},
+      {"orientation 7",
+       [](v1::Scene& s) {
+         s.mutable_blind()->set_orientation(static_cast<v1::VenetianBlind::Orientation>(7));
+       },
+       "blind.orientation"},
+      {"sensor 50 m away",
+       [](v1::Scene& s) { s.mutable_sensors(3)->mutable_position()->set_y(-50); },
+       "sensors[3] (\"S4\") at (-1, -50, 6.7) is outside the room"},
+      {"sensor at 1e9 m",
+       [](v1::Scene& s) { s.mutable_sensors(0)->mutable_position()->set_x(1e9); },
+       "sensors[0].position"},
+      {"1e6 m window", [](v1::Scene& s) { s.mutable_window()->set_width_m(1e6); }, "window"},
+      {"window off the wall", [](v1::Scene& s) { s.mutable_window()->mutable_center()->set_y(-3); },
+       "window: it does not lie at an opening"},
+      {"side margin 1e9", [](v1::Scene& s) { s.mutable_blind()->set_side_margin_m(1e9); },
+       "blind.side_margin_m"},
+      {"slats thicker than wide",
+       [](v1::Scene& s) { s.mutable_blind()->mutable_slat_thickness_m()->set_max(0.08); },
+       "a slat must be thinner than it is wide"},
+      {"tilt beyond pi/2", [](v1::Scene& s) { s.mutable_blind()->mutable_tilt_rad()->set_max(4); },
+       "blind.tilt_rad"},
+      {"huge coordinate",
+       [](v1::Scene& s) { s.mutable_surfaces(22)->mutable_box()->mutable_max()->set_x(1e7); },
+       "surfaces[22].box.max"},
+      {"material name with a newline",
+       [](v1::Scene& s) { s.mutable_materials(0)->set_name("office\nforged log line"); },
+       "materials[0].name: holds the control character U+000A"},
+      {"long scene name", [](v1::Scene& s) { s.set_name(std::string(300, 'n')); },
+       "scene.name: is 300 bytes long"},
+  };
+  using JobEdit = std::function<void(v1::SubmitJobRequest&)>;
+  std::vector<std::tuple<std::string, JobEdit, std::string>> job_cases = {
+      {"goal 42",
+       [](v1::SubmitJobRequest& r) {
+         r.mutable_job()->mutable_objective()->set_goal(static_cast<v1::Goal>(42));
+       },
+       "job objective.goal"},
+      {"occupied 25 h",
+       [](v1::SubmitJobRequest& r) {
+         r.mutable_job()->mutable_metrics()->set_occupied_start_h(25);
+       },
+       "metrics.occupied_start_h"},
+      {"occupied NaN",
+       [](v1::SubmitJobRequest& r) {
+         r.mutable_job()->mutable_metrics()->set_occupied_end_h(std::nan(""));
+       },
+       "metrics.occupied_end_h"},
+      {"sDA 1e300",
+       [](v1::SubmitJobRequest& r) {
+         r.mutable_job()->mutable_metrics()->set_sda_time_fraction_percent(1e300);
+       },
+       "metrics.sda_time_fraction_percent"},
+      {"UDI lower >= upper",
+       [](v1::SubmitJobRequest& r) { r.mutable_job()->mutable_metrics()->set_udi_lower_lux(5000); },
+       "udi_lower_lux"},
+      {"negative DA threshold",
+       [](v1::SubmitJobRequest& r) {
+         r.mutable_job()->mutable_metrics()->set_da_threshold_lux(-1);
+       },
+       "metrics.da_threshold_lux"},
+      {"job name with a newline",
+       [](v1::SubmitJobRequest& r) { r.mutable_job()->set_name("a\n[info] job-1 succeeded"); },
+       "job.name: holds the control character U+000A"},
+      {"garbage weather",
+       [](v1::SubmitJobRequest& r) {
+         r.set_weather_epw(
+             "\x7f"
+             "ELF garbage");
+       },
+       "weather_epw ('URY_Montevideo.865800_IWEC.epw'), line 1"},
+      {"truncated weather",
+       [&](v1::SubmitJobRequest& r) { r.set_weather_epw(weather.substr(0, weather.size() / 3)); },
+       "(truncated row)"},
+      {"weather full of NaN",
+       [&](v1::SubmitJobRequest& r) {
+         std::string nan = weather;
+         for (size_t at = nan.find(",0,0,0,"); at != std::string::npos;
+              at = nan.find(",0,0,0,", at + 1)) {
+           nan.replace(at, 7, ",nan,nan,nan,");
+         }
+         r.set_weather_epw(nan);
+       },
+       "is not a number: 'nan'"},
+  };
+  for (const auto& [what, edit, field] : scene_cases) {
+    job_cases.push_back(
+        {what, [edit](v1::SubmitJobRequest& r) { edit(*r.mutable_job()->mutable_scene()); },
+         field});
+  }
+  for (const auto& [what, edit, field] : job_cases) {
+    v1::SubmitJobRequest request = InlineRequest(TinyJob());
+    request.set_weather_name("URY_Montevideo.865800_IWEC.epw");
+    edit(request);
+    grpc::ClientContext context;
+    v1::JobInfo info;
+    expect_refused(d->jobs().Submit(&context, request, &info), "Submit: " + what, field);
+  }
+
+  // Sites: the same scenes, and weather that used to make a site ready
+  const auto site_request = [&] {
+    v1::RegisterSiteRequest request;
+    const v1::SubmitJobRequest job = InlineRequest(TinyJob());
+    *request.mutable_scene() = job.job().scene();
+    *request.mutable_sampling() = job.job().sampling();
+    request.set_weather_epw(weather);
+    request.set_weather_name("URY_Montevideo.865800_IWEC.epw");
+    return request;
+  };
+  std::vector<std::tuple<std::string, std::function<void(v1::RegisterSiteRequest&)>, std::string>>
+      site_cases = {
+          {"garbage weather", [](v1::RegisterSiteRequest& r) { r.set_weather_epw("not a file"); },
+           "weather_epw ('URY_Montevideo.865800_IWEC.epw'), line 1"},
+          {"truncated weather",
+           [&](v1::RegisterSiteRequest& r) { r.set_weather_epw(weather.substr(0, 5000)); },
+           "weather_epw"},
+          {"site name with a control character",
+           [](v1::RegisterSiteRequest& r) { r.set_name("site\x1b[2J"); },
+           "name: holds the control character U+001B"},
+      };
+  for (const auto& [what, edit, field] : scene_cases) {
+    site_cases.push_back(
+        {what, [edit](v1::RegisterSiteRequest& r) { edit(*r.mutable_scene()); }, field});
+  }
+  for (const auto& [what, edit, field] : site_cases) {
+    v1::RegisterSiteRequest request = site_request();
+    edit(request);
+    grpc::ClientContext context;
+    v1::SiteInfo info;
+    expect_refused(d->sites().Register(&context, request, &info), "Register: " + what, field);
+  }
+
+  // Strings that are not UTF-8 never reach the handlers: gRPC's protobuf parser refuses them
+  {
+    v1::SubmitJobRequest request = InlineRequest(TinyJob());
+    request.mutable_job()->set_name("\xff\xfe");
+    grpc::ClientContext context;
+    v1::JobInfo info;
+    EXPECT_FALSE(d->jobs().Submit(&context, request, &info).ok());
+  }
+
+  // Nothing stored
+  EXPECT_THAT(d->Cli({"job", "list"}).out, ::testing::Not(HasSubstr("job-")));
+  EXPECT_THAT(d->Cli({"site", "list"}).out, ::testing::Not(HasSubstr("site-")));
+  const fs::path weather_dir = d->data_dir() + "/weather";
+  EXPECT_TRUE(!fs::exists(weather_dir) || fs::is_empty(weather_dir));
+  // No client text broke a log line: every line the daemon wrote is one of its own
+  std::istringstream log(d->Log());
+  for (std::string line; std::getline(log, line);) {
+    EXPECT_THAT(line, ::testing::MatchesRegex("[0-9]{4}-[0-9]{2}-[0-9]{2} [0-9:.]+ [a-z]+ .*"));
+  }
+
+  // Still serving: a good site and a good job are taken
+  grpc::ClientContext context;
+  v1::SiteInfo site;
+  ASSERT_TRUE(d->sites().Register(&context, site_request(), &site).ok());
+  const CliResult r =
+      d->Cli({"job", "submit", WriteJob("tiny", TinyJob()), "--site", site.id(), "--watch"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("best design:"));
 }
 
 }  // namespace

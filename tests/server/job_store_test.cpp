@@ -74,6 +74,30 @@ TEST(JobStoreTest, Sites) {
   EXPECT_EQ((*sites)[0].weather_path, "/data/weather/x.epw");
 }
 
+TEST(JobStoreTest, UsersSurviveReopening) {
+  const std::string path = FreshDb("users");
+  {
+    auto store = JobStore::Open(path);
+    ASSERT_TRUE(store.ok());
+    ASSERT_TRUE((*store)->InsertUser(UserRecord{"ann", std::string(32, 'a'), false, 5, 0}).ok());
+    ASSERT_TRUE((*store)->InsertUser(UserRecord{"root", std::string(32, 'r'), true, 6, 0}).ok());
+    ASSERT_TRUE((*store)->RevokeUser("ann", 7).ok());
+  }
+  auto store = JobStore::Open(path);
+  ASSERT_TRUE(store.ok());
+  auto users = (*store)->LoadUsers();
+  ASSERT_TRUE(users.ok()) << users.status();
+  ASSERT_EQ(users->size(), 2u);
+  EXPECT_EQ((*users)[0].name, "ann");
+  EXPECT_EQ((*users)[0].token_sha256, std::string(32, 'a'));
+  EXPECT_EQ((*users)[0].created_unix_ms, 5);
+  EXPECT_EQ((*users)[0].revoked_unix_ms, 7);
+  EXPECT_TRUE((*users)[1].admin);
+  EXPECT_EQ((*users)[1].revoked_unix_ms, 0);
+  EXPECT_EQ((*store)->InsertUser(UserRecord{"ann", std::string(32, 'b'), false, 8, 0}).code(),
+            absl::StatusCode::kAlreadyExists);
+}
+
 TEST(JobStoreTest, UnwritablePathIsAnError) {
   EXPECT_FALSE(JobStore::Open("/nonexistent/dir/fenestra.db").ok());
 }
