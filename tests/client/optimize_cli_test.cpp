@@ -1,30 +1,21 @@
 // Runs `fenestra optimize --local` as a user would: the final check in the output, the result
 // file and the history CSV with the best value against time.
-#include <google/protobuf/util/json_util.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cmath>
-#include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "client/cli_util.h"
+#include "core/common/json_proto.h"
 #include "fenestra/v1/job.pb.h"
+#include "tests/client/cli_run.h"
 
 namespace fenestra {
 namespace {
 
-namespace fs = std::filesystem;
-
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using OptimizeCliTest = CliTest;
 
 std::vector<std::string> Split(const std::string& line) {
   std::vector<std::string> fields;
@@ -33,40 +24,20 @@ std::vector<std::string> Split(const std::string& line) {
   return fields;
 }
 
-class OptimizeCliTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           (std::string("fenestra_cli_") +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
-};
-
 // The quick tilt job with 6 evaluations: it keeps the published reflection limits, which the
 // check (without a limit) finds at this seed.
 TEST_F(OptimizeCliTest, PrintsTheFinalCheckAndWritesTheBestValueAgainstTime) {
   v1::Job job;
-  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(
-                  ReadFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json"), &job)
-                  .ok());
-  job.set_scene_file(FENESTRA_SOURCE_DIR "/examples/city_office/scene.json");
+  ASSERT_TRUE(ReadJsonProtoFile(kExamples + "/city_office/alpha_max_quick.json", "job", &job).ok());
+  job.set_scene_file(kExamples + "/city_office/scene.json");
   job.mutable_budget()->set_max_evaluations(6);
   job.mutable_sampling()->set_backend("cpu");
-  std::string json;
-  ASSERT_TRUE(google::protobuf::util::MessageToJsonString(job, &json).ok());
-  std::ofstream(dir_ / "job.json") << json;
+  ASSERT_TRUE(WriteJsonFile((dir_ / "job.json").string(), job).ok());
 
-  const std::string command = std::string(FENESTRA_CLI) + " optimize --local " +
-                              (dir_ / "job.json").string() + " -o " +
-                              (dir_ / "result.json").string() + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  char buffer[4096];
-  while (size_t n = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, n);
-  ASSERT_EQ(pclose(pipe), 0) << output;
+  const CliRun run = Fenestra("optimize --local " + (dir_ / "job.json").string() + " -o " +
+                              (dir_ / "result.json").string());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const std::string& output = run.output;
   EXPECT_NE(output.find("checking the best design by the one-stage method...\n"), std::string::npos)
       << output;
   EXPECT_NE(output.find("[6/6] check of the best design ("), std::string::npos) << output;
@@ -74,8 +45,7 @@ TEST_F(OptimizeCliTest, PrintsTheFinalCheckAndWritesTheBestValueAgainstTime) {
 
   // The result file: the check, and the same flag in the output
   v1::JobResult result;
-  ASSERT_TRUE(
-      google::protobuf::util::JsonStringToMessage(ReadFile(dir_ / "result.json"), &result).ok());
+  ASSERT_TRUE(ReadJsonProtoFile((dir_ / "result.json").string(), "result", &result).ok());
   ASSERT_TRUE(result.has_final_check());
   EXPECT_TRUE(result.final_check().disagrees()) << result.final_check().DebugString();
   EXPECT_NE(output.find(": DISAGREES"), std::string::npos) << output;
