@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 
 #include "absl/strings/str_cat.h"
@@ -25,6 +26,7 @@ v1::JobProgress ToProto(const JobProgress& p) {
   *out.mutable_best() = p.best;
   out.set_elapsed_seconds(p.elapsed_seconds);
   out.set_remaining_seconds(p.remaining_seconds);
+  if (p.final_check) *out.mutable_final_check() = *p.final_check;
   return out;
 }
 
@@ -370,9 +372,15 @@ void JobManager::Finish(Record& r, v1::JobState state, const v1::JobResult* resu
                          absl::SixDigits(result->best_value().standard_error()), " after ",
                          result->evaluations(), " evaluations (", result->stop_reason(), ")")
           : "";
+  const std::string check =
+      result && result->has_final_check()
+          ? absl::StrCat("; final check (one-stage) ",
+                         absl::SixDigits(result->final_check().one_stage().value()), " ± ",
+                         absl::SixDigits(result->final_check().one_stage().standard_error()))
+          : "";
   switch (state) {
     case v1::JOB_STATE_SUCCEEDED:
-      spdlog::info("job {} succeeded{}", id, best);
+      spdlog::info("job {} succeeded{}{}", id, best, check);
       break;
     case v1::JOB_STATE_CANCELLED:
       spdlog::info("job {} cancelled{}", id, best);
@@ -382,6 +390,14 @@ void JobManager::Finish(Record& r, v1::JobState state, const v1::JobResult* resu
       break;
     default:
       spdlog::warn("job {} failed: {}", id, LogSafe(error));
+  }
+  if (result && result->final_check().disagrees()) {
+    const v1::Estimate& d = result->final_check().difference();
+    spdlog::warn(
+        "job {}: the final check disagrees: one-stage minus two-stage {:.4g} ± {:.4g} ({:.1f} "
+        "standard errors); the two-stage value is off by more than its Monte Carlo error",
+        id, d.value(), d.standard_error(),
+        d.standard_error() > 0 ? std::abs(d.value()) / d.standard_error() : 0.0);
   }
 }
 
