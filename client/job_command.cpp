@@ -97,16 +97,10 @@ void ShowEvent(const v1::JobEvent& event) {
     case v1::JobEvent::kStarted:
       fmt::print("started (backend {})\n", event.started().backend());
       break;
-    case v1::JobEvent::kStage: {
+    case v1::JobEvent::kStage:
       EndProgress();
-      const v1::Stage& stage = event.stage();
-      fmt::print("{}...\n", stage.name() == "sky" ? "building the sky matrix"
-                            : stage.name() == "outdoor"
-                                ? (stage.cached() ? "outdoor matrix from the cache"
-                                                  : "tracing the outdoor matrix")
-                                : "searching");
+      fmt::print("{}...\n", StageText(event.stage().name(), event.stage().cached()));
       break;
-    }
     case v1::JobEvent::kProgress:
       ShowProgress(FromProto(event.progress()));
       break;

@@ -14,6 +14,8 @@
 namespace fenestra {
 namespace {
 
+// One row per step of the search: its design, value and timing, and the best value so far
+// with its standard error (the job's error against elapsed_seconds).
 absl::Status WriteHistoryCsv(const std::string& path, const v1::JobResult& result) {
   return WriteFileAtomically(path, [&](std::ostream& out) {
     std::vector<std::string> names;
@@ -21,13 +23,17 @@ absl::Status WriteHistoryCsv(const std::string& path, const v1::JobResult& resul
     std::sort(names.begin(), names.end());
     out << "index";
     for (const std::string& n : names) out << ',' << n;
-    out << ",value,standard_error,seconds,cached,improved,neighborhood\n";
+    out << ",value,standard_error,seconds,cached,improved,neighborhood,elapsed_seconds,"
+           "best_value,best_standard_error\n";
+    v1::Estimate best;
     for (const v1::Evaluation& e : result.history()) {
+      if (e.improved()) best = e.value();
       out << e.index();
       for (const std::string& n : names) out << ',' << fmt::format("{:.9g}", e.design().at(n));
-      out << fmt::format(",{:.9g},{:.9g},{:.6f},{},{},{}\n", e.value().value(),
+      out << fmt::format(",{:.9g},{:.9g},{:.6f},{},{},{},{:.6f},{:.9g},{:.9g}\n", e.value().value(),
                          e.value().standard_error(), e.seconds(), e.cached() ? 1 : 0,
-                         e.improved() ? 1 : 0, e.neighborhood());
+                         e.improved() ? 1 : 0, e.neighborhood(), e.elapsed_seconds(), best.value(),
+                         best.standard_error());
     }
     return absl::OkStatus();
   });
@@ -60,9 +66,7 @@ void AddOptimizeCommand(CLI::App& app) {
     JobCallbacks callbacks;
     callbacks.stage = [](const std::string& stage) {
       EndProgress();
-      fmt::print("{}...\n", stage == "sky"       ? "building the sky matrix"
-                            : stage == "outdoor" ? "tracing the outdoor matrix"
-                                                 : "searching");
+      fmt::print("{}...\n", StageText(stage));
       std::fflush(stdout);
     };
     callbacks.progress = ShowProgress;

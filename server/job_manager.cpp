@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 #include "absl/cleanup/cleanup.h"
@@ -27,6 +28,7 @@ v1::JobProgress ToProto(const JobProgress& p) {
   *out.mutable_best() = p.best;
   out.set_elapsed_seconds(p.elapsed_seconds);
   out.set_remaining_seconds(p.remaining_seconds);
+  if (p.final_check) *out.mutable_final_check() = *p.final_check;
   return out;
 }
 
@@ -538,9 +540,15 @@ void JobManager::Ended(Record& r) {
                          absl::SixDigits(result->best_value().standard_error()), " after ",
                          result->evaluations(), " evaluations (", result->stop_reason(), ")")
           : "";
+  const std::string check =
+      result && result->has_final_check()
+          ? absl::StrCat("; final check (one-stage) ",
+                         absl::SixDigits(result->final_check().one_stage().value()), " ± ",
+                         absl::SixDigits(result->final_check().one_stage().standard_error()))
+          : "";
   switch (r.info.state()) {
     case v1::JOB_STATE_SUCCEEDED:
-      spdlog::info("job {} succeeded{}", id, best);
+      spdlog::info("job {} succeeded{}{}", id, best, check);
       break;
     case v1::JOB_STATE_CANCELLED:
       spdlog::info("job {} cancelled{}", id, best);
@@ -550,6 +558,14 @@ void JobManager::Ended(Record& r) {
       break;
     default:
       spdlog::warn("job {} failed: {}", id, LogSafe(r.info.error()));
+  }
+  if (result && result->final_check().disagrees()) {
+    const v1::Estimate& d = result->final_check().difference();
+    spdlog::warn(
+        "job {}: the final check disagrees: one-stage minus two-stage {:.4g} ± {:.4g} ({:.1f} "
+        "standard errors); the two-stage value is off by more than its Monte Carlo error",
+        id, d.value(), d.standard_error(),
+        d.standard_error() > 0 ? std::abs(d.value()) / d.standard_error() : 0.0);
   }
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <span>
 
 #include "absl/strings/str_cat.h"
 #include "core/common/content_hash.h"
@@ -16,6 +17,7 @@
 #include "core/metrics/metric_errors.h"
 #include "core/metrics/occupancy.h"
 #include "core/optimize/design_variables.h"
+#include "core/optimize/final_check.h"
 #include "core/optimize/metric_objective.h"
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
@@ -64,7 +66,9 @@ BlindDesign DesignAt(const PreparedJob& job, const std::vector<double>& x) {
   return design;
 }
 
-v1::Evaluation ToProto(const PreparedJob& job, const VnsRecord& record) {
+// `search_start_seconds`: when the search started, in the job's time.
+v1::Evaluation ToProto(const PreparedJob& job, const VnsRecord& record,
+                       double search_start_seconds) {
   v1::Evaluation e;
   e.set_index(record.index);
   for (int i = 0; i < job.job.variables_size(); ++i) {
@@ -76,7 +80,19 @@ v1::Evaluation ToProto(const PreparedJob& job, const VnsRecord& record) {
   e.set_cached(record.cached);
   e.set_improved(record.improved);
   e.set_neighborhood(record.neighborhood);
+  e.set_elapsed_seconds(search_start_seconds + record.elapsed_seconds);
   return e;
+}
+
+// The best value against time: the evaluations that moved the incumbent.
+void AddBestOverTime(v1::JobResult& result) {
+  for (const v1::Evaluation& e : result.history()) {
+    if (!e.improved()) continue;
+    v1::BestSoFar& best = *result.add_best_over_time();
+    best.set_elapsed_seconds(e.elapsed_seconds());
+    best.set_evaluation(e.index());
+    *best.mutable_value() = e.value();
+  }
 }
 
 void SetEstimate(v1::Estimate* out, double value, double standard_error) {
@@ -103,6 +119,101 @@ v1::Metrics ToProto(const AnnualMetricsEstimate& m) {
                 m.standard_error.sensors[s].da_percent);
   }
   return out;
+}
+
+// What the annual metrics of a job's designs need: the sky matrix, the occupied steps and
+// the lit analysed ones (the rest are dark or not counted), the metric settings and the
+// objective's metric.
+struct AnnualSetting {
+  SkyMatrix sky;
+  std::vector<bool> occupied;
+  std::vector<int> columns;  // lit analysed steps, ascending
+  int analysed_hours = 0;
+  MetricOptions options;
+  SceneMetric metric = SceneMetric::kUdiMean;
+};
+
+absl::StatusOr<AnnualSetting> MakeAnnualSetting(const PreparedJob& job) {
+  const v1::MetricSettings& m = job.job.metrics();
+  AnnualSetting setting;
+  SkyMatrixOptions sky_options;
+  sky_options.ground_reflectance = job.scene.site.ground_reflectance;
+  FENESTRA_ASSIGN_OR_RETURN(sky, BuildSkyMatrix(job.weather, sky_options));
+  setting.sky = std::move(sky);
+  std::vector<double> hours;
+  for (const SkyStep& step : setting.sky.steps) hours.push_back(step.hour);
+  FENESTRA_ASSIGN_OR_RETURN(occupied,
+                            OccupiedSteps(hours, {m.occupied_start_h(), m.occupied_end_h()}));
+  setting.occupied = std::move(occupied);
+  const HourBasis hour_basis = m.all_hours() ? HourBasis::kAllHours : HourBasis::kOccupied;
+  for (const int c : LitColumns(setting.sky.radiance)) {
+    if (hour_basis == HourBasis::kAllHours || setting.occupied[c]) setting.columns.push_back(c);
+  }
+  setting.analysed_hours = AnalysedHours(setting.occupied, hour_basis);
+  setting.options.udi_lower_lux = m.udi_lower_lux();
+  setting.options.udi_upper_lux = m.udi_upper_lux();
+  setting.options.da_threshold_lux = m.da_threshold_lux();
+  setting.options.sda_min_da_percent = m.sda_time_fraction_percent();
+  setting.options.hours = hour_basis;
+  FENESTRA_ASSIGN_OR_RETURN(metric, ToSceneMetric(job.job.objective().metric()));
+  setting.metric = metric;
+  return setting;
+}
+
+// The final check (final_check.h) of design `x` against `two_stage`, the one-stage metrics
+// taken as the search takes the two-stage ones. Cancelled as RunFinalCheck.
+absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualSetting& setting,
+                                           const std::vector<double>& x,
+                                           const v1::Estimate& two_stage, DcBackend* backend,
+                                           const std::function<bool()>& cancelled) {
+  const DaylightMetric metric =
+      [&](std::span<const Matrix> dc_batches) -> absl::StatusOr<Evaluation> {
+    FENESTRA_ASSIGN_OR_RETURN(
+        metrics,
+        AnnualMetricsWithErrors(dc_batches, std::span<const Matrix>(&setting.sky.radiance, 1),
+                                setting.columns, setting.occupied, setting.options));
+    return MetricEvaluation(std::move(metrics), setting.metric);
+  };
+  FinalCheckOptions options;
+  options.batches = job.job.sampling().batches();
+  options.seed = job.job.sampling().seed();
+  options.cancelled = cancelled;
+  absl::StatusOr<FinalCheckOutcome> outcome =
+      RunFinalCheck(job.scene, DesignAt(job, x), two_stage, metric, options, backend);
+  if (absl::IsCancelled(outcome.status())) return outcome.status();
+  if (!outcome.ok()) {
+    return absl::Status(outcome.status().code(),
+                        absl::StrCat("final check: ", outcome.status().message()));
+  }
+  if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&outcome->one_stage.payload)) {
+    *outcome->check.mutable_one_stage_metrics() = ToProto(*metrics);
+  }
+  return std::move(outcome->check);
+}
+
+// The final check of the search's best design into `result` (which holds the search's
+// history), then reported once more with the check. A cancel during the check leaves it out.
+absl::Status CheckBestDesign(const PreparedJob& job, const AnnualSetting& setting,
+                             const VnsResult& search, DcBackend* backend,
+                             const JobCallbacks& callbacks,
+                             std::chrono::steady_clock::time_point start, v1::JobResult& result) {
+  if (callbacks.stage) callbacks.stage("check");
+  absl::StatusOr<v1::FinalCheck> check =
+      CheckDesign(job, setting, search.best_x, result.best_value(), backend, callbacks.cancelled);
+  if (absl::IsCancelled(check.status())) return absl::OkStatus();
+  if (!check.ok()) return check.status();
+  *result.mutable_final_check() = *check;
+  if (callbacks.progress) {
+    JobProgress last;
+    last.evaluations = search.evaluations;
+    last.max_evaluations = job.job.budget().max_evaluations();
+    last.current = result.history(result.history_size() - 1);
+    last.best = result.history(search.best_index);
+    last.elapsed_seconds = Since(start);
+    last.final_check = *std::move(check);
+    callbacks.progress(last);
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace
@@ -190,22 +301,11 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   const v1::Job& spec = job.job;
   v1::JobResult result;
 
-  // Sky matrix, the occupied hours and the lit analysed ones (the rest are dark or not counted)
+  // Sky matrix, the occupied hours and the lit analysed ones, the metric settings
   if (callbacks.stage) callbacks.stage("sky");
-  SkyMatrixOptions sky_options;
-  sky_options.ground_reflectance = job.scene.site.ground_reflectance;
-  FENESTRA_ASSIGN_OR_RETURN(sky, BuildSkyMatrix(job.weather, sky_options));
-  std::vector<double> hours;
-  for (const SkyStep& step : sky.steps) hours.push_back(step.hour);
-  FENESTRA_ASSIGN_OR_RETURN(occupied, OccupiedSteps(hours, {spec.metrics().occupied_start_h(),
-                                                            spec.metrics().occupied_end_h()}));
-  const HourBasis hour_basis =
-      spec.metrics().all_hours() ? HourBasis::kAllHours : HourBasis::kOccupied;
-  std::vector<int> columns;
-  for (const int c : LitColumns(sky.radiance)) {
-    if (hour_basis == HourBasis::kAllHours || occupied[c]) columns.push_back(c);
-  }
-  const int analysed_hours = AnalysedHours(occupied, hour_basis);
+  FENESTRA_ASSIGN_OR_RETURN(setting, MakeAnnualSetting(job));
+  const std::vector<int>& columns = setting.columns;
+  const MetricOptions& metric_options = setting.options;
   result.mutable_timings()->set_sky_seconds(Since(start));
 
   // Outdoor matrix: the cached one, or traced now
@@ -226,13 +326,6 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
 
   // The objective: indoor stage with the same random streams for every design
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
-  MetricOptions metric_options;
-  metric_options.udi_lower_lux = spec.metrics().udi_lower_lux();
-  metric_options.udi_upper_lux = spec.metrics().udi_upper_lux();
-  metric_options.da_threshold_lux = spec.metrics().da_threshold_lux();
-  metric_options.sda_min_da_percent = spec.metrics().sda_time_fraction_percent();
-  metric_options.hours = hour_basis;
-  FENESTRA_ASSIGN_OR_RETURN(metric, ToSceneMetric(spec.objective().metric()));
   IndoorOptions indoor_options;
   indoor_options.paths_per_sensor = spec.sampling().indoor_paths_per_sensor();
   indoor_options.max_bounces = spec.sampling().indoor_bounces();
@@ -244,9 +337,9 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
     return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
   }
   // S over the lit analysed hours, in lux
-  Matrix lit_sky(sky.radiance.rows(), static_cast<Eigen::Index>(columns.size()));
+  Matrix lit_sky(setting.sky.radiance.rows(), static_cast<Eigen::Index>(columns.size()));
   for (size_t c = 0; c < columns.size(); ++c) {
-    lit_sky.col(c) = kWhiteEfficacyLumensPerWatt * sky.radiance.col(columns[c]);
+    lit_sky.col(c) = kWhiteEfficacyLumensPerWatt * setting.sky.radiance.col(columns[c]);
   }
 
   // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O) S, as
@@ -260,9 +353,9 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     FENESTRA_ASSIGN_OR_RETURN(tallies, design_tallies->Tally(DesignAt(job, x), metric_options));
-    FENESTRA_ASSIGN_OR_RETURN(metrics,
-                              AnnualMetricsFromTallies(tallies, analysed_hours, metric_options));
-    return MetricEvaluation(std::move(metrics), metric);
+    FENESTRA_ASSIGN_OR_RETURN(
+        metrics, AnnualMetricsFromTallies(tallies, setting.analysed_hours, metric_options));
+    return MetricEvaluation(std::move(metrics), setting.metric);
   };
 
   // The search
@@ -295,19 +388,20 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   vns.seed = spec.sampling().seed();
   VnsCallbacks vns_callbacks;
   vns_callbacks.cancelled = callbacks.cancelled;
+  if (callbacks.stage) callbacks.stage("search");
+  const double search_start = Since(start);
   if (callbacks.progress) {
     vns_callbacks.progress = [&](const VnsProgress& p) {
       JobProgress progress;
       progress.evaluations = p.evaluations;
       progress.max_evaluations = p.max_evaluations;
-      progress.current = ToProto(job, *p.current);
-      progress.best = ToProto(job, *p.best);
+      progress.current = ToProto(job, *p.current, search_start);
+      progress.best = ToProto(job, *p.best, search_start);
       progress.elapsed_seconds = Since(start);
       progress.remaining_seconds = p.remaining_seconds;
       callbacks.progress(progress);
     };
   }
-  if (callbacks.stage) callbacks.stage("search");
   FENESTRA_ASSIGN_OR_RETURN(search, RunVns(variables, objective, vns, vns_callbacks));
 
   // The result
@@ -318,15 +412,38 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&search.best.payload)) {
     *result.mutable_best_metrics() = ToProto(*metrics);
   }
-  for (const VnsRecord& record : search.history) *result.add_history() = ToProto(job, record);
+  for (const VnsRecord& record : search.history) {
+    *result.add_history() = ToProto(job, record, search_start);
+  }
+  AddBestOverTime(result);
   result.set_evaluations(search.evaluations);
   result.set_stop_reason(std::string(StopReasonName(search.stop_reason)));
   result.mutable_timings()->set_evaluation_seconds(search.evaluation_seconds);
-  result.mutable_timings()->set_total_seconds(Since(start));
   result.set_outdoor_mean_relative_standard_error(
       MeanRelativeError(outdoor->coefficients, outdoor->standard_error, 0.01, false));
   result.set_backend(backend->Name());
+
+  // The final check: the best design by the one-stage method
+  if (spec.sampling().final_check() && search.stop_reason != StopReason::kCancelled) {
+    design_tallies.reset();  // the search's recorded paths or device buffers
+    FENESTRA_RETURN_IF_ERROR(
+        CheckBestDesign(job, setting, search, backend.get(), callbacks, start, result));
+  }
+  result.mutable_timings()->set_total_seconds(Since(start));
   return result;
+}
+
+absl::StatusOr<v1::FinalCheck> CheckJobDesign(
+    const PreparedJob& job, const google::protobuf::Map<std::string, double>& design,
+    const v1::Estimate& two_stage) {
+  std::vector<double> x;
+  for (const v1::DesignVariable& v : job.job.variables()) {
+    const auto it = design.find(v.name());
+    x.push_back(it == design.end() ? v.start() : it->second);
+  }
+  FENESTRA_ASSIGN_OR_RETURN(setting, MakeAnnualSetting(job));
+  FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(job.job.sampling().backend()));
+  return CheckDesign(job, setting, x, two_stage, backend.get(), {});
 }
 
 }  // namespace fenestra

@@ -6,6 +6,7 @@
 // local mode and the service's workers run exactly this.
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "absl/status/statusor.h"
@@ -81,7 +82,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& sampling);
 absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1::Sampling& sampling,
                                                    const std::function<bool()>& cancelled = {});
 
-// What a running job reports after each evaluation.
+// What a running job reports after each evaluation, and once more after its final check.
 struct JobProgress {
   int evaluations = 0;
   int max_evaluations = 0;
@@ -89,10 +90,12 @@ struct JobProgress {
   v1::Evaluation best;
   double elapsed_seconds = 0;
   double remaining_seconds = 0;  // estimate
+  // Only in the report after the final check: its result.
+  std::optional<v1::FinalCheck> final_check;
 };
 
 struct JobCallbacks {
-  // A stage starts: "sky", "outdoor", "search".
+  // A stage starts: "sky", "outdoor", "indoor paths", "search", "check" (the final check).
   std::function<void(const std::string& stage)> stage;
   std::function<void(const JobProgress&)> progress;
   // Polled between evaluations; true stops the search at that checkpoint.
@@ -100,9 +103,20 @@ struct JobCallbacks {
 };
 
 // Runs the job. `outdoor` may hold a cached outdoor matrix whose key equals
-// OutdoorMatrixKey(job); otherwise (null) it is computed. A cancelled job returns its
-// result so far with stop_reason "cancelled". `outdoor` with another key is an error.
+// OutdoorMatrixKey(job); otherwise (null) it is computed. After the search the best design
+// is checked by the one-stage method (sampling.final_check, core/optimize/final_check.h),
+// unless the job was cancelled; a cancel during the check leaves it out. A cancelled job
+// returns its result so far with stop_reason "cancelled". `outdoor` with another key is an
+// error.
 absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix* outdoor,
                                      const JobCallbacks& callbacks = {});
+
+// The final check (JobResult.final_check, core/optimize/final_check.h) of `design` (variable
+// name -> value, as JobResult.best_design; a variable left out is at its start) against the
+// two-stage estimate `two_stage` of the job's metric, with the job's sky, metric settings,
+// batches, seed and backend: what RunJob does after its search (bench/final_check_bench.cpp).
+absl::StatusOr<v1::FinalCheck> CheckJobDesign(
+    const PreparedJob& job, const google::protobuf::Map<std::string, double>& design,
+    const v1::Estimate& two_stage);
 
 }  // namespace fenestra

@@ -30,6 +30,8 @@ constexpr int64_t kDefaultOutdoorPaths = 20'000'000;
 constexpr int64_t kDefaultIndoorPaths = 200'000;
 constexpr int kDefaultOutdoorBounces = 30;
 constexpr int kDefaultIndoorBounces = 5;
+// Whether a job checks its best design by the one-stage method when its sampling does not say.
+constexpr bool kFinalCheckByDefault = true;
 
 absl::Status Invalid(const std::string& field, const std::string& reason) {
   return absl::InvalidArgumentError(absl::StrCat("job ", field, ": ", reason));
@@ -226,6 +228,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   if (s.basis_cells() == 0) s.set_basis_cells(kDefaultBasisCells);
   if (s.backend().empty()) s.set_backend("auto");
   if (s.batches() == 0) s.set_batches(kDefaultBatches);
+  if (!s.has_final_check()) s.set_final_check(kFinalCheckByDefault);
   if (s.basis_cells() != 288 && s.basis_cells() != 1152) {
     return Invalid("sampling.basis_cells", "must be 288 or 1152");
   }

@@ -8,6 +8,7 @@
 #include <sys/socket.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "tests/server/fenestrad_harness.h"
@@ -466,6 +467,63 @@ TEST_F(FenestradTest, PythonClientRegistersASiteAndRunsAJob) {
   EXPECT_THAT(r.out, HasSubstr("stage search"));
   EXPECT_THAT(r.out, HasSubstr("[6/6] best"));
   EXPECT_THAT(r.out, HasSubstr("best design: alpha="));
+}
+
+// The final check travels with the job: the last progress event and the result carry it,
+// the stored job keeps it across a restart, the client prints it, and the daemon logs a
+// warning when it disagrees. The job keeps the quick job's reflection limits (5 indoor),
+// which leave out light the check counts: it disagrees at this seed.
+TEST_F(FenestradTest, FinalCheckIsInTheLastProgressEventTheResultAndTheLog) {
+  auto d = StartDaemon();
+  v1::Job job = TinyJob(4);
+  job.mutable_sampling()->set_indoor_paths_per_sensor(10000);
+  CliResult r = d->Cli({"job", "submit", WriteJob("checked", job), "--watch", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::vector<v1::JobEvent> events;
+  std::istringstream lines(r.out);
+  for (std::string line; std::getline(lines, line);) events.push_back(FromJson<v1::JobEvent>(line));
+  ASSERT_GE(events.size(), 3u);
+  ASSERT_TRUE(events.back().has_finished()) << r.out;
+  const v1::JobResult& result = events.back().finished();
+  ASSERT_TRUE(result.has_final_check());
+  const v1::FinalCheck& check = result.final_check();
+  EXPECT_EQ(check.two_stage().value(), result.best_value().value());
+  EXPECT_GT(check.one_stage().standard_error(), 0);
+  EXPECT_GE(check.paths_per_sensor(), check.pilot_paths_per_sensor());
+  EXPECT_EQ(result.best_over_time(result.best_over_time_size() - 1).value().value(),
+            result.best_value().value());
+
+  // The check stage, then one progress event with the check, the last before the result
+  const v1::JobEvent& last_progress = events[events.size() - 2];
+  ASSERT_TRUE(last_progress.has_progress()) << r.out;
+  EXPECT_EQ(last_progress.progress().final_check().SerializeAsString(), check.SerializeAsString());
+  int with_check = 0;
+  bool check_stage = false;
+  for (const v1::JobEvent& e : events) {
+    with_check += e.has_progress() && e.progress().has_final_check();
+    check_stage |= e.has_stage() && e.stage().name() == "check";
+  }
+  EXPECT_EQ(with_check, 1);
+  EXPECT_TRUE(check_stage);
+
+  // The flag, exactly when the difference exceeds 3 standard errors; printed and logged
+  const v1::Estimate& difference = check.difference();
+  EXPECT_EQ(check.disagrees(), std::abs(difference.value()) > 3 * difference.standard_error());
+  ASSERT_TRUE(check.disagrees()) << check.DebugString();
+  EXPECT_THAT(d->Log(), HasSubstr("warning job job-1: the final check disagrees"));
+  r = d->Cli({"job", "show", "job-1"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("[4/4] check of the best design"));
+  EXPECT_THAT(r.out, HasSubstr(": DISAGREES"));
+  EXPECT_THAT(r.out, HasSubstr("final check (one-stage, "));
+  EXPECT_THAT(r.out, HasSubstr("warning: the two-stage value and the one-stage check differ"));
+
+  // The store keeps the check with the result and the latest progress
+  EXPECT_EQ(d->Stop(), 0);
+  d->Start();
+  const v1::JobInfo stored = GetJob(*d, "job-1");
+  EXPECT_EQ(stored.result().final_check().SerializeAsString(), check.SerializeAsString());
+  EXPECT_EQ(stored.progress().final_check().SerializeAsString(), check.SerializeAsString());
 }
 
 // What a hostile tester sent, each refused at the door: INVALID_ARGUMENT naming the field,
