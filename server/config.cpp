@@ -15,11 +15,14 @@
 namespace fenestra {
 namespace {
 
-// Defaults of the settings added with users (daemon.proto documents them)
+// Defaults of the settings added with users and with the data-directory limits
+// (daemon.proto documents them)
 constexpr char kDefaultAuth[] = "token";
 constexpr int kDefaultMaxQueuedJobsPerUser = 8;
 constexpr int kDefaultMaxSitesPerUser = 100;
 constexpr int64_t kDefaultMaxUploadBytesPerUser = int64_t{256} << 20;
+constexpr int64_t kDefaultMaxDataDirBytes = int64_t{10} << 30;
+constexpr int kDefaultMaxConcurrentHeavyRequests = 2;
 
 // Checks auth and TLS against the listen address: what leaves this machine is encrypted
 // and authenticated unless the configuration says otherwise in so many words.
@@ -151,6 +154,11 @@ absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
            fill(limits.max_upload_bytes_per_user(), kDefaultMaxUploadBytesPerUser,
                 "max_upload_bytes_per_user",
                 [&](int64_t v) { limits.set_max_upload_bytes_per_user(v); }),
+           fill(limits.max_data_dir_bytes(), kDefaultMaxDataDirBytes, "max_data_dir_bytes",
+                [&](int64_t v) { limits.set_max_data_dir_bytes(v); }),
+           fill(limits.max_concurrent_heavy_requests(), kDefaultMaxConcurrentHeavyRequests,
+                "max_concurrent_heavy_requests",
+                [&](int v) { limits.set_max_concurrent_heavy_requests(v); }),
        }) {
     if (!s.ok()) return s;
   }

@@ -16,6 +16,7 @@
 #include "absl/time/time.h"
 #include "server/config.h"
 #include "server/daemon.h"
+#include "server/heavy_requests.h"
 #include "server/log_safe.h"
 #include "server/users.h"
 
@@ -30,9 +31,9 @@ struct Flags {
   std::string tls_cert, tls_key, tls_client_ca;
   bool allow_plaintext = false;
   int workers = 0, max_sensors = 0, max_evaluations = 0, max_message_bytes = 0, max_queued_jobs = 0,
-      max_sites = 0, max_queued_jobs_per_user = 0, max_sites_per_user = 0;
+      max_sites = 0, max_queued_jobs_per_user = 0, max_sites_per_user = 0, max_heavy_requests = 0;
   int64_t max_outdoor_paths = 0, max_indoor_paths = 0, max_triangles = 0,
-          max_upload_bytes_per_user = 0;
+          max_upload_bytes_per_user = 0, max_data_dir_bytes = 0;
   double grace = 0;
 };
 
@@ -68,6 +69,11 @@ void AddDaemonFlags(CLI::App& app, Flags& f) {
   app.add_option("--max-sites-per-user", f.max_sites_per_user, "limit: sites per user [100]");
   app.add_option("--max-upload-bytes-per-user", f.max_upload_bytes_per_user,
                  "limit: weather files a user's sites and queued or running jobs hold [256 MiB]");
+  app.add_option("--max-data-dir-bytes", f.max_data_dir_bytes,
+                 "limit: bytes under the data directory [10 GiB]");
+  app.add_option("--max-heavy-requests", f.max_heavy_requests,
+                 "limit: requests of 1 MiB or more (registrations, submissions, site "
+                 "scenes sent back) processed at once [2]");
   app.add_option("--shutdown-grace", f.grace,
                  "seconds running jobs may go on after SIGTERM before they are interrupted [10]");
   app.add_option("--log-level", f.log_level, "trace, debug, info, warn, error [info]");
@@ -99,6 +105,8 @@ void ApplyFlags(const Flags& f, fenestra::v1::DaemonConfig& config) {
   if (f.max_queued_jobs_per_user) l.set_max_queued_jobs_per_user(f.max_queued_jobs_per_user);
   if (f.max_sites_per_user) l.set_max_sites_per_user(f.max_sites_per_user);
   if (f.max_upload_bytes_per_user) l.set_max_upload_bytes_per_user(f.max_upload_bytes_per_user);
+  if (f.max_data_dir_bytes) l.set_max_data_dir_bytes(f.max_data_dir_bytes);
+  if (f.max_heavy_requests) l.set_max_concurrent_heavy_requests(f.max_heavy_requests);
 }
 
 // `fenestrad user ...`: what was asked, on the store in `data_dir`.
@@ -207,6 +215,7 @@ int Serve(const fenestra::v1::DaemonConfig& config, const std::string& port_file
 }  // namespace
 
 int main(int argc, char** argv) {
+  fenestra::ReleaseLargeBlocksWhenFreed();
   CLI::App app{"fenestrad: the Fenestra daylight optimization service"};
   Flags flags;
   UserCommand user;

@@ -127,21 +127,8 @@ class Daemon {
   }
 
   void Start() {
+    Launch();
     const std::string port_file = data_dir_ + ".port";
-    fs::remove(port_file);
-    std::vector<std::string> args = {FENESTRAD, "--listen",    "127.0.0.1:0", "--data-dir",
-                                     data_dir_, "--port-file", port_file};
-    args.insert(args.end(), flags_.begin(), flags_.end());
-    pid_ = fork();
-    if (pid_ == 0) {
-      prctl(PR_SET_PDEATHSIG, SIGKILL);  // no daemon outlives a crashed test
-      const int log = open(log_path().c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-      dup2(log, STDERR_FILENO);
-      dup2(log, STDOUT_FILENO);
-      std::vector<char*> argv = Argv(args);
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
     const auto deadline = Clock::now() + std::chrono::seconds(20);
     while (!fs::exists(port_file) && Clock::now() < deadline) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -152,10 +139,16 @@ class Daemon {
     sites_ = v1::SiteService::NewStub(channel_);
     jobs_ = v1::JobService::NewStub(channel_);
   }
+  // Starts a daemon that is expected to stop by itself (a failed start); its exit code.
+  int RunToExit() {
+    Launch();
+    return Signal(0);
+  }
   // SIGTERM; the exit code.
   int Stop() { return Signal(SIGTERM); }
   int Kill() { return Signal(SIGKILL); }
 
+  pid_t pid() const { return pid_; }
   const std::string& address() const { return address_; }
   // The token Context() sends ("" = none).
   void set_token(std::string token) { token_ = std::move(token); }
@@ -209,9 +202,28 @@ class Daemon {
   }
 
  private:
+  // Forks and runs fenestrad, its output appended to the log.
+  void Launch() {
+    const std::string port_file = data_dir_ + ".port";
+    fs::remove(port_file);
+    std::vector<std::string> args = {FENESTRAD, "--listen",    "127.0.0.1:0", "--data-dir",
+                                     data_dir_, "--port-file", port_file};
+    args.insert(args.end(), flags_.begin(), flags_.end());
+    pid_ = fork();
+    if (pid_ == 0) {
+      prctl(PR_SET_PDEATHSIG, SIGKILL);  // no daemon outlives a crashed test
+      const int log = open(log_path().c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      dup2(log, STDERR_FILENO);
+      dup2(log, STDOUT_FILENO);
+      std::vector<char*> argv = Argv(args);
+      execv(argv[0], argv.data());
+      _exit(127);
+    }
+  }
+  // Sends `signal` (0: none) and waits for the exit; the exit code.
   int Signal(int signal) {
     if (pid_ <= 0) return -1;
-    kill(pid_, signal);
+    if (signal != 0) kill(pid_, signal);
     int status = 0;
     waitpid(pid_, &status, 0);
     pid_ = -1;
