@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
   fenestra::AddSkyCommand(app);
   fenestra::AddDcCommand(app);
   fenestra::AddOptimizeCommand(app);
+  fenestra::AddReportCommand(app);
   fenestra::AddSiteCommand(app);
   fenestra::AddJobCommand(app);
   try {
