@@ -110,12 +110,14 @@ void DrawOccupancy(Svg& svg, const DayHourGrid& grid, const v1::MetricSettings& 
   auto band = [&](double from, double to) {
     svg.Rect(kLeft, kTop + from * kHourHeight, width, (to - from) * kHourHeight, "occupancy");
   };
+  svg.BeginGroup("occupied-hours");
   if (start < end) {
     band(start, end);
   } else {
     band(start, 24);
     band(0, end);
   }
+  svg.EndGroup();
 }
 
 // Occupied hours below, in and above the range.
