@@ -1,6 +1,8 @@
 // The summary (best design and its metrics) and the settings, timings and versions.
 #include <fmt/format.h>
 
+#include <algorithm>
+
 
 #include "client/report/sections.h"
 #include "client/report/svg.h"
@@ -136,8 +138,9 @@ std::string SummarySection(const ReportData& data) {
 }
 
 std::string SettingsSection(const ReportData& data) {
-  Rows versions;
+  Rows versions;  // by name: a map's order is not kept
   for (const auto& [name, version] : data.result.versions()) versions.push_back({name, version});
+  std::sort(versions.begin(), versions.end());
   std::string body = "<div class=\"tables\">";
   body += KeyValueTable("job-table", "Job", JobRows(data));
   body += KeyValueTable("sampling-table", "Sampling", SamplingRows(data));

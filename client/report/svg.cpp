@@ -83,13 +83,15 @@ std::string EscapeXml(std::string_view text) {
 
 std::vector<double> NiceTicks(double lo, double hi, int target) {
   if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) return {lo};
+  // The factor nearest (geometrically) to the raw step, as d3's tickIncrement chooses it
   const double raw = (hi - lo) / std::max(1, target);
   const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
-  double step = magnitude;
-  for (const double m : {1.0, 2.0, 5.0, 10.0}) {
-    step = m * magnitude;
-    if (step >= raw) break;
-  }
+  const double error = raw / magnitude;
+  const double factor = error >= std::sqrt(50.0)   ? 10
+                        : error >= std::sqrt(10.0) ? 5
+                        : error >= std::sqrt(2.0)  ? 2
+                                                   : 1;
+  const double step = factor * magnitude;
   std::vector<double> ticks;
   for (double t = std::ceil(lo / step - 1e-9) * step; t <= hi + 1e-9 * step; t += step) {
     ticks.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
@@ -100,8 +102,8 @@ std::vector<double> NiceTicks(double lo, double hi, int target) {
 std::string TickLabel(double value, double step) {
   const int decimals =
       step > 0 ? std::clamp(static_cast<int>(-std::floor(std::log10(step) + 1e-9)), 0, 6) : 0;
-  std::string s = fmt::format("{:.{}f}", value, decimals);
-  return s == "-0" ? "0" : s;
+  const double rounded = std::abs(value) < 0.5 * std::pow(10.0, -decimals) ? 0.0 : value;
+  return fmt::format("{:.{}f}", rounded, decimals);
 }
 
 void PaddedRange(const std::vector<double>& values, double fraction, double* lo, double* hi) {
