@@ -158,11 +158,11 @@ const v1::JobResult& ResultOrFail(const v1::JobInfo& info) {
     if (info.state() == v1::JOB_STATE_FAILED) {
       Fail(absl::FailedPreconditionError(absl::StrCat(info.id(), " failed: ", info.error())));
     }
-    Fail(absl::FailedPreconditionError(absl::StrCat(
-        info.id(), " is ", StateName(info.state()),
-        IsFinalState(info.state())
-            ? " without a result"
-            : absl::StrCat("; no result yet (fenestra job watch ", info.id(), ")"))));
+    Fail(absl::FailedPreconditionError(
+        absl::StrCat(info.id(), " is ", StateName(info.state()),
+                     IsFinalState(info.state())
+                         ? " without a result"
+                         : absl::StrCat("; no result yet (fenestra job watch ", info.id(), ")"))));
   }
   return info.result();
 }

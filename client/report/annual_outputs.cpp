@@ -26,9 +26,9 @@ absl::StatusOr<const v1::HourlyIlluminance*> Hourly(const v1::JobResult& result)
   const int64_t steps = h.month_size();
   if (h.day_size() != steps || h.hour_size() != steps ||
       h.illuminance_lux_size() != static_cast<int64_t>(h.sensors_size()) * steps) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "best_hourly: ", h.illuminance_lux_size(), " values do not fill ", h.sensors_size(),
-        " sensors x ", steps, " time steps"));
+    return absl::InvalidArgumentError(absl::StrCat("best_hourly: ", h.illuminance_lux_size(),
+                                                   " values do not fill ", h.sensors_size(),
+                                                   " sensors x ", steps, " time steps"));
   }
   return &h;
 }

@@ -15,7 +15,7 @@ namespace fenestra {
 namespace {
 
 constexpr double kMaxWidth = 250, kMaxHeight = 440;  // drawing area of the section [px]
-constexpr double kDetailSize = 300;                   // of the detail [px]
+constexpr double kDetailSize = 300;                  // of the detail [px]
 constexpr double kLeft = 70, kTop = 40, kRight = 150, kBottom = 62;
 
 using Uv = std::pair<double, double>;  // depth from the outer face [m], along the stack [m]
@@ -33,12 +33,15 @@ struct BlindCut {
 
 std::vector<Uv> Hull(std::vector<Uv> p) {
   std::sort(p.begin(), p.end());
-  p.erase(std::unique(p.begin(), p.end(), [](Uv a, Uv b) {
-            return std::abs(a.first - b.first) < 1e-12 && std::abs(a.second - b.second) < 1e-12;
-          }),
+  p.erase(std::unique(p.begin(), p.end(),
+                      [](Uv a, Uv b) {
+                        return std::abs(a.first - b.first) < 1e-12 &&
+                               std::abs(a.second - b.second) < 1e-12;
+                      }),
           p.end());
   auto cross = [](Uv o, Uv a, Uv b) {
-    return (a.first - o.first) * (b.second - o.second) - (a.second - o.second) * (b.first - o.first);
+    return (a.first - o.first) * (b.second - o.second) -
+           (a.second - o.second) * (b.first - o.first);
   };
   std::vector<Uv> hull(2 * p.size());
   size_t k = 0;
@@ -173,7 +176,8 @@ Chart EqualScaleChart(Svg& svg, double u0, double u1, double v0, double v1, doub
 }
 
 std::string StackLabel(bool vertical) {
-  return vertical ? "across the window, from its centre [m]" : "height from the opening's centre [m]";
+  return vertical ? "across the window, from its centre [m]"
+                  : "height from the opening's centre [m]";
 }
 
 std::string SectionFigure(const BlindCut& s) {
@@ -235,7 +239,8 @@ std::string DetailFigure(const BlindCut& s, const BlindDesign& design) {
   Chart chart = EqualScaleChart(svg, u0, u1, v0, v1, kDetailSize, kDetailSize,
                                 "depth from the window's outer face [m]", StackLabel(s.vertical));
   chart.DrawAxes(4, 4);
-  svg.Line(chart.X(s.depth), chart.top(), chart.X(s.depth), chart.top() + chart.height(), "reference-line");
+  svg.Line(chart.X(s.depth), chart.top(), chart.X(s.depth), chart.top() + chart.height(),
+           "reference-line");
   svg.Text(chart.X(s.depth) - 5, chart.top() + 6, "wall's inner face", "dim-text", Anchor::kEnd,
            -90);
   for (int i = k; i <= last; ++i) svg.Polygon(ToPx(chart, s.slats[i]), "slat");
@@ -252,14 +257,15 @@ std::string DetailFigure(const BlindCut& s, const BlindDesign& design) {
                         1000 * design.slat_thickness_m));
   if (last > k) {
     const double right = chart.left() + chart.width();
-    Dimension(svg, {right, chart.Y(s.centers[last].second)}, {right, chart.Y(c.second)}, {1, 0},
-              10, fmt::format("p = {:.1f} mm", 1000 * s.layout.pitch_m));
+    Dimension(svg, {right, chart.Y(s.centers[last].second)}, {right, chart.Y(c.second)}, {1, 0}, 10,
+              fmt::format("p = {:.1f} mm", 1000 * s.layout.pitch_m));
   }
   return "<figure class=\"plot\">" + svg.Finish() +
-         fmt::format("<figcaption>Two slats enlarged (1 m = {:.0f} px): the tilt α from the "
-                     "window plane, slat width w and thickness t, and the pitch p between the "
-                     "slat axes.</figcaption></figure>\n",
-                     scale);
+         fmt::format(
+             "<figcaption>Two slats enlarged (1 m = {:.0f} px): the tilt α from the "
+             "window plane, slat width w and thickness t, and the pitch p between the "
+             "slat axes.</figcaption></figure>\n",
+             scale);
 }
 
 std::string BlindTable(const Scene& scene, const BlindCut& s, const BlindDesign& d) {
@@ -268,19 +274,23 @@ std::string BlindTable(const Scene& scene, const BlindCut& s, const BlindDesign&
   return HtmlTable(
       "blind-table", {"quantity", "value"},
       {{"orientation", s.vertical ? "vertical slats" : "horizontal slats"},
-       {"tilt α", fmt::format("{:.4f} rad ({:.1f}°)", d.tilt_rad, d.tilt_rad * 180 / std::numbers::pi)},
+       {"tilt α",
+        fmt::format("{:.4f} rad ({:.1f}°)", d.tilt_rad, d.tilt_rad * 180 / std::numbers::pi)},
        {"slat width w", fmt::format("{:.1f} mm", 1000 * d.slat_width_m)},
        {"slat spacing s", fmt::format("{:.1f} mm", 1000 * d.slat_spacing_m)},
        {"slat thickness t", fmt::format("{:.1f} mm", 1000 * d.slat_thickness_m)},
        {"pitch p (w + s, widened so tilted slats never overlap)",
         fmt::format("{:.1f} mm", 1000 * s.layout.pitch_m)},
        {"slats", fmt::format("{}", s.layout.slat_count)},
-       {"slat axes behind the wall's inner face", fmt::format("{:.1f} mm", 1000 * s.layout.axis_depth_m)},
+       {"slat axes behind the wall's inner face",
+        fmt::format("{:.1f} mm", 1000 * s.layout.axis_depth_m)},
        {"clearance to the wall", fmt::format("{:.1f} mm", 1000 * spec.wall_gap_m)},
-       {"slat length beyond the opening, each end", fmt::format("{:.1f} mm", 1000 * spec.side_margin_m)},
+       {"slat length beyond the opening, each end",
+        fmt::format("{:.1f} mm", 1000 * spec.side_margin_m)},
        {"slat material", fmt::format("{} (reflectance {:.2f})", m.name, m.reflectance)},
-       {"window opening", fmt::format("{:.2f} × {:.2f} m, wall {:.2f} m thick", scene.window.width_m,
-                                      scene.window.height_m, scene.window.depth_m)}});
+       {"window opening",
+        fmt::format("{:.2f} × {:.2f} m, wall {:.2f} m thick", scene.window.width_m,
+                    scene.window.height_m, scene.window.depth_m)}});
 }
 
 }  // namespace
@@ -297,7 +307,8 @@ std::string BlindSection(const ReportData& data) {
   std::string body = Note(
       "Drawn from the slats the tracer used (core/geometry/blind): each slat's cross-section, "
       "the wall cut through above and below the opening, outdoors on the left.");
-  body += "<div class=\"figures\">" + SectionFigure(s) + DetailFigure(s, data.best_design) + "</div>\n";
+  body +=
+      "<div class=\"figures\">" + SectionFigure(s) + DetailFigure(s, data.best_design) + "</div>\n";
   return Section("blind", heading, body + BlindTable(*data.scene, s, data.best_design));
 }
 

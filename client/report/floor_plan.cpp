@@ -26,8 +26,8 @@ std::vector<Xy> WindowCorners(const Window& w) {
   for (const double depth : {0.0, w.depth_m}) {
     for (const double a : {-0.5, 0.5}) {
       for (const double u : {-0.5, 0.5}) {
-        const Vec3d p = w.center - depth * w.normal + (a * w.width_m) * w.across +
-                        (u * w.height_m) * w.up;
+        const Vec3d p =
+            w.center - depth * w.normal + (a * w.width_m) * w.across + (u * w.height_m) * w.up;
         corners.emplace_back(p.x, p.y);
       }
     }
@@ -41,7 +41,8 @@ std::vector<Xy> ConvexHull(std::vector<Xy> points) {
   points.erase(std::unique(points.begin(), points.end()), points.end());
   if (points.size() < 3) return points;
   auto cross = [](Xy o, Xy a, Xy b) {
-    return (a.first - o.first) * (b.second - o.second) - (a.second - o.second) * (b.first - o.first);
+    return (a.first - o.first) * (b.second - o.second) -
+           (a.second - o.second) * (b.first - o.first);
   };
   std::vector<Xy> hull(2 * points.size());
   size_t k = 0;
@@ -90,7 +91,8 @@ void DrawRoom(Svg& svg, const Chart& chart, const Scene& scene) {
     const Vec3d* v = &mesh.vertices[3 * t];
     const Vec3d normal = Cross(v[1] - v[0], v[2] - v[0]);
     if (std::abs(normal.z) > 0.2 * Length(normal)) {
-      svg.Polygon({{chart.X(v[0].x), chart.Y(v[0].y)}, {chart.X(v[1].x), chart.Y(v[1].y)},
+      svg.Polygon({{chart.X(v[0].x), chart.Y(v[0].y)},
+                   {chart.X(v[1].x), chart.Y(v[1].y)},
                    {chart.X(v[2].x), chart.Y(v[2].y)}},
                   "plan-floor");
       continue;
@@ -108,7 +110,8 @@ void DrawRoom(Svg& svg, const Chart& chart, const Scene& scene) {
     }
     walls.push_back(segment);
   }
-  for (const Points& w : walls) svg.Line(w[0].first, w[0].second, w[1].first, w[1].second, "plan-wall");
+  for (const Points& w : walls)
+    svg.Line(w[0].first, w[0].second, w[1].first, w[1].second, "plan-wall");
   Points window;
   for (const auto& [x, y] : ConvexHull(WindowCorners(scene.window))) {
     window.emplace_back(chart.X(x), chart.Y(y));
@@ -140,7 +143,9 @@ void DrawNorthArrow(Svg& svg, double x, double y) {
 }
 
 // Sensor labels fit when no label box overlaps another or another sensor.
-std::string SensorValue(const v1::Estimate& e) { return WithError(e.value(), e.standard_error(), 1); }
+std::string SensorValue(const v1::Estimate& e) {
+  return WithError(e.value(), e.standard_error(), 1);
+}
 
 // Each sensor's name sits above it and its value below, centred; they fit when no two
 // sensors closer than a label's width share a column of labels.
@@ -162,24 +167,26 @@ std::string PlanFigure(const ReportData& data, const std::string& id, const std:
                        const google::protobuf::RepeatedPtrField<v1::Estimate>& values) {
   const Scene& scene = *data.scene;
   const Extent e = PlanExtent(scene);
-  const double scale = std::min(kPlanMaxWidth / (e.max_x - e.min_x),
-                                kPlanMaxHeight / (e.max_y - e.min_y));
+  const double scale =
+      std::min(kPlanMaxWidth / (e.max_x - e.min_x), kPlanMaxHeight / (e.max_y - e.min_y));
   const double width = (e.max_x - e.min_x) * scale, height = (e.max_y - e.min_y) * scale;
   Svg svg(id, "plan-plot", kLeft + width + kLabelRoom + kBarRoom, kTop + height + kBottom,
           "Floor plan with the sensors coloured by " + what);
   Chart chart(svg, kLeft, kTop, width, height, {"x, east [m]", e.min_x, e.max_x},
               {"y, north [m]", e.min_y, e.max_y});
-  chart.DrawAxes(std::max(2, static_cast<int>(width / 60)), std::max(2, static_cast<int>(height / 60)));
+  chart.DrawAxes(std::max(2, static_cast<int>(width / 60)),
+                 std::max(2, static_cast<int>(height / 60)));
   DrawRoom(svg, chart, scene);
   LabelWindow(svg, chart, scene.window);
   DrawNorthArrow(svg, kLeft + width - 14, kTop + 20);
 
   std::vector<Xy> at;
-  for (const Sensor& s : scene.sensors) at.emplace_back(chart.X(s.position.x), chart.Y(s.position.y));
+  for (const Sensor& s : scene.sensors)
+    at.emplace_back(chart.X(s.position.x), chart.Y(s.position.y));
   double longest = 0;
   for (int i = 0; i < values.size(); ++i) {
-    longest = std::max({longest, TextWidth(scene.sensors[i].name, 11),
-                        TextWidth(SensorValue(values[i]), 11.5)});
+    longest = std::max(
+        {longest, TextWidth(scene.sensors[i].name, 11), TextWidth(SensorValue(values[i]), 11.5)});
   }
   const bool labelled = LabelsFit(at, longest);
   svg.BeginGroup("sensors");
@@ -189,16 +196,20 @@ std::string PlanFigure(const ReportData& data, const std::string& id, const std:
     if (!labelled) continue;
     svg.Text(at[i].first, at[i].second - kSensorRadius - 4, scene.sensors[i].name, "sensor-name",
              Anchor::kMiddle);
-    svg.Text(at[i].first, at[i].second + kSensorRadius + 13,
-             SensorValue(v), "sensor-value",
+    svg.Text(at[i].first, at[i].second + kSensorRadius + 13, SensorValue(v), "sensor-value",
              Anchor::kMiddle);
   }
   svg.EndGroup();
+  if (data.map_sensor >= 0) {
+    svg.Circle(at[data.map_sensor].first, at[data.map_sensor].second, kSensorRadius + 4,
+               "map-sensor");
+  }
   ViridisColorBar(svg, kLeft + width + kLabelRoom, kTop + 20, std::min(height - 20, 220.0), 0, 100,
                   short_name + " [%]");
-  std::string figure = "<figure class=\"plot\">" + svg.Finish() + "<figcaption>" +
-                       EscapeXml(what) + " of each sensor, best design";
+  std::string figure = "<figure class=\"plot\">" + svg.Finish() + "<figcaption>" + EscapeXml(what) +
+                       " of each sensor, best design";
   if (!labelled) figure += " (values in the table below)";
+  if (data.map_sensor >= 0) figure += "; the ring marks the temporal map's sensor";
   return figure + "</figcaption></figure>\n";
 }
 
@@ -229,8 +240,8 @@ std::string SensorTable(const ReportData& data, const std::string& udi, const st
   for (size_t i = 0; i < scene.sensors.size(); ++i) {
     const Sensor& s = scene.sensors[i];
     const int k = static_cast<int>(i);
-    rows.push_back({s.name, fmt::format("{:.2f}", s.position.x), fmt::format("{:.2f}", s.position.y),
-                    fmt::format("{:.2f}", s.position.z),
+    rows.push_back({s.name, fmt::format("{:.2f}", s.position.x),
+                    fmt::format("{:.2f}", s.position.y), fmt::format("{:.2f}", s.position.z),
                     WithError(m.sensor_udi(k).value(), m.sensor_udi(k).standard_error(), 1),
                     WithError(m.sensor_da(k).value(), m.sensor_da(k).standard_error(), 1),
                     hourly ? fmt::format("{:.0f}", means[i]) : "not recorded"});
@@ -245,7 +256,8 @@ std::string SensorTable(const ReportData& data, const std::string& udi, const st
 std::string FloorPlanSection(const ReportData& data) {
   const std::string heading = "Floor plan and sensors";
   if (!data.scene) {
-    return Section("floor-plan", heading, NotRecorded("The scene", "this result does not hold its job"));
+    return Section("floor-plan", heading,
+                   NotRecorded("The scene", "this result does not hold its job"));
   }
   const int sensors = static_cast<int>(data.scene->sensors.size());
   const v1::Metrics& m = data.result.best_metrics();

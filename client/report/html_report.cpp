@@ -58,6 +58,7 @@ footer { margin-top: 36px; font-size: 13px; border-top: 1px solid #d0d7de; paddi
 .plan-label { font-size: 12px; fill: #1a1a1a; }
 .north-arrow { fill: #1a1a1a; }
 .sensor { stroke: #1a1a1a; stroke-width: 1.2; }
+.map-sensor { fill: none; stroke: #d55e00; stroke-width: 2; }
 .sensor-name { font-size: 10.5px; fill: #555; }
 .sensor-value { font-size: 11px; font-weight: 600; fill: #1a1a1a; }
 .colorbar, .swatch { stroke: #6e7781; stroke-width: 0.8; }
@@ -86,17 +87,21 @@ std::string Header(const ReportData& data) {
   std::vector<std::string> design;
   for (const v1::DesignVariable& v : r.job().variables()) {
     const auto best = r.best_design().find(v.name());
-    if (best != r.best_design().end()) design.push_back(v.name() + " " + DesignValue(v.name(), best->second));
+    if (best != r.best_design().end())
+      design.push_back(v.name() + " " + DesignValue(v.name(), best->second));
   }
-  std::string html = fmt::format("<header>\n<h1>Fenestra report: {}</h1>\n",
-                                 EscapeXml(r.job().name().empty() ? "optimization job" : r.job().name()));
-  html += fmt::format("<p class=\"lead\">Best design: {} — {} {} %</p>\n",
-                      EscapeXml(absl::StrJoin(design, ", ")), EscapeXml(data.metric_name),
-                      EscapeXml(WithError(r.best_value().value(), r.best_value().standard_error())));
+  std::string html =
+      fmt::format("<header>\n<h1>Fenestra report: {}</h1>\n",
+                  EscapeXml(r.job().name().empty() ? "optimization job" : r.job().name()));
+  html +=
+      fmt::format("<p class=\"lead\">Best design: {} — {} {} %</p>\n",
+                  EscapeXml(absl::StrJoin(design, ", ")), EscapeXml(data.metric_name),
+                  EscapeXml(WithError(r.best_value().value(), r.best_value().standard_error())));
   html += fmt::format(
       "<p class=\"meta\">{} evaluations, stopped: {}; {:.1f} s on {}; weather: {}; result: {}</p>\n"
       "</header>\n",
-      r.evaluations(), EscapeXml(r.stop_reason()), r.timings().total_seconds(), EscapeXml(r.backend()),
+      r.evaluations(), EscapeXml(r.stop_reason()), r.timings().total_seconds(),
+      EscapeXml(r.backend()),
       EscapeXml(r.weather_location().empty() ? "not recorded" : r.weather_location()),
       EscapeXml(data.source));
   return html;
@@ -106,7 +111,8 @@ std::string Page(const ReportData& data) {
   std::string html = fmt::format(
       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; style-src "
-      "'unsafe-inline'\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+      "'unsafe-inline'\">\n<meta name=\"viewport\" content=\"width=device-width, "
+      "initial-scale=1\">\n"
       "<title>Fenestra report: {}</title>\n<style>{}</style>\n</head>\n<body>\n<main>\n",
       EscapeXml(data.result.job().name()), kStyle);
   html += Header(data);
@@ -118,7 +124,8 @@ std::string Page(const ReportData& data) {
   html += fmt::format(
       "<footer>Made by fenestra {} from {}. Every value is a Monte Carlo estimate ± one standard "
       "error.</footer>\n</main>\n</body>\n</html>\n",
-      EscapeXml(version == data.result.versions().end() ? "" : version->second), EscapeXml(data.source));
+      EscapeXml(version == data.result.versions().end() ? "" : version->second),
+      EscapeXml(data.source));
   return html;
 }
 
@@ -166,7 +173,8 @@ std::string Note(std::string_view text) {
   return fmt::format("<p class=\"note\">{}</p>\n", EscapeXml(text));
 }
 
-absl::StatusOr<std::string> RenderReport(const v1::JobResult& result, const ReportOptions& options) {
+absl::StatusOr<std::string> RenderReport(const v1::JobResult& result,
+                                         const ReportOptions& options) {
   FENESTRA_ASSIGN_OR_RETURN(data, GatherReportData(result, options.source, options.sensor));
   return Page(data);
 }

@@ -64,7 +64,8 @@ absl::Status GatherScene(const std::string& source, ReportData& data) {
   std::map<std::string, double> best(data.result.best_design().begin(),
                                      data.result.best_design().end());
   absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, best);
-  if (!design.ok()) return Inconsistent(source, "best_design", std::string(design.status().message()));
+  if (!design.ok())
+    return Inconsistent(source, "best_design", std::string(design.status().message()));
   data.best_design = *design;
   const int sensors = static_cast<int>(scene.sensors.size());
   const v1::Metrics& m = data.result.best_metrics();
@@ -84,9 +85,10 @@ absl::Status CheckHourly(const std::string& source, const ReportData& data) {
   const int64_t values = static_cast<int64_t>(h.sensors_size()) * steps;
   if (h.day_size() != steps || h.hour_size() != steps || h.illuminance_lux_size() != values ||
       (h.standard_error_lux_size() != 0 && h.standard_error_lux_size() != values)) {
-    return Inconsistent(source, "best_hourly",
-                        absl::StrCat("needs ", values, " values for ", h.sensors_size(),
-                                     " sensors x ", steps, " steps, has ", h.illuminance_lux_size()));
+    return Inconsistent(
+        source, "best_hourly",
+        absl::StrCat("needs ", values, " values for ", h.sensors_size(), " sensors x ", steps,
+                     " steps, has ", h.illuminance_lux_size()));
   }
   if (!data.scene || h.sensors_size() != static_cast<int>(data.scene->sensors.size())) {
     return Inconsistent(source, "best_hourly.sensors", "do not match the scene's sensors");
@@ -185,8 +187,7 @@ absl::StatusOr<ReportData> GatherReportData(const v1::JobResult& result, const s
                               OccupiedSteps(hours, {m.occupied_start_h(), m.occupied_end_h()}));
     data.occupied = std::move(occupied);
   } else if (!sensor.empty()) {
-    return absl::InvalidArgumentError(
-        "--sensor: the result holds no hourly illuminance to map");
+    return absl::InvalidArgumentError("--sensor: the result holds no hourly illuminance to map");
   }
   // Recorded by the job itself in newer results: its error against time and the final
   // one-stage check. Left unset here, the page says "not recorded".

@@ -15,9 +15,9 @@ namespace fenestra {
 
 // One evaluation of the search.
 struct SearchPoint {
-  int number = 0;       // 1, 2, ... in the order of the search
-  double seconds = 0;   // evaluation time spent up to and including this one [s]
-  double value = 0;     // the objective's metric [%]
+  int number = 0;      // 1, 2, ... in the order of the search
+  double seconds = 0;  // evaluation time spent up to and including this one [s]
+  double value = 0;    // the objective's metric [%]
   double standard_error = 0;
   bool improved = false;  // became the best design
   bool cached = false;

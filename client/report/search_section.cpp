@@ -13,7 +13,7 @@ namespace {
 // Figure sizes [px]: the chart area sits inside margins for the legend, ticks and labels.
 constexpr double kWideWidth = 540, kWideHeight = 330;
 constexpr double kSmallWidth = 350, kSmallHeight = 260;
-constexpr double kLeft = 72, kTop = 44, kRight = 20, kBottom = 62;
+constexpr double kLeft = 72, kTop = 52, kRight = 20, kBottom = 62;  // two legend rows fit
 
 // The value axis: every value ± error (and the target, when there is one), padded.
 Axis ValueAxis(const ReportData& data) {
@@ -52,7 +52,8 @@ void DrawValues(Svg& svg, Chart& chart, const ReportData& data, XOf x_of, double
   svg.BeginGroup("evaluations");
   Points best;
   for (const SearchPoint& p : data.search) {
-    chart.ErrorBar(x_of(p), p.value, p.standard_error, p.improved ? "errorbar improved" : "errorbar");
+    chart.ErrorBar(x_of(p), p.value, p.standard_error,
+                   p.improved ? "errorbar improved" : "errorbar");
     if (p.improved) best.emplace_back(x_of(p), p.value);
   }
   chart.StepLine(best, x_end, "best-line");
@@ -70,7 +71,7 @@ void DrawValues(Svg& svg, Chart& chart, const ReportData& data, XOf x_of, double
   if (objective.goal() == v1::GOAL_TARGET) {
     legend.push_back({"line:target-line", fmt::format("target {:g} %", objective.target())});
   }
-  Legend(svg, 12, 22, legend);
+  Legend(svg, 12, 18, legend);
 }
 
 std::string ValueByEvaluation(const ReportData& data) {
@@ -79,7 +80,8 @@ std::string ValueByEvaluation(const ReportData& data) {
   const double n = static_cast<double>(data.search.size());
   Chart chart(svg, kLeft, kTop, kWideWidth - kLeft - kRight, kWideHeight - kTop - kBottom,
               {"evaluation [number]", 0.5, n + 0.5, true}, ValueAxis(data));
-  DrawValues(svg, chart, data, [](const SearchPoint& p) { return double(p.number); }, n + 0.5);
+  DrawValues(
+      svg, chart, data, [](const SearchPoint& p) { return double(p.number); }, n + 0.5);
   return svg.Finish();
 }
 
@@ -89,7 +91,8 @@ std::string ValueByTime(const ReportData& data) {
   const Axis time = TimeAxis(data);
   Chart chart(svg, kLeft, kTop, kWideWidth - kLeft - kRight, kWideHeight - kTop - kBottom, time,
               ValueAxis(data));
-  DrawValues(svg, chart, data, [](const SearchPoint& p) { return p.seconds; }, time.hi);
+  DrawValues(
+      svg, chart, data, [](const SearchPoint& p) { return p.seconds; }, time.hi);
   return svg.Finish();
 }
 
@@ -118,11 +121,12 @@ std::string ErrorByTime(const ReportData& data) {
       {"line:best-line", "from the evaluations (best so far)"}};
   if (data.recorded_error) {
     Points recorded;
-    for (const ErrorPoint& e : *data.recorded_error) recorded.emplace_back(chart.X(e.seconds), chart.Y(e.standard_error));
+    for (const ErrorPoint& e : *data.recorded_error)
+      recorded.emplace_back(chart.X(e.seconds), chart.Y(e.standard_error));
     svg.Polyline(recorded, "recorded-line");
     legend.push_back({"line:recorded-line", "recorded by the job"});
   }
-  Legend(svg, 12, 22, legend);
+  Legend(svg, 12, 18, legend);
   return svg.Finish();
 }
 
@@ -137,7 +141,8 @@ std::string DesignVariablePlot(const ReportData& data, const FreeVariable& varia
   for (const SearchPoint& p : data.search) {
     const auto x = p.design.find(variable.name);
     if (x == p.design.end()) continue;
-    chart.ErrorBar(x->second, p.value, p.standard_error, p.improved ? "errorbar improved" : "errorbar");
+    chart.ErrorBar(x->second, p.value, p.standard_error,
+                   p.improved ? "errorbar improved" : "errorbar");
     Marker(svg, chart.X(x->second), chart.Y(p.value), p.improved,
            p.improved ? "point improved" : "point");
   }

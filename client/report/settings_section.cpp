@@ -3,7 +3,6 @@
 
 #include <algorithm>
 
-
 #include "client/report/sections.h"
 #include "client/report/svg.h"
 #include "core/optimize/job.h"
@@ -30,10 +29,11 @@ std::string BestDesignTable(const ReportData& data) {
   for (const v1::DesignVariable& v : data.result.job().variables()) {
     const auto best = data.result.best_design().find(v.name());
     const bool free = !v.fixed() && v.upper() > v.lower();
-    rows.push_back({v.name(),
-                    best == data.result.best_design().end() ? "-" : DesignValue(v.name(), best->second),
-                    free ? fmt::format("[{:g}, {:g}]", v.lower(), v.upper()) : "fixed",
-                    DesignValue(v.name(), v.start())});
+    rows.push_back(
+        {v.name(),
+         best == data.result.best_design().end() ? "-" : DesignValue(v.name(), best->second),
+         free ? fmt::format("[{:g}, {:g}]", v.lower(), v.upper()) : "fixed",
+         DesignValue(v.name(), v.start())});
   }
   return HtmlTable("best-design-table", {"variable", "best", "range searched", "start"}, rows);
 }
@@ -47,23 +47,27 @@ std::string BestMetricsTable(const ReportData& data) {
   };
   return HtmlTable(
       "best-metrics-table", {"metric, best design", "value ± SE [%]"},
-      {row(udi + ", mean over sensors", m.udi()), row("UDI fell short (below the range)", m.udi_fell_short()),
-       row("UDI exceeded (above the range)", m.udi_exceeded()), row(udi + ", all sensors at once", m.udi_all_sensors()),
+      {row(udi + ", mean over sensors", m.udi()),
+       row("UDI fell short (below the range)", m.udi_fell_short()),
+       row("UDI exceeded (above the range)", m.udi_exceeded()),
+       row(udi + ", all sensors at once", m.udi_all_sensors()),
        row(fmt::format("DA{:g}", s.da_threshold_lux()), m.da()),
        row(fmt::format("cDA{:g}", s.da_threshold_lux()), m.cda()),
-       row(fmt::format("sDA{:g}/{:g}%", s.da_threshold_lux(), s.sda_time_fraction_percent()), m.sda())});
+       row(fmt::format("sDA{:g}/{:g}%", s.da_threshold_lux(), s.sda_time_fraction_percent()),
+           m.sda())});
 }
 
 Rows JobRows(const ReportData& data) {
   const v1::Job& job = data.result.job();
   const v1::Budget& b = job.budget();
-  return {{"name", job.name()},
-          {"objective", fmt::format("{} {} [%]", GoalText(job.objective()), data.metric_name)},
-          {"budget", fmt::format("{} evaluations{}", b.max_evaluations(),
-                                 b.max_seconds() > 0 ? fmt::format(", {:g} s", b.max_seconds()) : "")},
-          {"evaluations", fmt::format("{} ({} in the history, repeats included)",
-                                      data.result.evaluations(), data.result.history_size())},
-          {"stopped", data.result.stop_reason()}};
+  return {
+      {"name", job.name()},
+      {"objective", fmt::format("{} {} [%]", GoalText(job.objective()), data.metric_name)},
+      {"budget", fmt::format("{} evaluations{}", b.max_evaluations(),
+                             b.max_seconds() > 0 ? fmt::format(", {:g} s", b.max_seconds()) : "")},
+      {"evaluations", fmt::format("{} ({} in the history, repeats included)",
+                                  data.result.evaluations(), data.result.history_size())},
+      {"stopped", data.result.stop_reason()}};
 }
 
 Rows SamplingRows(const ReportData& data) {
@@ -74,7 +78,9 @@ Rows SamplingRows(const ReportData& data) {
     parts = fmt::format("{} × {}{}", p.columns, p.rows,
                         s.window_columns() == 0 || s.window_rows() == 0 ? " (automatic)" : "");
   }
-  auto bounces = [](int b) { return b < 0 ? std::string("unlimited (roulette)") : fmt::format("{}", b); };
+  auto bounces = [](int b) {
+    return b < 0 ? std::string("unlimited (roulette)") : fmt::format("{}", b);
+  };
   return {{"outdoor paths", fmt::format("{}", s.outdoor_paths())},
           {"outdoor bounces", bounces(s.outdoor_bounces())},
           {"indoor paths per sensor", fmt::format("{}", s.indoor_paths_per_sensor())},
@@ -88,7 +94,8 @@ Rows SamplingRows(const ReportData& data) {
 
 Rows MetricRows(const ReportData& data) {
   const v1::MetricSettings& m = data.result.job().metrics();
-  return {{"UDI range", fmt::format("{:g}–{:g} lx, limits included", m.udi_lower_lux(), m.udi_upper_lux())},
+  return {{"UDI range",
+           fmt::format("{:g}–{:g} lx, limits included", m.udi_lower_lux(), m.udi_upper_lux())},
           {"DA threshold", fmt::format("{:g} lx", m.da_threshold_lux())},
           {"sDA share of hours", fmt::format("{:g} %", m.sda_time_fraction_percent())},
           {"occupied hours", fmt::format("{:g}–{:g} h local standard time", m.occupied_start_h(),
@@ -97,15 +104,18 @@ Rows MetricRows(const ReportData& data) {
 }
 
 Rows SiteRows(const ReportData& data) {
-  Rows rows = {{"weather", data.result.weather_location().empty() ? "not recorded"
-                                                                  : data.result.weather_location()}};
+  Rows rows = {{"weather", data.result.weather_location().empty()
+                               ? "not recorded"
+                               : data.result.weather_location()}};
   if (data.scene) {
     const Site& s = data.scene->site;
-    rows.push_back({"latitude, longitude", fmt::format("{:.2f}°, {:.2f}°", s.latitude_deg, s.longitude_deg)});
+    rows.push_back(
+        {"latitude, longitude", fmt::format("{:.2f}°, {:.2f}°", s.latitude_deg, s.longitude_deg)});
     rows.push_back({"time zone", fmt::format("UTC{:+g} h", s.time_zone_h)});
     rows.push_back({"ground reflectance", fmt::format("{:.2f}", s.ground_reflectance)});
-    rows.push_back({"scene", fmt::format("{} ({} triangles, {} sensors)", data.scene->name,
-                                         data.scene->fixed.TriangleCount(), data.scene->sensors.size())});
+    rows.push_back(
+        {"scene", fmt::format("{} ({} triangles, {} sensors)", data.scene->name,
+                              data.scene->fixed.TriangleCount(), data.scene->sensors.size())});
   }
   return rows;
 }
@@ -118,9 +128,11 @@ Rows TimingRows(const ReportData& data) {
                                                      : "from the cache"},
           {"evaluations", fmt::format("{:.2f} s ({:.3f} s each)", t.evaluation_seconds(),
                                       n > 0 ? t.evaluation_seconds() / n : 0.0)},
+          {"best design's hourly illuminance", fmt::format("{:.2f} s", t.best_hourly_seconds())},
           {"whole job", fmt::format("{:.2f} s", t.total_seconds())},
-          {"outdoor matrix error", fmt::format("{:.2f} % (mean relative SE)",
-                                               100 * data.result.outdoor_mean_relative_standard_error())}};
+          {"outdoor matrix error",
+           fmt::format("{:.2f} % (mean relative SE)",
+                       100 * data.result.outdoor_mean_relative_standard_error())}};
 }
 
 std::string KeyValueTable(std::string_view id, std::string_view title, const Rows& rows) {
@@ -147,7 +159,8 @@ std::string SettingsSection(const ReportData& data) {
   body += KeyValueTable("metric-settings-table", "Metrics", MetricRows(data));
   body += KeyValueTable("site-table", "Site", SiteRows(data));
   body += KeyValueTable("timings-table", "Timings", TimingRows(data));
-  body += versions.empty() ? "<div><h3>Versions</h3>" + NotRecorded("Versions", "the result predates them") + "</div>"
+  body += versions.empty() ? "<div><h3>Versions</h3>" +
+                                 NotRecorded("Versions", "the result predates them") + "</div>"
                            : KeyValueTable("versions-table", "Versions", versions);
   body += "</div>\n<h3>Final one-stage check</h3>\n";
   if (data.final_check) {
@@ -155,7 +168,8 @@ std::string SettingsSection(const ReportData& data) {
     for (const auto& [quantity, value] : *data.final_check) rows.push_back({quantity, value});
     body += HtmlTable("final-check-table", {"quantity", "value"}, rows);
   } else {
-    body += NotRecorded("The final one-stage check of the best design", "this result does not hold one");
+    body += NotRecorded("The final one-stage check of the best design",
+                        "this result does not hold one");
   }
   return Section("settings", "Settings, timings and versions", body);
 }

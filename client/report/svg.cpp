@@ -11,7 +11,7 @@ namespace fenestra {
 double TextWidth(std::string_view text, double font_px) {
   size_t characters = 0;
   for (const char c : text) characters += (static_cast<unsigned char>(c) & 0xc0) != 0x80;
-  return 0.55 * font_px * static_cast<double>(characters);
+  return 0.58 * font_px * static_cast<double>(characters);
 }
 
 std::string Px(double v) {
@@ -33,7 +33,8 @@ std::string FillAttribute(std::string_view fill) {
 
 std::string PointList(const Points& points) {
   std::string out;
-  for (const auto& [x, y] : points) out += fmt::format("{}{},{}", out.empty() ? "" : " ", Px(x), Px(y));
+  for (const auto& [x, y] : points)
+    out += fmt::format("{}{},{}", out.empty() ? "" : " ", Px(x), Px(y));
   return out;
 }
 
@@ -64,11 +65,21 @@ std::string EscapeXml(std::string_view text) {
   out.reserve(text.size());
   for (const char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
       default:
         // Control characters other than tab and newline are not allowed in XML
         if (static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\n') {
@@ -130,7 +141,8 @@ std::string ViridisColor(double fraction) {
   const double t = f - i;
   int rgb[3];
   for (int c = 0; c < 3; ++c) {
-    rgb[c] = static_cast<int>(std::lround(kViridis[i][c] + t * (kViridis[i + 1][c] - kViridis[i][c])));
+    rgb[c] =
+        static_cast<int>(std::lround(kViridis[i][c] + t * (kViridis[i + 1][c] - kViridis[i][c])));
   }
   return fmt::format("#{:02x}{:02x}{:02x}", rgb[0], rgb[1], rgb[2]);
 }
@@ -152,8 +164,8 @@ Svg::Svg(std::string_view id, std::string_view css_class, double width, double h
 }
 
 void Svg::Line(double x1, double y1, double x2, double y2, std::string_view css_class) {
-  out_ += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"{}/>\n", Px(x1), Px(y1),
-                      Px(x2), Px(y2), ClassAttribute(css_class));
+  out_ += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"{}/>\n", Px(x1), Px(y1), Px(x2),
+                      Px(y2), ClassAttribute(css_class));
 }
 
 void Svg::Rect(double x, double y, double width, double height, std::string_view css_class,
@@ -169,7 +181,8 @@ void Svg::Circle(double cx, double cy, double r, std::string_view css_class,
 }
 
 void Svg::Polyline(const Points& points, std::string_view css_class) {
-  out_ += fmt::format("<polyline points=\"{}\"{}/>\n", PointList(points), ClassAttribute(css_class));
+  out_ +=
+      fmt::format("<polyline points=\"{}\"{}/>\n", PointList(points), ClassAttribute(css_class));
 }
 
 void Svg::Polygon(const Points& points, std::string_view css_class, std::string_view fill) {
@@ -177,13 +190,12 @@ void Svg::Polygon(const Points& points, std::string_view css_class, std::string_
                       ClassAttribute(css_class), FillAttribute(fill));
 }
 
-void Svg::Text(double x, double y, std::string_view text, std::string_view css_class,
-               Anchor anchor, double rotate_deg) {
+void Svg::Text(double x, double y, std::string_view text, std::string_view css_class, Anchor anchor,
+               double rotate_deg) {
   const char* anchors[] = {"start", "middle", "end"};
-  const std::string rotation =
-      rotate_deg == 0
-          ? ""
-          : fmt::format(" transform=\"rotate({} {} {})\"", Px(rotate_deg), Px(x), Px(y));
+  const std::string rotation = rotate_deg == 0 ? ""
+                                               : fmt::format(" transform=\"rotate({} {} {})\"",
+                                                             Px(rotate_deg), Px(x), Px(y));
   out_ += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"{}\"{}{}>{}</text>\n", Px(x), Px(y),
                       anchors[static_cast<int>(anchor)], rotation, ClassAttribute(css_class),
                       EscapeXml(text));
@@ -206,9 +218,7 @@ std::string Svg::Finish() { return out_ + "</svg>\n"; }
 Chart::Chart(Svg& svg, double left, double top, double width, double height, Axis x, Axis y)
     : svg_(svg), left_(left), top_(top), width_(width), height_(height), x_(x), y_(y) {}
 
-double Chart::X(double value) const {
-  return left_ + (value - x_.lo) / (x_.hi - x_.lo) * width_;
-}
+double Chart::X(double value) const { return left_ + (value - x_.lo) / (x_.hi - x_.lo) * width_; }
 
 double Chart::Y(double value) const {
   return top_ + height_ - (value - y_.lo) / (y_.hi - y_.lo) * height_;
@@ -266,7 +276,13 @@ void Marker(Svg& svg, double x, double y, bool emphasised, std::string_view css_
 
 double Legend(Svg& svg, double x, double y,
               const std::vector<std::pair<std::string, std::string>>& entries) {
+  const double left = x;
   for (const auto& [sample, text] : entries) {
+    const double width = 20 + TextWidth(text) + 18;
+    if (x > left && x + width - 18 > svg.width() - 4) {  // the next row
+      x = left;
+      y += 18;
+    }
     const std::string_view s = sample;
     if (s == "point") {
       Marker(svg, x + 6, y - 4, false, "point");
@@ -282,9 +298,9 @@ double Legend(Svg& svg, double x, double y,
       svg.Rect(x, y - 11, 14, 12, s.substr(8));
     }
     svg.Text(x + 20, y, text, "legend-text");
-    x += 20 + TextWidth(text) + 18;
+    x += width;
   }
-  return x;
+  return y;
 }
 
 void ViridisColorBar(Svg& svg, double x, double y, double height, double lo, double hi,

@@ -122,9 +122,10 @@ class Chart {
 // distinct when printed in grey).
 void Marker(Svg& svg, double x, double y, bool emphasised, std::string_view css_class);
 
-// A row of legend entries at (x, y): each a marker or line sample ("point", "cached",
-// "improved", "line:<class>", "swatch:<colour>", "outline:<class>") followed by its text.
-// Returns the x after the last entry.
+// Legend entries from (x, y) (the first row's baseline): each a marker or line sample
+// ("point", "cached", "improved", "line:<class>", "swatch:<colour>", "outline:<class>")
+// followed by its text, in rows 18 px apart that fit the figure's width. Returns the last
+// row's baseline.
 double Legend(Svg& svg, double x, double y,
               const std::vector<std::pair<std::string, std::string>>& entries);
 

@@ -86,8 +86,9 @@ void DrawAxes(Svg& svg, const DayHourGrid& grid) {
   svg.Rect(kLeft, kTop, width, 24 * kHourHeight, "frame");
   for (size_t i = 0; i < grid.month_start.size(); ++i) {
     const double x = kLeft + grid.month_start[i] * kDayWidth;
-    const double next = i + 1 < grid.month_start.size() ? kLeft + grid.month_start[i + 1] * kDayWidth
-                                                         : kLeft + width;
+    const double next = i + 1 < grid.month_start.size()
+                            ? kLeft + grid.month_start[i + 1] * kDayWidth
+                            : kLeft + width;
     svg.Line(x, bottom, x, bottom + 6, "tick");
     svg.Text((x + next) / 2, bottom + 17, kMonths[grid.month_of_start[i] - 1], "tick-label",
              Anchor::kMiddle);
@@ -97,7 +98,8 @@ void DrawAxes(Svg& svg, const DayHourGrid& grid) {
     svg.Line(kLeft - 5, y, kLeft, y, "tick");
     svg.Text(kLeft - 8, y + 4, fmt::format("{}", hour), "tick-label", Anchor::kEnd);
   }
-  svg.Text(kLeft + width / 2, bottom + 36, "day of the year [month]", "axis-label", Anchor::kMiddle);
+  svg.Text(kLeft + width / 2, bottom + 36, "day of the year [month]", "axis-label",
+           Anchor::kMiddle);
   svg.Text(kLeft - 40, kTop + 12 * kHourHeight, "local standard time [h]", "axis-label",
            Anchor::kMiddle, -90);
   svg.EndGroup();
@@ -126,7 +128,8 @@ std::array<int, 4> OccupiedBands(const ReportData& data, int sensor) {
   const int steps = h.month_size();
   std::array<int, 4> counts = {0, 0, 0, 0};
   for (int j = 0; j < steps; ++j) {
-    if (data.occupied[j]) ++counts[BandOf(h.illuminance_lux(sensor * steps + j), data.result.job().metrics())];
+    if (data.occupied[j])
+      ++counts[BandOf(h.illuminance_lux(sensor * steps + j), data.result.job().metrics())];
   }
   return counts;
 }
@@ -146,20 +149,22 @@ std::string TemporalMapSection(const ReportData& data) {
   const DayHourGrid grid = GridOf(data.result.best_hourly(), sensor);
   const double width = grid.days * kDayWidth;
   const std::string name = data.scene->sensors[sensor].name;
-  Svg svg("plot-temporal-map", "map-plot", kLeft + width + kRight, kTop + 24 * kHourHeight + kBottom,
+  Svg svg("plot-temporal-map", "map-plot", kLeft + width + kRight,
+          kTop + 24 * kHourHeight + kBottom,
           "Illuminance at " + name + " by day and hour, coloured by the UDI bands");
   DrawCells(svg, grid, m);
   DrawOccupancy(svg, grid, m);
   DrawAxes(svg, grid);
   const double legend_y = kTop + 24 * kHourHeight + 66;
-  Legend(svg, kLeft, legend_y,
-         {{fmt::format("swatch:{}", kBandColors[kDark]), "no daylight"},
-          {fmt::format("swatch:{}", kBandColors[kBelow]), fmt::format("< {:g} lx", m.udi_lower_lux())},
-          {fmt::format("swatch:{}", kBandColors[kInRange]),
-           fmt::format("{:g}–{:g} lx", m.udi_lower_lux(), m.udi_upper_lux())},
-          {fmt::format("swatch:{}", kBandColors[kAbove]), fmt::format("> {:g} lx", m.udi_upper_lux())},
-          {"outline:occupancy", fmt::format("occupied {:g}–{:g} h", m.occupied_start_h(),
-                                            m.occupied_end_h())}});
+  Legend(
+      svg, kLeft, legend_y,
+      {{fmt::format("swatch:{}", kBandColors[kDark]), "no daylight"},
+       {fmt::format("swatch:{}", kBandColors[kBelow]), fmt::format("< {:g} lx", m.udi_lower_lux())},
+       {fmt::format("swatch:{}", kBandColors[kInRange]),
+        fmt::format("{:g}–{:g} lx", m.udi_lower_lux(), m.udi_upper_lux())},
+       {fmt::format("swatch:{}", kBandColors[kAbove]), fmt::format("> {:g} lx", m.udi_upper_lux())},
+       {"outline:occupancy",
+        fmt::format("occupied {:g}–{:g} h", m.occupied_start_h(), m.occupied_end_h())}});
 
   const std::array<int, 4> bands = OccupiedBands(data, sensor);
   const int occupied = bands[0] + bands[1] + bands[2] + bands[3];
@@ -168,8 +173,9 @@ std::string TemporalMapSection(const ReportData& data) {
   std::string caption = fmt::format(
       "Illuminance at {} ({}UDI {}), best design. Of its {} occupied hours: {} in range, {} below "
       "(of which {} without daylight), {} above.",
-      name, worst ? "the sensor with the lowest UDI, " : "", WithError(udi.value(), udi.standard_error(), 1) + " %",
-      occupied, bands[kInRange], bands[kBelow] + bands[kDark], bands[kDark], bands[kAbove]);
+      name, worst ? "the sensor with the lowest UDI, " : "",
+      WithError(udi.value(), udi.standard_error(), 1) + " %", occupied, bands[kInRange],
+      bands[kBelow] + bands[kDark], bands[kDark], bands[kAbove]);
   return Section("temporal-map", heading,
                  "<figure class=\"plot wide\">" + svg.Finish() + "<figcaption>" +
                      EscapeXml(caption) + "</figcaption></figure>\n");

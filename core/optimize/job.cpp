@@ -507,10 +507,12 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (search.evaluations > 0 && search.stop_reason != StopReason::kCancelled &&
       static_cast<int64_t>(job.scene.sensors.size() * sky.steps.size()) <=
           kMaxHourlyIlluminanceValues) {
+    const auto hourly_start = std::chrono::steady_clock::now();
     FENESTRA_ASSIGN_OR_RETURN(
         hourly, DesignHourlyIlluminance(job.scene, DesignAt(job, search.best_x), indoor_options,
                                         outdoor->coefficients, sky, *backend));
     *result.mutable_best_hourly() = std::move(hourly);
+    result.mutable_timings()->set_best_hourly_seconds(Since(hourly_start));
   }
   DescribeRun(spec, ranged, weather.location, result);
 

@@ -89,7 +89,8 @@ TEST_F(AnnualOutputsTest, ObjHoldsTheSceneWithTheBestBlind) {
   ASSERT_TRUE(obj.ok()) << obj.status();
   absl::StatusOr<Scene> scene = BuildScene(result.job().scene(), "result");
   ASSERT_TRUE(scene.ok()) << scene.status();
-  const std::map<std::string, double> best(result.best_design().begin(), result.best_design().end());
+  const std::map<std::string, double> best(result.best_design().begin(),
+                                           result.best_design().end());
   absl::StatusOr<BlindDesign> design = DesignWithOverrides(*scene, best);
   ASSERT_TRUE(design.ok()) << design.status();
   const int slats = LayoutBlind(scene->window, *scene->blind, *design).slat_count;

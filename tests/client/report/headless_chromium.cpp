@@ -133,7 +133,9 @@ absl::StatusOr<Struct> HeadlessChromium::Call(const std::string& method, const S
   }
   while (true) {
     absl::StatusOr<Struct> reply = Receive();
-    if (!reply.ok()) return absl::Status(reply.status().code(), method + ": " + std::string(reply.status().message()));
+    if (!reply.ok())
+      return absl::Status(reply.status().code(),
+                          method + ": " + std::string(reply.status().message()));
     if (Field(*reply, "id").number_value() != id) {
       Record(*reply);
       continue;
@@ -208,10 +210,11 @@ absl::Status HeadlessChromium::WaitForEvent(const std::string& method) {
 }
 
 absl::Status HeadlessChromium::Load(const std::string& url, int width, int height) {
-  absl::StatusOr<Struct> r = Call(
-      "Emulation.setDeviceMetricsOverride",
-      Params({{"width", Number(width)}, {"height", Number(height)}, {"deviceScaleFactor", Number(1)},
-              {"mobile", Bool(false)}}));
+  absl::StatusOr<Struct> r =
+      Call("Emulation.setDeviceMetricsOverride", Params({{"width", Number(width)},
+                                                         {"height", Number(height)},
+                                                         {"deviceScaleFactor", Number(1)},
+                                                         {"mobile", Bool(false)}}));
   if (!r.ok()) return r.status();
   events_.clear();
   r = Call("Page.navigate", Params({{"url", String(url)}}));
@@ -223,8 +226,9 @@ absl::Status HeadlessChromium::Load(const std::string& url, int width, int heigh
 }
 
 absl::StatusOr<Value> HeadlessChromium::Evaluate(const std::string& expression) {
-  absl::StatusOr<Struct> r = Call(
-      "Runtime.evaluate", Params({{"expression", String(expression)}, {"returnByValue", Bool(true)}}));
+  absl::StatusOr<Struct> r =
+      Call("Runtime.evaluate",
+           Params({{"expression", String(expression)}, {"returnByValue", Bool(true)}}));
   if (!r.ok()) return r.status();
   if (r->fields().contains("exceptionDetails")) {
     return absl::InvalidArgumentError(Text(Field(*r, "exceptionDetails")));
@@ -241,10 +245,11 @@ absl::StatusOr<std::string> HeadlessChromium::Screenshot() {
   if (!metrics.ok()) return metrics.status();
   const Struct& size = Field(*metrics, "cssContentSize").struct_value();
   const Struct& view = Field(*metrics, "cssLayoutViewport").struct_value();
-  absl::StatusOr<Struct> r = Call(
-      "Emulation.setDeviceMetricsOverride",
-      Params({{"width", Field(view, "clientWidth")}, {"height", Field(size, "height")},
-              {"deviceScaleFactor", Number(1)}, {"mobile", Bool(false)}}));
+  absl::StatusOr<Struct> r =
+      Call("Emulation.setDeviceMetricsOverride", Params({{"width", Field(view, "clientWidth")},
+                                                         {"height", Field(size, "height")},
+                                                         {"deviceScaleFactor", Number(1)},
+                                                         {"mobile", Bool(false)}}));
   if (!r.ok()) return r.status();
   r = Call("Page.captureScreenshot", Params({{"format", String("png")}}));
   if (!r.ok()) return r.status();
@@ -256,10 +261,9 @@ absl::StatusOr<std::string> HeadlessChromium::Screenshot() {
 }
 
 absl::StatusOr<std::string> HeadlessChromium::PrintToPdf() {
-  absl::StatusOr<Struct> r = Call(
-      "Page.printToPDF",
-      Params({{"paperWidth", Number(8.27)}, {"paperHeight", Number(11.69)},
-              {"printBackground", Bool(true)}}));
+  absl::StatusOr<Struct> r = Call("Page.printToPDF", Params({{"paperWidth", Number(8.27)},
+                                                             {"paperHeight", Number(11.69)},
+                                                             {"printBackground", Bool(true)}}));
   if (!r.ok()) return r.status();
   std::string pdf;
   if (!absl::Base64Unescape(Field(*r, "data").string_value(), &pdf)) {

@@ -125,7 +125,8 @@ TEST_F(HtmlReportTest, LoadsWithoutErrorsOrRequestsAndDrawsEveryFigure) {
   // As many slats as the generator makes at the best design
   absl::StatusOr<Scene> scene = BuildScene(result.job().scene(), "result");
   ASSERT_TRUE(scene.ok()) << scene.status();
-  const std::map<std::string, double> best(result.best_design().begin(), result.best_design().end());
+  const std::map<std::string, double> best(result.best_design().begin(),
+                                           result.best_design().end());
   absl::StatusOr<BlindDesign> design = DesignWithOverrides(*scene, best);
   ASSERT_TRUE(design.ok()) << design.status();
   EXPECT_EQ(Get(Get(figures, "plot-blind-section"), "slats").number_value(),
@@ -155,7 +156,8 @@ TEST_F(HtmlReportTest, NoTextOverlapsOrLeavesItsFigure) {
   ASSERT_TRUE(png.ok()) << png.status();
   ASSERT_GT(png->size(), 8u);
   EXPECT_EQ(png->substr(1, 3), "PNG");
-  const fs::path artifact = fs::path(FENESTRA_BINARY_DIR) / "test_artifacts" / "report_screenshot.png";
+  const fs::path artifact =
+      fs::path(FENESTRA_BINARY_DIR) / "test_artifacts" / "report_screenshot.png";
   fs::create_directories(artifact.parent_path());
   std::ofstream(artifact, std::ios::binary) << *png;
   RecordProperty("screenshot", artifact.string());
@@ -182,10 +184,11 @@ TEST_F(HtmlReportTest, PrintsWithEveryFigure) {
 // The inspection itself finds overlapping and clipped texts
 TEST_F(HtmlReportTest, TheInspectionFindsOverlapsAndClippedTexts) {
   const std::string page = (dir_ / "bad.html").string();
-  std::ofstream(page) << "<!DOCTYPE html><html><body><svg class=\"figure\" id=\"bad\" width=\"200\" "
-                         "height=\"60\"><text x=\"10\" y=\"20\">hello</text><text x=\"14\" "
-                         "y=\"24\">world</text><text x=\"180\" y=\"50\">clipped</text>"
-                         "</svg></body></html>";
+  std::ofstream(page)
+      << "<!DOCTYPE html><html><body><svg class=\"figure\" id=\"bad\" width=\"200\" "
+         "height=\"60\"><text x=\"10\" y=\"20\">hello</text><text x=\"14\" "
+         "y=\"24\">world</text><text x=\"180\" y=\"50\">clipped</text>"
+         "</svg></body></html>";
   ASSERT_TRUE(browser_->Load("file://" + page, 800, 600).ok());
   const Value inspected = Inspect();
   EXPECT_EQ(Strings(Get(inspected, "overlaps")), std::vector<std::string>{"bad: hello / world"});

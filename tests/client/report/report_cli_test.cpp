@@ -70,14 +70,16 @@ TEST_F(ReportCliTest, OptimizeLocalWritesTheAnnualOutputsAndReportMakesThePage) 
   EXPECT_TRUE(Read(Path("h.mtx")) == Read(Path("h2.mtx"))) << "h.mtx differs";
   EXPECT_TRUE(Read(Path("b.obj")) == Read(Path("b2.obj"))) << "b.obj differs";
 
-  run = RunCommand({FENESTRA_CLI, "report", Path("r.json"), "-o", Path("r.html"), "--sensor", "S2"});
+  run =
+      RunCommand({FENESTRA_CLI, "report", Path("r.json"), "-o", Path("r.html"), "--sensor", "S2"});
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const std::string page = Read(Path("r.html"));
   EXPECT_THAT(page, HasSubstr("Illuminance at S2 (UDI"));
   EXPECT_TRUE(page == *RenderReport(result, {Path("r.json"), "S2"})) << "the page differs";
 
   // Errors name what is wrong and write nothing
-  run = RunCommand({FENESTRA_CLI, "report", Path("r.json"), "-o", Path("x.html"), "--sensor", "S0"});
+  run =
+      RunCommand({FENESTRA_CLI, "report", Path("r.json"), "-o", Path("x.html"), "--sensor", "S0"});
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_THAT(run.output, HasSubstr("error: --sensor: no sensor 'S0'"));
   run = RunCommand({FENESTRA_CLI, "report", Path("missing.json"), "-o", Path("x.html")});
@@ -86,7 +88,8 @@ TEST_F(ReportCliTest, OptimizeLocalWritesTheAnnualOutputsAndReportMakesThePage) 
   std::ofstream(Path("bad.json")) << "{\"history\": [{\"value\": {\"value\": \"NaN\"}}]}";
   run = RunCommand({FENESTRA_CLI, "report", Path("bad.json"), "-o", Path("x.html")});
   EXPECT_EQ(run.exit_code, 1);
-  EXPECT_THAT(run.output, HasSubstr("history[0]: value, standard_error and seconds must be finite"));
+  EXPECT_THAT(run.output,
+              HasSubstr("history[0]: value, standard_error and seconds must be finite"));
   EXPECT_FALSE(fs::exists(Path("x.html")));
 }
 
@@ -113,15 +116,16 @@ TEST_F(ReportCliTest, JobReportAndResultThroughFenestrad) {
   EXPECT_TRUE(Read(Path("h.mtx")) == Read(Path("h2.mtx"))) << "h.mtx differs";
   EXPECT_TRUE(Read(Path("b.obj")) == Read(Path("b2.obj"))) << "b.obj differs";
   // --json prints the result alone
-  run = RunCommand({FENESTRA_CLI, "job", "result", id, "--server", server, "--json",
-                    "--hourly-csv", Path("h3.csv")});
+  run = RunCommand({FENESTRA_CLI, "job", "result", id, "--server", server, "--json", "--hourly-csv",
+                    Path("h3.csv")});
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_EQ(run.output.find("hourly illuminance (CSV)"), std::string::npos);
 
   run = RunCommand({FENESTRA_CLI, "job", "report", id, "--server", server, "-o", Path("r.html")});
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_TRUE(Read(Path("r.html")) == *RenderReport(result, {id, ""})) << "the page differs";
-  run = RunCommand({FENESTRA_CLI, "job", "report", "job-99", "--server", server, "-o", Path("x.html")});
+  run = RunCommand(
+      {FENESTRA_CLI, "job", "report", "job-99", "--server", server, "-o", Path("x.html")});
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_THAT(run.output, HasSubstr("job-99"));
   EXPECT_FALSE(fs::exists(Path("x.html")));

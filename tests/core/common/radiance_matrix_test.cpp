@@ -64,7 +64,8 @@ TEST_F(RadianceMatrixTest, ThreeComponentsAreWrittenAsGreyChannels) {
 TEST_F(RadianceMatrixTest, BadComponentsAndShortDataAreErrors) {
   EXPECT_FALSE(WriteRadianceMatrix(Path("m.mtx"), Example(), MatrixFormat::kAscii, 2).ok());
   EXPECT_FALSE(fs::exists(Path("m.mtx")));
-  std::ofstream(Path("short.mtx")) << "#?RADIANCE\nNROWS=1\nNCOLS=2\nNCOMP=3\nFORMAT=ascii\n\n1 1 1\t2 2\n";
+  std::ofstream(Path("short.mtx"))
+      << "#?RADIANCE\nNROWS=1\nNCOLS=2\nNCOMP=3\nFORMAT=ascii\n\n1 1 1\t2 2\n";
   absl::StatusOr<std::vector<Matrix>> read = ReadRadianceMatrixComponents(Path("short.mtx"));
   ASSERT_FALSE(read.ok());
   EXPECT_NE(read.status().message().find("expected 6 values, found 5"), std::string::npos)
