@@ -31,32 +31,6 @@ struct BlindCut {
   bool vertical = false;
 };
 
-std::vector<Uv> Hull(std::vector<Uv> p) {
-  std::sort(p.begin(), p.end());
-  p.erase(std::unique(p.begin(), p.end(),
-                      [](Uv a, Uv b) {
-                        return std::abs(a.first - b.first) < 1e-12 &&
-                               std::abs(a.second - b.second) < 1e-12;
-                      }),
-          p.end());
-  auto cross = [](Uv o, Uv a, Uv b) {
-    return (a.first - o.first) * (b.second - o.second) -
-           (a.second - o.second) * (b.first - o.first);
-  };
-  std::vector<Uv> hull(2 * p.size());
-  size_t k = 0;
-  for (size_t i = 0; i < p.size(); ++i) {
-    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
-    hull[k++] = p[i];
-  }
-  for (size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
-    while (k >= t && cross(hull[k - 2], hull[k - 1], p[i - 1]) <= 0) --k;
-    hull[k++] = p[i - 1];
-  }
-  hull.resize(k > 0 ? k - 1 : 0);
-  return hull;
-}
-
 // Generates the slats as the tracer does and projects each onto the section plane.
 BlindCut SectionOf(const Scene& scene, const BlindDesign& design) {
   const Window& w = scene.window;
@@ -75,7 +49,7 @@ BlindCut SectionOf(const Scene& scene, const BlindDesign& design) {
       const Vec3d d = mesh.vertices[v] - w.center;
       corners.emplace_back(-Dot(d, w.normal), Dot(d, stack));
     }
-    section.slats.push_back(Hull(corners));
+    section.slats.push_back(ConvexHull(corners));
     Uv c{0, 0};
     for (const Uv& p : section.slats.back()) c.first += p.first, c.second += p.second;
     const double n = static_cast<double>(section.slats.back().size());

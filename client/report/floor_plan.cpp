@@ -35,29 +35,6 @@ std::vector<Xy> WindowCorners(const Window& w) {
   return corners;
 }
 
-// Convex hull (Andrew's monotone chain), counter-clockwise.
-std::vector<Xy> ConvexHull(std::vector<Xy> points) {
-  std::sort(points.begin(), points.end());
-  points.erase(std::unique(points.begin(), points.end()), points.end());
-  if (points.size() < 3) return points;
-  auto cross = [](Xy o, Xy a, Xy b) {
-    return (a.first - o.first) * (b.second - o.second) -
-           (a.second - o.second) * (b.first - o.first);
-  };
-  std::vector<Xy> hull(2 * points.size());
-  size_t k = 0;
-  for (size_t i = 0; i < points.size(); ++i) {
-    while (k >= 2 && cross(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
-    hull[k++] = points[i];
-  }
-  for (size_t i = points.size() - 1, t = k + 1; i > 0; --i) {
-    while (k >= t && cross(hull[k - 2], hull[k - 1], points[i - 1]) <= 0) --k;
-    hull[k++] = points[i - 1];
-  }
-  hull.resize(k - 1);
-  return hull;
-}
-
 // The plan's extent [m]: indoor triangles, window and sensors, padded.
 struct Extent {
   double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;

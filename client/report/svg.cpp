@@ -153,6 +153,33 @@ std::vector<std::pair<double, std::string>> ViridisStops() {
   return stops;
 }
 
+Points ConvexHull(Points p) {
+  std::sort(p.begin(), p.end());
+  p.erase(std::unique(p.begin(), p.end(),
+                      [](const auto& a, const auto& b) {
+                        return std::abs(a.first - b.first) < 1e-12 &&
+                               std::abs(a.second - b.second) < 1e-12;
+                      }),
+          p.end());
+  if (p.size() < 3) return p;
+  auto cross = [](const auto& o, const auto& a, const auto& b) {
+    return (a.first - o.first) * (b.second - o.second) -
+           (a.second - o.second) * (b.first - o.first);
+  };
+  Points hull(2 * p.size());
+  size_t k = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  for (size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
+    while (k >= t && cross(hull[k - 2], hull[k - 1], p[i - 1]) <= 0) --k;
+    hull[k++] = p[i - 1];
+  }
+  hull.resize(k - 1);
+  return hull;
+}
+
 Svg::Svg(std::string_view id, std::string_view css_class, double width, double height,
          std::string_view title)
     : id_(id), width_(width), height_(height) {

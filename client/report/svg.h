@@ -41,6 +41,10 @@ enum class Anchor { kStart, kMiddle, kEnd };
 
 using Points = std::vector<std::pair<double, double>>;
 
+// The convex hull of `points` (Andrew's monotone chain), counter-clockwise; points closer
+// than 1e-12 count as one.
+Points ConvexHull(Points points);
+
 // SVG markup, element by element; coordinates in px of the figure's viewBox.
 class Svg {
  public:

@@ -6,7 +6,6 @@
 
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 #include "client/cli_util.h"
 #include "client/report/annual_outputs.h"
@@ -21,12 +20,8 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-std::string Read(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+// A file's bytes; empty when it cannot be read.
+std::string Read(const std::string& path) { return ReadFileBytes(path).value_or(""); }
 
 class ReportCliTest : public testing::Test {
  protected:

@@ -42,6 +42,12 @@ TEST(SvgTest, TextIsEscaped) {
   EXPECT_NE(markup.find("&lt;b&gt;"), std::string::npos);
 }
 
+TEST(SvgTest, ConvexHullDropsInnerAndRepeatedPoints) {
+  EXPECT_EQ(ConvexHull({{1, 1}, {0, 0}, {0.5, 0.5}, {1, 0}, {0, 1}, {1, 1}, {0, 0.5}}),
+            (Points{{0, 0}, {1, 0}, {1, 1}, {0, 1}}));
+  EXPECT_EQ(ConvexHull({{2, 3}, {2, 3}}), (Points{{2, 3}}));
+}
+
 TEST(SvgTest, ViridisRunsFromPurpleToYellow) {
   EXPECT_EQ(ViridisColor(0), "#440154");
   EXPECT_EQ(ViridisColor(1), "#fde725");
