@@ -330,10 +330,9 @@ void AddJobCommand(CLI::App& app) {
     if (result->json) {
       fmt::print("{}\n", ToJson(info.result(), JsonLayout::kIndented));
     } else {
-      fmt::print("{} ({}): {}\n{}", info.id(), info.name(), StateName(info.state()),
-                 FormatResult(info.result()));
+      fmt::print("{} ({}): {}\n{}{}", info.id(), info.name(), StateName(info.state()),
+                 FormatResult(info.result()), AnnualOutputLines(result->annual));
     }
-    if (!result->json) fmt::print("{}", AnnualOutputLines(result->annual));
   });
 
   // job report
