@@ -3,6 +3,7 @@
 // result makes the same page and files as the local one.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -28,7 +29,8 @@ class ReportCliTest : public testing::Test {
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
            ("fenestra_report_cli_" +
-            std::string(testing::UnitTest::GetInstance()->current_test_info()->name()));
+            std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     // The quick job with its scene by absolute path, so the job file may live here

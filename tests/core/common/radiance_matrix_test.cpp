@@ -1,6 +1,7 @@
 #include "core/common/radiance_matrix.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -16,7 +17,8 @@ class RadianceMatrixTest : public testing::Test {
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
            ("fenestra_radiance_matrix_" +
-            std::string(testing::UnitTest::GetInstance()->current_test_info()->name()));
+            std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(getpid()));
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }

@@ -1,6 +1,7 @@
 #include "core/geometry/scene_proto.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -67,7 +68,8 @@ TEST(SceneProtoTest, CityOfficeRebuildsTheSameScene) {
 
 // OBJ meshes become triangles, sensor grids sensors, vertical blinds stay vertical
 TEST(SceneProtoTest, ObjMeshesAndGridsAreInlined) {
-  const fs::path dir = fs::temp_directory_path() / "fenestra_scene_proto_test";
+  const fs::path dir =
+      fs::temp_directory_path() / ("fenestra_scene_proto_test_" + std::to_string(getpid()));
   fs::create_directories(dir);
   std::ofstream(dir / "box.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\ng top\nf 1 2 3 4\n";
   std::ofstream(dir / "scene.json") << R"({
