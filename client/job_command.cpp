@@ -12,6 +12,8 @@
 #include "client/grpc_client.h"
 #include "client/job_request.h"
 #include "client/progress_display.h"
+#include "client/report/annual_outputs.h"
+#include "client/report/html_report.h"
 
 namespace fenestra {
 namespace {
@@ -142,6 +144,21 @@ int Watch(FenestraClient& client, const std::string& id, bool json) {
       if (end.result.evaluations() > 0) fmt::print("best so far:\n{}", FormatResult(end.result));
       return 1;
   }
+}
+
+// The job's result; Fail()s saying why when it has none.
+const v1::JobResult& ResultOrFail(const v1::JobInfo& info) {
+  if (!info.has_result()) {
+    if (info.state() == v1::JOB_STATE_FAILED) {
+      Fail(absl::FailedPreconditionError(absl::StrCat(info.id(), " failed: ", info.error())));
+    }
+    Fail(absl::FailedPreconditionError(
+        absl::StrCat(info.id(), " is ", StateName(info.state()),
+                     IsFinalState(info.state())
+                         ? " without a result"
+                         : absl::StrCat("; no result yet (fenestra job watch ", info.id(), ")"))));
+  }
+  return info.result();
 }
 
 }  // namespace
@@ -287,6 +304,7 @@ void AddJobCommand(CLI::App& app) {
     ServerOptions server;
     std::string id, output;
     bool json = false;
+    AnnualOutputPaths annual;
   };
   auto result = std::make_shared<ResultArgs>();
   CLI::App* result_cmd = job->add_subcommand("result", "Print a job's result (best design)");
@@ -294,28 +312,41 @@ void AddJobCommand(CLI::App& app) {
   result_cmd->add_flag("--json", result->json, "Print the result as JSON");
   result_cmd->add_option("-o,--output", result->output,
                          "Also write the result file here (JSON, as optimize --local writes it)");
+  AddAnnualOutputOptions(result_cmd, result->annual);
   AddServerOptions(result_cmd, result->server);
   result_cmd->callback([result] {
     const v1::JobInfo info = ValueOrFail(ConnectOrFail(result->server).GetJob(result->id));
-    if (!info.has_result()) {
-      if (info.state() == v1::JOB_STATE_FAILED) {
-        Fail(absl::FailedPreconditionError(absl::StrCat(info.id(), " failed: ", info.error())));
-      }
-      Fail(absl::FailedPreconditionError(absl::StrCat(
-          info.id(), " is ", StateName(info.state()),
-          IsFinalState(info.state())
-              ? " without a result"
-              : absl::StrCat("; no result yet (fenestra job watch ", info.id(), ")"))));
-    }
+    ResultOrFail(info);
     if (!result->output.empty()) {
       if (absl::Status st = WriteJsonFile(result->output, info.result()); !st.ok()) Fail(st);
     }
+    if (absl::Status st = WriteAnnualOutputs(info.result(), result->annual); !st.ok()) Fail(st);
     if (result->json) {
       fmt::print("{}\n", ToJson(info.result(), JsonLayout::kIndented));
     } else {
-      fmt::print("{} ({}): {}\n{}", info.id(), info.name(), StateName(info.state()),
-                 FormatResult(info.result()));
+      fmt::print("{} ({}): {}\n{}{}", info.id(), info.name(), StateName(info.state()),
+                 FormatResult(info.result()), AnnualOutputLines(result->annual));
     }
+  });
+
+  // job report
+  struct ReportArgs {
+    ServerOptions server;
+    std::string id, output, sensor;
+  };
+  auto report = std::make_shared<ReportArgs>();
+  CLI::App* report_cmd = job->add_subcommand(
+      "report", "Write the report of a job's result: one self-contained HTML page");
+  report_cmd->add_option("ID", report->id, "Job id")->required();
+  report_cmd->add_option("-o,--output", report->output, "Report file (HTML)")->required();
+  AddReportSensorOption(report_cmd, report->sensor);
+  AddServerOptions(report_cmd, report->server);
+  report_cmd->callback([report] {
+    const v1::JobInfo info = ValueOrFail(ConnectOrFail(report->server).GetJob(report->id));
+    const absl::Status written =
+        WriteReport(ResultOrFail(info), {info.id(), report->sensor}, report->output);
+    if (!written.ok()) Fail(written);
+    fmt::print("report: {}\n", report->output);
   });
 }
 

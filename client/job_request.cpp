@@ -1,6 +1,5 @@
 #include "client/job_request.h"
 
-#include <algorithm>
 #include <filesystem>
 
 #include "absl/strings/str_cat.h"
@@ -31,9 +30,7 @@ absl::StatusOr<v1::Scene> InlineObjMeshes(const v1::Scene& scene, const std::str
     for (size_t t = 0; t < obj->group.size(); ++t) {
       const Vec3d a = obj->vertices[3 * t], b = obj->vertices[3 * t + 1],
                   c = obj->vertices[3 * t + 2];
-      // Degenerate triangles would fail the polygon check (area > 1e-6 x longest edge²)
-      const double edge = std::max({Length(b - a), Length(c - b), Length(a - c)});
-      if (!(0.5 * Length(Cross(b - a, c - a)) > 1e-6 * edge * edge)) continue;
+      if (IsDegenerateTriangle(a, b, c)) continue;  // it would fail the polygon check
       v1::Surface& triangle = *out.add_surfaces();
       triangle.set_name(s.name());
       triangle.set_side(s.side());

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   fenestra::AddDcCommand(app);
   fenestra::AddConvergenceCommand(app);
   fenestra::AddOptimizeCommand(app);
+  fenestra::AddReportCommand(app);
   fenestra::AddSiteCommand(app);
   fenestra::AddJobCommand(app);
   try {

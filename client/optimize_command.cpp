@@ -8,6 +8,7 @@
 #include "client/cli_util.h"
 #include "client/commands.h"
 #include "client/progress_display.h"
+#include "client/report/annual_outputs.h"
 #include "core/common/atomic_file.h"
 #include "core/optimize/job.h"
 
@@ -45,6 +46,7 @@ void AddOptimizeCommand(CLI::App& app) {
   struct Args {
     std::string job, output, csv;
     bool local = false;
+    AnnualOutputPaths annual;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("optimize", "Run an optimization job in this process");
@@ -52,6 +54,7 @@ void AddOptimizeCommand(CLI::App& app) {
   cmd->add_flag("--local", args->local, "Run here, without the service")->required();
   cmd->add_option("-o,--output", args->output, "Result file (JSON); default: JOB.result.json");
   cmd->add_option("--csv", args->csv, "History as CSV; default: the result file with .csv");
+  AddAnnualOutputOptions(cmd, args->annual);
   cmd->callback([args] {
     const v1::Job job = ValueOrFail(ReadJobFile(args->job));
     const std::string base = std::filesystem::path(args->job).parent_path().string();
@@ -75,6 +78,8 @@ void AddOptimizeCommand(CLI::App& app) {
     if (absl::Status s = WriteJsonFile(output, result); !s.ok()) Fail(s);
     if (absl::Status s = WriteHistoryCsv(csv, result); !s.ok()) Fail(s);
     fmt::print("{}result: {}\nhistory: {}\n", FormatResult(result), output, csv);
+    if (absl::Status s = WriteAnnualOutputs(result, args->annual); !s.ok()) Fail(s);
+    fmt::print("{}", AnnualOutputLines(args->annual));
   });
 }
 

@@ -92,10 +92,8 @@ void AddSceneCommand(CLI::App& app) {
     const Scene s = ValueOrFail(LoadScene(args->file));
     const BlindDesign design =
         ValueOrFail(DesignWithOverrides(s, ValueOrFail(ParseDesignValues(args->set))));
-    const TriangleMesh mesh = AssembleMesh(s, design);
-    const absl::Status written = WriteObj(args->obj, mesh, s.materials);
-    if (!written.ok()) Fail(written);
-    fmt::print("wrote {} triangles to {}\n", mesh.TriangleCount(), args->obj);
+    const size_t triangles = ValueOrFail(WriteSceneObj(args->obj, s, design));
+    fmt::print("wrote {} triangles to {}\n", triangles, args->obj);
   });
 }
 

@@ -6,7 +6,7 @@ packages=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler libabsl-dev
   libembree-dev libtbb-dev libeigen3-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libcli11-dev libtinyobjloader-dev libsqlite3-dev zlib1g-dev libexpat1-dev
-  libssl-dev openssl
+  libssl-dev openssl chromium
   python3 python3-grpcio python3-grpc-tools python3-numpy
 )
 missing=()

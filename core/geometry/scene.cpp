@@ -1,5 +1,6 @@
 #include "core/geometry/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -498,6 +499,11 @@ TriangleMesh AssembleMesh(const Scene& scene, const BlindDesign& design) {
     GenerateBlind(scene.window, *scene.blind, design, part, mesh);
   }
   return mesh;
+}
+
+bool IsDegenerateTriangle(Vec3d a, Vec3d b, Vec3d c) {
+  const double edge = std::max({Length(b - a), Length(c - b), Length(a - c)});
+  return !(TriangleArea(a, b, c) > kShapeTolerance * edge * edge);
 }
 
 BlindDesign DefaultDesign(const Scene& scene) {

@@ -92,6 +92,10 @@ absl::StatusOr<Scene> LoadScene(const std::string& path);
 // The complete geometry at `design` (blind included when the scene has one).
 TriangleMesh AssembleMesh(const Scene& scene, const BlindDesign& design);
 
+// True when a triangle has no area by the polygon check (area <= 1e-6 x its longest
+// edge²): as a polygon surface it would be refused.
+bool IsDegenerateTriangle(Vec3d a, Vec3d b, Vec3d c);
+
 // The blind design the scene file states (its parameters' values), or an empty design.
 BlindDesign DefaultDesign(const Scene& scene);
 

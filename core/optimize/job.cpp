@@ -8,16 +8,20 @@
 #include <span>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "core/common/content_hash.h"
 #include "core/common/json_proto.h"
 #include "core/common/status_macros.h"
 #include "core/dc/two_stage.h"
+#include "core/geometry/scene_proto.h"
 #include "core/metrics/annual_metrics.h"
 #include "core/metrics/illuminance.h"
 #include "core/metrics/metric_errors.h"
 #include "core/metrics/occupancy.h"
+#include "core/optimize/build_info.h"
 #include "core/optimize/design_variables.h"
 #include "core/optimize/final_check.h"
+#include "core/optimize/hourly_illuminance.h"
 #include "core/optimize/metric_objective.h"
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
@@ -98,6 +102,25 @@ void AddBestOverTime(v1::JobResult& result) {
 void SetEstimate(v1::Estimate* out, double value, double standard_error) {
   out->set_value(value);
   out->set_standard_error(standard_error);
+}
+
+// What a result says about how it was made: the job as run (its scene self-contained), the
+// weather's location and the versions.
+void DescribeRun(const v1::Job& spec, const Scene& scene, const EpwLocation& location,
+                 v1::JobResult& result) {
+  v1::Job& job = *result.mutable_job();
+  job = spec;
+  job.clear_scene_file();
+  job.clear_weather_file();
+  *job.mutable_scene() = SelfContainedSceneProto(scene);
+  std::vector<std::string> place;
+  for (const std::string& part : {location.city, location.region, location.country}) {
+    if (!part.empty() && part != "-") place.push_back(part);
+  }
+  result.set_weather_location(absl::StrJoin(place, ", "));
+  for (const auto& [name, version] : ComponentVersions()) {
+    (*result.mutable_versions())[name] = version;
+  }
 }
 
 v1::Metrics ToProto(const AnnualMetricsEstimate& m) {
@@ -337,10 +360,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
     return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
   }
   // S over the lit analysed hours, in lux
-  Matrix lit_sky(setting.sky.radiance.rows(), static_cast<Eigen::Index>(columns.size()));
-  for (size_t c = 0; c < columns.size(); ++c) {
-    lit_sky.col(c) = kWhiteEfficacyLumensPerWatt * setting.sky.radiance.col(columns[c]);
-  }
+  const Matrix lit_sky = SkyColumnsInLux(setting.sky.radiance, columns);
 
   // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O) S, as
   // the backend does it best (on the CPU the paths recorded once, then replayed per design;
@@ -404,6 +424,20 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   }
   FENESTRA_ASSIGN_OR_RETURN(search, RunVns(variables, objective, vns, vns_callbacks));
 
+  // The best design's hourly illuminance, for reports and other tools
+  design_tallies.reset();  // the search's paths are no longer needed
+  if (search.evaluations > 0 && search.stop_reason != StopReason::kCancelled &&
+      static_cast<int64_t>(job.scene.sensors.size() * setting.sky.steps.size()) <=
+          kMaxHourlyIlluminanceValues) {
+    const auto hourly_start = std::chrono::steady_clock::now();
+    FENESTRA_ASSIGN_OR_RETURN(
+        hourly, DesignHourlyIlluminance(job.scene, DesignAt(job, search.best_x), indoor_options,
+                                        outdoor->coefficients, setting.sky, *backend));
+    *result.mutable_best_hourly() = std::move(hourly);
+    result.mutable_timings()->set_best_hourly_seconds(Since(hourly_start));
+  }
+  DescribeRun(spec, ranged, job.weather.location, result);
+
   // The result
   for (size_t i = 0; i < variables.size(); ++i) {
     (*result.mutable_best_design())[variables[i].name] = search.best_x[i];
@@ -425,7 +459,6 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
 
   // The final check: the best design by the one-stage method
   if (spec.sampling().final_check() && search.stop_reason != StopReason::kCancelled) {
-    design_tallies.reset();  // the search's recorded paths or device buffers
     FENESTRA_RETURN_IF_ERROR(
         CheckBestDesign(job, setting, search, backend.get(), callbacks, start, result));
   }
