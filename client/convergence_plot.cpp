@@ -7,6 +7,7 @@
 #include <limits>
 #include <ostream>
 
+#include "client/report/svg.h"
 #include "core/common/atomic_file.h"
 
 namespace fenestra {
@@ -15,29 +16,6 @@ namespace {
 constexpr double kWidth = 760, kHeight = 480;
 constexpr double kLeft = 80, kRight = 230, kTop = 40, kBottom = 60;  // margins [px]
 constexpr const char* kColors[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e"};
-
-std::string XmlEscape(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 bool Drawable(double x, double y) { return x > 0 && y > 0 && std::isfinite(x) && std::isfinite(y); }
 
@@ -107,11 +85,11 @@ void WriteAxes(std::ostream& out, const Frame& f, const LogLogPlot& plot) {
   out << fmt::format(
       "<text class=\"x-label\" x=\"{:.1f}\" y=\"{}\" text-anchor=\"middle\" "
       "font-family=\"sans-serif\" font-size=\"14\">{}</text>\n",
-      (x0 + x1) / 2, kHeight - 16, XmlEscape(plot.x_label));
+      (x0 + x1) / 2, kHeight - 16, EscapeXml(plot.x_label));
   out << fmt::format(
       "<text class=\"y-label\" x=\"20\" y=\"{:.1f}\" text-anchor=\"middle\" "
       "font-family=\"sans-serif\" font-size=\"14\" transform=\"rotate(-90 20 {:.1f})\">{}</text>\n",
-      (y0 + y1) / 2, (y0 + y1) / 2, XmlEscape(plot.y_label));
+      (y0 + y1) / 2, (y0 + y1) / 2, EscapeXml(plot.y_label));
 }
 
 void WriteSeries(std::ostream& out, const Frame& f, const PlotSeries& s, const char* color,
@@ -120,7 +98,7 @@ void WriteSeries(std::ostream& out, const Frame& f, const PlotSeries& s, const c
   for (size_t k = 0; k < s.x.size() && k < s.y.size(); ++k) {
     if (Drawable(s.x[k], s.y[k])) points += fmt::format("{:.1f},{:.1f} ", f.X(s.x[k]), f.Y(s.y[k]));
   }
-  out << fmt::format("<g class=\"series\" data-name=\"{}\">\n", XmlEscape(s.name));
+  out << fmt::format("<g class=\"series\" data-name=\"{}\">\n", EscapeXml(s.name));
   out << fmt::format(
       "<polyline class=\"series-line\" fill=\"none\" stroke=\"{}\" stroke-width=\"2\" "
       "points=\"{}\"/>\n",
@@ -136,7 +114,7 @@ void WriteSeries(std::ostream& out, const Frame& f, const PlotSeries& s, const c
       "<line class=\"legend\" x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"{}\" "
       "stroke-width=\"2\"/>\n<text x=\"{}\" y=\"{}\" font-family=\"sans-serif\" "
       "font-size=\"12\">{}</text>\n",
-      lx, ly, lx + 24, ly, color, lx + 30, ly + 4, XmlEscape(s.name));
+      lx, ly, lx + 24, ly, color, lx + 30, ly + 4, EscapeXml(s.name));
 }
 
 }  // namespace
@@ -174,7 +152,7 @@ absl::Status WriteLogLogSvg(const std::string& path, const LogLogPlot& plot) {
         "<rect width=\"{0}\" height=\"{1}\" fill=\"#ffffff\"/>\n"
         "<text class=\"title\" x=\"{3}\" y=\"24\" font-family=\"sans-serif\" font-size=\"15\">"
         "{2}</text>\n",
-        kWidth, kHeight, XmlEscape(plot.title), kLeft);
+        kWidth, kHeight, EscapeXml(plot.title), kLeft);
     WriteAxes(out, frame, plot);
     for (size_t k = 0; k < plot.series.size(); ++k) {
       WriteSeries(out, frame, plot.series[k], kColors[k % std::size(kColors)], static_cast<int>(k));
