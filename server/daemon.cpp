@@ -41,6 +41,15 @@ Daemon::~Daemon() { Shutdown(); }
 absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& config) {
   std::unique_ptr<Daemon> d(new Daemon(config));
   const v1::Limits& limits = config.limits();
+  // The health port first, so that probes find the process alive while the store opens
+  if (!config.health_listen().empty()) {
+    absl::StatusOr<std::unique_ptr<HealthServer>> health =
+        HealthServer::Start(config.health_listen());
+    if (!health.ok()) return health.status();
+    d->health_ = *std::move(health);
+    spdlog::info("health checks on {} (port {}, plaintext, the health service only)",
+                 config.health_listen(), d->health_->port());
+  }
   absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials = PortCredentials(config);
   if (!credentials.ok()) return credentials.status();
 
@@ -131,6 +140,8 @@ absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& co
                                             : "TLS with client certificates",
       config.auth(), dir.root().string(), dir.UsedBytes(), dir.max_bytes(), config.worker_threads(),
       config.backend());
+  d->server_->GetHealthCheckService()->SetServingStatus(kReadinessService, true);
+  if (d->health_) d->health_->SetReady(true);
   return d;
 }
 
@@ -138,11 +149,14 @@ void Daemon::Shutdown() {
   if (stopped_) return;
   stopped_ = true;
   if (server_) server_->GetHealthCheckService()->SetServingStatus(false);
+  if (health_) health_->SetReady(false);
   if (jobs_) jobs_->Shutdown(config_.shutdown_grace_seconds());
   if (server_) {
     server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
     server_->Wait();
   }
+  // Last, so that liveness holds while jobs wind down
+  health_.reset();
   spdlog::info("fenestrad stopped");
 }
 

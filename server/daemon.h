@@ -7,6 +7,7 @@
 #include "absl/status/statusor.h"
 #include "fenestra/v1/daemon.pb.h"
 #include "server/data_dir.h"
+#include "server/health.h"
 #include "server/heavy_requests.h"
 #include "server/job_manager.h"
 #include "server/job_store.h"
@@ -21,7 +22,8 @@ namespace fenestra {
 
 // fenestrad assembled: data directory, job store (with the users), outdoor cache, uploaded
 // weather files, work queue, sites, jobs and the gRPC server (SiteService, JobService,
-// health checking, and reflection with auth none), over TLS when configured.
+// health checking, and reflection with auth none), over TLS when configured; with
+// config.health_listen, the health port too (HealthServer).
 class Daemon {
  public:
   // Opens the data directory (FailedPrecondition naming it when it is not writable),
@@ -33,6 +35,8 @@ class Daemon {
 
   // The port the server listens on (useful with port 0).
   int port() const { return port_; }
+  // The health port (config.health_listen), or 0 when there is none.
+  int health_port() const { return health_ ? health_->port() : 0; }
 
   // Reports NOT_SERVING to health checks, refuses new work, lets running jobs reach the
   // end or a checkpoint (see JobManager::Shutdown), then stops the gRPC server.
@@ -42,6 +46,7 @@ class Daemon {
   explicit Daemon(const v1::DaemonConfig& config);
 
   v1::DaemonConfig config_;
+  std::unique_ptr<HealthServer> health_;
   std::unique_ptr<DataDir> data_dir_;
   std::unique_ptr<JobStore> store_;
   std::unique_ptr<OutdoorCache> cache_;
