@@ -21,7 +21,7 @@
 #include "client/cli_util.h"
 #include "client/job_request.h"
 #include "tests/child_process.h"
-#include "tests/client/certificates.h"
+#include "tests/certificates.h"
 #include "tests/client/recording_server.h"
 
 namespace fenestra {

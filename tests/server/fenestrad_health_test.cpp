@@ -5,9 +5,9 @@
 #include <sys/socket.h>
 
 #include "fenestra/v1/daemon.pb.h"
+#include "tests/certificates.h"
 #include "tests/server/fenestrad_harness.h"
 #include "tests/server/health_client.h"
-#include "tests/server/test_certificates.h"
 
 namespace fenestra {
 namespace {
@@ -17,16 +17,6 @@ using ::testing::HasSubstr;
 
 class FenestradHealthTest : public FenestradTest {
  protected:
-  static void SetUpTestSuite() {
-    const std::string dir =
-        testing::TempDir() + "/fenestrad_health_test_certificates_" + std::to_string(getpid());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    certs_ = new TestCertificates;
-    MakeTestCertificates(dir, certs_);
-  }
-  static void TearDownTestSuite() { delete certs_; }
-
   // The health port a started daemon wrote on the second line of its port file.
   static int HealthPort(const Daemon& d) {
     std::ifstream ports(d.data_dir() + ".port");
@@ -47,8 +37,6 @@ class FenestradHealthTest : public FenestradTest {
     while (!token.empty() && token.back() == '\n') token.pop_back();
     return token;
   }
-
-  static inline TestCertificates* certs_ = nullptr;
 };
 
 grpc::StatusCode ListJobs(const std::shared_ptr<grpc::Channel>& channel, const std::string& token) {
@@ -75,9 +63,9 @@ grpc::StatusCode ListSites(const std::shared_ptr<grpc::Channel>& channel,
 TEST_F(FenestradHealthTest, PlaintextHealthBesideTlsAndTokensServingNothingElse) {
   const std::string ann = AddUser("ann");
   grpc::SslCredentialsOptions tls;
-  tls.pem_root_certs = ReadFile(certs_->ca);
+  tls.pem_root_certs = ReadFile(Certs().ca_cert);
   Daemon d(dir_ + "/data",
-           {"--tls-cert", certs_->server_cert, "--tls-key", certs_->server_key, "--health-listen",
+           {"--tls-cert", Certs().server_cert, "--tls-key", Certs().server_key, "--health-listen",
             "127.0.0.1:0"},
            grpc::SslCredentials(tls));
   d.Start();
