@@ -153,12 +153,12 @@ int main(int argc, char** argv) {
   std::printf(
       "outdoor stage: %lld paths, 30 bounces, %dx%d window parts: %.4f s, %.3e rays, "
       "%.2f G rays/s\n",
-      static_cast<long long>(o.paths_per_cell * o.coefficients.rows()), outdoor.parts.columns,
+      static_cast<long long>(o.paths_per_cell * o.sky_view.size()), outdoor.parts.columns,
       outdoor.parts.rows, o.wall_seconds, static_cast<double>(o.rays_traced),
       o.rays_traced / o.wall_seconds / 1e9);
 
   // One candidate as a job evaluates it: the indoor stage, then the tallies of
-  // E = (I O) S over the lit occupied hours (formed and reduced on the GPU), then UDI with
+  // E_b = (I_b O_b) S over the lit occupied hours (formed and reduced on the GPU), then UDI with
   // its jackknife error
   const EpwData weather =
       ValueOrExit(ReadEpw(kRoot + "/examples/weather/URY_Montevideo.865800_IWEC.epw"));
@@ -181,7 +181,7 @@ int main(int argc, char** argv) {
   const MetricOptions metric_options;
   const int analysed_hours = AnalysedHours(occupied, metric_options.hours);
   const std::unique_ptr<DesignTallies> design_tallies =
-      ValueOrExit(gpu->MakeDesignTallies(office, indoor, o.coefficients, analysed_sky));
+      ValueOrExit(gpu->MakeDesignTallies(office, indoor, o.batches, analysed_sky));
   double kernel = 0, total = 0, prepare = 0;
   const int candidates = 20;
   uint64_t rays = 0;

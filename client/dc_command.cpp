@@ -99,8 +99,9 @@ void AddDcCommand(CLI::App& app) {
                parts.columns, parts.rows, a.basis, limit);
     fmt::print(
         "  outdoor stage: {} paths, {} triangles, {} rays, {:.2f} s, mean relative SE {:.4f}\n",
-        o.paths_per_cell * o.coefficients.rows(), o.triangles, o.rays_traced, o.wall_seconds,
-        MeanRelativeError(o.coefficients, o.standard_error));
+        o.paths_per_cell * o.sky_view.size(), o.triangles, o.rays_traced, o.wall_seconds,
+        MeanRelativeError(o.coefficients.topRows(o.sky_view.size()),
+                          o.standard_error.topRows(o.sky_view.size())));
     fmt::print(
         "  indoor stage: {} sensors x {} paths, {} triangles, {} rays, {:.2f} s, mean "
         "relative SE {:.4f}\n",
@@ -161,9 +162,11 @@ void AddDcCommand(CLI::App& app) {
   command->add_option("--indoor-paths", args->indoor_paths, "Two-stage: indoor paths per sensor")
       ->capture_default_str();
   command->add_option("--outdoor-matrix", args->outdoor_matrix,
-                      "Two-stage: also write O (cells x 146) [-]");
+                      "Two-stage: also write O ((window cells + 146) x 146: the window cells' "
+                      "reflected radiance, then the identity for the direct columns) [-]");
   command->add_option("--indoor-matrix", args->indoor_matrix,
-                      "Two-stage: also write I (sensors x cells) [sr]");
+                      "Two-stage: also write I (sensors x (window cells + 146): light through the "
+                      "window cells, then straight from each sky bin) [sr]");
   command->add_option("--format", args->format, "Matrix format")
       ->check(CLI::IsMember({"ascii", "float"}))
       ->capture_default_str();

@@ -227,13 +227,14 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
       s.window_rows() > 16) {
     return Invalid("sampling.window_columns/window_rows", "must be in [0, 16] (0 = automatic)");
   }
+  if (s.batches() < 2 || s.batches() > 64) return Invalid("sampling.batches", "must be in [2, 64]");
   const int64_t window_cells =
       int64_t{s.basis_cells()} * std::max(1, s.window_columns()) * std::max(1, s.window_rows());
-  if (s.outdoor_paths() < 2 * window_cells) {
+  if (s.outdoor_paths() < window_cells * s.batches()) {
     return Invalid("sampling.outdoor_paths",
-                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ")"));
+                   absl::StrCat("must be at least one per window cell and batch (",
+                                window_cells * s.batches(), ")"));
   }
-  if (s.batches() < 2 || s.batches() > 64) return Invalid("sampling.batches", "must be in [2, 64]");
   if (s.indoor_paths_per_sensor() < s.batches()) {
     return Invalid("sampling.indoor_paths_per_sensor", "must be at least the batch count");
   }
@@ -284,18 +285,20 @@ absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& ba
   const WindowParts parts = SamplingWindowParts(prepared.job.sampling(), prepared.scene.window);
   const int64_t window_cells =
       int64_t{prepared.job.sampling().basis_cells()} * parts.columns * parts.rows;
-  if (prepared.job.sampling().outdoor_paths() < 2 * window_cells) {
+  const int batches = prepared.job.sampling().batches();
+  if (prepared.job.sampling().outdoor_paths() < window_cells * batches) {
     return Invalid("sampling.outdoor_paths",
-                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ": ",
-                                parts.columns, "x", parts.rows, " window parts x ",
-                                prepared.job.sampling().basis_cells(), " direction cells)"));
+                   absl::StrCat("must be at least one per window cell and batch (",
+                                window_cells * batches, ": ", parts.columns, "x", parts.rows,
+                                " window parts x ", prepared.job.sampling().basis_cells(),
+                                " direction cells x ", batches, " batches)"));
   }
   return prepared;
 }
 
 std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
   ContentHash hash;
-  hash.String("fenestra outdoor matrix v1");
+  hash.String("fenestra outdoor matrix v2");
   const TriangleMesh& mesh = scene.fixed;
   for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
     if (mesh.side[t] != Side::kOutdoor) continue;
@@ -312,9 +315,17 @@ std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
   hash.Value(w.width_m), hash.Value(w.height_m);
   hash.Value(sampling.outdoor_paths()), hash.Value(sampling.outdoor_bounces());
   hash.Value(sampling.seed()), hash.Value(sampling.basis_cells());
+  hash.Value(sampling.batches());
   const WindowParts parts = SamplingWindowParts(sampling, scene.window);
   hash.Value(parts.columns), hash.Value(parts.rows);
   return hash.Hex();
+}
+
+double OutdoorMeanRelativeError(const OutdoorMatrix& matrix) {
+  const Eigen::Index cells = std::max<Eigen::Index>(0, matrix.coefficients.rows() - kDaylightBins);
+  if (cells == 0 || matrix.standard_error.rows() != matrix.coefficients.rows()) return 0;
+  return MeanRelativeError(matrix.coefficients.topRows(cells), matrix.standard_error.topRows(cells),
+                           0.01, false);
 }
 
 WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Window& window) {
@@ -332,14 +343,16 @@ absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1:
   options.seed = sampling.seed();
   options.basis_cells = sampling.basis_cells();
   options.parts = SamplingWindowParts(sampling, scene.window);
+  options.batches = sampling.batches();
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(sampling.backend()));
   FENESTRA_ASSIGN_OR_RETURN(result, ComputeOutdoorStage(scene, options, backend.get()));
   OutdoorMatrix matrix;
   matrix.coefficients = std::move(result.coefficients);
   matrix.standard_error = std::move(result.standard_error);
+  matrix.batches = std::move(result.batches);
   matrix.basis_cells = result.basis_cells;
   matrix.parts = result.parts;
-  matrix.paths = result.paths_per_cell * result.coefficients.rows();
+  matrix.paths = result.paths_per_cell * result.sky_view.size();
   matrix.bounces = sampling.outdoor_bounces();
   matrix.seed = sampling.seed();
   matrix.wall_seconds = result.wall_seconds;
@@ -408,13 +421,16 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (!(outdoor->parts == indoor_options.parts)) {
     return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
   }
+  if (static_cast<int>(outdoor->batches.size()) != indoor_options.batches) {
+    return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
+  }
   // S over the lit analysed hours, in lux
   Matrix lit_sky(sky.radiance.rows(), static_cast<Eigen::Index>(columns.size()));
   for (size_t c = 0; c < columns.size(); ++c) {
     lit_sky.col(c) = kWhiteEfficacyLumensPerWatt * sky.radiance.col(columns[c]);
   }
 
-  // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O) S, as
+  // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O_b) S, as
   // the backend does it best (on the CPU the paths recorded once, then replayed per design;
   // on the GPU I and E never leave the device), for the designs within the job's ranges
   if (callbacks.stage) callbacks.stage("indoor paths");
@@ -428,7 +444,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   }
   FENESTRA_ASSIGN_OR_RETURN(
       design_tallies,
-      backend->MakeDesignTallies(ranged, indoor_options, outdoor->coefficients, lit_sky));
+      backend->MakeDesignTallies(ranged, indoor_options, outdoor->batches, lit_sky));
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     FENESTRA_ASSIGN_OR_RETURN(tallies, design_tallies->Tally(DesignAt(job, x), metric_options));
@@ -495,8 +511,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   result.set_stop_reason(std::string(StopReasonName(search.stop_reason)));
   result.mutable_timings()->set_evaluation_seconds(search.evaluation_seconds);
   result.mutable_timings()->set_total_seconds(Since(start));
-  result.set_outdoor_mean_relative_standard_error(
-      MeanRelativeError(outdoor->coefficients, outdoor->standard_error, 0.01, false));
+  result.set_outdoor_mean_relative_standard_error(OutdoorMeanRelativeError(*outdoor));
   result.set_backend(backend->Name());
   return result;
 }

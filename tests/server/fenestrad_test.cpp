@@ -1,6 +1,6 @@
 // fenestrad end to end: a real daemon on a free localhost port with a temporary data
 // directory, driven through the fenestra client (and, for status codes, a gRPC stub).
-// Jobs use tiny sampling (20000 outdoor paths, 2000 indoor paths per sensor).
+// Jobs use tiny sampling (40000 outdoor paths, 2000 indoor paths per sensor).
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <gmock/gmock.h>
@@ -258,7 +258,7 @@ class FenestradTest : public testing::Test {
     v1::Job job = FromJson<v1::Job>(
         ReadFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json"));
     job.set_scene_file(FENESTRA_SOURCE_DIR "/examples/city_office/scene.json");
-    job.mutable_sampling()->set_outdoor_paths(20000);
+    job.mutable_sampling()->set_outdoor_paths(40000);
     job.mutable_sampling()->set_indoor_paths_per_sensor(2000);
     job.mutable_sampling()->set_backend("cpu");
     job.mutable_budget()->set_max_evaluations(evaluations);
@@ -553,7 +553,7 @@ TEST_F(FenestradTest, ObjMeshesAreSentInlineAsPolygons) {
   std::ofstream(dir_ + "/scene.json") << ToJson(scene);
 
   CliResult r =
-      d->Cli({"site", "add", dir_ + "/scene.json", "--outdoor-paths", "20000", "--wait", "--json"});
+      d->Cli({"site", "add", dir_ + "/scene.json", "--outdoor-paths", "40000", "--wait", "--json"});
   ASSERT_EQ(r.code, 0) << r.err;
   const v1::SiteInfo site = FromJson<v1::SiteInfo>(r.out);
   EXPECT_EQ(site.state(), v1::SITE_STATE_READY);
@@ -640,7 +640,7 @@ TEST_F(FenestradTest, BadRequestsGetTheRightCodeAndTheDaemonKeepsServing) {
   r = d->Cli({"site", "add", "--job", WriteJob("tiny", TinyJob()), "--wait"});
   ASSERT_EQ(r.code, 0) << r.err;
   job = TinyJob();
-  job.mutable_sampling()->set_outdoor_paths(30000);
+  job.mutable_sampling()->set_outdoor_paths(50000);
   request = InlineRequest(job);
   request.set_site_id("site-1");
   expect(submit(request), grpc::StatusCode::INVALID_ARGUMENT, "does not match site site-1");
@@ -783,7 +783,7 @@ TEST_F(FenestradTest, PythonClientRegistersASiteAndRunsAJob) {
   auto d = StartDaemon();
   const CliResult r = Daemon::RunCli(
       {"/usr/bin/python3", FENESTRA_SOURCE_DIR "/examples/python_client.py", "--server",
-       d->address(), "--outdoor-paths", "20000", "--indoor-paths", "2000", "--evaluations", "6",
+       d->address(), "--outdoor-paths", "40000", "--indoor-paths", "2000", "--evaluations", "6",
        FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json"});
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_THAT(r.out, HasSubstr("site-1 ready"));
