@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
       static_cast<long long>(o.paths_per_cell * o.sky_view.size()),
       static_cast<long long>(o.paths_per_cell), parts.columns, parts.rows, o.basis_cells,
       o.triangles, o.wall_seconds, static_cast<double>(o.rays_traced),
-      o.rays_traced / o.wall_seconds, MeanRelativeError(o.coefficients.topRows(o.sky_view.size()),
+      o.rays_traced / o.wall_seconds,
+      MeanRelativeError(o.coefficients.topRows(o.sky_view.size()),
                         o.standard_error.topRows(o.sky_view.size())));
 
   for (const double alpha : {0.0, 0.6, 1.5707963}) {

@@ -78,8 +78,8 @@ Args Parse(int argc, char** argv) {
 struct OutdoorSums {
   int cells = 0;
   uint64_t paths = 0;
-  std::vector<double> reflected, first;  // cells x 146
-  std::vector<double> first_count;       // cells
+  std::vector<double> reflected, first;   // cells x 146
+  std::vector<double> first_count;        // cells
   std::vector<double> reflected_squares;  // cells: sum over paths of (sky score)^2, reflected
   std::vector<double> all_squares;        // cells: the same, every path
 
@@ -156,16 +156,17 @@ OutdoorSums TraceOutdoor(const EmbreeIntersector& scene, const TraceGeometry& ge
   return sums;
 }
 
-// The outdoor view, reporting to the indoor mode that nothing escapes (every score goes to
-// its window cell) but remembering for the sink where the score arrives and whether its
-// view reaches the sky.
+// The outdoor view, scoring everything into its window cell but remembering for the sink
+// where the score arrives and whether its view reaches the sky.
 struct WatchingOutdoor {
   OutdoorView<EmbreeIntersector> view;
   mutable Vec3f point, omega;
   mutable bool escapes = false;
-  bool Escapes(Vec3f p, Vec3f outward, Vec3f o, int part) const {
-    point = p, omega = o, escapes = view.Escapes(p, outward, o, part);
-    return false;
+  template <class Sink>
+  void Score(const TraceWindow& window, const HemisphereBasis&, Vec3f p, Vec3f o, int cell,
+             double value, Sink* sink) const {
+    point = p, omega = o, escapes = view.Escapes(p, window.normal, o);
+    sink->Add(cell, value);
   }
 };
 
@@ -276,11 +277,11 @@ int main(int argc, char** argv) {
       if (m.name == "city") m.reflectance = 0;
     }
   }
-  const BlindDesign design = ValueOrExit(DesignWithOverrides(
-      scene, {{"alpha", args.alpha},
-              {"width", args.width},
-              {"spacing", args.spacing},
-              {"thickness", args.thickness}}));
+  const BlindDesign design =
+      ValueOrExit(DesignWithOverrides(scene, {{"alpha", args.alpha},
+                                              {"width", args.width},
+                                              {"spacing", args.spacing},
+                                              {"thickness", args.thickness}}));
   const WindowParts parts =
       args.parts.columns > 0 ? args.parts : AutomaticWindowParts(scene.window);
   const HemisphereBasis basis = ValueOrExit(BasisFor(args.cells));
@@ -328,12 +329,12 @@ int main(int argc, char** argv) {
         t.all.assign(cells, 0.0), t.met.assign(cells, 0.0);
         t.exact.assign(cells, 0.0), t.exact_direct.assign(cells, 0.0);
         WatchingOutdoor watcher = prototype;
-        const IndoorContext context{&watcher, &prototype.view.scene, outdoor.Surfaces(),
-                                    outdoor_window, &basis, cells};
+        const IndoorContext context{
+            &watcher, &prototype.view.scene, outdoor.Surfaces(), outdoor_window, &basis, cells};
         IndoorSink sink{&t, &context, static_cast<uint32_t>(s), &slot.continuations};
         slot.continuations = BatchStart(paths, kBatches, b) * 64;
-        IndoorMode<IndoorSink, WatchingOutdoor> mode{sensors[s].position, sensors[s].normal, window,
-                                                     &basis, -1, &watcher, &sink};
+        IndoorMode<IndoorSink, WatchingOutdoor> mode{
+            sensors[s].position, sensors[s].normal, window, &basis, -1, &watcher, &sink};
         for (uint64_t p = BatchStart(paths, kBatches, b); p < BatchStart(paths, kBatches, b + 1);
              ++p) {
           TracePath<EmbreeIntersector, decltype(mode), 0>(
@@ -356,9 +357,9 @@ int main(int argc, char** argv) {
       "sky sums [sr] per sensor: one-stage with the same indoor paths (exact outdoors), two-stage "
       "through the cells and split; differences relative to the one-stage value, in standard "
       "errors of the difference (indoor paths in 8 batches, and O's per-path moments)\n");
-  std::printf(
-      "%-6s %-22s %-30s %-30s %-22s %s\n", "sensor", "one-stage", "cells (projected O)",
-      "split (projected O)", "cells (solid-angle O)", "cells bias: direct + reflected; L1 cells / split");
+  std::printf("%-6s %-22s %-30s %-30s %-22s %s\n", "sensor", "one-stage", "cells (projected O)",
+              "split (projected O)", "cells (solid-angle O)",
+              "cells bias: direct + reflected; L1 cells / split");
   for (int s = 0; s < sensor_count; ++s) {
     std::vector<double> exact, old_projected, old_solid, split, direct_bias, reflected_bias;
     double old_var = 0, split_var = 0;
@@ -383,12 +384,12 @@ int main(int argc, char** argv) {
         d_split[j] += t.direct_bins[j] * inv_paths / kBatches;
         for (int c = 0; c < cells; ++c) {
           const double met = n - projected.first_count[c];
-          d_old[j] += t.all[c] * (projected.first[c * kSkyBins + j] +
-                                  projected.reflected[c * kSkyBins + j]) /
+          d_old[j] += t.all[c] *
+                      (projected.first[c * kSkyBins + j] + projected.reflected[c * kSkyBins + j]) /
                       n * inv_paths / kBatches;
           if (met > 0) {
-            d_split[j] += t.met[c] * projected.reflected[c * kSkyBins + j] / met * inv_paths /
-                          kBatches;
+            d_split[j] +=
+                t.met[c] * projected.reflected[c * kSkyBins + j] / met * inv_paths / kBatches;
           }
         }
       }
@@ -403,7 +404,8 @@ int main(int argc, char** argv) {
         all += tallies[s * kBatches + b].all[c] * inv_paths / kBatches;
         met_weight += tallies[s * kBatches + b].met[c] * inv_paths / kBatches;
       }
-      const double mean = (projected.Sky(projected.first, c) + projected.Sky(projected.reflected, c)) / n;
+      const double mean =
+          (projected.Sky(projected.first, c) + projected.Sky(projected.reflected, c)) / n;
       old_var += all * all * std::max(0.0, projected.all_squares[c] / n - mean * mean) / n;
       const double met = n - projected.first_count[c];
       if (met > 1) {
@@ -449,9 +451,12 @@ int main(int argc, char** argv) {
     const double one = std::accumulate(exact.begin(), exact.end(), 0.0);
     std::vector<double> old_bias(cells), split_bias(cells);
     for (int c = 0; c < cells; ++c) {
-      old_bias[c] = all[c] * (projected.Sky(projected.first, c) + projected.Sky(projected.reflected, c)) / n - exact[c];
+      old_bias[c] =
+          all[c] * (projected.Sky(projected.first, c) + projected.Sky(projected.reflected, c)) / n -
+          exact[c];
       const double m = n - projected.first_count[c];
-      split_bias[c] = direct[c] + (m > 0 ? met[c] * projected.Sky(projected.reflected, c) / m : 0.0) - exact[c];
+      split_bias[c] =
+          direct[c] + (m > 0 ? met[c] * projected.Sky(projected.reflected, c) / m : 0.0) - exact[c];
     }
     std::vector<int> order(cells);
     std::iota(order.begin(), order.end(), 0);
@@ -472,11 +477,13 @@ int main(int argc, char** argv) {
       double elevation, azimuth;
       CellDirection(basis, scene.window, dir, &elevation, &azimuth);
       shown += std::abs(old_bias[c]);
-      std::printf("%d,%d   %-5d %-4d %5.1f/%5.1f   %5.2f%%   %4.2f / %4.2f / %4.2f     %+6.2f%%  %+6.2f%%\n",
-                  part % parts.columns, part / parts.columns, dir, Ring(basis, dir), elevation,
-                  azimuth, 100 * exact[c] / one, all[c] > 0 ? (all[c] - met[c]) / all[c] : 0.0,
-                  projected.first_count[c] / n, solid.first_count[c] / n, 100 * old_bias[c] / one,
-                  100 * split_bias[c] / one);
+      std::printf(
+          "%d,%d   %-5d %-4d %5.1f/%5.1f   %5.2f%%   %4.2f / %4.2f / %4.2f     %+6.2f%%  "
+          "%+6.2f%%\n",
+          part % parts.columns, part / parts.columns, dir, Ring(basis, dir), elevation, azimuth,
+          100 * exact[c] / one, all[c] > 0 ? (all[c] - met[c]) / all[c] : 0.0,
+          projected.first_count[c] / n, solid.first_count[c] / n, 100 * old_bias[c] / one,
+          100 * split_bias[c] / one);
     }
     double old_sum = std::accumulate(old_bias.begin(), old_bias.end(), 0.0);
     double split_sum = std::accumulate(split_bias.begin(), split_bias.end(), 0.0);

@@ -41,10 +41,11 @@ struct Design {
 };
 
 std::vector<Design> Designs() {
-  std::vector<Design> designs = {
-      {"optimum", 0.0, 0.13, 0.07, 0.014},     {"source_tilt", 0.58, 0.15, 0.0, 0.01},
-      {"source_tilt_open", 0.58, 0.15, 0.05, 0.02}, {"thin_wide_gaps", 0.0, 0.05, 0.10, 0.01},
-      {"shelves", std::numbers::pi / 2, 0.15, 0.0, 0.02}};
+  std::vector<Design> designs = {{"optimum", 0.0, 0.13, 0.07, 0.014},
+                                 {"source_tilt", 0.58, 0.15, 0.0, 0.01},
+                                 {"source_tilt_open", 0.58, 0.15, 0.05, 0.02},
+                                 {"thin_wide_gaps", 0.0, 0.05, 0.10, 0.01},
+                                 {"shelves", std::numbers::pi / 2, 0.15, 0.0, 0.02}};
   const double pi = std::numbers::pi;
   for (double alpha : {0.0, pi / 4, pi / 2}) {
     for (double width : {0.05, 0.10, 0.15}) {
@@ -140,9 +141,11 @@ int main(int argc, char** argv) {
   double one_seconds = 0, two_seconds = 0;
   const std::vector<Design> designs = Designs();
   for (const Design& d : designs) {
-    const BlindDesign design = ValueOrExit(DesignWithOverrides(
-        scene,
-        {{"alpha", d.alpha}, {"width", d.width}, {"spacing", d.spacing}, {"thickness", d.thickness}}));
+    const BlindDesign design =
+        ValueOrExit(DesignWithOverrides(scene, {{"alpha", d.alpha},
+                                                {"width", d.width},
+                                                {"spacing", d.spacing},
+                                                {"thickness", d.thickness}}));
     OneStageOptions one;
     one.paths_per_sensor = one_stage_paths;
     one.max_bounces = 0;
@@ -207,9 +210,11 @@ int main(int argc, char** argv) {
       "with each seed's own SE\n",
       seeds);
   for (const Design& d : {designs[0], designs[1], designs[4]}) {
-    const BlindDesign design = ValueOrExit(DesignWithOverrides(
-        scene,
-        {{"alpha", d.alpha}, {"width", d.width}, {"spacing", d.spacing}, {"thickness", d.thickness}}));
+    const BlindDesign design =
+        ValueOrExit(DesignWithOverrides(scene, {{"alpha", d.alpha},
+                                                {"width", d.width},
+                                                {"spacing", d.spacing},
+                                                {"thickness", d.thickness}}));
     std::vector<Eigen::VectorXd> sums, errors;
     for (int k = 0; k < seeds; ++k) {
       OutdoorOptions out = outdoor;

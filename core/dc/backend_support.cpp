@@ -170,15 +170,14 @@ absl::Status CheckOutdoorBatches(const std::vector<Matrix>& outdoor_batches, con
   }
   for (const Matrix& o : outdoor_batches) {
     if (o.rows() != outdoor_batches[0].rows() || o.cols() != kDaylightBins) {
-      return absl::InvalidArgumentError(absl::StrCat("an outdoor batch is ", o.rows(), " x ",
-                                                     o.cols(), ", expected ",
-                                                     outdoor_batches[0].rows(), " x ",
-                                                     kDaylightBins));
+      return absl::InvalidArgumentError(
+          absl::StrCat("an outdoor batch is ", o.rows(), " x ", o.cols(), ", expected ",
+                       outdoor_batches[0].rows(), " x ", kDaylightBins));
     }
   }
   if (sky.rows() != kDaylightBins) {
-    return absl::InvalidArgumentError(absl::StrCat("the outdoor matrix has ", kDaylightBins,
-                                                   " sky bins, the sky ", sky.rows()));
+    return absl::InvalidArgumentError(
+        absl::StrCat("the outdoor matrix has ", kDaylightBins, " sky bins, the sky ", sky.rows()));
   }
   return absl::OkStatus();
 }

@@ -15,7 +15,7 @@
 #if FENESTRA_WITH_CUDA
 #include "core/trace/bvh.h"
 #include "core/trace/cuda/cuda_tracer.h"
-#include "core/trace/sky_horizon.h"
+#include "core/trace/window_cells.h"
 #endif
 
 namespace fenestra {
@@ -95,9 +95,9 @@ class CudaAnnualProduct : public AnnualProduct {
 
   absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
     if (static_cast<int>(indoor_batches.size()) != batches_) {
-      return absl::InvalidArgumentError(absl::StrCat("the indoor stage has ",
-                                                     indoor_batches.size(), " batches, the outdoor matrix ",
-                                                     batches_, "; they pair up"));
+      return absl::InvalidArgumentError(absl::StrCat("the indoor stage has ", indoor_batches.size(),
+                                                     " batches, the outdoor matrix ", batches_,
+                                                     "; they pair up"));
     }
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
     FENESTRA_RETURN_IF_ERROR(Hold());
@@ -112,8 +112,8 @@ class CudaAnnualProduct : public AnnualProduct {
                                                const MetricOptions& options) override {
     const int batches = static_cast<int>(indoor_batches.size());
     if (batches != batches_) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "the indoor stage has ", batches, " batches, the outdoor matrix ", batches_));
+      return absl::InvalidArgumentError(absl::StrCat("the indoor stage has ", batches,
+                                                     " batches, the outdoor matrix ", batches_));
     }
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
     FENESTRA_RETURN_IF_ERROR(Hold());
@@ -127,9 +127,9 @@ class CudaAnnualProduct : public AnnualProduct {
   // Makes the tracer hold this product's O_b and S (a later product may have replaced them).
   absl::Status Hold() {
     if (*current_ == generation_) return absl::OkStatus();
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->SetAnnualProduct(outdoor_.data(), batches_,
-                                                             static_cast<int>(rows_), sky_.data(),
-                                                             static_cast<int>(sky_.cols()))));
+    FENESTRA_RETURN_IF_ERROR(
+        Check(tracer_->SetAnnualProduct(outdoor_.data(), batches_, static_cast<int>(rows_),
+                                        sky_.data(), static_cast<int>(sky_.cols()))));
     *current_ = generation_;
     return absl::OkStatus();
   }
@@ -156,16 +156,18 @@ struct OutdoorSlot {
 class OutdoorHolder {
  public:
   static absl::StatusOr<OutdoorHolder> Make(CudaTracer* tracer, OutdoorSlot* slot,
-                                            const Scene& scene, WindowParts parts) {
+                                            const Scene& scene, WindowParts parts,
+                                            const HemisphereBasis& basis) {
     FENESTRA_ASSIGN_OR_RETURN(geometry, OutdoorViewGeometry(scene));
     FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(geometry, BvhQuality::kHigh));
-    std::vector<float> horizon = SkyHorizon(geometry, LocalWindow(geometry, scene.window, parts));
-    return OutdoorHolder(tracer, slot, std::move(geometry), std::move(bvh), std::move(horizon));
+    std::vector<uint8_t> met =
+        WindowCellsMeetingSurfaces(geometry, LocalWindow(geometry, scene.window, parts), basis);
+    return OutdoorHolder(tracer, slot, std::move(geometry), std::move(bvh), std::move(met));
   }
   // Makes the tracer hold this outdoor scene.
   absl::Status Hold() {
     if (slot_->current == generation_) return absl::OkStatus();
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->SetOutdoorScene(bvh_, horizon_)));
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->SetOutdoorScene(bvh_, met_)));
     slot_->current = generation_;
     return absl::OkStatus();
   }
@@ -173,19 +175,19 @@ class OutdoorHolder {
 
  private:
   OutdoorHolder(CudaTracer* tracer, OutdoorSlot* slot, TraceGeometry geometry, BvhLayout bvh,
-                std::vector<float> horizon)
+                std::vector<uint8_t> met)
       : tracer_(tracer),
         slot_(slot),
         generation_(++slot->made),
         geometry_(std::move(geometry)),
         bvh_(std::move(bvh)),
-        horizon_(std::move(horizon)) {}
+        met_(std::move(met)) {}
   CudaTracer* tracer_;
   OutdoorSlot* slot_;
   int generation_;
   TraceGeometry geometry_;
   BvhLayout bvh_;
-  std::vector<float> horizon_;
+  std::vector<uint8_t> met_;
 };
 
 // A search's objective on the GPU: per design the room and blind are uploaded, then the
@@ -256,12 +258,11 @@ class CudaBackend : public DcBackend {
     if (outdoor_batches[0].rows() != columns ||
         static_cast<int>(outdoor_batches.size()) != options.batches) {
       return absl::InvalidArgumentError(absl::StrCat(
-          "the outdoor matrix has ", outdoor_batches[0].rows(), " rows in ",
-          outdoor_batches.size(), " batches, the indoor stage ", columns, " columns in ",
-          options.batches));
+          "the outdoor matrix has ", outdoor_batches[0].rows(), " rows in ", outdoor_batches.size(),
+          " batches, the indoor stage ", columns, " columns in ", options.batches));
     }
     FENESTRA_ASSIGN_OR_RETURN(
-        outdoor, OutdoorHolder::Make(tracer_.get(), &outdoor_slot_, scene, options.parts));
+        outdoor, OutdoorHolder::Make(tracer_.get(), &outdoor_slot_, scene, options.parts, basis));
     auto product = std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_current_,
                                                        ++annual_generation_, outdoor_batches, sky);
     return std::make_unique<CudaDesignTallies>(tracer_.get(), scene, options, basis,
@@ -332,9 +333,9 @@ class CudaBackend : public DcBackend {
     tally.batch_paths = BatchSizes(paths_per_cell, batches);
     tally.sum.resize(static_cast<size_t>(batches) * tally.cells * kOutdoorRowSize);
     CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,
-                                                    WithoutImportance(path), tally.sum.data(),
-                                                    &counters)));
+    FENESTRA_RETURN_IF_ERROR(
+        Check(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,
+                               WithoutImportance(path), tally.sum.data(), &counters)));
     Count(counters, &tally.counters);
     tally.wall_seconds = Seconds(start);
     return tally;
@@ -349,8 +350,8 @@ class CudaBackend : public DcBackend {
     // A room and its blind, built anew for every design of a search; the outdoor surfaces
     FENESTRA_RETURN_IF_ERROR(Upload(geometry, BvhQuality::kMedium));
     FENESTRA_ASSIGN_OR_RETURN(outdoor_bvh, BuildBvh(outdoor, BvhQuality::kHigh));
-    FENESTRA_RETURN_IF_ERROR(
-        Check(tracer_->SetOutdoorScene(outdoor_bvh, OutdoorHorizon(geometry, outdoor, window))));
+    FENESTRA_RETURN_IF_ERROR(Check(
+        tracer_->SetOutdoorScene(outdoor_bvh, OutdoorMetCells(geometry, outdoor, window, basis))));
     outdoor_slot_.current = 0;
     IndoorTally tally;
     tally.sensors = static_cast<int>(sensors.size());

@@ -125,9 +125,8 @@ class DcBackend {
   virtual absl::StatusOr<OutdoorTally> Outdoor(const TraceGeometry& geometry,
                                                const TraceWindow& window,
                                                const HemisphereBasis& basis,
-                                               uint64_t paths_per_cell, int batches,
-                                               uint64_t seed, const PathSettings& path,
-                                               int threads) = 0;
+                                               uint64_t paths_per_cell, int batches, uint64_t seed,
+                                               const PathSettings& path, int threads) = 0;
   virtual absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry,
                                              const TraceGeometry& outdoor,
                                              const std::vector<TraceSensor>& sensors,

@@ -87,9 +87,9 @@ class EmbreeBackend : public DcBackend {
                                      const PathSettings& path, int threads) override {
     FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
     FENESTRA_ASSIGN_OR_RETURN(outdoor_scene, EmbreeScene::Build(outdoor));
-    const std::vector<float> horizon = OutdoorHorizon(geometry, outdoor, window);
+    const std::vector<uint8_t> met = OutdoorMetCells(geometry, outdoor, window, basis);
     const OutdoorView<EmbreeIntersector> view{outdoor_scene->Intersector(),
-                                              OutdoorOffset(geometry, outdoor), horizon.data()};
+                                              OutdoorOffset(geometry, outdoor), met.data()};
     return TraceIndoorCpu(scene->Intersector(), geometry.Surfaces(), view, sensors, window, basis,
                           paths_per_sensor, batches, seed, path, threads);
   }

@@ -168,7 +168,7 @@ struct IndoorReplay::Data {
   std::vector<TraceSensor> sensors;
   TraceWindow window;
   std::unique_ptr<EmbreeScene> outdoor;  // the outdoor surfaces, for the direct test
-  std::vector<float> horizon;            // their skyline
+  std::vector<uint8_t> met;              // the window cells whose views all meet them
   OutdoorEmbreeView outdoor_view;
   std::vector<Chunk> chunks;
   std::vector<uint64_t> batch_paths;
@@ -202,9 +202,9 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
   FENESTRA_ASSIGN_OR_RETURN(outdoor, OutdoorViewGeometry(scene));
   FENESTRA_ASSIGN_OR_RETURN(outdoor_scene, EmbreeScene::Build(outdoor));
   data->outdoor = std::move(outdoor_scene);
-  data->horizon = OutdoorHorizon(geometry, outdoor, data->window);
+  data->met = OutdoorMetCells(geometry, outdoor, data->window, basis);
   data->outdoor_view = {data->outdoor->Intersector(), OutdoorOffset(geometry, outdoor),
-                        data->horizon.data()};
+                        data->met.data()};
   const BlindEnvelope envelope = EnvelopeOfBlind(scene.window, *scene.blind, kEnvelopeMargin);
   LocalEnvelope local;
   local.center = geometry.ToLocal(envelope.center);
@@ -236,11 +236,10 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
     const TraceSensor& sensor = data->sensors[chunk.sensor];
     RecordingSink sink{&chunk, &scene_view};
     for (uint64_t p = first; p < last; ++p) {
-      RecordingMode mode{
-          IndoorMode<RecordingSink, OutdoorEmbreeView>{sensor.position, sensor.normal, data->window,
-                                                       &data->basis, settings.max_bounces,
-                                                       &data->outdoor_view, &sink},
-          &scene_view, &chunk, p};
+      RecordingMode mode{IndoorMode<RecordingSink, OutdoorEmbreeView>{
+                             sensor.position, sensor.normal, data->window, &data->basis,
+                             settings.max_bounces, &data->outdoor_view, &sink},
+                         &scene_view, &chunk, p};
       TracePath<RecordingIntersector, RecordingMode, 0>(scene_view, geometry.Surfaces(), settings,
                                                         PathRandom(options.seed, chunk.sensor, p),
                                                         mode);

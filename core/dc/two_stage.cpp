@@ -10,9 +10,9 @@
 #include "absl/strings/str_split.h"
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
-#include "core/trace/sky_horizon.h"
 #include "core/trace/trace_geometry.h"
 #include "core/trace/two_stage_cpu.h"
+#include "core/trace/window_cells.h"
 
 namespace fenestra {
 namespace {
@@ -213,10 +213,10 @@ Vec3f OutdoorOffset(const TraceGeometry& indoor, const TraceGeometry& outdoor) {
   return {static_cast<float>(d.x), static_cast<float>(d.y), static_cast<float>(d.z)};
 }
 
-std::vector<float> OutdoorHorizon(const TraceGeometry& indoor, const TraceGeometry& outdoor,
-                                  TraceWindow window) {
+std::vector<uint8_t> OutdoorMetCells(const TraceGeometry& indoor, const TraceGeometry& outdoor,
+                                     TraceWindow window, const HemisphereBasis& basis) {
   window.center = window.center + OutdoorOffset(indoor, outdoor);
-  return SkyHorizon(outdoor, window);
+  return WindowCellsMeetingSurfaces(outdoor, window, basis);
 }
 
 absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options) {
@@ -300,10 +300,12 @@ absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
   }
   // D_b = I_b O_b; D and its errors from the batches
   TwoStageResult result;
-  result.batches = SplitBatches(ThroughWindow(indoor.batches, outdoor.batches), indoor.batches.size());
+  result.batches =
+      SplitBatches(ThroughWindow(indoor.batches, outdoor.batches), indoor.batches.size());
   MeanAndError(result.batches, &result.coefficients, &result.standard_error);
   std::vector<Matrix> sky_sums;
-  for (const Matrix& d : result.batches) sky_sums.push_back(d.rightCols(kDaylightBins - 1).rowwise().sum());
+  for (const Matrix& d : result.batches)
+    sky_sums.push_back(d.rightCols(kDaylightBins - 1).rowwise().sum());
   Matrix sky_sum, sky_sum_error;
   MeanAndError(sky_sums, &sky_sum, &sky_sum_error);
   result.sky_sum = sky_sum.col(0);

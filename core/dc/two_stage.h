@@ -172,10 +172,10 @@ absl::StatusOr<TraceGeometry> OutdoorViewGeometry(const Scene& scene);
 // The offset of an OutdoorView: `outdoor`'s frame position of `indoor`'s frame origin.
 Vec3f OutdoorOffset(const TraceGeometry& indoor, const TraceGeometry& outdoor);
 
-// The skyline bound of an OutdoorView (core/trace/sky_horizon.h): `outdoor` seen from the
-// parts of `window`, which is given in `indoor`'s frame.
-std::vector<float> OutdoorHorizon(const TraceGeometry& indoor, const TraceGeometry& outdoor,
-                                  TraceWindow window);
+// The window cells of an OutdoorView whose every view meets one of `outdoor`'s surfaces
+// (core/trace/window_cells.h), for `window` given in `indoor`'s frame.
+std::vector<uint8_t> OutdoorMetCells(const TraceGeometry& indoor, const TraceGeometry& outdoor,
+                                     TraceWindow window, const HemisphereBasis& basis);
 
 // The window in `geometry`'s local frame, split into `parts`.
 TraceWindow LocalWindow(const TraceGeometry& geometry, const Window& window, WindowParts parts);

@@ -78,9 +78,9 @@ FENESTRA_CPU_GPU inline Vec3T<T> SampleBasisCell(const HemisphereBasis& basis, i
   const T cos_hi = T(1) - static_cast<T>(first) / n;
   const T cos_lo = T(1) - static_cast<T>(basis.cumulative[ring]) / n;
   // Uniform in cos θ (solid angle) or in cos² θ (projected solid angle)
-  const T cos_theta = projected ? sqrt(fmax(T(0), cos_hi * cos_hi -
-                                                      u1 * (cos_hi * cos_hi - cos_lo * cos_lo)))
-                                : cos_hi - u1 * (cos_hi - cos_lo);
+  const T cos_theta =
+      projected ? sqrt(fmax(T(0), cos_hi * cos_hi - u1 * (cos_hi * cos_hi - cos_lo * cos_lo)))
+                : cos_hi - u1 * (cos_hi - cos_lo);
   const T sin_theta = sqrt(fmax(T(0), T(1) - cos_theta * cos_theta));
   const T phi =
       (static_cast<T>(cell - first) + u2) * T(2 * 3.14159265358979323846) / static_cast<T>(count);

@@ -442,9 +442,8 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
       range.max = std::max(range.max, v.upper());
     }
   }
-  FENESTRA_ASSIGN_OR_RETURN(
-      design_tallies,
-      backend->MakeDesignTallies(ranged, indoor_options, outdoor->batches, lit_sky));
+  FENESTRA_ASSIGN_OR_RETURN(design_tallies, backend->MakeDesignTallies(ranged, indoor_options,
+                                                                       outdoor->batches, lit_sky));
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     FENESTRA_ASSIGN_OR_RETURN(tallies, design_tallies->Tally(DesignAt(job, x), metric_options));

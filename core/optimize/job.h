@@ -19,7 +19,7 @@ namespace fenestra {
 // The outdoor matrix O of a site: window direction cells x 146 sky bins [-], with its
 // standard error and how it was made.
 struct OutdoorMatrix {
-  Matrix coefficients;          // O (core/dc/two_stage.h): window cells + 146 rows
+  Matrix coefficients;  // O (core/dc/two_stage.h): window cells + 146 rows
   Matrix standard_error;
   std::vector<Matrix> batches;  // O_b, paired with the indoor batches
   int basis_cells = 0;

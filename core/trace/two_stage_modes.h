@@ -16,7 +16,9 @@
 // then holds the radiance of the outdoor surfaces, smooth in position and direction where
 // the sky's edge against the buildings (a step in radiance from sky to wall) is not. So
 // D = I O with I's columns the window cells, then the 146 sky bins, and O's rows the
-// reflected radiance of each window cell, then the identity.
+// reflected radiance of each window cell, then the identity. The test is only traced for
+// views from window cells that may reach the sky: from most cells of a window in a street
+// every view meets the street or the buildings across it (core/trace/window_cells.h).
 //
 // OutdoorMode: a path starts at a uniform point of its window part, its direction within
 // one basis cell distributed by projected solid angle (cos omega d omega dA is the measure
@@ -146,27 +148,29 @@ FENESTRA_CPU_GPU inline int IndoorColumnCount(const TraceWindow& window,
   return WindowCellCount(window, basis) + kTregenzaBinCount;
 }
 
-// Azimuth bins of the skyline bound (core/trace/sky_horizon.h): 2 degrees each.
-inline constexpr int kHorizonAzimuthBins = 180;
-
 // The outdoor surfaces as the indoor stage sees them: whether the view from a window
 // point along omega reaches the sky, exactly as the first segment of an outdoor path.
 template <class Intersector>
 struct OutdoorView {
-  Intersector scene;      // the outdoor surfaces in front of the window, in their own frame
-  Vec3f offset;           // the outdoor frame's position of the indoor frame's origin [m]
-  const float* horizon;   // SkyHorizon of the window's parts, or null
+  Intersector scene;   // the outdoor surfaces in front of the window, in their own frame
+  Vec3f offset;        // the outdoor frame's position of the indoor frame's origin [m]
+  const uint8_t* met;  // per window cell: every view from it meets a surface
+                       // (core/trace/window_cells.h), or null
 
-  // `part`: the window part of `point`.
-  FENESTRA_CPU_GPU bool Escapes(Vec3f point, Vec3f outward, Vec3f omega, int part) const {
-    // Above the skyline of its part and azimuth the view reaches the sky for sure
-    if (horizon != nullptr) {
-      int bin = static_cast<int>((atan2f(omega.y, omega.x) + kPiF) *
-                                 (static_cast<float>(kHorizonAzimuthBins) / (2.0f * kPiF)));
-      bin = bin < 0 ? 0 : (bin >= kHorizonAzimuthBins ? kHorizonAzimuthBins - 1 : bin);
-      if (omega.z > horizon[part * kHorizonAzimuthBins + bin]) return true;
-    }
+  FENESTRA_CPU_GPU bool SurelyMet(int cell) const { return met != nullptr && met[cell] != 0; }
+
+  FENESTRA_CPU_GPU bool Escapes(Vec3f point, Vec3f outward, Vec3f omega) const {
     return !scene.Occluded(OffsetRayOrigin(point + offset, outward), omega, INFINITY);
+  }
+
+  // Light arriving through the window at `point` from `omega` (window cell `cell`), worth
+  // `value` per unit radiance: into the direct column of omega's sky bin when the view
+  // reaches the sky, else into the window cell. Sink: void Add(int column, double value).
+  template <class Sink>
+  FENESTRA_CPU_GPU void Score(const TraceWindow& window, const HemisphereBasis& basis, Vec3f point,
+                              Vec3f omega, int cell, double value, Sink* sink) const {
+    const bool direct = !SurelyMet(cell) && Escapes(point, window.normal, omega);
+    sink->Add(direct ? WindowCellCount(window, basis) + TregenzaBin(omega) : cell, value);
   }
 };
 
@@ -207,7 +211,7 @@ struct OutdoorMode {
 };
 
 // Sink: void Add(int column, double value) (IndoorColumnCount columns);
-// Outdoor: bool Escapes(Vec3f point, Vec3f outward, Vec3f omega, int part), as OutdoorView.
+// Outdoor: void Score(window, basis, point, omega, cell, value, Sink*), as OutdoorView.
 template <class Sink, class Outdoor>
 struct IndoorMode {
   Vec3f sensor_position;  // local frame
@@ -255,11 +259,9 @@ struct IndoorMode {
   }
 
   // Light reaching the window at `point` from `omega` (window cell `cell`), worth `value`
-  // per unit radiance: into the direct column of omega's sky bin when the view reaches
-  // the sky, else into the window cell.
+  // per unit radiance: the outdoor surfaces tell its column (OutdoorView::Score).
   FENESTRA_CPU_GPU void Score(Vec3f point, Vec3f omega, int cell, double value) {
-    const bool direct = outdoor->Escapes(point, window.normal, omega, cell / basis->cell_count);
-    sink->Add(direct ? WindowCellCount(window, *basis) + TregenzaBin(omega) : cell, value);
+    outdoor->Score(window, *basis, point, omega, cell, value, sink);
   }
 
   FENESTRA_CPU_GPU void Finish(const PathStats&) const {}
@@ -293,8 +295,8 @@ struct IndoorMode {
     const float mis =
         PowerHeuristic(WindowDensity(distance_squared, cos_window), cos_vertex * kInvPiF);
     Score(point, omega, window.PartOf(u.u[0], u.u[1]) * basis->cell_count + cell,
-          static_cast<double>(factor * cos_vertex * cos_window * window.Area() /
-                              distance_squared * mis));
+          static_cast<double>(factor * cos_vertex * cos_window * window.Area() / distance_squared *
+                              mis));
   }
 };
 

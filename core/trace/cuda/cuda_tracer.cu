@@ -241,9 +241,8 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
 }
 
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
-    IndoorKernel(CalledBvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
-                 OutdoorView<CalledBvhIntersector> outdoor, const TraceSensor* sensors,
-                 int sensor_count,
+    IndoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
+                 OutdoorView<BvhIntersector> outdoor, const TraceSensor* sensors, int sensor_count,
                  TraceWindow window, HemisphereBasis basis, uint64_t paths_per_sensor, int batches,
                  uint64_t seed, double* sum, unsigned long long* counters,
                  unsigned long long* next_path) {
@@ -258,7 +257,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   const uint64_t first = BatchFirst(paths_per_sensor, batches, b);
   const uint64_t last = BatchFirst(paths_per_sensor, batches, b + 1);
   SharedSink sink{row, nullptr};
-  IndoorMode<SharedSink, OutdoorView<CalledBvhIntersector>> mode{
+  IndoorMode<SharedSink, OutdoorView<BvhIntersector>> mode{
       sensors[s].position,  sensors[s].normal, window, &shared_basis,
       settings.max_bounces, &outdoor,          &sink};
   ThreadCounts counts;
@@ -464,7 +463,7 @@ struct CudaTracer::Impl {
   std::string name;
   DeviceBuffer<BvhNode> nodes, outdoor_nodes;
   DeviceBuffer<BvhTriangle> triangles, outdoor_triangles;
-  DeviceBuffer<float> horizon;  // of the outdoor scene
+  DeviceBuffer<uint8_t> outdoor_met;  // per window cell (OutdoorView::met)
   DeviceBuffer<uint32_t> triangle_material;
   DeviceBuffer<TraceMaterial> materials;
   DeviceBuffer<TraceSensor> sensors;
@@ -495,9 +494,8 @@ struct CudaTracer::Impl {
   std::string Tally(int batches, int sensors, const TallyRequest& request);
 
   BvhIntersector Scene() const { return {nodes.get(), triangles.get()}; }
-  CalledBvhIntersector CalledScene() const { return {{nodes.get(), triangles.get()}}; }
-  OutdoorView<CalledBvhIntersector> Outdoor(Vec3f offset) const {
-    return {{{outdoor_nodes.get(), outdoor_triangles.get()}}, offset, horizon.get()};
+  OutdoorView<BvhIntersector> Outdoor(Vec3f offset) const {
+    return {{outdoor_nodes.get(), outdoor_triangles.get()}, offset, outdoor_met.get()};
   }
   SurfaceTable Surfaces() const { return {materials.get(), triangle_material.get()}; }
 
@@ -664,13 +662,13 @@ std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis
       sum, nullptr, counters);
 }
 
-std::string CudaTracer::SetOutdoorScene(const BvhLayout& bvh, const std::vector<float>& horizon) {
+std::string CudaTracer::SetOutdoorScene(const BvhLayout& bvh, const std::vector<uint8_t>& met) {
   cudaError_t e = cudaSetDevice(impl_->device);
   if (e == cudaSuccess) e = impl_->outdoor_nodes.Upload(bvh.nodes.data(), bvh.nodes.size());
   if (e == cudaSuccess) {
     e = impl_->outdoor_triangles.Upload(bvh.triangles.data(), bvh.triangles.size());
   }
-  if (e == cudaSuccess) e = impl_->horizon.Upload(horizon.data(), horizon.size());
+  if (e == cudaSuccess) e = impl_->outdoor_met.Upload(met.data(), met.size());
   impl_->has_outdoor = e == cudaSuccess;
   return e == cudaSuccess ? "" : Error(e);
 }
@@ -700,7 +698,8 @@ std::string CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int s
                              kCounters * sizeof(unsigned long long);
     if (shared > available) {
       return "CUDA: " + std::to_string(cells) +
-             " columns of the indoor matrix do not fit the indoor kernel's shared memory (at most " +
+             " columns of the indoor matrix do not fit the indoor kernel's shared memory (at "
+             "most " +
              std::to_string(available / sizeof(double)) +
              " on this device): use fewer window parts or the 288-cell basis";
     }
@@ -715,17 +714,17 @@ std::string CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int s
       rows, static_cast<size_t>(batches) * sensor_count * cells, false,
       [&] {
         IndoorKernel<<<grid, kThreads, shared>>>(
-            d.CalledScene(), d.Surfaces(), path, d.Outdoor(outdoor_offset), d.sensors.get(),
-            sensor_count, window, basis, paths_per_sensor, batches, seed, d.sum.get(),
-            d.counters.get(), d.next_path.get());
+            d.Scene(), d.Surfaces(), path, d.Outdoor(outdoor_offset), d.sensors.get(), sensor_count,
+            window, basis, paths_per_sensor, batches, seed, d.sum.get(), d.counters.get(),
+            d.next_path.get());
       },
       host_sum, nullptr, out);
 }
 
 std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
                                const TraceWindow& window, Vec3f outdoor_offset,
-                               const HemisphereBasis& basis, uint64_t paths_per_sensor,
-                               int batches, uint64_t seed, const PathSettings& path, double* sum,
+                               const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
+                               uint64_t seed, const PathSettings& path, double* sum,
                                CudaCounters* counters) {
   if (sum == nullptr) return "CUDA tracer: no buffer for the indoor sums";
   return impl_->TraceIndoor(sensors, sensor_count, window, outdoor_offset, basis, paths_per_sensor,

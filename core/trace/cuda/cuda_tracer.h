@@ -64,10 +64,11 @@ class CudaTracer {
                       uint64_t paths_per_cell, int batches, uint64_t seed, const PathSettings& path,
                       double* sum, CudaCounters* counters);
 
-  // Uploads the outdoor surfaces' BVH and their skyline (SkyHorizon, for the window parts
-  // of the next indoor stages), which the indoor stage tests its window connections
-  // against (OutdoorView). "" or the error.
-  std::string SetOutdoorScene(const BvhLayout& bvh, const std::vector<float>& horizon);
+  // Uploads the outdoor surfaces' BVH, which the indoor stage tests its window connections
+  // against (OutdoorView), and per window cell whether all its views meet them
+  // (WindowCellsMeetingSurfaces, for the next indoor stages' parts and basis). "" or the
+  // error.
+  std::string SetOutdoorScene(const BvhLayout& bvh, const std::vector<uint8_t>& met);
 
   // Indoor paths in `batches` contiguous batches per sensor, as TraceIndoorCpu, against the
   // uploaded scene and outdoor scene (`outdoor_offset`: OutdoorView::offset); sum gets

@@ -53,7 +53,8 @@ TEST(AnnualProductTest, TalliesTheVersionsOfE) {
   const int batches = 4, sensors = 5, cells = 12, hours = 40;
   std::srand(7);
   std::vector<Matrix> outdoor;
-  for (int b = 0; b < batches; ++b) outdoor.push_back(Matrix::Random(cells, kDaylightBins).cwiseAbs());
+  for (int b = 0; b < batches; ++b)
+    outdoor.push_back(Matrix::Random(cells, kDaylightBins).cwiseAbs());
   // Hours from dim to bright, so E crosses 100, 300 and 3000 lx
   Matrix sky = Matrix::Random(kDaylightBins, hours).cwiseAbs();
   for (int h = 0; h < hours; ++h) sky.col(h) *= 0.2 * std::pow(1.13, h);

@@ -158,8 +158,8 @@ TEST(CudaBackendTest, AnnualProductMatchesCpu) {
   std::unique_ptr<DcBackend> cpu = MakeEmbreeBackend();
   absl::StatusOr<std::unique_ptr<AnnualProduct>> expected = cpu->MakeAnnualProduct(outdoor, sky);
   absl::StatusOr<std::unique_ptr<AnnualProduct>> first = gpu->MakeAnnualProduct(outdoor, sky);
-  absl::StatusOr<std::unique_ptr<AnnualProduct>> second = gpu->MakeAnnualProduct(
-      std::vector<Matrix>(batches, Matrix::Zero(rows, kDaylightBins)), sky);
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> second =
+      gpu->MakeAnnualProduct(std::vector<Matrix>(batches, Matrix::Zero(rows, kDaylightBins)), sky);
   ASSERT_TRUE(expected.ok() && first.ok() && second.ok());
   absl::StatusOr<std::vector<Matrix>> e_cpu = (*expected)->Apply(indoor);
   absl::StatusOr<std::vector<Matrix>> e_zero = (*second)->Apply(indoor);

@@ -81,8 +81,8 @@ TEST(HemisphereBasisTest, ProjectedSamplesFollowTheCosine) {
     double mean = 0;
     const int n = 20000;
     for (int k = 0; k < n; ++k) mean += SampleBasisCell(b, cell, u(rng), u(rng), projected).z / n;
-    const double expected = projected ? 2.0 / 3 * (c1 * c1 * c1 - c0 * c0 * c0) / (c1 * c1 - c0 * c0)
-                                      : (c0 + c1) / 2;
+    const double expected =
+        projected ? 2.0 / 3 * (c1 * c1 * c1 - c0 * c0 * c0) / (c1 * c1 - c0 * c0) : (c0 + c1) / 2;
     EXPECT_NEAR(mean, expected, 0.001) << (projected ? "projected" : "solid angle");
   }
 }
