@@ -18,7 +18,6 @@ namespace fenestra {
 namespace {
 
 constexpr int kMaxPartsPerSide = 16;
-constexpr int kMaxBatches = 64;
 
 double Seconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

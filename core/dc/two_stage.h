@@ -55,8 +55,9 @@ WindowParts AutomaticWindowParts(const Window& window);
 // WindowParts from "COLUMNSxROWS" (e.g. "4x2"), or InvalidArgument.
 absl::StatusOr<WindowParts> ParseWindowParts(const std::string& text);
 
-// Independent batches of each stage, by default.
+// Independent batches of each stage, by default, and at most.
 inline constexpr int kDefaultBatches = 8;
+inline constexpr int kMaxBatches = 64;
 
 struct OutdoorOptions {
   int64_t paths = 20'000'000;  // in total, evenly over the window cells; >= cells x batches
