@@ -464,7 +464,7 @@ absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& ba
 
 std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
   ContentHash hash;
-  hash.String("fenestra outdoor matrix v1");
+  hash.String("fenestra outdoor matrix v2");
   const TriangleMesh& mesh = scene.fixed;
   for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
     if (mesh.side[t] != Side::kOutdoor) continue;
@@ -481,9 +481,17 @@ std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
   hash.Value(w.width_m), hash.Value(w.height_m);
   hash.Value(sampling.outdoor_paths()), hash.Value(sampling.outdoor_bounces());
   hash.Value(sampling.seed()), hash.Value(sampling.basis_cells());
+  hash.Value(sampling.batches());
   const WindowParts parts = SamplingWindowParts(sampling, scene.window);
   hash.Value(parts.columns), hash.Value(parts.rows);
   return hash.Hex();
+}
+
+double OutdoorMeanRelativeError(const OutdoorMatrix& matrix) {
+  const Eigen::Index cells = std::max<Eigen::Index>(0, matrix.coefficients.rows() - kDaylightBins);
+  if (cells == 0 || matrix.standard_error.rows() != matrix.coefficients.rows()) return 0;
+  return MeanRelativeError(matrix.coefficients.topRows(cells), matrix.standard_error.topRows(cells),
+                           0.01, false);
 }
 
 WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Window& window) {
@@ -501,14 +509,16 @@ absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1:
   options.seed = sampling.seed();
   options.basis_cells = sampling.basis_cells();
   options.parts = SamplingWindowParts(sampling, scene.window);
+  options.batches = sampling.batches();
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(sampling.backend()));
   FENESTRA_ASSIGN_OR_RETURN(result, ComputeOutdoorStage(scene, options, backend.get()));
   OutdoorMatrix matrix;
   matrix.coefficients = std::move(result.coefficients);
   matrix.standard_error = std::move(result.standard_error);
+  matrix.batches = std::move(result.batches);
   matrix.basis_cells = result.basis_cells;
   matrix.parts = result.parts;
-  matrix.paths = result.paths_per_cell * result.coefficients.rows();
+  matrix.paths = result.paths_per_cell * result.sky_view.size();
   matrix.bounces = sampling.outdoor_bounces();
   matrix.seed = sampling.seed();
   matrix.wall_seconds = result.wall_seconds;
@@ -606,19 +616,21 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (!(outdoor->parts == indoor_options.parts)) {
     return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
   }
+  if (static_cast<int>(outdoor->batches.size()) != indoor_options.batches) {
+    return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
+  }
   // S over the lit analysed hours, in lux
   const Matrix lit_sky = SkyColumnsInLux(setting.sky.radiance, columns);
 
-  // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O) S, as
+  // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O_b) S, as
   // the backend does it best (on the CPU the paths recorded once, then replayed per design;
   // on the GPU I and E never leave the device), for the designs within the job's ranges.
   // A design's paths depend on the seed alone, never on the designs before it, so a resumed
   // search evaluates as the uninterrupted one would.
   if (callbacks.stage) callbacks.stage("indoor paths");
   const Scene ranged = WithJobRanges(job.scene, spec);
-  FENESTRA_ASSIGN_OR_RETURN(
-      design_tallies,
-      backend->MakeDesignTallies(ranged, indoor_options, outdoor->coefficients, lit_sky));
+  FENESTRA_ASSIGN_OR_RETURN(design_tallies, backend->MakeDesignTallies(ranged, indoor_options,
+                                                                       outdoor->batches, lit_sky));
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     FENESTRA_ASSIGN_OR_RETURN(tallies, design_tallies->Tally(DesignAt(job, x), metric_options));
@@ -641,7 +653,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
     const auto hourly_start = std::chrono::steady_clock::now();
     FENESTRA_ASSIGN_OR_RETURN(
         hourly, DesignHourlyIlluminance(job.scene, DesignAt(job, search.best_x), indoor_options,
-                                        outdoor->coefficients, setting.sky, *backend));
+                                        outdoor->batches, setting.sky, *backend));
     *result.mutable_best_hourly() = std::move(hourly);
     result.mutable_timings()->set_best_hourly_seconds(Since(hourly_start));
   }
@@ -649,8 +661,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
 
   // The result
   AddSearch(search_settings, search, checkpoint, result);
-  result.set_outdoor_mean_relative_standard_error(
-      MeanRelativeError(outdoor->coefficients, outdoor->standard_error, 0.01, false));
+  result.set_outdoor_mean_relative_standard_error(OutdoorMeanRelativeError(*outdoor));
   result.set_backend(backend->Name());
 
   // The final check: the best design by the one-stage method

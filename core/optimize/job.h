@@ -22,8 +22,9 @@ namespace fenestra {
 // The outdoor matrix O of a site: window direction cells x 146 sky bins [-], with its
 // standard error and how it was made.
 struct OutdoorMatrix {
-  Matrix coefficients;
+  Matrix coefficients;  // O (core/dc/two_stage.h): window cells + 146 rows
   Matrix standard_error;
+  std::vector<Matrix> batches;  // O_b, paired with the indoor batches
   int basis_cells = 0;
   WindowParts parts;
   int64_t paths = 0;
@@ -74,6 +75,10 @@ std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling);
 // The window parts `sampling` asks for (resolved), automatic ones for `window` if it
 // leaves them open.
 WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Window& window);
+
+// Mean relative standard error of the window cells' entries of O (not the identity rows),
+// over the entries above 1% of the matrix's largest.
+double OutdoorMeanRelativeError(const OutdoorMatrix& matrix);
 
 // Fills in the defaults of `sampling` (see job.proto) and checks its ranges.
 absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& sampling);

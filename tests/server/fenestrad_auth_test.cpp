@@ -444,7 +444,7 @@ TEST_F(FenestradAuthTest, PythonClientWithTlsAndAToken) {
                                         "--server",
                                         d->address(),
                                         "--outdoor-paths",
-                                        "20000",
+                                        "40000",
                                         "--indoor-paths",
                                         "2000",
                                         "--evaluations",

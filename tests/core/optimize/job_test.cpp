@@ -89,12 +89,12 @@ TEST(JobTest, WindowPartsAreResolvedAndChecked) {
   EXPECT_FALSE(ResolveSampling(few).ok());
 }
 
-// A job needs two outdoor paths per window cell of its resolved parts
+// A job needs an outdoor path per window cell of its resolved parts and batch
 TEST(JobTest, PrepareChecksOutdoorPathsAgainstTheWindowCells) {
   absl::StatusOr<v1::Job> job =
       ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json");
   ASSERT_TRUE(job.ok()) << job.status();
-  job->mutable_sampling()->set_outdoor_paths(5000);  // 4 x 3 x 288 cells need 6912
+  job->mutable_sampling()->set_outdoor_paths(20000);  // 4 x 3 x 288 cells x 8 batches: 27648
   absl::StatusOr<PreparedJob> prepared =
       PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
   ASSERT_FALSE(prepared.ok());
