@@ -241,13 +241,21 @@ int main(int argc, char** argv) {
   const PreparedJob prepared = ValueOrExit(PrepareJob(job, kRoot + "/examples/city_office"));
   const auto start = std::chrono::steady_clock::now();
   const v1::JobResult result = ValueOrExit(RunJob(prepared, nullptr));
+  const v1::Timings& t = result.timings();
+  const v1::FinalCheck& check = result.final_check();
   std::printf(
       "four-variable optimization: %d evaluations (%s) in %.2f s (sky %.2f s, outdoor %.2f s, "
-      "evaluations %.2f s); best UDI %.2f ± %.2f %% at",
-      result.evaluations(), result.stop_reason().c_str(), Since(start),
-      result.timings().sky_seconds(), result.timings().outdoor_seconds(),
-      result.timings().evaluation_seconds(), result.best_value().value(),
-      result.best_value().standard_error());
+      "evaluations %.2f s, best design's hourly illuminance %.2f s, final check %.2f s with "
+      "%lld + %lld paths per sensor, the rest %.2f s); best UDI %.2f ± %.2f %% (check %.2f ± "
+      "%.2f %%) at",
+      result.evaluations(), result.stop_reason().c_str(), Since(start), t.sky_seconds(),
+      t.outdoor_seconds(), t.evaluation_seconds(), t.best_hourly_seconds(), check.seconds(),
+      static_cast<long long>(check.pilot_paths_per_sensor()),
+      static_cast<long long>(check.paths_per_sensor()),
+      t.total_seconds() - t.sky_seconds() - t.outdoor_seconds() - t.evaluation_seconds() -
+          t.best_hourly_seconds() - check.seconds(),
+      result.best_value().value(), result.best_value().standard_error(),
+      check.one_stage().value(), check.one_stage().standard_error());
   for (const char* name : {"alpha", "width", "spacing", "thickness"}) {
     std::printf(" %s=%.4f", name, result.best_design().at(name));
   }
