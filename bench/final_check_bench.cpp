@@ -5,13 +5,13 @@
 // the machine may be shared, bench/README.md).
 //
 //   final_check_bench [seeds] [cpu|cuda|auto]
-//   final_check_bench split [cpu|cuda|auto]
+//   final_check_bench split [cpu|cuda|auto] [OUTDOOR/INDOOR ...]
 //
 // `seeds` (default 1) repeats each check with the jobs' seed set to 1, 2, ... (other streams).
 // `split` tells the reflection limits from the method: the tilt jobs' blind at three tilts,
-// each a one-evaluation job (the tilt fixed) with the jobs' sampling, once with their limits
-// (5 indoor, 30 outdoor reflections) and once without; its final check gives the one-stage
-// value.
+// each a one-evaluation job (the tilt fixed) with the jobs' sampling, once per pair of
+// reflection limits (outdoor/indoor, -1 = unlimited; default: the jobs' defaults, then
+// 30/5, the source publication's); its final check gives the one-stage value.
 #include <sys/resource.h>
 
 #include <chrono>
@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "bench/bench_util.h"
 #include "core/common/json_proto.h"
@@ -73,25 +74,52 @@ PreparedJob Prepare(const std::string& name, const std::string& backend, uint64_
   return ValueOrExit(PrepareJob(job, dir));
 }
 
-// The two-stage value of alpha_max.json's blind at `alpha`, with and without the reflection
-// limits, each with its final check.
-void Split(const std::string& backend) {
+// Reflection limits of the two stages; 0 = the jobs' default.
+struct Limits {
+  int outdoor = 0, indoor = 0;
+};
+
+std::string LimitsText(const Limits& limits) {
+  const auto text = [](int bounces) {
+    return bounces == 0  ? std::string("the default")
+           : bounces < 0 ? std::string("unlimited")
+                         : std::to_string(bounces);
+  };
+  return "outdoor reflections " + text(limits.outdoor) + ", indoor " + text(limits.indoor);
+}
+
+// The two-stage value of alpha_max.json's blind at `alpha` with each pair of reflection
+// limits, each with its final check and its CPU time.
+void Split(const std::string& backend, const std::vector<Limits>& limits) {
   for (const double alpha : {0.1136, 0.8, 1.5707963267948966}) {
-    for (const bool limited : {true, false}) {
+    for (const Limits& l : limits) {
       PreparedJob job = Prepare("alpha_max", backend, 1);
       v1::DesignVariable& tilt = *job.job.mutable_variables(0);
       tilt.set_start(alpha);
       tilt.set_fixed(true);
-      if (!limited) {
-        job.job.mutable_sampling()->set_indoor_bounces(-1);
-        job.job.mutable_sampling()->set_outdoor_bounces(-1);
-      }
+      v1::Sampling& sampling = *job.job.mutable_sampling();
+      v1::Sampling defaults = ValueOrExit(ResolveSampling(v1::Sampling()));
+      sampling.set_outdoor_bounces(l.outdoor != 0 ? l.outdoor : defaults.outdoor_bounces());
+      sampling.set_indoor_bounces(l.indoor != 0 ? l.indoor : defaults.indoor_bounces());
+      const double cpu = CpuSeconds();
       const v1::JobResult result = ValueOrExit(RunJob(job, nullptr));
-      std::printf("alpha = %.4f, %s:\n", alpha,
-                  limited ? "5 indoor and 30 outdoor reflections" : "no reflection limit");
+      std::printf("alpha = %.4f, %s (%d/%d): job CPU %.2f s (outdoor stage %.2f s wall)\n", alpha,
+                  LimitsText(l).c_str(), sampling.outdoor_bounces(), sampling.indoor_bounces(),
+                  CpuSeconds() - cpu, result.timings().outdoor_seconds());
       PrintCheck(result.final_check(), -1);
     }
   }
+}
+
+// "OUTDOOR/INDOOR" (e.g. "30/-1"), or exits.
+Limits ParseLimits(const std::string& text) {
+  const size_t slash = text.find('/');
+  if (slash == std::string::npos) {
+    std::fprintf(stderr, "error: reflection limits must read OUTDOOR/INDOOR, got '%s'\n",
+                 text.c_str());
+    std::exit(2);
+  }
+  return {std::stoi(text.substr(0, slash)), std::stoi(text.substr(slash + 1))};
 }
 
 }  // namespace
@@ -100,7 +128,10 @@ void Split(const std::string& backend) {
 int main(int argc, char** argv) {
   using namespace fenestra;
   if (argc > 1 && std::string(argv[1]) == "split") {
-    Split(argc > 2 ? argv[2] : "auto");
+    std::vector<Limits> limits;
+    for (int i = 3; i < argc; ++i) limits.push_back(ParseLimits(argv[i]));
+    if (limits.empty()) limits = {Limits{}, Limits{30, 5}};
+    Split(argc > 2 ? argv[2] : "auto", limits);
     return 0;
   }
   const int seeds = argc > 1 ? std::max(1, std::atoi(argv[1])) : 1;

@@ -142,19 +142,17 @@ int main(int argc, char** argv) {
   TraversalAlone("lightwell", nullptr);
   TraversalAlone("city_office", &open);
 
-  // The city-office outdoor stage
+  // The city-office outdoor stage with the jobs' sampling (core/dc/two_stage.h)
   // The window in its default parts (4 x 3), as jobs trace it
   OutdoorOptions outdoor;
-  outdoor.paths = 20'000'000;
-  outdoor.max_bounces = 30;
   outdoor.parts = AutomaticWindowParts(office.window);
   ValueOrExit(ComputeOutdoorStage(office, outdoor, gpu.get()));
   const OutdoorResult o = ValueOrExit(ComputeOutdoorStage(office, outdoor, gpu.get()));
   std::printf(
-      "outdoor stage: %lld paths, 30 bounces, %dx%d window parts: %.4f s, %.3e rays, "
-      "%.2f G rays/s\n",
-      static_cast<long long>(o.paths_per_cell * o.sky_view.size()), outdoor.parts.columns,
-      outdoor.parts.rows, o.wall_seconds, static_cast<double>(o.rays_traced),
+      "outdoor stage: %lld paths, %d bounces (-1: unlimited), %dx%d window parts: %.4f s, "
+      "%.3e rays, %.2f G rays/s\n",
+      static_cast<long long>(o.paths_per_cell * o.sky_view.size()), outdoor.max_bounces,
+      outdoor.parts.columns, outdoor.parts.rows, o.wall_seconds, static_cast<double>(o.rays_traced),
       o.rays_traced / o.wall_seconds / 1e9);
 
   // One candidate as a job evaluates it: the indoor stage, then the tallies of
@@ -171,8 +169,6 @@ int main(int argc, char** argv) {
     if (occupied[c]) analysed.push_back(c);
   }
   IndoorOptions indoor;
-  indoor.paths_per_sensor = 200'000;
-  indoor.max_bounces = 5;
   indoor.parts = outdoor.parts;
   Matrix analysed_sky(kDaylightBins, static_cast<Eigen::Index>(analysed.size()));
   for (size_t c = 0; c < analysed.size(); ++c) {
@@ -216,12 +212,12 @@ int main(int argc, char** argv) {
     rays += i.rays_traced;
   }
   std::printf(
-      "candidate evaluation (9 sensors x 2e5 paths, 5 bounces, D S over %zu hours, UDI): %.2f ms "
-      "(the indoor kernel %.2f ms at %.2f G closest-hit rays/s, the design's mesh and BVH "
-      "%.2f ms, the rest uploads, E = (I_b O_b) S, its tallies and the metrics); last UDI "
-      "%.2f ± %.2f %%\n",
-      analysed.size(), 1e3 * total / candidates, 1e3 * kernel / candidates, rays / kernel / 1e9,
-      1e3 * prepare / candidates, udi, udi_se);
+      "candidate evaluation (9 sensors x 2e5 paths, %d bounces (-1: unlimited), D S over %zu "
+      "hours, UDI): %.2f ms (the indoor kernel %.2f ms at %.2f G closest-hit rays/s, the "
+      "design's mesh and BVH %.2f ms, the rest uploads, E = (I_b O_b) S, its tallies and the "
+      "metrics); last UDI %.2f ± %.2f %%\n",
+      indoor.max_bounces, analysed.size(), 1e3 * total / candidates, 1e3 * kernel / candidates,
+      rays / kernel / 1e9, 1e3 * prepare / candidates, udi, udi_se);
 
   // Is one candidate enough to fill the GPU? The same design with 4 and 16 times the paths
   // (as if that many candidates shared a launch)
@@ -259,6 +255,13 @@ int main(int argc, char** argv) {
   for (const char* name : {"alpha", "width", "spacing", "thickness"}) {
     std::printf(" %s=%.4f", name, result.best_design().at(name));
   }
-  std::printf("\n");
+  const v1::FinalCheck& check = result.final_check();
+  std::printf(
+      "\nfinal check (one-stage, %lld paths per sensor, %.2f s): %.2f ± %.2f %%, difference "
+      "%+.2f ± %.2f %%%s; best hourly illuminance %.2f s\n",
+      static_cast<long long>(check.paths_per_sensor()), check.seconds(), check.one_stage().value(),
+      check.one_stage().standard_error(), check.difference().value(),
+      check.difference().standard_error(), check.disagrees() ? " DISAGREES" : "",
+      result.timings().best_hourly_seconds());
   return 0;
 }

@@ -67,6 +67,16 @@ PathSettings PathSettingsFor(const OneStageOptions& options) {
   return settings;
 }
 
+Vec3d OneStageFrameOrigin(const std::vector<Sensor>& sensors) {
+  if (sensors.empty()) return {0, 0, 0};
+  Vec3d lo = sensors[0].position, hi = sensors[0].position;
+  for (const Sensor& s : sensors) {
+    lo = {std::min(lo.x, s.position.x), std::min(lo.y, s.position.y), std::min(lo.z, s.position.z)};
+    hi = {std::max(hi.x, s.position.x), std::max(hi.y, s.position.y), std::max(hi.z, s.position.z)};
+  }
+  return (lo + hi) * 0.5;
+}
+
 std::vector<TraceSensor> LocalSensors(const TraceGeometry& geometry,
                                       const std::vector<Sensor>& sensors) {
   std::vector<TraceSensor> local;

@@ -19,6 +19,13 @@ absl::Status CheckOneStageInput(const std::vector<Sensor>& sensors, const OneSta
 // The per-path settings the options ask for.
 PathSettings PathSettingsFor(const OneStageOptions& options);
 
+// The local frame's origin of a one-stage trace: the centre of the sensors' bounding box.
+// Float coordinates are finest near the origin, and the fine parts of a scene (the blind's
+// slats, millimetres apart when nearly closed) lie near the sensors, while a city's bounding
+// box centres tens of metres away: there the 256-ulp ray offsets (core/trace/ray_offset.h)
+// grow to half a millimetre and let light through gaps that are hardly wider.
+Vec3d OneStageFrameOrigin(const std::vector<Sensor>& sensors);
+
 // The sensors in `geometry`'s local frame, directions normalized.
 std::vector<TraceSensor> LocalSensors(const TraceGeometry& geometry,
                                       const std::vector<Sensor>& sensors);

@@ -275,7 +275,8 @@ class CudaBackend : public DcBackend {
                                           const OneStageOptions& options) override {
     const auto start = std::chrono::steady_clock::now();
     FENESTRA_RETURN_IF_ERROR(CheckOneStageInput(sensors, options));
-    FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(mesh, materials));
+    const Vec3d origin = OneStageFrameOrigin(sensors);
+    FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(mesh, materials, &origin));
     FENESTRA_RETURN_IF_ERROR(Upload(geometry));
     const std::vector<TraceSensor> local = LocalSensors(geometry, sensors);
     const int sensor_count = static_cast<int>(local.size());

@@ -24,7 +24,8 @@ class EmbreeBackend : public DcBackend {
                                           const OneStageOptions& options) override {
     const auto start = std::chrono::steady_clock::now();
     FENESTRA_RETURN_IF_ERROR(CheckOneStageInput(sensors, options));
-    FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(mesh, materials));
+    const Vec3d origin = OneStageFrameOrigin(sensors);
+    FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(mesh, materials, &origin));
     FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
 
     // Learn the importance map, then trace

@@ -150,6 +150,29 @@ struct RecordingMode {
   void Finish(const PathStats& stats) { inner.Finish(stats); }
 };
 
+// Adds the value of every connection the blind leaves clear to its column of `sum`; the
+// shadow rays go in packets (the answers are Occluded's, ray by ray).
+void TestConnections(const EmbreeIntersector& blind, const std::vector<Connection>& connections,
+                     std::vector<double>& sum) {
+  constexpr int kPacket = EmbreeIntersector::kPacketRays;
+  Vec3f origins[kPacket], directions[kPacket];
+  float distances[kPacket];
+  bool blocked[kPacket];
+  for (size_t first = 0; first < connections.size(); first += kPacket) {
+    const int count = static_cast<int>(std::min<size_t>(kPacket, connections.size() - first));
+    for (int i = 0; i < count; ++i) {
+      const Connection& k = connections[first + i];
+      origins[i] = k.origin;
+      directions[i] = k.direction;
+      distances[i] = k.distance;
+    }
+    blind.OccludedPacket(origins, directions, distances, count, blocked);
+    for (int i = 0; i < count; ++i) {
+      if (!blocked[i]) sum[connections[first + i].column] += connections[first + i].value;
+    }
+  }
+}
+
 double Seconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -296,12 +319,8 @@ absl::StatusOr<IndoorResult> IndoorReplay::Compute(const BlindDesign& design) co
       [&](uint64_t c, Slot& slot) {
         const Chunk& chunk = d.chunks[c];
         slot.sum = chunk.fixed;
-        for (const Connection& k : chunk.connections) {
-          ++slot.counters.rays;
-          if (!blind_view.Occluded(k.origin, k.direction, k.distance)) {
-            slot.sum[k.column] += k.value;
-          }
-        }
+        TestConnections(blind_view, chunk.connections, slot.sum);
+        slot.counters.rays += chunk.connections.size();
         const TraceSensor& sensor = d.sensors[chunk.sensor];
         IndoorMode<Slot, OutdoorEmbreeView> mode{
             sensor.position,      sensor.normal,   d.window, &d.basis,

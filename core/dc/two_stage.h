@@ -55,13 +55,23 @@ WindowParts AutomaticWindowParts(const Window& window);
 // WindowParts from "COLUMNSxROWS" (e.g. "4x2"), or InvalidArgument.
 absl::StatusOr<WindowParts> ParseWindowParts(const std::string& text);
 
+// The two-stage method's sampling by default: the jobs' (job.proto, Sampling; filled in by
+// ResolveSampling, core/optimize/job.h) and the stages' options'. Reflections are unlimited,
+// paths ended by Russian roulette alone: limits cheap enough to matter cut the light of the
+// city office's room (walls of reflectance 0.8) by 2-12 points of UDI, and unlimited paths
+// cost no more than 15 or 20 reflections (bench/README.md, "Reflection limits").
+inline constexpr int64_t kDefaultOutdoorPaths = 20'000'000;
+inline constexpr int kDefaultOutdoorBounces = -1;
+inline constexpr int64_t kDefaultIndoorPathsPerSensor = 200'000;
+inline constexpr int kDefaultIndoorBounces = -1;
 // Independent batches of each stage, by default, and at most.
 inline constexpr int kDefaultBatches = 8;
 inline constexpr int kMaxBatches = 64;
 
 struct OutdoorOptions {
-  int64_t paths = 20'000'000;  // in total, evenly over the window cells; >= cells x batches
-  int max_bounces = 30;        // surface reflections; < 0 = unlimited (roulette)
+  // In total, evenly over the window cells; >= cells x batches
+  int64_t paths = kDefaultOutdoorPaths;
+  int max_bounces = kDefaultOutdoorBounces;  // surface reflections; < 0 = unlimited (roulette)
   uint64_t seed = 1;
   int threads = 0;  // CPU threads; 0 = every hardware thread
   int basis_cells = 288;
@@ -93,8 +103,9 @@ struct OutdoorResult {
 };
 
 struct IndoorOptions {
-  int64_t paths_per_sensor = 200'000;
-  int max_bounces = 5;  // reflections whose light may reach a sensor; < 0 = unlimited
+  int64_t paths_per_sensor = kDefaultIndoorPathsPerSensor;
+  // Reflections whose light may reach a sensor; < 0 = unlimited (roulette)
+  int max_bounces = kDefaultIndoorBounces;
   uint64_t seed = 1;
   int threads = 0;
   int basis_cells = 288;

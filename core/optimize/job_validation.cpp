@@ -1,5 +1,6 @@
 // The door for jobs: every field of a Job checked, defaults filled in (job.proto states
-// them; the constants here and in core/metrics are the only other place).
+// them; the constants here, the sampling's in core/dc/two_stage.h and the metrics' in
+// core/metrics are the only other place).
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -26,10 +27,6 @@ constexpr double kMaxIlluminanceLux = 1e6;
 // 1000 even a white room (reflectance 0.99) has no light left to carry.
 constexpr int kMaxBounces = 1000;
 constexpr int kDefaultBasisCells = 288;
-constexpr int64_t kDefaultOutdoorPaths = 20'000'000;
-constexpr int64_t kDefaultIndoorPaths = 200'000;
-constexpr int kDefaultOutdoorBounces = 30;
-constexpr int kDefaultIndoorBounces = 5;
 // Whether a job checks its best design by the one-stage method when its sampling does not say.
 constexpr bool kFinalCheckByDefault = true;
 
@@ -224,7 +221,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   v1::Sampling s = given;
   if (s.outdoor_paths() == 0) s.set_outdoor_paths(kDefaultOutdoorPaths);
   if (s.outdoor_bounces() == 0) s.set_outdoor_bounces(kDefaultOutdoorBounces);
-  if (s.indoor_paths_per_sensor() == 0) s.set_indoor_paths_per_sensor(kDefaultIndoorPaths);
+  if (s.indoor_paths_per_sensor() == 0) s.set_indoor_paths_per_sensor(kDefaultIndoorPathsPerSensor);
   if (s.indoor_bounces() == 0) s.set_indoor_bounces(kDefaultIndoorBounces);
   if (s.seed() == 0) s.set_seed(1);
   if (s.basis_cells() == 0) s.set_basis_cells(kDefaultBasisCells);

@@ -77,9 +77,9 @@ TEST_F(DcCommandTest, TwoStageWritesDAndBothStages) {
 TEST_F(DcCommandTest, TwoStageDefaultsAreTheJobs) {
   const CliRun run = Fenestra("dc --help");
   ASSERT_EQ(run.exit_code, 0) << run.output;
-  // job.proto: outdoor 2e7 paths and 30 reflections, indoor 2e5 paths and 5 reflections
+  // job.proto: outdoor 2e7 paths, indoor 2e5 paths, reflections unlimited in both stages
   for (const char* flag : {"--outdoor-paths INT=20000000", "--indoor-paths INT=200000",
-                           "--outdoor-bounces INT=30", "--indoor-bounces INT=5"}) {
+                           "--outdoor-bounces INT=-1", "--indoor-bounces INT=-1"}) {
     EXPECT_NE(run.output.find(flag), std::string::npos) << flag << "\n" << run.output;
   }
 }
@@ -89,7 +89,7 @@ TEST_F(DcCommandTest, BouncesIsRefusedForTwoStage) {
                               (dir_ / "D.mtx").string());
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.output.find("error: --bounces is the one-stage limit; the two-stage method takes "
-                            "--outdoor-bounces (default 30) and --indoor-bounces (default 5)"),
+                            "--outdoor-bounces (default -1) and --indoor-bounces (default -1)"),
             std::string::npos)
       << run.output;
   EXPECT_TRUE(fs::is_empty(dir_));
