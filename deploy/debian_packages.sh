@@ -7,6 +7,8 @@ packages=(
   libembree-dev libtbb-dev libeigen3-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libcli11-dev libtinyobjloader-dev libsqlite3-dev zlib1g-dev
   python3 python3-grpcio python3-grpc-tools python3-numpy
+  # tests/run_all.sh's sanitizer and fuzzing builds: clang, libFuzzer, llvm-symbolizer
+  clang libclang-rt-14-dev llvm
 )
 missing=()
 for p in "${packages[@]}"; do
