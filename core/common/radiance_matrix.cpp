@@ -131,6 +131,21 @@ absl::StatusOr<Matrix> ReadRadianceMatrix(const std::string& path) {
     return absl::InvalidArgumentError(
         absl::StrCat(path, ": NCOMP=", comps, " (only one-component matrices are supported)"));
   }
+  // The header's size against the data that follows, before anything is allocated: a value
+  // takes 4 bytes as float, 8 as double, at least 1 as text
+  std::streamoff data_bytes = 0;
+  if (in) {
+    const std::streamoff data_start = in.tellg();
+    in.seekg(0, std::ios::end);
+    data_bytes = in.tellg() - data_start;
+    in.seekg(data_start);
+  }
+  const long value_bytes = format == "float" ? 4 : format == "double" ? 8 : 1;
+  if (rows > data_bytes / value_bytes / cols) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": the header says NROWS=", rows,
+                                                   " NCOLS=", cols, " but only ", data_bytes,
+                                                   " bytes of ", format, " data follow"));
+  }
   if (format == "ascii") return ParseTable(path, in, rows, cols);
   Matrix m(rows, cols);
   if (format == "float" || format == "double") {
