@@ -67,6 +67,10 @@ BlindLayout LayoutBlind(const Window& window, const BlindSpec& spec, const Blind
   return layout;
 }
 
+double MaxSlatCount(const Window& window, const BlindSpec& spec, double min_slat_width_m) {
+  return 1 + std::ceil(BlindFrame(window, spec).stack_extent_m / min_slat_width_m);
+}
+
 BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design,
                           uint32_t part_index, TriangleMesh& mesh) {
   const BlindLayout layout = LayoutBlind(window, spec, design);

@@ -39,6 +39,14 @@ struct BlindLayout {
 // Slat layout for `design` in `window` (see blind.cpp for the exact rule).
 BlindLayout LayoutBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design);
 
+// The most slats a blind may have (12 triangles each); scenes and jobs whose narrowest slats
+// would need more are refused.
+inline constexpr int kMaxBlindSlats = 100'000;
+
+// An upper bound on the slats LayoutBlind places in `window` for any design whose slat width
+// is at least `min_slat_width_m` [m] (the pitch is at least the width).
+double MaxSlatCount(const Window& window, const BlindSpec& spec, double min_slat_width_m);
+
 // A box (centre, three unit axes, half extents) that holds the blind of every design whose
 // values lie within the spec's ranges.
 struct BlindEnvelope {

@@ -15,6 +15,8 @@ namespace {
 
 // Relative tolerance for planarity and perpendicularity checks.
 constexpr double kShapeTolerance = 1e-6;
+// Sensors per scene, grids expanded.
+constexpr double kMaxSensors = 1'000'000;
 
 // Collects errors as "<file>: <field>: <reason>".
 class Checker {
@@ -218,9 +220,17 @@ absl::StatusOr<std::vector<Sensor>> BuildSensors(const v1::Scene& proto, const C
     for (double v : {g.z_m(), g.x_min_m(), g.x_max_m(), g.y_min_m(), g.y_max_m()}) {
       if (!std::isfinite(v)) return check.Error(field, "coordinates must be finite numbers");
     }
-    const long nx = std::lround(std::floor((g.x_max_m() - g.x_min_m()) / g.spacing_m() + 1e-9));
-    const long ny = std::lround(std::floor((g.y_max_m() - g.y_min_m()) / g.spacing_m() + 1e-9));
-    if (nx < 1 || ny < 1) return check.Error(field, "the grid holds no cell of the given spacing");
+    const double x_cells = std::floor((g.x_max_m() - g.x_min_m()) / g.spacing_m() + 1e-9);
+    const double y_cells = std::floor((g.y_max_m() - g.y_min_m()) / g.spacing_m() + 1e-9);
+    if (!(x_cells >= 1 && y_cells >= 1)) {
+      return check.Error(field, "the grid holds no cell of the given spacing");
+    }
+    if (!(static_cast<double>(sensors.size()) + x_cells * y_cells <= kMaxSensors)) {
+      return check.Error(field, absl::StrCat("the grid holds ", x_cells * y_cells,
+                                             " sensors; a scene may have at most ", kMaxSensors));
+    }
+    const long nx = std::lround(x_cells);
+    const long ny = std::lround(y_cells);
     const std::string prefix = g.name().empty() ? absl::StrCat("grid", i) : g.name();
     for (long iy = 0; iy < ny; ++iy) {
       for (long ix = 0; ix < nx; ++ix) {
@@ -254,7 +264,8 @@ absl::StatusOr<ParameterRange> BuildParameter(const v1::Parameter& p, const std:
 }
 
 absl::StatusOr<BlindSpec> BuildBlind(const v1::VenetianBlind& b,
-                                     const std::vector<Material>& materials, const Checker& check) {
+                                     const std::vector<Material>& materials, const Window& window,
+                                     const Checker& check) {
   BlindSpec spec;
   FENESTRA_ASSIGN_OR_RETURN(material,
                             FindMaterial(materials, b.material(), "blind.material", check));
@@ -273,6 +284,11 @@ absl::StatusOr<BlindSpec> BuildBlind(const v1::VenetianBlind& b,
       thickness, BuildParameter(b.slat_thickness_m(), "blind.slat_thickness_m", 0, check));
   if (!(width.min > 0)) return check.Error("blind.slat_width_m", "must be > 0");
   if (!(thickness.min > 0)) return check.Error("blind.slat_thickness_m", "must be > 0");
+  if (const double slats = MaxSlatCount(window, spec, width.min); !(slats <= kMaxBlindSlats)) {
+    return check.Error("blind.slat_width_m", absl::StrCat("at its narrowest, ", width.min,
+                                                          " m, the blind would need up to ", slats,
+                                                          " slats; at most ", kMaxBlindSlats));
+  }
   spec.tilt_rad = tilt;
   spec.slat_width_m = width;
   spec.slat_spacing_m = spacing;
@@ -374,7 +390,8 @@ absl::StatusOr<Scene> BuildScene(const v1::Scene& proto, const std::string& path
   FENESTRA_ASSIGN_OR_RETURN(sensors, BuildSensors(proto, check));
   scene.sensors = std::move(sensors);
   if (proto.has_blind()) {
-    FENESTRA_ASSIGN_OR_RETURN(blind, BuildBlind(proto.blind(), scene.materials, check));
+    FENESTRA_ASSIGN_OR_RETURN(blind,
+                              BuildBlind(proto.blind(), scene.materials, scene.window, check));
     scene.blind = blind;
   }
   FENESTRA_ASSIGN_OR_RETURN(site, BuildSite(proto, check));

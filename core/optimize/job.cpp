@@ -112,6 +112,14 @@ absl::Status ValidateVariables(const v1::Job& job, const Scene& scene) {
                                          info->highest, "]"));
     }
     if (v.step() < 0) return Invalid(field + ".step", "must be >= 0");
+    if (v.name() == "width") {
+      const double slats = MaxSlatCount(scene.window, *scene.blind, v.lower());
+      if (!(slats <= kMaxBlindSlats)) {
+        return Invalid(field + ".lower",
+                       absl::StrCat("at width ", v.lower(), " m the blind would need up to ", slats,
+                                    " slats; at most ", kMaxBlindSlats));
+      }
+    }
   }
   return absl::OkStatus();
 }

@@ -122,6 +122,24 @@ TEST_F(SceneErrorsTest, ZeroOrNegativeSlatSizes) {
               {"blind.slat_spacing_m", "below 0"});
 }
 
+// Sizes that would take more memory than a scene may use are errors before any is taken.
+TEST_F(SceneErrorsTest, TooManySensorsOrSlats) {
+  const std::string sensors = R"("sensors": [)";
+  ExpectError(Scene(sensors, R"("sensorGrids": [{"zM": 0.8, "xMinM": 0, "xMaxM": 1.8, "yMinM": 0,
+                                                "yMaxM": 2.8, "spacingM": 1e-5}], )" +
+                                 sensors),
+              {"sensor_grids[0]", "the grid holds 5.04e+10 sensors", "at most 1e+06"});
+  // The pitch is at least the width: 1 m / 1e-7 m needs 10^7 slats
+  ExpectError(
+      Scene(R"("slatWidthM": {"value": 0.1, "min": 0.05)",
+            R"("slatWidthM": {"value": 0.1, "min": 1e-7)"),
+      {"blind.slat_width_m", "at its narrowest, 1e-07 m", "up to 1e+07 slats", "at most 100000"});
+  // Far more slats than an int counts
+  ExpectError(Scene(R"("slatWidthM": {"value": 0.1, "min": 0.05, "max": 0.15})",
+                    R"("slatWidthM": {"value": 1e-300})"),
+              {"blind.slat_width_m", "at most 100000"});
+}
+
 TEST_F(SceneErrorsTest, DesignValueOutsideItsRange) {
   ExpectError(Scene(R"("slatWidthM": {"value": 0.1)", R"("slatWidthM": {"value": 0.2)"),
               {"blind.slat_width_m", "value 0.2 is outside [0.05, 0.15]"});

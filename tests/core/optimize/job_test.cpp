@@ -48,6 +48,23 @@ TEST(JobTest, PrepareChecksOutdoorPathsAgainstTheWindowCells) {
   EXPECT_TRUE(prepared.ok()) << prepared.status();
 }
 
+// A width range whose narrowest slats would need more than kMaxBlindSlats is refused before
+// any blind is generated.
+TEST(JobTest, PrepareRefusesWidthsNeedingTooManySlats) {
+  absl::StatusOr<v1::Job> job =
+      ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_width_target.json");
+  ASSERT_TRUE(job.ok()) << job.status();
+  for (v1::DesignVariable& v : *job->mutable_variables()) {
+    if (v.name() == "width") v.set_lower(1e-6);  // 1.5 m window: 1.5 million slats
+  }
+  absl::StatusOr<PreparedJob> prepared =
+      PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
+  ASSERT_FALSE(prepared.ok());
+  EXPECT_NE(prepared.status().message().find(".lower: at width 1e-06 m the blind would need up to"),
+            std::string::npos)
+      << prepared.status();
+}
+
 // The outdoor matrix's key follows the window parts it was traced with, not how they
 // were asked for.
 TEST(JobTest, OutdoorKeyFollowsTheWindowParts) {
