@@ -6,6 +6,8 @@
 #include <atomic>
 #include <thread>
 
+#include "absl/strings/str_cat.h"
+
 namespace fenestra {
 namespace {
 
@@ -65,7 +67,7 @@ TEST(WorkQueueTest, WorkersRunTasksConcurrently) {
   std::atomic<int> running = 0, peak = 0;
   for (int i = 0; i < 4; ++i) {
     ASSERT_TRUE(queue
-                    .Push("t" + std::to_string(i),
+                    .Push(absl::StrCat("t", i),
                           [&] {
                             peak = std::max(peak.load(), ++running);
                             std::this_thread::sleep_for(std::chrono::milliseconds(100));
