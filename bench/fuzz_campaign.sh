@@ -4,12 +4,13 @@
 # (target, executions, time, exec/s, corpus size, crashes, leaks, timeouts, out-of-memory)
 # with the machine it ran on.
 # Usage: bench/fuzz_campaign.sh [--build DIR] [--runs N] [--seconds S] [--workers K]
-#                               [--out FILE]
+#                               [--targets T1,T2,...] [--out FILE]
 #   --build    a build configured with -DFENESTRA_FUZZ=ON (clang), default build-sanitize
 #              (tests/run_all.sh makes it: build-sanitize)
 #   --runs     executions per target (default 10000000), split among its workers
 #   --seconds  wall-clock cap per target (default 0 = none)
-#   --workers  processes per target (default: cores / 7, at least 1)
+#   --workers  processes per target (default: cores / targets, at least 1)
+#   --targets  which fuzz targets (default all: tests/fuzz/fuzz_common.sh lists them)
 #   --out      the table (default bench/results/fuzz_campaign.txt)
 # New corpus inputs and crashing inputs stay in DIR/fuzz-campaign/<target>/; a crash is
 # committed under tests/fuzz/regressions/<target>/ once fixed.
@@ -20,8 +21,7 @@ source tests/fuzz/fuzz_common.sh
 build=build-sanitize
 runs=10000000
 seconds=0
-workers=$(($(nproc) / ${#FUZZ_TARGETS[@]}))
-[ "$workers" -ge 1 ] || workers=1
+workers=0
 out=bench/results/fuzz_campaign.txt
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -29,10 +29,15 @@ while [ $# -gt 0 ]; do
     --runs) runs="$2"; shift 2 ;;
     --seconds) seconds="$2"; shift 2 ;;
     --workers) workers="$2"; shift 2 ;;
+    --targets) IFS=, read -r -a FUZZ_TARGETS <<<"$2"; shift 2 ;;
     --out) out="$2"; shift 2 ;;
     *) echo "unknown option $1 (see the top of $0)" >&2; exit 2 ;;
   esac
 done
+if [ "$workers" -le 0 ]; then
+  workers=$(($(nproc) / ${#FUZZ_TARGETS[@]}))
+  [ "$workers" -ge 1 ] || workers=1
+fi
 for target in "${FUZZ_TARGETS[@]}"; do
   if [ ! -x "$build/tests/fuzz/${target}_fuzz" ]; then
     echo "$build/tests/fuzz/${target}_fuzz is missing: configure $build with" \
