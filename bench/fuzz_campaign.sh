@@ -67,10 +67,11 @@ for pid in "${pids[@]}"; do wait "$pid" || status=1; done
 # The table, from each worker's log: executions (libFuzzer's final stats) and seconds ("Done N
 # runs in S second(s)")
 sum_stat() {  # sum_stat NAME LOG...
-  cat "${@:2}" | grep -ao "stat::$1: [0-9]*" | awk '{s += $2} END {print s + 0}'
+  cat "${@:2}" | { grep -ao "stat::$1: [0-9]*" || true; } | awk '{s += $2} END {print s + 0}'
 }
 max_seconds() {  # max_seconds LOG...
-  cat "$@" | grep -ao "Done [0-9]* runs in [0-9]* second" | awk '{if ($5 > m) m = $5} END {print m + 0}'
+  cat "$@" | { grep -ao "Done [0-9]* runs in [0-9]* second" || true; } |
+    awk '{if ($5 > m) m = $5} END {print m + 0}'
 }
 {
   echo "# Fuzzing campaign, $(date -u '+%Y-%m-%d %H:%M UTC'), commit $(git rev-parse --short HEAD)"

@@ -1,5 +1,6 @@
 #include "core/geometry/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -17,6 +18,12 @@ namespace {
 constexpr double kShapeTolerance = 1e-6;
 // Sensors per scene, grids expanded.
 constexpr double kMaxSensors = 1'000'000;
+// Largest coordinate or length [m]: sums of a few stay finite (and within float range).
+constexpr double kMaxLengthM = 1e7;
+
+// Finite and at most kMaxLengthM in magnitude.
+bool Bounded(double value) { return std::isfinite(value) && std::abs(value) <= kMaxLengthM; }
+std::string BoundedText() { return absl::StrCat("finite numbers within ±", kMaxLengthM, " m"); }
 
 // Collects errors as "<file>: <field>: <reason>".
 class Checker {
@@ -28,23 +35,33 @@ class Checker {
   }
 
   absl::StatusOr<Vec3d> Point(const v1::Vec3& v, const std::string& field) const {
-    if (!std::isfinite(v.x()) || !std::isfinite(v.y()) || !std::isfinite(v.z())) {
-      return Error(field, "coordinates must be finite numbers");
+    if (!Bounded(v.x()) || !Bounded(v.y()) || !Bounded(v.z())) {
+      return Error(field, "coordinates must be " + BoundedText());
     }
     return Vec3d{v.x(), v.y(), v.z()};
   }
 
   absl::StatusOr<Vec3d> Direction(const v1::Vec3& v, const std::string& field) const {
-    absl::StatusOr<Vec3d> d = Point(v, field);
-    if (!d.ok()) return d;
-    const double length = Length(*d);
-    if (!(length > 0)) return Error(field, "direction must not be zero");
-    return *d / length;
+    if (!std::isfinite(v.x()) || !std::isfinite(v.y()) || !std::isfinite(v.z())) {
+      return Error(field, "coordinates must be finite numbers");
+    }
+    // Scaled by its largest component first, so no length overflows or vanishes
+    const Vec3d d{v.x(), v.y(), v.z()};
+    const double largest = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+    if (!(largest > 0)) return Error(field, "direction must not be zero");
+    return Normalize(d / largest);
   }
 
   absl::Status Positive(double value, const std::string& field) const {
-    if (!std::isfinite(value) || !(value > 0)) {
-      return Error(field, absl::StrCat("must be a finite number > 0, got ", value));
+    if (!Bounded(value) || !(value > 0)) {
+      return Error(field, absl::StrCat("must be > 0 among ", BoundedText(), ", got ", value));
+    }
+    return absl::OkStatus();
+  }
+
+  absl::Status NonNegative(double value, const std::string& field) const {
+    if (!Bounded(value) || !(value >= 0)) {
+      return Error(field, absl::StrCat("must be >= 0 among ", BoundedText(), ", got ", value));
     }
     return absl::OkStatus();
   }
@@ -168,6 +185,12 @@ absl::Status AddObj(const v1::ObjMesh& obj, const std::string& field, uint32_t d
   for (size_t t = 0; t < triangles->group.size(); ++t) {
     const Vec3d a = triangles->vertices[3 * t], b = triangles->vertices[3 * t + 1],
                 c = triangles->vertices[3 * t + 2];
+    for (const Vec3d& p : {a, b, c}) {
+      if (!Bounded(p.x) || !Bounded(p.y) || !Bounded(p.z)) {
+        return check.Error(field + ".path", absl::StrCat("triangle ", t + 1,
+                                                         ": coordinates must be ", BoundedText()));
+      }
+    }
     if (!(TriangleArea(a, b, c) > 0)) {
       ++dropped;
       continue;
@@ -190,9 +213,7 @@ absl::StatusOr<Window> BuildWindow(const v1::Scene& proto, const Checker& check)
   }
   FENESTRA_RETURN_IF_ERROR(check.Positive(w.width_m(), "window.width_m"));
   FENESTRA_RETURN_IF_ERROR(check.Positive(w.height_m(), "window.height_m"));
-  if (!std::isfinite(w.depth_m()) || w.depth_m() < 0) {
-    return check.Error("window.depth_m", "must be a finite number >= 0");
-  }
+  FENESTRA_RETURN_IF_ERROR(check.NonNegative(w.depth_m(), "window.depth_m"));
   window.center = center;
   window.normal = normal;
   window.up = up;
@@ -218,7 +239,7 @@ absl::StatusOr<std::vector<Sensor>> BuildSensors(const v1::Scene& proto, const C
     const std::string field = absl::StrCat("sensor_grids[", i, "]");
     FENESTRA_RETURN_IF_ERROR(check.Positive(g.spacing_m(), field + ".spacing_m"));
     for (double v : {g.z_m(), g.x_min_m(), g.x_max_m(), g.y_min_m(), g.y_max_m()}) {
-      if (!std::isfinite(v)) return check.Error(field, "coordinates must be finite numbers");
+      if (!Bounded(v)) return check.Error(field, "coordinates must be " + BoundedText());
     }
     const double x_cells = std::floor((g.x_max_m() - g.x_min_m()) / g.spacing_m() + 1e-9);
     const double y_cells = std::floor((g.y_max_m() - g.y_min_m()) / g.spacing_m() + 1e-9);
@@ -248,7 +269,7 @@ absl::StatusOr<std::vector<Sensor>> BuildSensors(const v1::Scene& proto, const C
 absl::StatusOr<ParameterRange> BuildParameter(const v1::Parameter& p, const std::string& field,
                                               double lowest, const Checker& check) {
   for (double v : {p.value(), p.min(), p.max()}) {
-    if (!std::isfinite(v)) return check.Error(field, "value, min and max must be finite");
+    if (!Bounded(v)) return check.Error(field, "value, min and max must be " + BoundedText());
   }
   ParameterRange range{p.value(), p.min(), p.max()};
   if (range.min == 0 && range.max == 0) range.min = range.max = range.value;  // fixed value
@@ -294,14 +315,10 @@ absl::StatusOr<BlindSpec> BuildBlind(const v1::VenetianBlind& b,
   spec.slat_spacing_m = spacing;
   spec.slat_thickness_m = thickness;
   if (b.has_wall_gap_m()) {
-    if (!std::isfinite(b.wall_gap_m()) || b.wall_gap_m() < 0) {
-      return check.Error("blind.wall_gap_m", "must be a finite number >= 0");
-    }
+    FENESTRA_RETURN_IF_ERROR(check.NonNegative(b.wall_gap_m(), "blind.wall_gap_m"));
     spec.wall_gap_m = b.wall_gap_m();
   }
-  if (!std::isfinite(b.side_margin_m()) || b.side_margin_m() < 0) {
-    return check.Error("blind.side_margin_m", "must be a finite number >= 0");
-  }
+  FENESTRA_RETURN_IF_ERROR(check.NonNegative(b.side_margin_m(), "blind.side_margin_m"));
   spec.side_margin_m = b.side_margin_m();
   return spec;
 }

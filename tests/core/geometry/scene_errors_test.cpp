@@ -96,6 +96,24 @@ TEST_F(SceneErrorsTest, NonFiniteCoordinates) {
               {"sensors[0].position", "finite"});
 }
 
+// Coordinates and lengths beyond 1e7 m are refused, so no sum of them overflows; a direction
+// may have any finite length.
+TEST_F(SceneErrorsTest, HugeCoordinatesAndLengths) {
+  ExpectError(Scene(R"({"x": 1, "y": 0, "z": 0})", R"({"x": 1e300, "y": 0, "z": 0})"),
+              {"surfaces[0].polygon.vertices[1]", "within ±1e+07 m"});
+  ExpectError(Scene(R"("depthM": 0.2)", R"("depthM": 1e308)"), {"window.depth_m", "1e+07"});
+  ExpectError(Scene(R"("slatWidthM": {"value": 0.1, "min": 0.05, "max": 0.15})",
+                    R"("slatWidthM": {"value": 1e300})"),
+              {"blind.slat_width_m", "1e+07"});
+  for (const char* normal :
+       {R"({"x": 0, "y": 5.9e236, "z": 0})", R"({"x": 0, "y": 1e-320, "z": 0})"}) {
+    absl::StatusOr<fenestra::Scene> scene = LoadScene(Scene(R"({"x": 0, "y": 1, "z": 0})", normal));
+    ASSERT_TRUE(scene.ok()) << scene.status();
+    EXPECT_EQ(scene->window.normal.y, 1.0) << normal;
+    EXPECT_EQ(scene->window.across.x, -1.0) << normal;
+  }
+}
+
 TEST_F(SceneErrorsTest, DegenerateWindow) {
   ExpectError(Scene(R"("widthM": 1)", R"("widthM": 0)"), {"window.width_m", "> 0"});
   ExpectError(Scene(R"("up": {"x": 0, "y": 0, "z": 1})", R"("up": {"x": 0, "y": 1, "z": 0})"),
