@@ -1,6 +1,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <string>
 
 namespace fenestra {
 
@@ -8,7 +9,12 @@ namespace fenestra {
 void AddSceneCommand(CLI::App& app);
 void AddSkyCommand(CLI::App& app);
 void AddDcCommand(CLI::App& app);
+void AddConvergenceCommand(CLI::App& app);
 void AddOptimizeCommand(CLI::App& app);
+// fenestra report (client/report_command.cpp).
+void AddReportCommand(CLI::App& app);
+// --sensor of `report` and `job report`: the temporal map's sensor.
+void AddReportSensorOption(CLI::App* command, std::string& sensor);
 // Clients of fenestrad (client/site_command.cpp, client/job_command.cpp).
 void AddSiteCommand(CLI::App& app);
 void AddJobCommand(CLI::App& app);

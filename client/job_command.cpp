@@ -1,8 +1,6 @@
 // fenestra job submit/watch/list/show/cancel/result: optimization jobs run by fenestrad.
 #include <fmt/format.h>
-#include <google/protobuf/util/json_util.h>
 
-#include <algorithm>
 #include <ctime>
 #include <memory>
 #include <optional>
@@ -12,30 +10,13 @@
 #include "client/cli_util.h"
 #include "client/commands.h"
 #include "client/grpc_client.h"
+#include "client/job_request.h"
 #include "client/progress_display.h"
-#include "core/common/atomic_file.h"
+#include "client/report/annual_outputs.h"
+#include "client/report/html_report.h"
 
 namespace fenestra {
 namespace {
-
-std::string StateName(v1::JobState state) {
-  std::string name = v1::JobState_Name(state);
-  return absl::AsciiStrToLower(name.substr(name.find("STATE_") + 6));
-}
-
-bool IsTerminalState(v1::JobState state) {
-  return state != v1::JOB_STATE_QUEUED && state != v1::JOB_STATE_RUNNING &&
-         state != v1::JOB_STATE_UNSPECIFIED;
-}
-
-std::string Json(const google::protobuf::Message& message, bool pretty) {
-  std::string json;
-  google::protobuf::util::JsonPrintOptions options;
-  options.add_whitespace = pretty;
-  (void)google::protobuf::util::MessageToJsonString(message, &json, options);
-  if (!pretty) json.erase(std::remove(json.begin(), json.end(), '\n'), json.end());
-  return json;
-}
 
 std::string LocalTime(int64_t unix_ms) {
   if (unix_ms == 0) return "-";
@@ -45,18 +26,6 @@ std::string LocalTime(int64_t unix_ms) {
   char text[32];
   std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S", &tm);
   return text;
-}
-
-v1::JobInfo GetJob(FenestradClient& client, const std::string& id) {
-  v1::GetJobRequest request;
-  request.set_id(id);
-  v1::JobInfo info;
-  if (absl::Status st =
-          client.Check(client.jobs().Get(client.UnaryContext().get(), request, &info));
-      !st.ok()) {
-    Fail(st);
-  }
-  return info;
 }
 
 void PrintJob(const v1::JobInfo& j) {
@@ -78,106 +47,118 @@ void PrintJob(const v1::JobInfo& j) {
   }
 }
 
-// Follows a job's events until it ends; returns the process exit code (0 = succeeded).
-int Watch(FenestradClient& client, const std::string& id, bool json) {
-  grpc::ClientContext context;
-  v1::WatchJobRequest request;
-  request.set_id(id);
-  std::unique_ptr<grpc::ClientReader<v1::JobEvent>> reader = client.jobs().Watch(&context, request);
-  v1::JobEvent event;
-  std::optional<v1::JobState> end;
-  v1::JobResult result;
-  std::string error;
-  while (reader->Read(&event)) {
-    if (json) {
-      fmt::print("{}\n", Json(event, false));
-      std::fflush(stdout);
-    }
-    switch (event.kind_case()) {
-      case v1::JobEvent::kSnapshot: {
-        const v1::JobInfo& j = event.snapshot();
-        if (!json) {
-          fmt::print("{} ({}): {}", j.id(), j.name(), StateName(j.state()));
-          if (j.state() == v1::JOB_STATE_QUEUED)
-            fmt::print(", {} job(s) ahead", j.queue_position());
-          if (j.state() == v1::JOB_STATE_RUNNING) fmt::print(", stage {}", j.stage());
-          fmt::print("\n");
-          if (j.has_progress() && j.state() == v1::JOB_STATE_RUNNING) {
-            ShowProgress(FromProto(j.progress()));
-          }
-        }
-        if (j.state() != v1::JOB_STATE_QUEUED && j.state() != v1::JOB_STATE_RUNNING) {
-          end = j.state();
-          result = j.result();
-          error = j.error();
-        }
-        break;
+// How a job ended, as its event stream told.
+struct JobEnd {
+  std::optional<v1::JobState> state;  // unset while the job runs
+  v1::JobResult result;               // the best design, when there is one
+  std::string error;                  // FAILED: the reason
+};
+
+// Records the end that `event` announces, if any.
+void RecordEnd(const v1::JobEvent& event, JobEnd& end) {
+  switch (event.kind_case()) {
+    case v1::JobEvent::kSnapshot:
+      if (IsFinalState(event.snapshot().state())) {
+        end = {event.snapshot().state(), event.snapshot().result(), event.snapshot().error()};
       }
-      case v1::JobEvent::kQueued:
-        if (!json) fmt::print("queued, {} job(s) ahead\n", event.queued());
-        break;
-      case v1::JobEvent::kStarted:
-        if (!json) fmt::print("started (backend {})\n", event.started().backend());
-        break;
-      case v1::JobEvent::kStage:
-        if (!json) {
-          EndProgress();
-          const std::string& stage = event.stage().name();
-          fmt::print("{}...\n", stage == "sky" ? "building the sky matrix"
-                                : stage == "outdoor"
-                                    ? (event.stage().cached() ? "outdoor matrix from the cache"
-                                                              : "tracing the outdoor matrix")
-                                    : "searching");
-        }
-        break;
-      case v1::JobEvent::kProgress:
-        if (!json) ShowProgress(FromProto(event.progress()));
-        break;
-      case v1::JobEvent::kFinished:
-        end = v1::JOB_STATE_SUCCEEDED;
-        result = event.finished();
-        break;
-      case v1::JobEvent::kFailed:
-        end = v1::JOB_STATE_FAILED;
-        error = event.failed();
-        break;
-      case v1::JobEvent::kCancelled:
-        end = v1::JOB_STATE_CANCELLED;
-        result = event.cancelled().result();
-        break;
-      case v1::JobEvent::kInterrupted:
-        end = v1::JOB_STATE_INTERRUPTED;
-        result = event.interrupted().result();
-        break;
-      default:
-        break;
+      break;
+    case v1::JobEvent::kFinished:
+      end = {v1::JOB_STATE_SUCCEEDED, event.finished(), ""};
+      break;
+    case v1::JobEvent::kFailed:
+      end = {v1::JOB_STATE_FAILED, {}, event.failed()};
+      break;
+    case v1::JobEvent::kCancelled:
+      end = {v1::JOB_STATE_CANCELLED, event.cancelled().result(), ""};
+      break;
+    case v1::JobEvent::kInterrupted:
+      end = {v1::JOB_STATE_INTERRUPTED, event.interrupted().result(), ""};
+      break;
+    default:
+      break;
+  }
+}
+
+// Shows an event as text: a line, or the live progress line.
+void ShowEvent(const v1::JobEvent& event) {
+  switch (event.kind_case()) {
+    case v1::JobEvent::kSnapshot: {
+      const v1::JobInfo& j = event.snapshot();
+      fmt::print("{} ({}): {}", j.id(), j.name(), StateName(j.state()));
+      if (j.state() == v1::JOB_STATE_QUEUED) fmt::print(", {} job(s) ahead", j.queue_position());
+      if (j.state() == v1::JOB_STATE_RUNNING) fmt::print(", stage {}", j.stage());
+      fmt::print("\n");
+      if (j.has_progress() && j.state() == v1::JOB_STATE_RUNNING) {
+        ShowProgress(FromProto(j.progress()));
+      }
+      break;
     }
+    case v1::JobEvent::kQueued:
+      fmt::print("queued, {} job(s) ahead\n", event.queued());
+      break;
+    case v1::JobEvent::kStarted:
+      fmt::print("started (backend {})\n", event.started().backend());
+      break;
+    case v1::JobEvent::kStage:
+      EndProgress();
+      fmt::print("{}...\n", StageText(event.stage().name(), event.stage().cached()));
+      break;
+    case v1::JobEvent::kProgress:
+      ShowProgress(FromProto(event.progress()));
+      break;
+    default:
+      break;
+  }
+}
+
+// Follows a job's events until it ends; returns the process exit code (0 = succeeded).
+int Watch(FenestraClient& client, const std::string& id, bool json) {
+  JobEnd end;
+  const absl::Status status = client.WatchJob(id, [&](const v1::JobEvent& event) {
+    if (json) {
+      fmt::print("{}\n", ToJson(event, JsonLayout::kLine));
+    } else {
+      ShowEvent(event);
+    }
+    RecordEnd(event, end);
     std::fflush(stdout);
-  }
+  });
   if (!json) EndProgress();
-  const grpc::Status status = reader->Finish();
-  if (!end) {
-    absl::Status st = client.Check(status);
-    if (st.ok()) st = absl::UnavailableError("the event stream ended before the job did");
-    Fail(absl::Status(st.code(), absl::StrCat(st.message(),
-                                              "; follow the job again with: "
-                                              "fenestra job watch ",
-                                              id)));
+  if (!end.state) {
+    const absl::Status st =
+        status.ok() ? absl::UnavailableError("the event stream ended before the job did") : status;
+    Fail(absl::Status(st.code(), absl::StrCat(st.message(), "; follow the job again with: ",
+                                              "fenestra job watch ", id)));
   }
-  if (json) return *end == v1::JOB_STATE_SUCCEEDED ? 0 : 1;
-  switch (*end) {
+  if (json) return *end.state == v1::JOB_STATE_SUCCEEDED ? 0 : 1;
+  switch (*end.state) {
     case v1::JOB_STATE_SUCCEEDED:
-      fmt::print("{} succeeded\n{}", id, FormatResult(result));
+      fmt::print("{} succeeded\n{}", id, FormatResult(end.result));
       return 0;
     case v1::JOB_STATE_FAILED:
-      fmt::print(stderr, "error: {} failed: {}\n", id, error);
+      fmt::print(stderr, "error: {} failed: {}\n", id, end.error);
       return 1;
     default:
-      fmt::print("{} {}{}\n", id, StateName(*end),
-                 *end == v1::JOB_STATE_INTERRUPTED ? " (fenestrad shut down)" : "");
-      if (result.evaluations() > 0) fmt::print("best so far:\n{}", FormatResult(result));
+      fmt::print("{} {}{}\n", id, StateName(*end.state),
+                 *end.state == v1::JOB_STATE_INTERRUPTED ? " (fenestrad shut down)" : "");
+      if (end.result.evaluations() > 0) fmt::print("best so far:\n{}", FormatResult(end.result));
       return 1;
   }
+}
+
+// The job's result; Fail()s saying why when it has none.
+const v1::JobResult& ResultOrFail(const v1::JobInfo& info) {
+  if (!info.has_result()) {
+    if (info.state() == v1::JOB_STATE_FAILED) {
+      Fail(absl::FailedPreconditionError(absl::StrCat(info.id(), " failed: ", info.error())));
+    }
+    Fail(absl::FailedPreconditionError(
+        absl::StrCat(info.id(), " is ", StateName(info.state()),
+                     IsFinalState(info.state())
+                         ? " without a result"
+                         : absl::StrCat("; no result yet (fenestra job watch ", info.id(), ")"))));
+  }
+  return info.result();
 }
 
 }  // namespace
@@ -207,13 +188,8 @@ void AddJobCommand(CLI::App& app) {
     v1::SubmitJobRequest request = ValueOrFail(SubmitRequestFromJobFile(submit->file));
     request.set_site_id(submit->site);
     request.set_default_backend(submit->backend);
-    FenestradClient client(submit->server);
-    v1::JobInfo info;
-    if (absl::Status st =
-            client.Check(client.jobs().Submit(client.UnaryContext().get(), request, &info));
-        !st.ok()) {
-      Fail(st);
-    }
+    FenestraClient client = ConnectOrFail(submit->server);
+    const v1::JobInfo info = ValueOrFail(client.SubmitJob(request));
     if (submit->quiet) {
       fmt::print("{}\n", info.id());
     } else if (!submit->json) {
@@ -240,7 +216,7 @@ void AddJobCommand(CLI::App& app) {
   watch_cmd->add_flag("--json", watch->json, "Print the events as JSON lines");
   AddServerOptions(watch_cmd, watch->server);
   watch_cmd->callback([watch] {
-    FenestradClient client(watch->server);
+    FenestraClient client = ConnectOrFail(watch->server);
     const int code = Watch(client, watch->id, watch->json);
     if (code != 0) throw CLI::RuntimeError(code);
   });
@@ -268,13 +244,8 @@ void AddJobCommand(CLI::App& app) {
       request.set_state(state);
     }
     request.set_limit(list->limit);
-    FenestradClient client(list->server);
-    v1::ListJobsResponse response;
-    if (absl::Status st =
-            client.Check(client.jobs().List(client.UnaryContext().get(), request, &response));
-        !st.ok()) {
-      Fail(st);
-    }
+    const v1::ListJobsResponse response =
+        ValueOrFail(ConnectOrFail(list->server).ListJobs(request));
     fmt::print("{:<10} {:<12} {:>11} {:>18}  {}\n", "ID", "STATE", "EVALUATIONS", "BEST [%]",
                "NAME");
     for (const v1::JobInfo& j : response.jobs()) {
@@ -301,10 +272,9 @@ void AddJobCommand(CLI::App& app) {
   show_cmd->add_flag("--json", show->json, "Print the job as JSON");
   AddServerOptions(show_cmd, show->server);
   show_cmd->callback([show] {
-    FenestradClient client(show->server);
-    const v1::JobInfo info = GetJob(client, show->id);
+    const v1::JobInfo info = ValueOrFail(ConnectOrFail(show->server).GetJob(show->id));
     if (show->json) {
-      fmt::print("{}\n", Json(info, true));
+      fmt::print("{}\n", ToJson(info, JsonLayout::kIndented));
     } else {
       PrintJob(info);
     }
@@ -321,15 +291,7 @@ void AddJobCommand(CLI::App& app) {
   cancel_cmd->add_option("ID", cancel->id, "Job id")->required();
   AddServerOptions(cancel_cmd, cancel->server);
   cancel_cmd->callback([cancel] {
-    FenestradClient client(cancel->server);
-    v1::CancelJobRequest request;
-    request.set_id(cancel->id);
-    v1::JobInfo info;
-    if (absl::Status st =
-            client.Check(client.jobs().Cancel(client.UnaryContext().get(), request, &info));
-        !st.ok()) {
-      Fail(st);
-    }
+    const v1::JobInfo info = ValueOrFail(ConnectOrFail(cancel->server).CancelJob(cancel->id));
     if (info.state() == v1::JOB_STATE_RUNNING) {
       fmt::print("{}: cancelling; it stops at its next checkpoint\n", info.id());
     } else {
@@ -342,43 +304,49 @@ void AddJobCommand(CLI::App& app) {
     ServerOptions server;
     std::string id, output;
     bool json = false;
+    AnnualOutputPaths annual;
   };
   auto result = std::make_shared<ResultArgs>();
   CLI::App* result_cmd = job->add_subcommand("result", "Print a job's result (best design)");
   result_cmd->add_option("ID", result->id, "Job id")->required();
   result_cmd->add_flag("--json", result->json, "Print the result as JSON");
-  result_cmd->add_option("-o,--output", result->output, "Also write the result as JSON here");
+  result_cmd->add_option("-o,--output", result->output,
+                         "Also write the result file here (JSON, as optimize --local writes it)");
+  AddAnnualOutputOptions(result_cmd, result->annual);
   AddServerOptions(result_cmd, result->server);
   result_cmd->callback([result] {
-    FenestradClient client(result->server);
-    const v1::JobInfo info = GetJob(client, result->id);
-    if (!info.has_result()) {
-      if (info.state() == v1::JOB_STATE_FAILED) {
-        Fail(absl::FailedPreconditionError(absl::StrCat(info.id(), " failed: ", info.error())));
-      }
-      Fail(absl::FailedPreconditionError(absl::StrCat(
-          info.id(), " is ", StateName(info.state()),
-          IsTerminalState(info.state())
-              ? " without a result"
-              : absl::StrCat("; no result yet (fenestra job watch ", info.id(), ")"))));
-    }
+    const v1::JobInfo info = ValueOrFail(ConnectOrFail(result->server).GetJob(result->id));
+    ResultOrFail(info);
     if (!result->output.empty()) {
-      const std::string json = Json(info.result(), true);
-      if (absl::Status st = WriteFileAtomically(result->output,
-                                                [&](std::ostream& out) {
-                                                  out << json << '\n';
-                                                  return absl::OkStatus();
-                                                });
-          !st.ok()) {
-        Fail(st);
-      }
+      if (absl::Status st = WriteJsonFile(result->output, info.result()); !st.ok()) Fail(st);
     }
+    if (absl::Status st = WriteAnnualOutputs(info.result(), result->annual); !st.ok()) Fail(st);
     if (result->json) {
-      fmt::print("{}\n", Json(info.result(), true));
+      fmt::print("{}\n", ToJson(info.result(), JsonLayout::kIndented));
     } else {
-      fmt::print("{} ({}): {}\n{}", info.id(), info.name(), StateName(info.state()),
-                 FormatResult(info.result()));
+      fmt::print("{} ({}): {}\n{}{}", info.id(), info.name(), StateName(info.state()),
+                 FormatResult(info.result()), AnnualOutputLines(result->annual));
     }
+  });
+
+  // job report
+  struct ReportArgs {
+    ServerOptions server;
+    std::string id, output, sensor;
+  };
+  auto report = std::make_shared<ReportArgs>();
+  CLI::App* report_cmd = job->add_subcommand(
+      "report", "Write the report of a job's result: one self-contained HTML page");
+  report_cmd->add_option("ID", report->id, "Job id")->required();
+  report_cmd->add_option("-o,--output", report->output, "Report file (HTML)")->required();
+  AddReportSensorOption(report_cmd, report->sensor);
+  AddServerOptions(report_cmd, report->server);
+  report_cmd->callback([report] {
+    const v1::JobInfo info = ValueOrFail(ConnectOrFail(report->server).GetJob(report->id));
+    const absl::Status written =
+        WriteReport(ResultOrFail(info), {info.id(), report->sensor}, report->output);
+    if (!written.ok()) Fail(written);
+    fmt::print("report: {}\n", report->output);
   });
 }
 

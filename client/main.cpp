@@ -11,7 +11,9 @@ int main(int argc, char** argv) {
   fenestra::AddSceneCommand(app);
   fenestra::AddSkyCommand(app);
   fenestra::AddDcCommand(app);
+  fenestra::AddConvergenceCommand(app);
   fenestra::AddOptimizeCommand(app);
+  fenestra::AddReportCommand(app);
   fenestra::AddSiteCommand(app);
   fenestra::AddJobCommand(app);
   try {

@@ -1,6 +1,5 @@
 // fenestra optimize --local JOB.json
 #include <fmt/format.h>
-#include <google/protobuf/util/json_util.h>
 
 #include <filesystem>
 #include <iostream>
@@ -9,26 +8,15 @@
 #include "client/cli_util.h"
 #include "client/commands.h"
 #include "client/progress_display.h"
+#include "client/report/annual_outputs.h"
 #include "core/common/atomic_file.h"
 #include "core/optimize/job.h"
 
 namespace fenestra {
 namespace {
 
-absl::Status WriteResult(const std::string& path, const v1::JobResult& result) {
-  std::string json;
-  google::protobuf::util::JsonPrintOptions options;
-  options.add_whitespace = true;
-  options.always_print_primitive_fields = true;
-  options.preserve_proto_field_names = true;
-  const auto status = google::protobuf::util::MessageToJsonString(result, &json, options);
-  if (!status.ok()) return absl::InternalError(std::string(status.message()));
-  return WriteFileAtomically(path, [&](std::ostream& out) {
-    out << json << '\n';
-    return absl::OkStatus();
-  });
-}
-
+// One row per step of the search: its design, value and timing, and the best value so far
+// with its standard error (the job's error against elapsed_seconds).
 absl::Status WriteHistoryCsv(const std::string& path, const v1::JobResult& result) {
   return WriteFileAtomically(path, [&](std::ostream& out) {
     std::vector<std::string> names;
@@ -36,13 +24,17 @@ absl::Status WriteHistoryCsv(const std::string& path, const v1::JobResult& resul
     std::sort(names.begin(), names.end());
     out << "index";
     for (const std::string& n : names) out << ',' << n;
-    out << ",value,standard_error,seconds,cached,improved,neighborhood\n";
+    out << ",value,standard_error,seconds,cached,improved,neighborhood,elapsed_seconds,"
+           "best_value,best_standard_error\n";
+    v1::Estimate best;
     for (const v1::Evaluation& e : result.history()) {
+      if (e.improved()) best = e.value();
       out << e.index();
       for (const std::string& n : names) out << ',' << fmt::format("{:.9g}", e.design().at(n));
-      out << fmt::format(",{:.9g},{:.9g},{:.6f},{},{},{}\n", e.value().value(),
+      out << fmt::format(",{:.9g},{:.9g},{:.6f},{},{},{},{:.6f},{:.9g},{:.9g}\n", e.value().value(),
                          e.value().standard_error(), e.seconds(), e.cached() ? 1 : 0,
-                         e.improved() ? 1 : 0, e.neighborhood());
+                         e.improved() ? 1 : 0, e.neighborhood(), e.elapsed_seconds(), best.value(),
+                         best.standard_error());
     }
     return absl::OkStatus();
   });
@@ -54,6 +46,7 @@ void AddOptimizeCommand(CLI::App& app) {
   struct Args {
     std::string job, output, csv;
     bool local = false;
+    AnnualOutputPaths annual;
   };
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("optimize", "Run an optimization job in this process");
@@ -61,6 +54,7 @@ void AddOptimizeCommand(CLI::App& app) {
   cmd->add_flag("--local", args->local, "Run here, without the service")->required();
   cmd->add_option("-o,--output", args->output, "Result file (JSON); default: JOB.result.json");
   cmd->add_option("--csv", args->csv, "History as CSV; default: the result file with .csv");
+  AddAnnualOutputOptions(cmd, args->annual);
   cmd->callback([args] {
     const v1::Job job = ValueOrFail(ReadJobFile(args->job));
     const std::string base = std::filesystem::path(args->job).parent_path().string();
@@ -75,17 +69,17 @@ void AddOptimizeCommand(CLI::App& app) {
     JobCallbacks callbacks;
     callbacks.stage = [](const std::string& stage) {
       EndProgress();
-      fmt::print("{}...\n", stage == "sky"       ? "building the sky matrix"
-                            : stage == "outdoor" ? "tracing the outdoor matrix"
-                                                 : "searching");
+      fmt::print("{}...\n", StageText(stage));
       std::fflush(stdout);
     };
     callbacks.progress = ShowProgress;
     const v1::JobResult result = ValueOrFail(RunJob(prepared, nullptr, callbacks));
     EndProgress();
-    if (absl::Status s = WriteResult(output, result); !s.ok()) Fail(s);
+    if (absl::Status s = WriteJsonFile(output, result); !s.ok()) Fail(s);
     if (absl::Status s = WriteHistoryCsv(csv, result); !s.ok()) Fail(s);
     fmt::print("{}result: {}\nhistory: {}\n", FormatResult(result), output, csv);
+    if (absl::Status s = WriteAnnualOutputs(result, args->annual); !s.ok()) Fail(s);
+    fmt::print("{}", AnnualOutputLines(args->annual));
   });
 }
 

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <map>
 
+#include "core/optimize/final_check.h"
+
 namespace fenestra {
 namespace {
 
@@ -19,6 +21,15 @@ std::string Clock(double seconds) {
 
 std::string Value(const v1::Estimate& e) {
   return fmt::format("{:.2f} ± {:.2f}", e.value(), e.standard_error());
+}
+
+// "+13.21 ± 1.91 % (6.9 SE)"
+std::string Difference(const v1::Estimate& d) {
+  std::string out = fmt::format("{:+.2f} ± {:.2f} %", d.value(), d.standard_error());
+  if (d.standard_error() > 0) {
+    out += fmt::format(" ({:.1f} SE)", std::abs(d.value()) / d.standard_error());
+  }
+  return out;
 }
 
 bool live_line = false;
@@ -35,11 +46,40 @@ std::string FormatDesign(const google::protobuf::Map<std::string, double>& desig
 }
 
 std::string FormatProgress(const JobProgress& p) {
+  if (p.final_check) {
+    const v1::FinalCheck& c = *p.final_check;
+    return fmt::format(
+        "[{}/{}] check of the best design ({}): one-stage {} %, two-stage {} %, difference {}{} "
+        "| {} elapsed",
+        p.evaluations, p.max_evaluations, FormatDesign(p.best.design()), Value(c.one_stage()),
+        Value(c.two_stage()), Difference(c.difference()), c.disagrees() ? ": DISAGREES" : "",
+        Clock(p.elapsed_seconds));
+  }
   return fmt::format("[{}/{}] best {} % ({}) | current {} %{} ({}) | {} elapsed, ~{} left",
                      p.evaluations, p.max_evaluations, Value(p.best.value()),
                      FormatDesign(p.best.design()), Value(p.current.value()),
                      p.current.cached() ? " cached" : "", FormatDesign(p.current.design()),
                      Clock(p.elapsed_seconds), Clock(p.remaining_seconds));
+}
+
+std::string StageText(const std::string& stage, bool cached) {
+  if (stage == "sky") return "building the sky matrix";
+  if (stage == "outdoor")
+    return cached ? "outdoor matrix from the cache" : "tracing the outdoor matrix";
+  if (stage == "check") return "checking the best design by the one-stage method";
+  return "searching";
+}
+
+JobProgress FromProto(const v1::JobProgress& p) {
+  JobProgress progress;
+  progress.evaluations = p.evaluations();
+  progress.max_evaluations = p.max_evaluations();
+  progress.current = p.current();
+  progress.best = p.best();
+  progress.elapsed_seconds = p.elapsed_seconds();
+  progress.remaining_seconds = p.remaining_seconds();
+  if (p.has_final_check()) progress.final_check = p.final_check();
+  return progress;
 }
 
 void ShowProgress(const JobProgress& progress) {
@@ -73,6 +113,21 @@ std::string FormatResult(const v1::JobResult& r) {
       "total {:.2f} s\n",
       r.evaluations(), r.stop_reason(), r.backend(), r.timings().sky_seconds(),
       r.timings().outdoor_seconds(), r.timings().evaluation_seconds(), r.timings().total_seconds());
+  if (r.has_final_check()) {
+    const v1::FinalCheck& c = r.final_check();
+    out += fmt::format(
+        "final check (one-stage, {} paths per sensor{}, {:.2f} s): {} %, difference to the "
+        "two-stage value {}\n",
+        c.paths_per_sensor(), c.paths_limited() ? ", the most allowed" : "", c.seconds(),
+        Value(c.one_stage()), Difference(c.difference()));
+    if (c.disagrees()) {
+      out += fmt::format(
+          "warning: the two-stage value and the one-stage check differ by more than {:g} "
+          "standard errors; the check traces without a reflection limit, so the stages' limits "
+          "(sampling.indoor_bounces, outdoor_bounces) may leave out light it counts\n",
+          kFinalCheckDisagreementStandardErrors);
+    }
+  }
   return out;
 }
 

@@ -11,6 +11,7 @@
 #include "client/commands.h"
 #include "core/geometry/obj_io.h"
 #include "core/geometry/scene.h"
+#include "core/trace/room_check.h"
 
 namespace fenestra {
 namespace {
@@ -75,7 +76,7 @@ void AddSceneCommand(CLI::App& app) {
   CLI::App* check = scene->add_subcommand("check", "Validate a scene and print a summary");
   check->add_option("FILE", *check_file, "Scene file (JSON)")->required();
   check->callback([check_file] {
-    const Scene s = ValueOrFail(LoadScene(*check_file));
+    const Scene s = ValueOrFail(LoadValidScene(*check_file));
     PrintSummary(s, DefaultDesign(s));
   });
 
@@ -91,10 +92,8 @@ void AddSceneCommand(CLI::App& app) {
     const Scene s = ValueOrFail(LoadScene(args->file));
     const BlindDesign design =
         ValueOrFail(DesignWithOverrides(s, ValueOrFail(ParseDesignValues(args->set))));
-    const TriangleMesh mesh = AssembleMesh(s, design);
-    const absl::Status written = WriteObj(args->obj, mesh, s.materials);
-    if (!written.ok()) Fail(written);
-    fmt::print("wrote {} triangles to {}\n", mesh.TriangleCount(), args->obj);
+    const size_t triangles = ValueOrFail(WriteSceneObj(args->obj, s, design));
+    fmt::print("wrote {} triangles to {}\n", triangles, args->obj);
   });
 }
 

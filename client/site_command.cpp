@@ -1,17 +1,16 @@
 // fenestra site add/list/show/rm: sites registered with fenestrad, whose outdoor matrices
 // the daemon computes once and caches.
 #include <fmt/format.h>
-#include <google/protobuf/util/json_util.h>
 
 #include <filesystem>
 #include <memory>
 #include <thread>
 
-#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "client/cli_util.h"
 #include "client/commands.h"
 #include "client/grpc_client.h"
+#include "client/job_request.h"
 #include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
 
@@ -20,18 +19,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string StateName(v1::SiteState state) {
-  std::string name = v1::SiteState_Name(state);
-  return absl::AsciiStrToLower(name.substr(name.find("STATE_") + 6));
-}
-
-std::string Json(const google::protobuf::Message& message) {
-  std::string json;
-  google::protobuf::util::JsonPrintOptions options;
-  options.add_whitespace = true;
-  (void)google::protobuf::util::MessageToJsonString(message, &json, options);
-  return json;
-}
+// How long `site add --wait` waits between two looks at the site.
+constexpr auto kSitePollInterval = std::chrono::milliseconds(250);
 
 void PrintSite(const v1::SiteInfo& s) {
   fmt::print("{} ({}): {}\n", s.id(), s.name(), StateName(s.state()));
@@ -127,13 +116,8 @@ void AddSiteCommand(CLI::App& app) {
     }
     if (!add->backend.empty()) s.set_backend(add->backend);
 
-    FenestradClient client(add->server);
-    v1::SiteInfo info;
-    if (absl::Status st =
-            client.Check(client.sites().Register(client.UnaryContext().get(), request, &info));
-        !st.ok()) {
-      Fail(st);
-    }
+    FenestraClient client = ConnectOrFail(add->server);
+    v1::SiteInfo info = ValueOrFail(client.RegisterSite(request));
     if (!add->json) {
       fmt::print("{} registered: {}\n", info.id(),
                  info.state() == v1::SITE_STATE_READY ? "outdoor matrix already cached"
@@ -141,18 +125,12 @@ void AddSiteCommand(CLI::App& app) {
       std::fflush(stdout);
     }
     while (add->wait && info.state() == v1::SITE_STATE_COMPUTING) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(250));
-      v1::GetSiteRequest get;
-      get.set_id(info.id());
-      if (absl::Status st =
-              client.Check(client.sites().Get(client.UnaryContext().get(), get, &info));
-          !st.ok()) {
-        Fail(st);
-      }
+      std::this_thread::sleep_for(kSitePollInterval);
+      info = ValueOrFail(client.GetSite(info.id()));
     }
     info.clear_scene();
     if (add->json) {
-      fmt::print("{}\n", Json(info));
+      fmt::print("{}\n", ToJson(info, JsonLayout::kIndented));
     } else if (add->wait) {
       PrintSite(info);
     }
@@ -166,13 +144,7 @@ void AddSiteCommand(CLI::App& app) {
   CLI::App* list_cmd = site->add_subcommand("list", "List the sites");
   AddServerOptions(list_cmd, *list_server);
   list_cmd->callback([list_server] {
-    FenestradClient client(*list_server);
-    v1::ListSitesResponse response;
-    if (absl::Status st = client.Check(
-            client.sites().List(client.UnaryContext().get(), v1::ListSitesRequest(), &response));
-        !st.ok()) {
-      Fail(st);
-    }
+    const v1::ListSitesResponse response = ValueOrFail(ConnectOrFail(*list_server).ListSites());
     fmt::print("{:<10} {:<10} {:>13} {:>12} {:>5}  {}\n", "ID", "STATE", "OUTDOOR PATHS",
                "COMPUTE [s]", "JOBS", "NAME");
     for (const v1::SiteInfo& s : response.sites()) {
@@ -193,18 +165,10 @@ void AddSiteCommand(CLI::App& app) {
   show_cmd->add_flag("--json", show->json, "Print the site as JSON (its scene left out)");
   AddServerOptions(show_cmd, show->server);
   show_cmd->callback([show] {
-    FenestradClient client(show->server);
-    v1::GetSiteRequest request;
-    request.set_id(show->id);
-    v1::SiteInfo info;
-    if (absl::Status st =
-            client.Check(client.sites().Get(client.UnaryContext().get(), request, &info));
-        !st.ok()) {
-      Fail(st);
-    }
+    v1::SiteInfo info = ValueOrFail(ConnectOrFail(show->server).GetSite(show->id));
     info.clear_scene();
     if (show->json) {
-      fmt::print("{}\n", Json(info));
+      fmt::print("{}\n", ToJson(info, JsonLayout::kIndented));
     } else {
       PrintSite(info);
     }
@@ -220,15 +184,7 @@ void AddSiteCommand(CLI::App& app) {
   rm_cmd->add_option("ID", rm->id, "Site id")->required();
   AddServerOptions(rm_cmd, rm->server);
   rm_cmd->callback([rm] {
-    FenestradClient client(rm->server);
-    v1::DeleteSiteRequest request;
-    request.set_id(rm->id);
-    v1::DeleteSiteResponse response;
-    if (absl::Status st =
-            client.Check(client.sites().Delete(client.UnaryContext().get(), request, &response));
-        !st.ok()) {
-      Fail(st);
-    }
+    if (absl::Status st = ConnectOrFail(rm->server).DeleteSite(rm->id); !st.ok()) Fail(st);
     fmt::print("{} deleted\n", rm->id);
   });
 }

@@ -5,7 +5,8 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler libabsl-dev
   libembree-dev libtbb-dev libeigen3-dev libspdlog-dev libfmt-dev
-  libgtest-dev libgmock-dev libcli11-dev libtinyobjloader-dev libsqlite3-dev zlib1g-dev
+  libgtest-dev libgmock-dev libcli11-dev libtinyobjloader-dev libsqlite3-dev zlib1g-dev libexpat1-dev
+  libssl-dev openssl chromium
   python3 python3-grpcio python3-grpc-tools python3-numpy
   # tests/run_all.sh's sanitizer and fuzzing builds: clang, libFuzzer, llvm-symbolizer
   clang libclang-rt-14-dev llvm

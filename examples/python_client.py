@@ -11,6 +11,11 @@ proto3 `optional` fields, hence the order).
 
   /usr/bin/python3 examples/python_client.py --server localhost:50051 \
       examples/city_office/alpha_max_quick.json
+
+Security, as in the fenestra command: --tls-ca CA.pem turns TLS on and verifies the
+daemon's certificate with that CA (--tls-cert/--tls-key add a client certificate); the
+bearer token comes from --token-file, else the FENESTRA_TOKEN environment variable, and
+goes with every request as `authorization: Bearer <token>` metadata.
 """
 import argparse
 import importlib
@@ -26,6 +31,7 @@ import grpc
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PROTO_DIR = os.path.join(REPO, "proto")
 PROTOS = ["fenestra/v1/scene.proto", "fenestra/v1/job.proto", "fenestra/v1/service.proto"]
+TOKEN_VARIABLE = "FENESTRA_TOKEN"
 
 
 def generate_stubs(out_dir):
@@ -45,6 +51,79 @@ def generate_stubs(out_dir):
             importlib.import_module("fenestra.v1.service_pb2_grpc"))
 
 
+def fail(message):
+    sys.exit(f"error: {message}")
+
+
+def read_file(flag, path):
+    """The bytes of the file given to `flag`; exits naming both when it cannot be read."""
+    try:
+        with open(path, "rb") as f:
+            return f.read()
+    except OSError as e:
+        fail(f"{flag} {path}: cannot open ({e.strerror})")
+
+
+def load_token(token_file):
+    """The bearer token from token_file, else FENESTRA_TOKEN, without surrounding whitespace;
+    None when neither is given. The token itself never appears in an error."""
+    if token_file:
+        source, token = f"--token-file {token_file}", read_file("--token-file", token_file)
+    elif TOKEN_VARIABLE in os.environ:
+        source, token = TOKEN_VARIABLE, os.environb[TOKEN_VARIABLE.encode()]
+    else:
+        return None
+    token = token.strip()
+    if not token:
+        fail(f"{source}: the token is empty")
+    for i, byte in enumerate(token):
+        if not 0x21 <= byte <= 0x7e:  # a header value is visible ASCII
+            fail(f"{source}: the token's character {i + 1} cannot go in a request header "
+                 "(only visible ASCII, no spaces)")
+    return token.decode("ascii")
+
+
+def open_channel(args):
+    """A channel to fenestrad: TLS verified with --tls-ca when given, else plaintext."""
+    options = [("grpc.keepalive_time_ms", 30000), ("grpc.max_receive_message_length", 1 << 28)]
+    if bool(args.tls_cert) != bool(args.tls_key):
+        fail("--tls-cert and --tls-key go together (the client certificate and its private key)")
+    if not args.tls_ca:
+        if args.tls_cert:
+            fail("--tls-cert needs --tls-ca (the CA that signed fenestrad's certificate)")
+        return grpc.insecure_channel(args.server, options=options)
+    credentials = grpc.ssl_channel_credentials(
+        root_certificates=read_file("--tls-ca", args.tls_ca),
+        private_key=read_file("--tls-key", args.tls_key) if args.tls_key else None,
+        certificate_chain=read_file("--tls-cert", args.tls_cert) if args.tls_cert else None)
+    return grpc.secure_channel(args.server, credentials, options=options)
+
+
+def is_local(target):
+    """Whether a gRPC target ("host:port", "dns:///host:port", "unix:path") is this machine."""
+    if target.startswith("unix:"):
+        return True
+    host = target.removeprefix("dns:///").removeprefix("ipv4:").removeprefix("ipv6:")
+    host = host.rsplit(":", 1)[0]
+    return host in ("localhost", "[::1]") or host.startswith("127.")
+
+
+def error_text(error, args, token):
+    """What a failed call tells the user."""
+    code, details = error.code(), error.details()
+    if code == grpc.StatusCode.UNAVAILABLE and "handshake" in details.lower():
+        return (f"cannot reach fenestrad at {args.server}: the TLS handshake failed ({details}); "
+                "does it serve TLS with a certificate signed by the --tls-ca CA?")
+    if code == grpc.StatusCode.UNAVAILABLE:
+        return f"cannot reach fenestrad at {args.server} ({details}); is it running?"
+    if code == grpc.StatusCode.DEADLINE_EXCEEDED:
+        return f"fenestrad at {args.server} did not answer within {args.timeout:g} s (--timeout)"
+    if code == grpc.StatusCode.UNAUTHENTICATED:
+        refused = "refused the token" if token else "wants a token"
+        return f"fenestrad {refused} ({details}): set --token-file or {TOKEN_VARIABLE}"
+    return f"{code.name}: {details}"
+
+
 def design_text(design):
     return " ".join(f"{name}={design[name]:.4g}" for name in sorted(design))
 
@@ -56,11 +135,23 @@ def main():
                         help="job file (JSON); its scene_file and weather file are sent inline")
     parser.add_argument("--server", default="localhost:50051", help="fenestrad host:port")
     parser.add_argument("--timeout", type=float, default=30, help="deadline per request [s]")
+    parser.add_argument("--tls-ca", help="use TLS; verify fenestrad's certificate with this CA")
+    parser.add_argument("--tls-cert", help="client certificate (PEM) for mTLS, with --tls-key")
+    parser.add_argument("--tls-key", help="private key of the client certificate (PEM)")
+    parser.add_argument("--token-file",
+                        help=f"bearer token sent with every request; default: ${TOKEN_VARIABLE}")
     parser.add_argument("--outdoor-paths", type=int, help="override sampling.outdoor_paths")
     parser.add_argument("--indoor-paths", type=int,
                         help="override sampling.indoor_paths_per_sensor")
     parser.add_argument("--evaluations", type=int, help="override budget.max_evaluations")
     args = parser.parse_args()
+    token = load_token(args.token_file)
+    if token and not args.tls_ca and not is_local(args.server):
+        print(f"warning: the token goes to {args.server} unencrypted; give --tls-ca to use TLS",
+              file=sys.stderr)
+    # The token goes with every call, the deadline with every call but Watch (a stream)
+    metadata = [("authorization", f"Bearer {token}")] if token else None
+    unary = {"timeout": args.timeout, "metadata": metadata}
 
     with tempfile.TemporaryDirectory() as stubs:
         job_pb2, scene_pb2, service_pb2, service_grpc = generate_stubs(stubs)
@@ -92,20 +183,18 @@ def main():
         if args.evaluations:
             job.budget.max_evaluations = args.evaluations
 
-        channel = grpc.insecure_channel(args.server, options=[
-            ("grpc.keepalive_time_ms", 30000), ("grpc.max_receive_message_length", 1 << 28)])
+        channel = open_channel(args)
         sites = service_grpc.SiteServiceStub(channel)
         jobs = service_grpc.JobServiceStub(channel)
         try:
             # A site: the outdoor matrix is computed once, in the background
             site = sites.Register(service_pb2.RegisterSiteRequest(
                 name=job.scene.name, scene=job.scene, sampling=job.sampling,
-                weather_epw=weather_epw, weather_name=os.path.basename(weather)),
-                timeout=args.timeout)
+                weather_epw=weather_epw, weather_name=os.path.basename(weather)), **unary)
             print(f"{site.id} registered", flush=True)
             while site.state == service_pb2.SITE_STATE_COMPUTING:
                 time.sleep(0.25)
-                site = sites.Get(service_pb2.GetSiteRequest(id=site.id), timeout=args.timeout)
+                site = sites.Get(service_pb2.GetSiteRequest(id=site.id), **unary)
             if site.state != service_pb2.SITE_STATE_READY:
                 sys.exit(f"error: {site.id} failed: {site.error}")
             print(f"{site.id} ready: outdoor matrix traced in {site.compute_seconds:.2f} s, "
@@ -113,10 +202,9 @@ def main():
                   flush=True)
 
             # The job on that site, and its events
-            info = jobs.Submit(service_pb2.SubmitJobRequest(job=job, site_id=site.id),
-                               timeout=args.timeout)
+            info = jobs.Submit(service_pb2.SubmitJobRequest(job=job, site_id=site.id), **unary)
             print(f"{info.id} submitted", flush=True)
-            for event in jobs.Watch(service_pb2.WatchJobRequest(id=info.id)):
+            for event in jobs.Watch(service_pb2.WatchJobRequest(id=info.id), metadata=metadata):
                 kind = event.WhichOneof("kind")
                 if kind == "snapshot":
                     print(f"{info.id}: {service_pb2.JobState.Name(event.snapshot.state)}")
@@ -144,9 +232,7 @@ def main():
             print("error: the event stream ended early", file=sys.stderr)
             return 1
         except grpc.RpcError as e:
-            if e.code() == grpc.StatusCode.UNAVAILABLE:
-                sys.exit(f"error: cannot reach fenestrad at {args.server} ({e.details()})")
-            sys.exit(f"error: {e.code().name}: {e.details()}")
+            fail(error_text(e, args, token))
 
 
 if __name__ == "__main__":

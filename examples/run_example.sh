@@ -29,8 +29,9 @@ trap 'stop_daemon; rm -rf "$data"' EXIT
 
 $fenestra scene check examples/city_office/scene.json
 
-# The daemon, on a free localhost port
-build/server/fenestrad --listen 127.0.0.1:0 --data-dir "$data" --port-file "$data/port" \
+# The daemon, on a free localhost port; auth none: every caller is the local user
+# (allowed on loopback only)
+build/server/fenestrad --listen 127.0.0.1:0 --auth none --data-dir "$data" --port-file "$data/port" \
   2>"$data/fenestrad.log" &
 pid=$!
 for _ in $(seq 100); do [ -s "$data/port" ] && break; sleep 0.1; done

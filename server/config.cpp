@@ -1,12 +1,91 @@
 #include "server/config.h"
 
-#include <algorithm>
+#include <arpa/inet.h>
 
+#include <algorithm>
+#include <string_view>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/strip.h"
 #include "core/common/json_proto.h"
 #include "core/dc/dc_backend.h"
 
 namespace fenestra {
+namespace {
+
+// Defaults of the settings added with users and with the data-directory limits
+// (daemon.proto documents them)
+constexpr char kDefaultAuth[] = "token";
+constexpr int kDefaultMaxQueuedJobsPerUser = 8;
+constexpr int kDefaultMaxSitesPerUser = 100;
+constexpr int64_t kDefaultMaxUploadBytesPerUser = int64_t{256} << 20;
+constexpr int64_t kDefaultMaxDataDirBytes = int64_t{10} << 30;
+constexpr int kDefaultMaxConcurrentHeavyRequests = 2;
+
+// Checks auth and TLS against the listen address: what leaves this machine is encrypted
+// and authenticated unless the configuration says otherwise in so many words.
+absl::Status CheckExposure(const v1::DaemonConfig& config) {
+  auto invalid = [](const std::string& text) {
+    return absl::InvalidArgumentError(absl::StrCat("configuration: ", text));
+  };
+  if (config.auth() != "token" && config.auth() != "none") {
+    return invalid(absl::StrCat("auth must be token or none, got '", config.auth(), "'"));
+  }
+  if (config.tls_cert_file().empty() != config.tls_key_file().empty()) {
+    return invalid(
+        "tls_cert_file and tls_key_file (--tls-cert, --tls-key) go together: give both or "
+        "neither");
+  }
+  if (!config.tls_client_ca_file().empty() && config.tls_cert_file().empty()) {
+    return invalid(
+        "tls_client_ca_file (--tls-client-ca) needs tls_cert_file and tls_key_file: client "
+        "certificates are checked on top of the server's TLS");
+  }
+  if (IsLoopbackAddress(config.listen_address())) return absl::OkStatus();
+  if (config.auth() == "none") {
+    return invalid(absl::StrCat(
+        "auth none makes every caller an administrator, so it is allowed only on a loopback "
+        "listen_address (localhost, 127.0.0.1, [::1]), not on '",
+        config.listen_address(), "'; use auth token with users from `fenestrad user add`"));
+  }
+  if (config.tls_cert_file().empty() && !config.allow_plaintext()) {
+    return invalid(absl::StrCat(
+        "listen_address '", config.listen_address(),
+        "' is reachable from other machines, and without TLS tokens and scenes would cross "
+        "the network in clear: give tls_cert_file and tls_key_file (--tls-cert, --tls-key), "
+        "or set allow_plaintext (--allow-plaintext) when a proxy in front terminates TLS"));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+bool IsLoopbackAddress(const std::string& listen_address) {
+  absl::string_view address = listen_address;
+  if (absl::StartsWith(address, "unix:") || absl::StartsWith(address, "unix-abstract:")) {
+    return true;
+  }
+  for (absl::string_view scheme : {"ipv4:", "ipv6:"}) absl::ConsumePrefix(&address, scheme);
+  std::string host;
+  if (absl::StartsWith(address, "[")) {
+    const size_t end = address.find(']');
+    if (end == absl::string_view::npos) return false;
+    host = std::string(address.substr(1, end - 1));
+  } else {
+    host = std::string(address.substr(0, address.rfind(':')));
+  }
+  if (absl::AsciiStrToLower(host) == "localhost") return true;
+  in_addr v4{};
+  if (inet_pton(AF_INET, host.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;
+  in6_addr v6{};
+  if (inet_pton(AF_INET6, host.c_str(), &v6) == 1) {
+    if (IN6_IS_ADDR_LOOPBACK(&v6)) return true;
+    return IN6_IS_ADDR_V4MAPPED(&v6) && v6.s6_addr[12] == 127;
+  }
+  return false;
+}
 
 absl::StatusOr<v1::DaemonConfig> ReadConfigFile(const std::string& path) {
   v1::DaemonConfig config;
@@ -36,6 +115,8 @@ absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
   }
   if (config.shutdown_grace_seconds() == 0) config.set_shutdown_grace_seconds(10);
   if (config.log_level().empty()) config.set_log_level("info");
+  if (config.auth().empty()) config.set_auth(kDefaultAuth);
+  if (absl::Status s = CheckExposure(config); !s.ok()) return s;
   static const char* kLevels[] = {"trace", "debug", "info", "warn", "error", "critical", "off"};
   if (std::find(std::begin(kLevels), std::end(kLevels), config.log_level()) == std::end(kLevels)) {
     return invalid("log_level", absl::StrCat("must be trace, debug, info, warn, error, critical or "
@@ -66,6 +147,18 @@ absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
            fill(limits.max_queued_jobs(), 64, "max_queued_jobs",
                 [&](int v) { limits.set_max_queued_jobs(v); }),
            fill(limits.max_sites(), 1000, "max_sites", [&](int v) { limits.set_max_sites(v); }),
+           fill(limits.max_queued_jobs_per_user(), kDefaultMaxQueuedJobsPerUser,
+                "max_queued_jobs_per_user", [&](int v) { limits.set_max_queued_jobs_per_user(v); }),
+           fill(limits.max_sites_per_user(), kDefaultMaxSitesPerUser, "max_sites_per_user",
+                [&](int v) { limits.set_max_sites_per_user(v); }),
+           fill(limits.max_upload_bytes_per_user(), kDefaultMaxUploadBytesPerUser,
+                "max_upload_bytes_per_user",
+                [&](int64_t v) { limits.set_max_upload_bytes_per_user(v); }),
+           fill(limits.max_data_dir_bytes(), kDefaultMaxDataDirBytes, "max_data_dir_bytes",
+                [&](int64_t v) { limits.set_max_data_dir_bytes(v); }),
+           fill(limits.max_concurrent_heavy_requests(), kDefaultMaxConcurrentHeavyRequests,
+                "max_concurrent_heavy_requests",
+                [&](int v) { limits.set_max_concurrent_heavy_requests(v); }),
        }) {
     if (!s.ok()) return s;
   }

@@ -1,83 +1,193 @@
 // fenestrad: the Fenestra daemon. Serves SiteService and JobService (gRPC), runs jobs on
 // worker threads, caches outdoor matrices and keeps jobs in data_dir/fenestra.db.
 // Configuration: a JSON file (fenestra.v1.DaemonConfig, --config) and flags, which win.
+// `fenestrad user add|list|revoke` manage the users of a daemon with token auth.
+#include <google/protobuf/stubs/logging.h>
 #include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
 #include "server/config.h"
 #include "server/daemon.h"
+#include "server/heavy_requests.h"
+#include "server/log_safe.h"
+#include "server/users.h"
 
-int main(int argc, char** argv) {
-  CLI::App app{"fenestrad: the Fenestra daylight optimization service"};
+namespace {
+
+namespace fs = std::filesystem;
+
+// The settings given as flags; 0, empty or false = not given.
+struct Flags {
   std::string config_file, port_file;
-  std::string listen, data_dir, backend, log_level;
+  std::string listen, data_dir, backend, log_level, auth;
+  std::string tls_cert, tls_key, tls_client_ca;
+  bool allow_plaintext = false;
   int workers = 0, max_sensors = 0, max_evaluations = 0, max_message_bytes = 0, max_queued_jobs = 0,
-      max_sites = 0;
-  int64_t max_outdoor_paths = 0, max_indoor_paths = 0, max_triangles = 0;
+      max_sites = 0, max_queued_jobs_per_user = 0, max_sites_per_user = 0, max_heavy_requests = 0;
+  int64_t max_outdoor_paths = 0, max_indoor_paths = 0, max_triangles = 0,
+          max_upload_bytes_per_user = 0, max_data_dir_bytes = 0;
   double grace = 0;
-  app.add_option("--config", config_file, "JSON configuration file (fenestra.v1.DaemonConfig)");
-  app.add_option("--listen", listen, "host:port to listen on [localhost:50051]");
-  app.add_option("--data-dir", data_dir,
-                 "job store, outdoor cache and weather files [fenestra-data]");
+};
+
+void AddDaemonFlags(CLI::App& app, Flags& f) {
+  app.add_option("--config", f.config_file, "JSON configuration file (fenestra.v1.DaemonConfig)");
+  app.add_option("--listen", f.listen, "host:port to listen on [localhost:50051]");
+  app.add_option("--data-dir", f.data_dir,
+                 "job store, users, outdoor cache and weather files [fenestra-data]");
   app.add_option(
-      "--workers", workers,
+      "--workers", f.workers,
       "jobs and site computations run at once [one per GPU, at least 1; 1 with --backend cpu]");
-  app.add_option("--backend", backend, "tracer for jobs that name none: cpu, cuda, auto [auto]");
-  app.add_option("--max-outdoor-paths", max_outdoor_paths, "limit: outdoor paths [1e9]");
-  app.add_option("--max-indoor-paths", max_indoor_paths, "limit: indoor paths per sensor [1e7]");
-  app.add_option("--max-sensors", max_sensors, "limit: sensors per scene [10000]");
-  app.add_option("--max-triangles", max_triangles, "limit: triangles per scene [2e6]");
-  app.add_option("--max-evaluations", max_evaluations, "limit: evaluations per job [10000]");
-  app.add_option("--max-message-bytes", max_message_bytes, "limit: request size [64 MiB]");
-  app.add_option("--max-queued-jobs", max_queued_jobs, "limit: jobs waiting [64]");
-  app.add_option("--max-sites", max_sites, "limit: registered sites [1000]");
-  app.add_option("--shutdown-grace", grace,
+  app.add_option("--backend", f.backend, "tracer for jobs that name none: cpu, cuda, auto [auto]");
+  app.add_option("--tls-cert", f.tls_cert, "TLS certificate chain (PEM) [none: plaintext]");
+  app.add_option("--tls-key", f.tls_key, "TLS private key (PEM) of --tls-cert");
+  app.add_option("--tls-client-ca", f.tls_client_ca,
+                 "CA certificates (PEM) that client certificates must chain to; clients "
+                 "without one are refused (mutual TLS)");
+  app.add_flag("--allow-plaintext", f.allow_plaintext,
+               "serve plaintext on a non-loopback address (behind a TLS-terminating proxy)");
+  app.add_option("--auth", f.auth,
+                 "token: every call carries a user's token (fenestrad user add); none: "
+                 "every caller is the local administrator, loopback only [token]");
+  app.add_option("--max-outdoor-paths", f.max_outdoor_paths, "limit: outdoor paths [1e9]");
+  app.add_option("--max-indoor-paths", f.max_indoor_paths, "limit: indoor paths per sensor [1e7]");
+  app.add_option("--max-sensors", f.max_sensors, "limit: sensors per scene [10000]");
+  app.add_option("--max-triangles", f.max_triangles, "limit: triangles per scene [2e6]");
+  app.add_option("--max-evaluations", f.max_evaluations, "limit: evaluations per job [10000]");
+  app.add_option("--max-message-bytes", f.max_message_bytes, "limit: request size [64 MiB]");
+  app.add_option("--max-queued-jobs", f.max_queued_jobs, "limit: jobs waiting [64]");
+  app.add_option("--max-sites", f.max_sites, "limit: registered sites [1000]");
+  app.add_option("--max-queued-jobs-per-user", f.max_queued_jobs_per_user,
+                 "limit: jobs waiting per user [8]");
+  app.add_option("--max-sites-per-user", f.max_sites_per_user, "limit: sites per user [100]");
+  app.add_option("--max-upload-bytes-per-user", f.max_upload_bytes_per_user,
+                 "limit: weather files a user's sites and queued or running jobs hold [256 MiB]");
+  app.add_option("--max-data-dir-bytes", f.max_data_dir_bytes,
+                 "limit: bytes under the data directory [10 GiB]");
+  app.add_option("--max-heavy-requests", f.max_heavy_requests,
+                 "limit: requests of 1 MiB or more (registrations, submissions, site "
+                 "scenes sent back) processed at once [2]");
+  app.add_option("--shutdown-grace", f.grace,
                  "seconds running jobs may go on after SIGTERM before they are interrupted [10]");
-  app.add_option("--log-level", log_level, "trace, debug, info, warn, error [info]");
-  app.add_option("--port-file", port_file, "write the port listened on to this file");
-  CLI11_PARSE(app, argc, argv);
+  app.add_option("--log-level", f.log_level, "trace, debug, info, warn, error [info]");
+  app.add_option("--port-file", f.port_file, "write the port listened on to this file");
+}
 
-  auto logger = spdlog::stderr_color_mt("fenestrad");
-  spdlog::set_default_logger(logger);
-  spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
-
-  // The file first, then the flags given
-  fenestra::v1::DaemonConfig config;
-  if (!config_file.empty()) {
-    absl::StatusOr<fenestra::v1::DaemonConfig> read = fenestra::ReadConfigFile(config_file);
-    if (!read.ok()) {
-      spdlog::critical("{}", std::string(read.status().message()));
-      return 2;
-    }
-    config = *read;
-  }
+// The flags given, on top of `config`.
+void ApplyFlags(const Flags& f, fenestra::v1::DaemonConfig& config) {
   fenestra::v1::Limits& l = *config.mutable_limits();
-  if (!listen.empty()) config.set_listen_address(listen);
-  if (!data_dir.empty()) config.set_data_dir(data_dir);
-  if (workers) config.set_worker_threads(workers);
-  if (!backend.empty()) config.set_backend(backend);
-  if (!log_level.empty()) config.set_log_level(log_level);
-  if (grace) config.set_shutdown_grace_seconds(grace);
-  if (max_outdoor_paths) l.set_max_outdoor_paths(max_outdoor_paths);
-  if (max_indoor_paths) l.set_max_indoor_paths_per_sensor(max_indoor_paths);
-  if (max_sensors) l.set_max_sensors(max_sensors);
-  if (max_triangles) l.set_max_triangles(max_triangles);
-  if (max_evaluations) l.set_max_evaluations(max_evaluations);
-  if (max_message_bytes) l.set_max_message_bytes(max_message_bytes);
-  if (max_queued_jobs) l.set_max_queued_jobs(max_queued_jobs);
-  if (max_sites) l.set_max_sites(max_sites);
-  absl::StatusOr<fenestra::v1::DaemonConfig> resolved = fenestra::ResolveConfig(config);
-  if (!resolved.ok()) {
-    spdlog::critical("{}", std::string(resolved.status().message()));
-    return 2;
-  }
-  spdlog::set_level(spdlog::level::from_str(resolved->log_level()));
+  if (!f.listen.empty()) config.set_listen_address(f.listen);
+  if (!f.data_dir.empty()) config.set_data_dir(f.data_dir);
+  if (f.workers) config.set_worker_threads(f.workers);
+  if (!f.backend.empty()) config.set_backend(f.backend);
+  if (!f.log_level.empty()) config.set_log_level(f.log_level);
+  if (f.grace) config.set_shutdown_grace_seconds(f.grace);
+  if (!f.tls_cert.empty()) config.set_tls_cert_file(f.tls_cert);
+  if (!f.tls_key.empty()) config.set_tls_key_file(f.tls_key);
+  if (!f.tls_client_ca.empty()) config.set_tls_client_ca_file(f.tls_client_ca);
+  if (f.allow_plaintext) config.set_allow_plaintext(true);
+  if (!f.auth.empty()) config.set_auth(f.auth);
+  if (f.max_outdoor_paths) l.set_max_outdoor_paths(f.max_outdoor_paths);
+  if (f.max_indoor_paths) l.set_max_indoor_paths_per_sensor(f.max_indoor_paths);
+  if (f.max_sensors) l.set_max_sensors(f.max_sensors);
+  if (f.max_triangles) l.set_max_triangles(f.max_triangles);
+  if (f.max_evaluations) l.set_max_evaluations(f.max_evaluations);
+  if (f.max_message_bytes) l.set_max_message_bytes(f.max_message_bytes);
+  if (f.max_queued_jobs) l.set_max_queued_jobs(f.max_queued_jobs);
+  if (f.max_sites) l.set_max_sites(f.max_sites);
+  if (f.max_queued_jobs_per_user) l.set_max_queued_jobs_per_user(f.max_queued_jobs_per_user);
+  if (f.max_sites_per_user) l.set_max_sites_per_user(f.max_sites_per_user);
+  if (f.max_upload_bytes_per_user) l.set_max_upload_bytes_per_user(f.max_upload_bytes_per_user);
+  if (f.max_data_dir_bytes) l.set_max_data_dir_bytes(f.max_data_dir_bytes);
+  if (f.max_heavy_requests) l.set_max_concurrent_heavy_requests(f.max_heavy_requests);
+}
 
+// `fenestrad user ...`: what was asked, on the store in `data_dir`.
+struct UserCommand {
+  std::string name, data_dir;
+  bool admin = false;
+  CLI::App *add = nullptr, *list = nullptr, *revoke = nullptr;
+};
+
+void AddUserCommands(CLI::App& app, UserCommand& c) {
+  CLI::App* user =
+      app.add_subcommand("user",
+                         "manage the users of a daemon with token auth (kept in DIR/fenestra.db; a "
+                         "running daemon sees changes at once)");
+  user->require_subcommand(1);
+  c.add = user->add_subcommand("add", "add a user; prints its new token, once, on stdout");
+  c.add->add_option("name", c.name, "user name: letters, digits, '.', '_', '-'")->required();
+  c.add->add_flag("--admin", c.admin, "the user sees and acts on every user's jobs and sites");
+  c.list = user->add_subcommand("list", "list the users (never their tokens)");
+  c.revoke = user->add_subcommand("revoke", "revoke a user's token; its calls fail from now on");
+  c.revoke->add_option("name", c.name, "user name")->required();
+  for (CLI::App* command : {c.add, c.list, c.revoke}) {
+    command->add_option("--data-dir", c.data_dir, "the daemon's data directory")->required();
+  }
+}
+
+std::string FormatUnixMs(int64_t unix_ms) {
+  return absl::FormatTime("%Y-%m-%d %H:%M:%S UTC", absl::FromUnixMillis(unix_ms),
+                          absl::UTCTimeZone());
+}
+
+int RunUserCommand(const UserCommand& c) {
+  const fs::path db = fs::path(c.data_dir) / "fenestra.db";
+  if (!*c.add && !fs::exists(db)) {
+    std::cerr << "fenestrad: no " << db.string() << " (is --data-dir the daemon's?)\n";
+    return 1;
+  }
+  std::error_code error;
+  fs::create_directories(c.data_dir, error);
+  absl::StatusOr<std::unique_ptr<fenestra::JobStore>> store = fenestra::JobStore::Open(db.string());
+  if (!store.ok()) {
+    std::cerr << "fenestrad: " << store.status().message() << "\n";
+    return 1;
+  }
+  if (*c.add) {
+    absl::StatusOr<std::string> token = fenestra::AddUser(**store, c.name, c.admin);
+    if (!token.ok()) {
+      std::cerr << "fenestrad: " << token.status().message() << "\n";
+      return 1;
+    }
+    std::cerr << "user " << c.name << (c.admin ? " (administrator)" : "")
+              << " added; its token follows, shown this once (the daemon keeps only its "
+                 "SHA-256):\n";
+    std::cout << *token << std::endl;
+    return 0;
+  }
+  if (*c.revoke) {
+    const absl::Status revoked = (*store)->RevokeUser(c.name, absl::ToUnixMillis(absl::Now()));
+    if (!revoked.ok()) {
+      std::cerr << "fenestrad: " << revoked.message() << "\n";
+      return 1;
+    }
+    std::cerr << "user " << c.name << ": token revoked\n";
+    return 0;
+  }
+  absl::StatusOr<std::vector<fenestra::UserRecord>> users = (*store)->LoadUsers();
+  if (!users.ok()) {
+    std::cerr << "fenestrad: " << users.status().message() << "\n";
+    return 1;
+  }
+  std::printf("%-24s %-6s %-24s %s\n", "NAME", "ADMIN", "CREATED", "REVOKED");
+  for (const fenestra::UserRecord& u : *users) {
+    std::printf("%-24s %-6s %-24s %s\n", u.name.c_str(), u.admin ? "yes" : "no",
+                FormatUnixMs(u.created_unix_ms).c_str(),
+                u.revoked_unix_ms ? FormatUnixMs(u.revoked_unix_ms).c_str() : "-");
+  }
+  return 0;
+}
+
+// Runs the daemon until SIGTERM or SIGINT.
+int Serve(const fenestra::v1::DaemonConfig& config, const std::string& port_file) {
   // SIGTERM and SIGINT are taken by sigwait below, not by a handler in some thread
   sigset_t signals;
   sigemptyset(&signals);
@@ -86,7 +196,7 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   signal(SIGPIPE, SIG_IGN);
 
-  absl::StatusOr<std::unique_ptr<fenestra::Daemon>> daemon = fenestra::Daemon::Start(*resolved);
+  absl::StatusOr<std::unique_ptr<fenestra::Daemon>> daemon = fenestra::Daemon::Start(config);
   if (!daemon.ok()) {
     spdlog::critical("{}", std::string(daemon.status().message()));
     return 1;
@@ -100,4 +210,45 @@ int main(int argc, char** argv) {
   spdlog::info("{} received: shutting down", received == SIGTERM ? "SIGTERM" : "SIGINT");
   (*daemon)->Shutdown();
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  fenestra::ReleaseLargeBlocksWhenFreed();
+  CLI::App app{"fenestrad: the Fenestra daylight optimization service"};
+  Flags flags;
+  UserCommand user;
+  AddDaemonFlags(app, flags);
+  AddUserCommands(app, user);
+  CLI11_PARSE(app, argc, argv);
+  if (*user.add || *user.list || *user.revoke) return RunUserCommand(user);
+
+  auto logger = spdlog::stderr_color_mt("fenestrad");
+  spdlog::set_default_logger(logger);
+  spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
+  // Protobuf's own complaints (a request whose strings are not UTF-8) in the same format
+  google::protobuf::SetLogHandler(
+      [](google::protobuf::LogLevel, const char*, int, const std::string& message) {
+        spdlog::warn("protobuf: {}", fenestra::LogSafe(message));
+      });
+
+  // The file first, then the flags given
+  fenestra::v1::DaemonConfig config;
+  if (!flags.config_file.empty()) {
+    absl::StatusOr<fenestra::v1::DaemonConfig> read = fenestra::ReadConfigFile(flags.config_file);
+    if (!read.ok()) {
+      spdlog::critical("{}", std::string(read.status().message()));
+      return 2;
+    }
+    config = *read;
+  }
+  ApplyFlags(flags, config);
+  absl::StatusOr<fenestra::v1::DaemonConfig> resolved = fenestra::ResolveConfig(config);
+  if (!resolved.ok()) {
+    spdlog::critical("{}", std::string(resolved.status().message()));
+    return 2;
+  }
+  spdlog::set_level(spdlog::level::from_str(resolved->log_level()));
+  return Serve(*resolved, flags.port_file);
 }

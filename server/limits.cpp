@@ -6,6 +6,10 @@
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
+#include "core/common/text.h"
+#include "core/sky/epw.h"
+#include "core/trace/room_check.h"
 
 namespace fenestra {
 namespace {
@@ -88,12 +92,82 @@ absl::Status CheckSamplingLimits(const v1::Sampling& sampling, const v1::Limits&
 }
 
 absl::Status CheckBudgetLimits(const v1::Budget& budget, const v1::Limits& limits) {
-  const int evaluations = budget.max_evaluations() > 0 ? budget.max_evaluations() : 150;
+  const int evaluations =
+      budget.max_evaluations() > 0 ? budget.max_evaluations() : kDefaultMaxEvaluations;
   if (evaluations > limits.max_evaluations()) {
     return OverLimit("budget.max_evaluations", evaluations, "max_evaluations",
                      limits.max_evaluations());
   }
   return absl::OkStatus();
+}
+
+absl::Status CheckUploadedWeather(const std::string& bytes, const std::string& weather_name) {
+  const bool named = !weather_name.empty() && CheckText(weather_name, "").ok();
+  const std::string source =
+      named ? absl::StrCat("weather_epw ('", weather_name, "')") : std::string("weather_epw");
+  return ParseEpw(bytes, source).status();
+}
+
+absl::StatusOr<CheckedSite> CheckSiteRequest(const v1::RegisterSiteRequest& request,
+                                             const v1::DaemonConfig& config) {
+  FENESTRA_RETURN_IF_ERROR(CheckMessageText(request, ""));
+  if (!request.has_scene()) return absl::InvalidArgumentError("scene: is required");
+  FENESTRA_RETURN_IF_ERROR(CheckInlineScene(request.scene()));
+  FENESTRA_RETURN_IF_ERROR(CheckSceneLimits(request.scene(), config.limits()));
+  CheckedSite site;
+  v1::Sampling sampling = request.sampling();
+  if (sampling.backend().empty()) sampling.set_backend(config.backend());
+  FENESTRA_ASSIGN_OR_RETURN(resolved, ResolveSampling(sampling));
+  FENESTRA_RETURN_IF_ERROR(CheckSamplingLimits(resolved, config.limits(), /*indoor=*/false));
+  site.sampling = resolved;
+  v1::Scene scene = request.scene();
+  scene.mutable_site()->clear_weather_file();
+  FENESTRA_ASSIGN_OR_RETURN(built, ValidateScene(scene, "scene"));
+  site.scene = std::move(built);
+  if (!request.weather_epw().empty()) {
+    FENESTRA_RETURN_IF_ERROR(CheckUploadedWeather(request.weather_epw(), request.weather_name()));
+  }
+  return site;
+}
+
+absl::StatusOr<CheckedJob> CheckJobRequest(const v1::SubmitJobRequest& request,
+                                           const v1::DaemonConfig& config) {
+  FENESTRA_RETURN_IF_ERROR(CheckMessageText(request, ""));
+  const v1::Limits& limits = config.limits();
+  CheckedJob checked;
+  v1::Job& job = checked.job;
+  job = request.job();
+  if (!job.scene_file().empty()) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "job.scene_file '", job.scene_file(),
+        "' is a path on the client; send the scene inline in job.scene (fenestra job submit "
+        "does this)"));
+  }
+  if (!job.has_scene()) {
+    return absl::InvalidArgumentError("job.scene: is required (the scene, inline)");
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckInlineScene(job.scene()));
+  double min_slat_width_m = 0;
+  for (const v1::DesignVariable& v : job.variables()) {
+    if (v.name() == "width") min_slat_width_m = v.fixed() ? v.start() : v.lower();
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckSceneLimits(job.scene(), limits, min_slat_width_m));
+  FENESTRA_RETURN_IF_ERROR(CheckBudgetLimits(job.budget(), limits));
+  if (job.sampling().backend().empty()) {
+    job.mutable_sampling()->set_backend(
+        request.default_backend().empty() ? config.backend() : request.default_backend());
+  }
+  FENESTRA_ASSIGN_OR_RETURN(sampling, ResolveSampling(job.sampling()));
+  FENESTRA_RETURN_IF_ERROR(CheckSamplingLimits(sampling, limits, /*indoor=*/true));
+  v1::Job without_paths = job;
+  without_paths.clear_weather_file();
+  without_paths.mutable_scene()->mutable_site()->clear_weather_file();
+  FENESTRA_ASSIGN_OR_RETURN(prepared, ValidateJob(without_paths, ""));
+  checked.prepared = std::move(prepared);
+  if (!request.weather_epw().empty()) {
+    FENESTRA_RETURN_IF_ERROR(CheckUploadedWeather(request.weather_epw(), request.weather_name()));
+  }
+  return checked;
 }
 
 }  // namespace fenestra

@@ -10,7 +10,6 @@
 #include <sstream>
 
 #include "absl/strings/str_cat.h"
-#include "core/common/atomic_file.h"
 #include "fenestra/v1/daemon.pb.h"
 #include "server/checksum.h"
 
@@ -110,11 +109,33 @@ absl::StatusOr<OutdoorMatrix> DecodeOutdoorMatrix(std::string_view bytes) {
   return matrix;
 }
 
-OutdoorCache::OutdoorCache(std::string dir) : dir_(std::move(dir)) {}
+OutdoorCache::OutdoorCache(std::string dir, const DataDir* data_dir)
+    : dir_(std::move(dir)), data_dir_(data_dir) {}
 
 std::string OutdoorCache::PathFor(const std::string& key) const {
   return (std::filesystem::path(dir_) / (Sha256Hex(key) + ".omx")).string();
 }
+
+namespace {
+
+// A cache file's matrix; DataLoss when it is unreadable, corrupt or holds another key
+// (`key` empty: any).
+absl::StatusOr<OutdoorMatrix> ReadMatrixFile(const std::string& path, const std::string& key) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) return absl::DataLossError("cannot be read");
+  std::string bytes(static_cast<size_t>(in.tellg()), '\0');
+  in.seekg(0);
+  if (!in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()))) {
+    return absl::DataLossError("cannot be read");
+  }
+  absl::StatusOr<OutdoorMatrix> matrix = DecodeOutdoorMatrix(bytes);
+  if (matrix.ok() && !key.empty() && matrix->key != key) {
+    return absl::DataLossError("file name does not match the key inside");
+  }
+  return matrix;
+}
+
+}  // namespace
 
 absl::StatusOr<OutdoorCache::LoadReport> OutdoorCache::Load() {
   std::error_code error;
@@ -122,80 +143,152 @@ absl::StatusOr<OutdoorCache::LoadReport> OutdoorCache::Load() {
   if (error) {
     return absl::InternalError(absl::StrCat("cannot create ", dir_, ": ", error.message()));
   }
+  // Oldest first, so the use order starts as the files' age
+  std::vector<std::pair<std::filesystem::file_time_type, std::filesystem::path>> files;
+  for (const auto& file : std::filesystem::directory_iterator(dir_, error)) {
+    if (file.path().extension() != ".omx") continue;
+    std::error_code time_error;
+    files.push_back({file.last_write_time(time_error), file.path()});
+  }
+  if (error) {
+    return absl::InternalError(absl::StrCat("cannot list ", dir_, ": ", error.message()));
+  }
+  std::sort(files.begin(), files.end());
   LoadReport report;
   std::lock_guard lock(mutex_);
-  for (const auto& file : std::filesystem::directory_iterator(dir_, error)) {
-    const std::string path = file.path().string();
-    if (file.path().extension() != ".omx") {
-      // Temporaries of an interrupted write
-      if (path.find(".omx") != std::string::npos) std::filesystem::remove(file.path(), error);
-      continue;
-    }
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream bytes;
-    bytes << in.rdbuf();
-    absl::StatusOr<OutdoorMatrix> matrix = DecodeOutdoorMatrix(bytes.str());
+  for (const auto& [time, file] : files) {
+    const std::string path = file.string();
+    absl::StatusOr<OutdoorMatrix> matrix = ReadMatrixFile(path, "");
     if (matrix.ok() && PathFor(matrix->key) != path) {
       matrix = absl::DataLossError("file name does not match the key inside");
     }
     if (!matrix.ok()) {
       report.discarded.push_back(absl::StrCat(path, ": ", matrix.status().message()));
-      std::filesystem::remove(file.path(), error);
+      std::filesystem::remove(file, error);
       continue;
     }
-    const std::string key = matrix->key;
-    entries_[key] = std::make_shared<const OutdoorMatrix>(*std::move(matrix));
-    from_disk_.insert(key);
+    Entry& entry = entries_[matrix->key];
+    entry.from_disk = true;
+    entry.last_used = ++uses_;
     ++report.loaded;
-  }
-  if (error) {
-    return absl::InternalError(absl::StrCat("cannot list ", dir_, ": ", error.message()));
   }
   return report;
 }
 
-std::shared_ptr<const OutdoorMatrix> OutdoorCache::Find(const std::string& key) const {
+std::shared_ptr<const OutdoorMatrix> OutdoorCache::Find(const std::string& key) {
+  {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(key);
+    if (it == entries_.end()) return nullptr;
+    it->second.last_used = ++uses_;
+    if (it->second.kept) return it->second.kept;
+    if (auto held = it->second.held.lock()) return held;
+  }
+  // Read it back from its file, outside the lock (megabytes)
+  const std::string path = PathFor(key);
+  absl::StatusOr<OutdoorMatrix> matrix = ReadMatrixFile(path, key);
   std::lock_guard lock(mutex_);
   auto it = entries_.find(key);
-  return it == entries_.end() ? nullptr : it->second;
+  if (it == entries_.end()) return nullptr;  // evicted meanwhile
+  if (it->second.kept) return it->second.kept;
+  if (auto held = it->second.held.lock()) return held;  // read by another caller meanwhile
+  if (!matrix.ok()) {
+    spdlog::warn("outdoor cache: discarded {}: {}", path, std::string(matrix.status().message()));
+    std::error_code error;
+    std::filesystem::remove(path, error);
+    entries_.erase(it);
+    return nullptr;
+  }
+  auto shared = std::make_shared<const OutdoorMatrix>(*std::move(matrix));
+  it->second.held = shared;
+  return shared;
+}
+
+bool OutdoorCache::Contains(const std::string& key) const {
+  std::lock_guard lock(mutex_);
+  return entries_.contains(key);
 }
 
 bool OutdoorCache::LoadedFromDisk(const std::string& key) const {
   std::lock_guard lock(mutex_);
-  return from_disk_.contains(key);
+  auto it = entries_.find(key);
+  return it != entries_.end() && it->second.from_disk;
 }
 
 absl::Status OutdoorCache::Put(std::shared_ptr<const OutdoorMatrix> matrix) {
   const std::string bytes = EncodeOutdoorMatrix(*matrix);
+  // Room is made outside the lock: evicting asks the sites and jobs what they use
+  absl::Status written =
+      data_dir_ ? data_dir_->MakeRoom(static_cast<int64_t>(bytes.size())) : absl::OkStatus();
+  if (written.ok()) written = WriteFileDurably(PathFor(matrix->key), bytes);
   {
     std::lock_guard lock(mutex_);
-    from_disk_.erase(matrix->key);
-    entries_[matrix->key] = matrix;
+    Entry& entry = entries_[matrix->key];
+    entry.held = matrix;
+    entry.kept = written.ok() ? nullptr : matrix;
+    entry.from_disk = false;
+    entry.last_used = ++uses_;
   }
   changed_.notify_all();
-  return WriteFileAtomically(
-      PathFor(matrix->key),
-      [&](std::ostream& out) {
-        out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-        return absl::OkStatus();
-      },
-      /*binary=*/true);
+  return written;
+}
+
+void OutdoorCache::SetInUse(std::function<bool(const std::string& key)> in_use) {
+  std::lock_guard lock(mutex_);
+  in_use_ = std::move(in_use);
+}
+
+bool OutdoorCache::EvictOne() {
+  std::vector<std::pair<int64_t, std::string>> candidates;
+  std::function<bool(const std::string&)> in_use;
+  {
+    std::lock_guard lock(mutex_);
+    for (const auto& [key, entry] : entries_) {
+      if (!entry.kept && entry.held.expired() && !computing_.contains(key)) {
+        candidates.push_back({entry.last_used, key});
+      }
+    }
+    in_use = in_use_;
+  }
+  std::sort(candidates.begin(), candidates.end());
+  // What the sites and jobs use is asked outside the lock (they take their own locks)
+  for (const auto& [last_used, key] : candidates) {
+    if (in_use && in_use(key)) continue;
+    {
+      std::lock_guard lock(mutex_);
+      auto it = entries_.find(key);
+      if (it == entries_.end() || it->second.last_used != last_used || it->second.kept ||
+          !it->second.held.expired()) {
+        continue;
+      }
+      entries_.erase(it);
+    }
+    std::error_code error;
+    std::filesystem::remove(PathFor(key), error);
+    spdlog::info(
+        "outdoor cache: evicted matrix {} (least recently used; no site or unfinished "
+        "job uses it) to make room",
+        key.substr(0, 16));
+    return true;
+  }
+  return false;
 }
 
 absl::StatusOr<OutdoorCache::Lookup> OutdoorCache::GetOrCompute(
     const std::string& key, const std::function<absl::StatusOr<OutdoorMatrix>()>& compute,
     const std::function<bool()>& cancelled) {
-  {
+  while (true) {
+    if (std::shared_ptr<const OutdoorMatrix> found = Find(key)) return Lookup{found, false};
     std::unique_lock lock(mutex_);
-    while (true) {
-      if (auto it = entries_.find(key); it != entries_.end()) return Lookup{it->second, false};
-      if (!computing_.contains(key)) break;
-      if (cancelled && cancelled()) {
-        return absl::CancelledError("cancelled while waiting for the outdoor matrix");
-      }
-      changed_.wait_for(lock, std::chrono::milliseconds(200));
+    if (entries_.contains(key)) continue;  // cached meanwhile
+    if (!computing_.contains(key)) {
+      computing_.insert(key);
+      break;
     }
-    computing_.insert(key);
+    if (cancelled && cancelled()) {
+      return absl::CancelledError("cancelled while waiting for the outdoor matrix");
+    }
+    changed_.wait_for(lock, std::chrono::milliseconds(200));
   }
   absl::StatusOr<OutdoorMatrix> result = compute();
   std::shared_ptr<const OutdoorMatrix> matrix;
@@ -203,7 +296,8 @@ absl::StatusOr<OutdoorCache::Lookup> OutdoorCache::GetOrCompute(
     result->key = key;
     matrix = std::make_shared<const OutdoorMatrix>(*std::move(result));
     if (absl::Status written = Put(matrix); !written.ok()) {
-      spdlog::warn("outdoor matrix {} kept in memory only: {}", key, written.ToString());
+      spdlog::warn("outdoor matrix {} kept in memory only: {}", key.substr(0, 16),
+                   std::string(written.message()));
     }
   }
   {

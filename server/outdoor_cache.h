@@ -13,6 +13,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "core/optimize/job.h"
+#include "server/data_dir.h"
 
 namespace fenestra {
 
@@ -24,31 +25,46 @@ std::string EncodeOutdoorMatrix(const OutdoorMatrix& matrix);
 // Parses a cache file's bytes. DataLoss when the header, size or checksum is wrong.
 absl::StatusOr<OutdoorMatrix> DecodeOutdoorMatrix(std::string_view bytes);
 
-// Outdoor matrices by OutdoorMatrixKey, in memory and as files <sha256(key)>.omx in one
-// folder, written atomically (temporary file + rename). Thread-safe.
+// Outdoor matrices by OutdoorMatrixKey, as files <sha256(key)>.omx in one folder, written
+// atomically (synced temporary file + rename). Matrices live in memory only while someone
+// holds them (a job or a site computation); otherwise they are read back from their file.
+// Files stay while the data directory has room: when it needs room, the least recently
+// used matrix that no site or unfinished job uses is evicted first. Thread-safe.
 class OutdoorCache {
  public:
-  explicit OutdoorCache(std::string dir);
+  // `data_dir`, when given, is asked for room before each file is written.
+  explicit OutdoorCache(std::string dir, const DataDir* data_dir = nullptr);
 
   // What Load found: files loaded, and files discarded (corrupt or unreadable) with why.
   struct LoadReport {
     int loaded = 0;
     std::vector<std::string> discarded;
   };
-  // Loads every cache file of the folder (created when missing). A file whose checksum or
-  // format is wrong is deleted, so its matrix is recomputed when needed.
+  // Checks every cache file of the folder (created when missing) and indexes the sound
+  // ones. A file whose checksum or format is wrong is deleted, so its matrix is recomputed
+  // when needed.
   absl::StatusOr<LoadReport> Load();
 
-  // The matrix with `key`, or null.
-  std::shared_ptr<const OutdoorMatrix> Find(const std::string& key) const;
+  // The matrix with `key` (read from its file when no one holds it), or null. A file found
+  // corrupt now is deleted (null).
+  std::shared_ptr<const OutdoorMatrix> Find(const std::string& key);
+  // Whether a matrix with `key` is cached, without reading it.
+  bool Contains(const std::string& key) const;
   // Whether `key`'s matrix came from a file at Load (rather than being computed by this
   // process).
   bool LoadedFromDisk(const std::string& key) const;
-  // Adds `matrix` under matrix.key, in memory and on disk; the status is the disk write's.
+  // Adds `matrix` under matrix.key, in memory and on disk; the status is the disk write's
+  // (when it fails, or the data directory has no room, the matrix is kept in memory).
   absl::Status Put(std::shared_ptr<const OutdoorMatrix> matrix);
 
   // Where `key`'s file lives.
   std::string PathFor(const std::string& key) const;
+
+  // Sets which keys are in use (by a site or an unfinished job): those are never evicted.
+  void SetInUse(std::function<bool(const std::string& key)> in_use);
+  // Removes the least recently used matrix that is cached on disk, held by no one and not
+  // in use; false when there is none.
+  bool EvictOne();
 
   // The result of GetOrCompute: the matrix, and whether this call traced it.
   struct Lookup {
@@ -63,12 +79,21 @@ class OutdoorCache {
                                       const std::function<bool()>& cancelled = {});
 
  private:
-  std::string dir_;
+  struct Entry {
+    std::weak_ptr<const OutdoorMatrix> held;    // while someone holds it
+    std::shared_ptr<const OutdoorMatrix> kept;  // when it has no file (no room on disk)
+    bool from_disk = false;                     // found at Load
+    int64_t last_used = 0;                      // use counter: larger = more recent
+  };
+
+  const std::string dir_;
+  const DataDir* const data_dir_;
   mutable std::mutex mutex_;
   std::condition_variable changed_;
-  std::map<std::string, std::shared_ptr<const OutdoorMatrix>> entries_;
-  std::set<std::string> from_disk_;
+  std::map<std::string, Entry> entries_;
   std::set<std::string> computing_;
+  int64_t uses_ = 0;
+  std::function<bool(const std::string& key)> in_use_;
 };
 
 }  // namespace fenestra

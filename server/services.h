@@ -3,45 +3,62 @@
 #include "fenestra/v1/service.grpc.pb.h"
 #include "server/job_manager.h"
 #include "server/site_manager.h"
+#include "server/users.h"
 
 namespace fenestra {
 
-// SiteService over a SiteManager: each handler converts its status to gRPC once and logs
-// one line.
-class SiteServiceImpl final : public v1::SiteService::Service {
+// The services take their requests as streams (gRPC's "streamed" method variants: the
+// same wire protocol as unary and server-streaming calls) so that each handler decodes
+// the request itself. Every call is answered the same way: the caller authenticated
+// (UNAUTHENTICATED otherwise, before the request is even read), the request decoded
+// (INVALID_ARGUMENT naming the message type when its bytes do not decode), the manager's
+// status converted to gRPC once, and one log line with client text escaped.
+
+// SiteService over a SiteManager.
+class SiteServiceImpl final : public v1::SiteService::StreamedService {
  public:
-  explicit SiteServiceImpl(SiteManager& sites) : sites_(sites) {}
-  grpc::Status Register(grpc::ServerContext* context, const v1::RegisterSiteRequest* request,
-                        v1::SiteInfo* response) override;
-  grpc::Status Get(grpc::ServerContext* context, const v1::GetSiteRequest* request,
-                   v1::SiteInfo* response) override;
-  grpc::Status List(grpc::ServerContext* context, const v1::ListSitesRequest* request,
-                    v1::ListSitesResponse* response) override;
-  grpc::Status Delete(grpc::ServerContext* context, const v1::DeleteSiteRequest* request,
-                      v1::DeleteSiteResponse* response) override;
+  SiteServiceImpl(SiteManager& sites, const Authenticator& auth) : sites_(sites), auth_(auth) {}
+  grpc::Status StreamedRegister(
+      grpc::ServerContext* context,
+      grpc::ServerUnaryStreamer<v1::RegisterSiteRequest, v1::SiteInfo>* stream) override;
+  grpc::Status StreamedGet(
+      grpc::ServerContext* context,
+      grpc::ServerUnaryStreamer<v1::GetSiteRequest, v1::SiteInfo>* stream) override;
+  grpc::Status StreamedList(
+      grpc::ServerContext* context,
+      grpc::ServerUnaryStreamer<v1::ListSitesRequest, v1::ListSitesResponse>* stream) override;
+  grpc::Status StreamedDelete(
+      grpc::ServerContext* context,
+      grpc::ServerUnaryStreamer<v1::DeleteSiteRequest, v1::DeleteSiteResponse>* stream) override;
 
  private:
   SiteManager& sites_;
+  const Authenticator& auth_;
 };
 
-// JobService over a JobManager: each handler converts its status to gRPC once and logs
-// one line.
-class JobServiceImpl final : public v1::JobService::Service {
+// JobService over a JobManager.
+class JobServiceImpl final : public v1::JobService::StreamedService {
  public:
-  explicit JobServiceImpl(JobManager& jobs) : jobs_(jobs) {}
-  grpc::Status Submit(grpc::ServerContext* context, const v1::SubmitJobRequest* request,
-                      v1::JobInfo* response) override;
-  grpc::Status Get(grpc::ServerContext* context, const v1::GetJobRequest* request,
-                   v1::JobInfo* response) override;
-  grpc::Status List(grpc::ServerContext* context, const v1::ListJobsRequest* request,
-                    v1::ListJobsResponse* response) override;
-  grpc::Status Cancel(grpc::ServerContext* context, const v1::CancelJobRequest* request,
-                      v1::JobInfo* response) override;
-  grpc::Status Watch(grpc::ServerContext* context, const v1::WatchJobRequest* request,
-                     grpc::ServerWriter<v1::JobEvent>* writer) override;
+  JobServiceImpl(JobManager& jobs, const Authenticator& auth) : jobs_(jobs), auth_(auth) {}
+  grpc::Status StreamedSubmit(
+      grpc::ServerContext* context,
+      grpc::ServerUnaryStreamer<v1::SubmitJobRequest, v1::JobInfo>* stream) override;
+  grpc::Status StreamedGet(
+      grpc::ServerContext* context,
+      grpc::ServerUnaryStreamer<v1::GetJobRequest, v1::JobInfo>* stream) override;
+  grpc::Status StreamedList(
+      grpc::ServerContext* context,
+      grpc::ServerUnaryStreamer<v1::ListJobsRequest, v1::ListJobsResponse>* stream) override;
+  grpc::Status StreamedCancel(
+      grpc::ServerContext* context,
+      grpc::ServerUnaryStreamer<v1::CancelJobRequest, v1::JobInfo>* stream) override;
+  grpc::Status StreamedWatch(
+      grpc::ServerContext* context,
+      grpc::ServerSplitStreamer<v1::WatchJobRequest, v1::JobEvent>* stream) override;
 
  private:
   JobManager& jobs_;
+  const Authenticator& auth_;
 };
 
 }  // namespace fenestra

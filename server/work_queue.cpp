@@ -7,14 +7,15 @@
 
 namespace fenestra {
 
-WorkQueue::WorkQueue(int workers, int max_queued_jobs) : max_queued_jobs_(max_queued_jobs) {
+WorkQueue::WorkQueue(int workers, int max_queued_jobs, int max_queued_jobs_per_user)
+    : max_queued_jobs_(max_queued_jobs), max_queued_jobs_per_user_(max_queued_jobs_per_user) {
   for (int i = 0; i < std::max(1, workers); ++i) workers_.emplace_back([this] { Work(); });
 }
 
 WorkQueue::~WorkQueue() { Join(); }
 
-absl::Status WorkQueue::Push(const std::string& id, std::function<void()> task, bool is_job,
-                             bool force) {
+absl::Status WorkQueue::Push(const std::string& id, const std::string& owner,
+                             std::function<void()> task, bool is_job, bool force) {
   {
     std::lock_guard lock(mutex_);
     if (stopped_) return absl::FailedPreconditionError("the work queue is stopped");
@@ -26,8 +27,17 @@ absl::Status WorkQueue::Push(const std::string& id, std::function<void()> task, 
             "the job queue is full: ", queued, " jobs wait (this server's limit max_queued_jobs = ",
             max_queued_jobs_, "); try again later"));
       }
+      const int owned =
+          static_cast<int>(std::count_if(tasks_.begin(), tasks_.end(), [&](const Task& t) {
+            return t.is_job && t.owner == owner;
+          }));
+      if (owned >= max_queued_jobs_per_user_) {
+        return absl::ResourceExhaustedError(absl::StrCat(
+            "limits.max_queued_jobs_per_user (", max_queued_jobs_per_user_, ") reached: ", owned,
+            " of your jobs wait; submit more when one has started, or cancel one"));
+      }
     }
-    tasks_.push_back(Task{id, std::move(task), is_job});
+    tasks_.push_back(Task{id, owner, std::move(task), is_job});
   }
   wake_.notify_one();
   return absl::OkStatus();
@@ -41,12 +51,41 @@ bool WorkQueue::Remove(const std::string& id) {
   return true;
 }
 
+std::vector<size_t> WorkQueue::TakingOrder() const {
+  // Each user's waiting tasks, oldest first, and when the user was last served
+  std::map<std::string, std::deque<size_t>> waiting;
+  for (size_t i = 0; i < tasks_.size(); ++i) waiting[tasks_[i].owner].push_back(i);
+  std::map<std::string, uint64_t> last_taken;
+  for (const auto& [owner, indices] : waiting) {
+    auto it = last_taken_.find(owner);
+    last_taken[owner] = it == last_taken_.end() ? 0 : it->second;
+  }
+  // Take in turn: the user served least recently, ties to the oldest task
+  std::vector<size_t> order;
+  order.reserve(tasks_.size());
+  uint64_t takes = takes_;
+  while (!waiting.empty()) {
+    auto next = waiting.begin();
+    for (auto it = waiting.begin(); it != waiting.end(); ++it) {
+      if (std::pair(last_taken[it->first], it->second.front()) <
+          std::pair(last_taken[next->first], next->second.front())) {
+        next = it;
+      }
+    }
+    order.push_back(next->second.front());
+    next->second.pop_front();
+    last_taken[next->first] = ++takes;
+    if (next->second.empty()) waiting.erase(next);
+  }
+  return order;
+}
+
 int WorkQueue::Position(const std::string& id) const {
   std::lock_guard lock(mutex_);
   int ahead = 0;
-  for (const Task& t : tasks_) {
-    if (t.id == id) return ahead;
-    if (t.is_job) ++ahead;
+  for (const size_t i : TakingOrder()) {
+    if (tasks_[i].id == id) return ahead;
+    if (tasks_[i].is_job) ++ahead;
   }
   return -1;
 }
@@ -91,8 +130,10 @@ void WorkQueue::Work() {
       std::unique_lock lock(mutex_);
       wake_.wait(lock, [&] { return stopped_ || !tasks_.empty(); });
       if (stopped_) return;
-      task = std::move(tasks_.front());
-      tasks_.pop_front();
+      const size_t next = TakingOrder().front();
+      task = std::move(tasks_[next]);
+      tasks_.erase(tasks_.begin() + static_cast<std::ptrdiff_t>(next));
+      last_taken_[task.owner] = ++takes_;
       ++running_;
     }
     task.run();

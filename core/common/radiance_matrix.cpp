@@ -13,25 +13,35 @@
 
 namespace fenestra {
 
-absl::Status WriteRadianceMatrix(const std::string& path, const Matrix& m, MatrixFormat format) {
+absl::Status WriteRadianceMatrix(const std::string& path, const Matrix& m, MatrixFormat format,
+                                 int components) {
+  if (components != 1 && components != 3) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("a Radiance matrix has 1 or 3 components here, not ", components));
+  }
   const bool binary = format == MatrixFormat::kFloat;
   return WriteFileAtomically(
       path,
       [&](std::ostream& out) {
         out << "#?RADIANCE\n"
-            << "NROWS=" << m.rows() << "\nNCOLS=" << m.cols() << "\nNCOMP=1\n"
+            << "NROWS=" << m.rows() << "\nNCOLS=" << m.cols() << "\nNCOMP=" << components << "\n"
             << "FORMAT=" << (binary ? "float" : "ascii") << "\n\n";
         if (binary) {
           for (Eigen::Index r = 0; r < m.rows(); ++r) {
             for (Eigen::Index c = 0; c < m.cols(); ++c) {
               const float v = static_cast<float>(m(r, c));
-              out.write(reinterpret_cast<const char*>(&v), sizeof v);
+              for (int k = 0; k < components; ++k) {
+                out.write(reinterpret_cast<const char*>(&v), sizeof v);
+              }
             }
           }
         } else {
           out.precision(9);
           for (Eigen::Index r = 0; r < m.rows(); ++r) {
-            for (Eigen::Index c = 0; c < m.cols(); ++c) out << (c ? "\t" : "") << m(r, c);
+            for (Eigen::Index c = 0; c < m.cols(); ++c) {
+              out << (c ? "\t" : "") << m(r, c);
+              for (int k = 1; k < components; ++k) out << ' ' << m(r, c);
+            }
             out << '\n';
           }
         }
@@ -103,11 +113,49 @@ absl::StatusOr<Matrix> ParseTable(const std::string& path, std::istream& in, lon
 
 }  // namespace
 
-absl::StatusOr<Matrix> ReadRadianceMatrix(const std::string& path) {
+namespace {
+
+// Component k of a matrix whose rows hold the components of each column in turn.
+std::vector<Matrix> SplitComponents(const Matrix& interleaved, long components) {
+  std::vector<Matrix> out;
+  const Eigen::Index cols = interleaved.cols() / components;
+  for (long k = 0; k < components; ++k) {
+    Matrix m(interleaved.rows(), cols);
+    for (Eigen::Index c = 0; c < cols; ++c) m.col(c) = interleaved.col(c * components + k);
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+absl::StatusOr<Matrix> ReadBinary(const std::string& path, std::istream& in, long rows, long cols,
+                                  bool is_float) {
+  Matrix m(rows, cols);
+  for (long i = 0; i < rows * cols; ++i) {
+    double v;
+    if (is_float) {
+      float f;
+      in.read(reinterpret_cast<char*>(&f), sizeof f);
+      v = f;
+    } else {
+      in.read(reinterpret_cast<char*>(&v), sizeof v);
+    }
+    if (!in) return absl::InvalidArgumentError(absl::StrCat(path, ": truncated data"));
+    m.data()[i] = v;
+  }
+  return m;
+}
+
+}  // namespace
+
+absl::StatusOr<std::vector<Matrix>> ReadRadianceMatrixComponents(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return absl::NotFoundError(absl::StrCat(path, ": cannot open"));
   const int first = in.peek();
-  if (first != '#') return ParseTable(path, in, -1, -1);
+  if (first != '#') {
+    absl::StatusOr<Matrix> table = ParseTable(path, in, -1, -1);
+    if (!table.ok()) return table.status();
+    return std::vector<Matrix>{*std::move(table)};
+  }
 
   long rows = -1, cols = -1, comps = 1;
   std::string format = "ascii";
@@ -127,9 +175,11 @@ absl::StatusOr<Matrix> ReadRadianceMatrix(const std::string& path) {
   if (rows <= 0 || cols <= 0) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": header lacks NROWS/NCOLS"));
   }
-  if (comps != 1) {
-    return absl::InvalidArgumentError(
-        absl::StrCat(path, ": NCOMP=", comps, " (only one-component matrices are supported)"));
+  if (comps < 1 || comps > 16) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": bad NCOMP=", comps));
+  }
+  if (format != "ascii" && format != "float" && format != "double") {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": unsupported FORMAT=", format));
   }
   // The header's size against the data that follows, before anything is allocated: a value
   // takes 4 bytes as float, 8 as double, at least 1 as text
@@ -141,30 +191,27 @@ absl::StatusOr<Matrix> ReadRadianceMatrix(const std::string& path) {
     in.seekg(data_start);
   }
   const long value_bytes = format == "float" ? 4 : format == "double" ? 8 : 1;
-  if (rows > data_bytes / value_bytes / cols) {
+  if (rows > data_bytes / value_bytes / cols / comps) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": the header says NROWS=", rows,
-                                                   " NCOLS=", cols, " but only ", data_bytes,
-                                                   " bytes of ", format, " data follow"));
+                                                   " NCOLS=", cols, " NCOMP=", comps, " but only ",
+                                                   data_bytes, " bytes of ", format,
+                                                   " data follow"));
   }
-  if (format == "ascii") return ParseTable(path, in, rows, cols);
-  Matrix m(rows, cols);
-  if (format == "float" || format == "double") {
-    const bool is_float = format == "float";
-    for (long i = 0; i < rows * cols; ++i) {
-      double v;
-      if (is_float) {
-        float f;
-        in.read(reinterpret_cast<char*>(&f), sizeof f);
-        v = f;
-      } else {
-        in.read(reinterpret_cast<char*>(&v), sizeof v);
-      }
-      if (!in) return absl::InvalidArgumentError(absl::StrCat(path, ": truncated data"));
-      m.data()[i] = v;
-    }
-    return m;
+  absl::StatusOr<Matrix> interleaved =
+      format == "ascii" ? ParseTable(path, in, rows, cols * comps)
+                        : ReadBinary(path, in, rows, cols * comps, format == "float");
+  if (!interleaved.ok()) return interleaved.status();
+  return SplitComponents(*interleaved, comps);
+}
+
+absl::StatusOr<Matrix> ReadRadianceMatrix(const std::string& path) {
+  absl::StatusOr<std::vector<Matrix>> components = ReadRadianceMatrixComponents(path);
+  if (!components.ok()) return components.status();
+  if (components->size() != 1) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": NCOMP=", components->size(),
+                                                   " (only one-component matrices are supported)"));
   }
-  return absl::InvalidArgumentError(absl::StrCat(path, ": unsupported FORMAT=", format));
+  return std::move(components->front());
 }
 
 }  // namespace fenestra

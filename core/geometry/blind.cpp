@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "absl/strings/str_cat.h"
 #include "core/geometry/scene.h"
 
 namespace fenestra {
@@ -54,6 +55,29 @@ double MinimumPitch(double w, double t, double tilt) {
 }
 
 }  // namespace
+
+absl::Status CheckBlindFits(const BlindSpec& spec, const Window& window) {
+  if (!(spec.slat_thickness_m.max < spec.slat_width_m.min)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("slats up to ", spec.slat_thickness_m.max, " m thick and from ",
+                     spec.slat_width_m.min, " m wide: a slat must be thinner than it is wide"));
+  }
+  const Frame frame = BlindFrame(window, spec);
+  if (!(spec.slat_width_m.max <= frame.stack_extent_m)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("slats up to ", spec.slat_width_m.max, " m wide are wider than the window's ",
+                     frame.stack_extent_m, " m ", spec.vertical ? "width" : "height",
+                     " across which they stack"));
+  }
+  if (const double slats = MaxSlatCount(window, spec, spec.slat_width_m.min);
+      !(slats <= kMaxBlindSlats)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "slats from ", spec.slat_width_m.min, " m wide need up to ", slats, " slats across the window's ",
+        frame.stack_extent_m, " m ", spec.vertical ? "width" : "height", "; a blind has at most ",
+        kMaxBlindSlats));
+  }
+  return absl::OkStatus();
+}
 
 BlindLayout LayoutBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design) {
   const Frame frame = BlindFrame(window, spec);

@@ -1,7 +1,9 @@
 #pragma once
 
 #include <cstdint>
+#include <numbers>
 
+#include "absl/status/status.h"
 #include "core/common/vec3.h"
 #include "core/geometry/mesh.h"
 
@@ -13,6 +15,23 @@ struct Window;
 struct ParameterRange {
   double value = 0, min = 0, max = 0;
 };
+
+// The range a blind parameter must stay within, whatever the scene or a job asks for.
+struct ParameterBounds {
+  double lowest = 0, highest = 0;
+};
+// Bounds no real Venetian blind reaches. Tilt: the generator's range.
+inline constexpr ParameterBounds kTiltBoundsRad{-std::numbers::pi / 2, std::numbers::pi / 2};
+// Slat width: micro-blinds between panes have 8 mm slats, external louvres up to 0.6 m.
+inline constexpr ParameterBounds kSlatWidthBoundsM{0.001, 1.0};
+// Gap between slats: a blind whose slats are a metre apart shades nothing.
+inline constexpr ParameterBounds kSlatSpacingBoundsM{0, 1.0};
+// Slat thickness: aluminium slats are 0.2 mm thick, timber louvres a few centimetres.
+inline constexpr ParameterBounds kSlatThicknessBoundsM{1e-4, 0.1};
+// Slat length beyond the opening at each end, and wall-to-slat clearance: blinds overlap
+// the wall by centimetres and hang centimetres from it.
+inline constexpr double kMaxSideMarginM = 1.0;
+inline constexpr double kMaxWallGapM = 1.0;
 
 // The Venetian blind's fixed description (from the scene).
 struct BlindSpec {
@@ -36,9 +55,6 @@ struct BlindLayout {
   double axis_depth_m = 0;  // distance of the slat axes behind the wall's inner face
 };
 
-// Slat layout for `design` in `window` (see blind.cpp for the exact rule).
-BlindLayout LayoutBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design);
-
 // The most slats a blind may have (12 triangles each); scenes and jobs whose narrowest slats
 // would need more are refused.
 inline constexpr int kMaxBlindSlats = 100'000;
@@ -46,6 +62,15 @@ inline constexpr int kMaxBlindSlats = 100'000;
 // An upper bound on the slats LayoutBlind places in `window` for any design whose slat width
 // is at least `min_slat_width_m` [m] (the pitch is at least the width).
 double MaxSlatCount(const Window& window, const BlindSpec& spec, double min_slat_width_m);
+
+// Checks that every design within the spec's ranges is a blind that fits `window`: slats
+// thinner than wide, no wider than the opening they stack across, and at most
+// kMaxBlindSlats of them at the narrowest width. InvalidArgument with the reason (the caller
+// adds the field).
+absl::Status CheckBlindFits(const BlindSpec& spec, const Window& window);
+
+// Slat layout for `design` in `window` (see blind.cpp for the exact rule).
+BlindLayout LayoutBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design);
 
 // A box (centre, three unit axes, half extents) that holds the blind of every design whose
 // values lie within the spec's ranges.

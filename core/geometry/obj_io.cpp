@@ -81,4 +81,12 @@ absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh,
   });
 }
 
+absl::StatusOr<size_t> WriteSceneObj(const std::string& path, const Scene& scene,
+                                     const BlindDesign& design) {
+  const TriangleMesh mesh = AssembleMesh(scene, design);
+  const absl::Status written = WriteObj(path, mesh, scene.materials);
+  if (!written.ok()) return written;
+  return mesh.TriangleCount();
+}
+
 }  // namespace fenestra

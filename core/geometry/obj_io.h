@@ -7,6 +7,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "core/geometry/mesh.h"
+#include "core/geometry/scene.h"
 
 namespace fenestra {
 
@@ -24,5 +25,10 @@ absl::StatusOr<ObjTriangles> ReadObj(const std::string& path);
 // no file is left at `path`.
 absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh,
                       const std::vector<Material>& materials);
+
+// Writes the scene's complete geometry at `design` (AssembleMesh: the blind included) as
+// WriteObj does; returns the number of triangles written.
+absl::StatusOr<size_t> WriteSceneObj(const std::string& path, const Scene& scene,
+                                     const BlindDesign& design);
 
 }  // namespace fenestra

@@ -9,6 +9,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/common/json_proto.h"
 #include "core/common/status_macros.h"
+#include "core/common/text.h"
 #include "core/geometry/obj_io.h"
 
 namespace fenestra {
@@ -16,14 +17,6 @@ namespace {
 
 // Relative tolerance for planarity and perpendicularity checks.
 constexpr double kShapeTolerance = 1e-6;
-// Sensors per scene, grids expanded.
-constexpr double kMaxSensors = 1'000'000;
-// Largest coordinate or length [m]: sums of a few stay finite (and within float range).
-constexpr double kMaxLengthM = 1e7;
-
-// Finite and at most kMaxLengthM in magnitude.
-bool Bounded(double value) { return std::isfinite(value) && std::abs(value) <= kMaxLengthM; }
-std::string BoundedText() { return absl::StrCat("finite numbers within ±", kMaxLengthM, " m"); }
 
 // Collects errors as "<file>: <field>: <reason>".
 class Checker {
@@ -35,33 +28,38 @@ class Checker {
   }
 
   absl::StatusOr<Vec3d> Point(const v1::Vec3& v, const std::string& field) const {
-    if (!Bounded(v.x()) || !Bounded(v.y()) || !Bounded(v.z())) {
-      return Error(field, "coordinates must be " + BoundedText());
+    if (!std::isfinite(v.x()) || !std::isfinite(v.y()) || !std::isfinite(v.z())) {
+      return Error(field, "coordinates must be finite numbers");
     }
-    return Vec3d{v.x(), v.y(), v.z()};
+    return Within(Vec3d{v.x(), v.y(), v.z()}, field);
+  }
+
+  // A point that may be computed (a window corner) must lie within the scene's bounds.
+  absl::StatusOr<Vec3d> Within(Vec3d p, const std::string& field) const {
+    for (double c : {p.x, p.y, p.z}) {
+      if (!(std::abs(c) <= kMaxCoordinateM)) {
+        return Error(field,
+                     absl::StrCat("(", p.x, ", ", p.y, ", ", p.z, ") lies beyond ", kMaxCoordinateM,
+                                  " m from the origin, the scene's bound (the tracer's "
+                                  "float coordinates lose millimetres beyond it)"));
+      }
+    }
+    return p;
   }
 
   absl::StatusOr<Vec3d> Direction(const v1::Vec3& v, const std::string& field) const {
     if (!std::isfinite(v.x()) || !std::isfinite(v.y()) || !std::isfinite(v.z())) {
-      return Error(field, "coordinates must be finite numbers");
+      return Error(field, "components must be finite numbers");
     }
-    // Scaled by its largest component first, so no length overflows or vanishes
-    const Vec3d d{v.x(), v.y(), v.z()};
-    const double largest = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
-    if (!(largest > 0)) return Error(field, "direction must not be zero");
-    return Normalize(d / largest);
+    // Scaled first, so that neither tiny nor huge components underflow or overflow
+    const double scale = std::max({std::abs(v.x()), std::abs(v.y()), std::abs(v.z())});
+    if (!(scale > 0)) return Error(field, "direction must not be zero");
+    return Normalize(Vec3d{v.x() / scale, v.y() / scale, v.z() / scale});
   }
 
   absl::Status Positive(double value, const std::string& field) const {
-    if (!Bounded(value) || !(value > 0)) {
-      return Error(field, absl::StrCat("must be > 0 among ", BoundedText(), ", got ", value));
-    }
-    return absl::OkStatus();
-  }
-
-  absl::Status NonNegative(double value, const std::string& field) const {
-    if (!Bounded(value) || !(value >= 0)) {
-      return Error(field, absl::StrCat("must be >= 0 among ", BoundedText(), ", got ", value));
+    if (!std::isfinite(value) || !(value > 0)) {
+      return Error(field, absl::StrCat("must be a finite number > 0, got ", value));
     }
     return absl::OkStatus();
   }
@@ -142,12 +140,20 @@ absl::Status AddPolygon(const v1::Polygon& polygon, const std::string& field, ui
       return check.Error(absl::StrCat(field, ".vertices[", k, "]"), "polygon is not planar");
     }
   }
+  // Convex: every corner turns the same way (the fan of triangles covers the polygon)
+  for (size_t k = 0; k < v.size(); ++k) {
+    const Vec3d a = v[k], b = v[(k + 1) % v.size()], c = v[(k + 2) % v.size()];
+    if (Dot(Cross(b - a, c - b), normal) < -kShapeTolerance * size * size) {
+      return check.Error(absl::StrCat(field, ".vertices[", (k + 1) % v.size(), "]"),
+                         "polygon is not convex (split it into convex polygons)");
+    }
+  }
   for (size_t k = 1; k + 1 < v.size(); ++k) mesh.Add(v[0], v[k], v[k + 1], material, side, part);
   return absl::OkStatus();
 }
 
 absl::Status AddBox(const v1::Box& box, const std::string& field, uint32_t material, Side side,
-                    uint32_t part, const Checker& check, TriangleMesh& mesh) {
+                    uint32_t part, const Checker& check, Scene& scene) {
   FENESTRA_ASSIGN_OR_RETURN(lo, check.Point(box.min(), field + ".min"));
   FENESTRA_ASSIGN_OR_RETURN(hi, check.Point(box.max(), field + ".max"));
   if (!(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z)) {
@@ -159,9 +165,10 @@ absl::Status AddBox(const v1::Box& box, const std::string& field, uint32_t mater
   static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
                                        {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
   for (const auto& f : kFaces) {
-    mesh.Add(corner(f[0]), corner(f[1]), corner(f[2]), material, side, part);
-    mesh.Add(corner(f[0]), corner(f[2]), corner(f[3]), material, side, part);
+    scene.fixed.Add(corner(f[0]), corner(f[1]), corner(f[2]), material, side, part);
+    scene.fixed.Add(corner(f[0]), corner(f[2]), corner(f[3]), material, side, part);
   }
+  scene.solid_boxes.push_back({lo, hi, part});
   return absl::OkStatus();
 }
 
@@ -185,11 +192,8 @@ absl::Status AddObj(const v1::ObjMesh& obj, const std::string& field, uint32_t d
   for (size_t t = 0; t < triangles->group.size(); ++t) {
     const Vec3d a = triangles->vertices[3 * t], b = triangles->vertices[3 * t + 1],
                 c = triangles->vertices[3 * t + 2];
-    for (const Vec3d& p : {a, b, c}) {
-      if (!Bounded(p.x) || !Bounded(p.y) || !Bounded(p.z)) {
-        return check.Error(field + ".path", absl::StrCat("triangle ", t + 1,
-                                                         ": coordinates must be ", BoundedText()));
-      }
+    for (const Vec3d& v : {a, b, c}) {
+      FENESTRA_RETURN_IF_ERROR(check.Within(v, field + ".path: a vertex").status());
     }
     if (!(TriangleArea(a, b, c) > 0)) {
       ++dropped;
@@ -211,9 +215,18 @@ absl::StatusOr<Window> BuildWindow(const v1::Scene& proto, const Checker& check)
   if (std::abs(Dot(normal, up)) > kShapeTolerance) {
     return check.Error("window.up", "must be perpendicular to window.outward_normal");
   }
-  FENESTRA_RETURN_IF_ERROR(check.Positive(w.width_m(), "window.width_m"));
-  FENESTRA_RETURN_IF_ERROR(check.Positive(w.height_m(), "window.height_m"));
-  FENESTRA_RETURN_IF_ERROR(check.NonNegative(w.depth_m(), "window.depth_m"));
+  for (const auto& [side, field] :
+       {std::pair{w.width_m(), "window.width_m"}, std::pair{w.height_m(), "window.height_m"}}) {
+    if (!(side >= kMinWindowSideM)) {
+      return check.Error(field,
+                         absl::StrCat("must be at least ", kMinWindowSideM, " m, got ", side));
+    }
+  }
+  if (!(w.depth_m() >= 0 && w.depth_m() <= kMaxWindowDepthM)) {
+    return check.Error("window.depth_m",
+                       absl::StrCat("must be in [0, ", kMaxWindowDepthM,
+                                    "] m (the wall's thickness), got ", w.depth_m()));
+  }
   window.center = center;
   window.normal = normal;
   window.up = up;
@@ -221,55 +234,79 @@ absl::StatusOr<Window> BuildWindow(const v1::Scene& proto, const Checker& check)
   window.width_m = w.width_m();
   window.height_m = w.height_m();
   window.depth_m = w.depth_m();
+  // Its corners, outer and inner face, within the scene's bounds
+  for (const double a : {-0.5, 0.5}) {
+    for (const double b : {-0.5, 0.5}) {
+      for (const double d : {0.0, w.depth_m()}) {
+        const Vec3d corner =
+            center + (a * w.width_m()) * window.across + (b * w.height_m()) * up - d * normal;
+        FENESTRA_RETURN_IF_ERROR(check.Within(corner, "window: a corner").status());
+      }
+    }
+  }
   return window;
+}
+
+// Appends the upward sensors at the cell centres of grid `i`.
+absl::Status AddGridSensors(const v1::SensorGrid& g, int i, const Checker& check,
+                            std::vector<Sensor>& sensors) {
+  const std::string field = absl::StrCat("sensor_grids[", i, "]");
+  FENESTRA_RETURN_IF_ERROR(check.Positive(g.spacing_m(), field + ".spacing_m"));
+  for (double v : {g.z_m(), g.x_min_m(), g.x_max_m(), g.y_min_m(), g.y_max_m()}) {
+    if (!std::isfinite(v)) return check.Error(field, "coordinates must be finite numbers");
+    if (!(std::abs(v) <= kMaxCoordinateM)) {
+      return check.Error(field, absl::StrCat("coordinate ", v, " lies beyond ", kMaxCoordinateM,
+                                             " m, the scene's bound"));
+    }
+  }
+  const double nx = std::floor((g.x_max_m() - g.x_min_m()) / g.spacing_m() + 1e-9);
+  const double ny = std::floor((g.y_max_m() - g.y_min_m()) / g.spacing_m() + 1e-9);
+  if (!(nx >= 1 && ny >= 1))
+    return check.Error(field, "the grid holds no cell of the given spacing");
+  if (!(nx * ny + static_cast<double>(sensors.size()) <= kMaxSceneSensors)) {
+    return check.Error(field,
+                       absl::StrCat("the grid holds ", nx * ny, " cells; a scene holds at most ",
+                                    kMaxSceneSensors, " sensors"));
+  }
+  const std::string prefix = g.name().empty() ? absl::StrCat("grid", i) : g.name();
+  for (long iy = 0; iy < static_cast<long>(ny); ++iy) {
+    for (long ix = 0; ix < static_cast<long>(nx); ++ix) {
+      sensors.push_back({absl::StrCat(prefix, "_", sensors.size()),
+                         {g.x_min_m() + (ix + 0.5) * g.spacing_m(),
+                          g.y_min_m() + (iy + 0.5) * g.spacing_m(), g.z_m()},
+                         {0, 0, 1},
+                         field});
+    }
+  }
+  return absl::OkStatus();
 }
 
 absl::StatusOr<std::vector<Sensor>> BuildSensors(const v1::Scene& proto, const Checker& check) {
   std::vector<Sensor> sensors;
+  if (proto.sensors_size() > kMaxSceneSensors) {
+    return check.Error("sensors", absl::StrCat("a scene holds at most ", kMaxSceneSensors,
+                                               " sensors, got ", proto.sensors_size()));
+  }
   for (int i = 0; i < proto.sensors_size(); ++i) {
     const v1::Sensor& s = proto.sensors(i);
     const std::string field = absl::StrCat("sensors[", i, "]");
     FENESTRA_ASSIGN_OR_RETURN(position, check.Point(s.position(), field + ".position"));
     FENESTRA_ASSIGN_OR_RETURN(direction, check.Direction(s.direction(), field + ".direction"));
     sensors.push_back(
-        {s.name().empty() ? absl::StrCat("s", i + 1) : s.name(), position, direction});
+        {s.name().empty() ? absl::StrCat("s", i + 1) : s.name(), position, direction, field});
   }
   for (int i = 0; i < proto.sensor_grids_size(); ++i) {
-    const v1::SensorGrid& g = proto.sensor_grids(i);
-    const std::string field = absl::StrCat("sensor_grids[", i, "]");
-    FENESTRA_RETURN_IF_ERROR(check.Positive(g.spacing_m(), field + ".spacing_m"));
-    for (double v : {g.z_m(), g.x_min_m(), g.x_max_m(), g.y_min_m(), g.y_max_m()}) {
-      if (!Bounded(v)) return check.Error(field, "coordinates must be " + BoundedText());
-    }
-    const double x_cells = std::floor((g.x_max_m() - g.x_min_m()) / g.spacing_m() + 1e-9);
-    const double y_cells = std::floor((g.y_max_m() - g.y_min_m()) / g.spacing_m() + 1e-9);
-    if (!(x_cells >= 1 && y_cells >= 1)) {
-      return check.Error(field, "the grid holds no cell of the given spacing");
-    }
-    if (!(static_cast<double>(sensors.size()) + x_cells * y_cells <= kMaxSensors)) {
-      return check.Error(field, absl::StrCat("the grid holds ", x_cells * y_cells,
-                                             " sensors; a scene may have at most ", kMaxSensors));
-    }
-    const long nx = std::lround(x_cells);
-    const long ny = std::lround(y_cells);
-    const std::string prefix = g.name().empty() ? absl::StrCat("grid", i) : g.name();
-    for (long iy = 0; iy < ny; ++iy) {
-      for (long ix = 0; ix < nx; ++ix) {
-        sensors.push_back({absl::StrCat(prefix, "_", sensors.size()),
-                           {g.x_min_m() + (ix + 0.5) * g.spacing_m(),
-                            g.y_min_m() + (iy + 0.5) * g.spacing_m(), g.z_m()},
-                           {0, 0, 1}});
-      }
-    }
+    FENESTRA_RETURN_IF_ERROR(AddGridSensors(proto.sensor_grids(i), i, check, sensors));
   }
   if (sensors.empty()) return check.Error("sensors", "at least one sensor is required");
   return sensors;
 }
 
 absl::StatusOr<ParameterRange> BuildParameter(const v1::Parameter& p, const std::string& field,
-                                              double lowest, const Checker& check) {
+                                              ParameterBounds bounds, const char* unit,
+                                              const Checker& check) {
   for (double v : {p.value(), p.min(), p.max()}) {
-    if (!Bounded(v)) return check.Error(field, "value, min and max must be " + BoundedText());
+    if (!std::isfinite(v)) return check.Error(field, "value, min and max must be finite");
   }
   ParameterRange range{p.value(), p.min(), p.max()};
   if (range.min == 0 && range.max == 0) range.min = range.max = range.value;  // fixed value
@@ -278,10 +315,34 @@ absl::StatusOr<ParameterRange> BuildParameter(const v1::Parameter& p, const std:
     return check.Error(field, absl::StrCat("value ", range.value, " is outside [", range.min, ", ",
                                            range.max, "]"));
   }
-  if (range.min < lowest) {
-    return check.Error(field, absl::StrCat("must not go below ", lowest, ", got ", range.min));
+  constexpr double kRounding = 1e-12;  // π/2 written in decimal
+  if (range.min < bounds.lowest - kRounding || range.max > bounds.highest + kRounding) {
+    return check.Error(
+        field, absl::StrCat("[", range.min, ", ", range.max, "] must stay within [", bounds.lowest,
+                            ", ", bounds.highest, "] ", unit, ", the range of a real blind"));
   }
   return range;
+}
+
+absl::StatusOr<bool> IsVertical(const v1::VenetianBlind& b, const Checker& check) {
+  switch (b.orientation()) {
+    case v1::VenetianBlind::ORIENTATION_UNSPECIFIED:
+    case v1::VenetianBlind::HORIZONTAL:
+      return false;
+    case v1::VenetianBlind::VERTICAL:
+      return true;
+    default:
+      return check.Error("blind.orientation", absl::StrCat("must be HORIZONTAL or VERTICAL, got ",
+                                                           static_cast<int>(b.orientation())));
+  }
+}
+
+absl::Status CheckLength(double value, double highest, const std::string& field,
+                         const Checker& check) {
+  if (!(value >= 0 && value <= highest)) {
+    return check.Error(field, absl::StrCat("must be in [0, ", highest, "] m, got ", value));
+  }
+  return absl::OkStatus();
 }
 
 absl::StatusOr<BlindSpec> BuildBlind(const v1::VenetianBlind& b,
@@ -291,35 +352,31 @@ absl::StatusOr<BlindSpec> BuildBlind(const v1::VenetianBlind& b,
   FENESTRA_ASSIGN_OR_RETURN(material,
                             FindMaterial(materials, b.material(), "blind.material", check));
   spec.material = material;
-  spec.vertical = b.orientation() == v1::VenetianBlind::VERTICAL;
+  FENESTRA_ASSIGN_OR_RETURN(vertical, IsVertical(b, check));
+  spec.vertical = vertical;
   FENESTRA_ASSIGN_OR_RETURN(
-      tilt, BuildParameter(b.tilt_rad(), "blind.tilt_rad", -std::numbers::pi / 2, check));
-  if (tilt.max > std::numbers::pi / 2 + 1e-12) {
-    return check.Error("blind.tilt_rad", "must not exceed π/2");
-  }
-  FENESTRA_ASSIGN_OR_RETURN(width,
-                            BuildParameter(b.slat_width_m(), "blind.slat_width_m", 0, check));
-  FENESTRA_ASSIGN_OR_RETURN(spacing,
-                            BuildParameter(b.slat_spacing_m(), "blind.slat_spacing_m", 0, check));
+      tilt, BuildParameter(b.tilt_rad(), "blind.tilt_rad", kTiltBoundsRad, "rad", check));
   FENESTRA_ASSIGN_OR_RETURN(
-      thickness, BuildParameter(b.slat_thickness_m(), "blind.slat_thickness_m", 0, check));
-  if (!(width.min > 0)) return check.Error("blind.slat_width_m", "must be > 0");
-  if (!(thickness.min > 0)) return check.Error("blind.slat_thickness_m", "must be > 0");
-  if (const double slats = MaxSlatCount(window, spec, width.min); !(slats <= kMaxBlindSlats)) {
-    return check.Error("blind.slat_width_m", absl::StrCat("at its narrowest, ", width.min,
-                                                          " m, the blind would need up to ", slats,
-                                                          " slats; at most ", kMaxBlindSlats));
-  }
+      width, BuildParameter(b.slat_width_m(), "blind.slat_width_m", kSlatWidthBoundsM, "m", check));
+  FENESTRA_ASSIGN_OR_RETURN(spacing, BuildParameter(b.slat_spacing_m(), "blind.slat_spacing_m",
+                                                    kSlatSpacingBoundsM, "m", check));
+  FENESTRA_ASSIGN_OR_RETURN(thickness,
+                            BuildParameter(b.slat_thickness_m(), "blind.slat_thickness_m",
+                                           kSlatThicknessBoundsM, "m", check));
   spec.tilt_rad = tilt;
   spec.slat_width_m = width;
   spec.slat_spacing_m = spacing;
   spec.slat_thickness_m = thickness;
   if (b.has_wall_gap_m()) {
-    FENESTRA_RETURN_IF_ERROR(check.NonNegative(b.wall_gap_m(), "blind.wall_gap_m"));
+    FENESTRA_RETURN_IF_ERROR(CheckLength(b.wall_gap_m(), kMaxWallGapM, "blind.wall_gap_m", check));
     spec.wall_gap_m = b.wall_gap_m();
   }
-  FENESTRA_RETURN_IF_ERROR(check.NonNegative(b.side_margin_m(), "blind.side_margin_m"));
+  FENESTRA_RETURN_IF_ERROR(
+      CheckLength(b.side_margin_m(), kMaxSideMarginM, "blind.side_margin_m", check));
   spec.side_margin_m = b.side_margin_m();
+  if (absl::Status fits = CheckBlindFits(spec, window); !fits.ok()) {
+    return check.Error("blind", std::string(fits.message()));
+  }
   return spec;
 }
 
@@ -355,32 +412,26 @@ absl::StatusOr<Site> BuildSite(const v1::Scene& proto, const Checker& check) {
   return site;
 }
 
-}  // namespace
-
-absl::StatusOr<v1::Scene> ReadSceneProto(const std::string& path) {
-  v1::Scene scene;
-  FENESTRA_RETURN_IF_ERROR(ReadJsonProtoFile(path, "scene", &scene));
-  return scene;
+absl::StatusOr<Side> SideOf(const v1::Surface& s, const std::string& field, const Checker& check) {
+  switch (s.side()) {
+    case v1::SIDE_INDOOR:
+      return Side::kIndoor;
+    case v1::SIDE_OUTDOOR:
+      return Side::kOutdoor;
+    default:
+      return check.Error(field, absl::StrCat("must be SIDE_INDOOR or SIDE_OUTDOOR, got ",
+                                             static_cast<int>(s.side())));
+  }
 }
 
-absl::StatusOr<Scene> BuildScene(const v1::Scene& proto, const std::string& path) {
-  const Checker check(path);
-  Scene scene;
-  scene.name = proto.name();
-  scene.source_path = path;
-  FENESTRA_ASSIGN_OR_RETURN(materials, BuildMaterials(proto, check));
-  scene.materials = std::move(materials);
-
-  // Triangulate every surface
+// Triangulates every surface into scene.fixed; boxes are also kept as solids.
+absl::Status BuildSurfaces(const v1::Scene& proto, const Checker& check, Scene& scene) {
   for (int i = 0; i < proto.surfaces_size(); ++i) {
     const v1::Surface& s = proto.surfaces(i);
     const std::string field = absl::StrCat("surfaces[", i, "]");
     FENESTRA_ASSIGN_OR_RETURN(
         material, FindMaterial(scene.materials, s.material(), field + ".material", check));
-    if (s.side() == v1::SIDE_UNSPECIFIED) {
-      return check.Error(field + ".side", "must be SIDE_INDOOR or SIDE_OUTDOOR");
-    }
-    const Side side = s.side() == v1::SIDE_INDOOR ? Side::kIndoor : Side::kOutdoor;
+    FENESTRA_ASSIGN_OR_RETURN(side, SideOf(s, field + ".side", check));
     const uint32_t part = static_cast<uint32_t>(scene.fixed.part_names.size());
     scene.fixed.part_names.push_back(s.name().empty() ? field : s.name());
     absl::Status status;
@@ -390,7 +441,7 @@ absl::StatusOr<Scene> BuildScene(const v1::Scene& proto, const std::string& path
             AddPolygon(s.polygon(), field + ".polygon", material, side, part, check, scene.fixed);
         break;
       case v1::Surface::kBox:
-        status = AddBox(s.box(), field + ".box", material, side, part, check, scene.fixed);
+        status = AddBox(s.box(), field + ".box", material, side, part, check, scene);
         break;
       case v1::Surface::kObj:
         status = AddObj(s.obj(), field + ".obj", material, side, part, scene.materials, check,
@@ -401,7 +452,26 @@ absl::StatusOr<Scene> BuildScene(const v1::Scene& proto, const std::string& path
     }
     FENESTRA_RETURN_IF_ERROR(status);
   }
+  return absl::OkStatus();
+}
 
+}  // namespace
+
+absl::StatusOr<v1::Scene> ReadSceneProto(const std::string& path) {
+  v1::Scene scene;
+  FENESTRA_RETURN_IF_ERROR(ReadJsonProtoFile(path, "scene", &scene));
+  return scene;
+}
+
+absl::StatusOr<Scene> BuildScene(const v1::Scene& proto, const std::string& path) {
+  const Checker check(path);
+  FENESTRA_RETURN_IF_ERROR(CheckMessageText(proto, path + ": "));
+  Scene scene;
+  scene.name = proto.name();
+  scene.source_path = path;
+  FENESTRA_ASSIGN_OR_RETURN(materials, BuildMaterials(proto, check));
+  scene.materials = std::move(materials);
+  FENESTRA_RETURN_IF_ERROR(BuildSurfaces(proto, check, scene));
   FENESTRA_ASSIGN_OR_RETURN(window, BuildWindow(proto, check));
   scene.window = window;
   FENESTRA_ASSIGN_OR_RETURN(sensors, BuildSensors(proto, check));
@@ -429,6 +499,11 @@ TriangleMesh AssembleMesh(const Scene& scene, const BlindDesign& design) {
     GenerateBlind(scene.window, *scene.blind, design, part, mesh);
   }
   return mesh;
+}
+
+bool IsDegenerateTriangle(Vec3d a, Vec3d b, Vec3d c) {
+  const double edge = std::max({Length(b - a), Length(c - b), Length(a - c)});
+  return !(TriangleArea(a, b, c) > kShapeTolerance * edge * edge);
 }
 
 BlindDesign DefaultDesign(const Scene& scene) {

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
@@ -12,6 +13,21 @@
 #include "fenestra/v1/scene.pb.h"
 
 namespace fenestra {
+
+// Largest |coordinate| of any point of a scene [m]: polygon and box corners, the window's
+// corners, sensors. The tracers work in float, relative to the centre of the scene's
+// bounding box; at 1e5 m from it floats are 7.8 mm apart, the thickness of a slat, so a
+// scene that reaches further loses the blind's geometry. 100 km also holds any site model
+// (a city, a ground plane to the horizon).
+inline constexpr double kMaxCoordinateM = 1e5;
+// Narrowest window side [m]: a slit below 1 cm lets in no daylight worth simulating, and
+// the tracer divides by the window's area.
+inline constexpr double kMinWindowSideM = 0.01;
+// Thickest wall a window may sit in (`Window::depth_m`) [m]; castle walls reach 3 m.
+inline constexpr double kMaxWindowDepthM = 5.0;
+// Most sensors in a scene, grids expanded: bounds the memory of a scene file's grid (the
+// service has its own, lower limit).
+inline constexpr int64_t kMaxSceneSensors = 1'000'000;
 
 // The window rectangle (the opening's outer face), the interface of the two-stage method.
 struct Window {
@@ -27,8 +43,15 @@ struct Window {
 
 struct Sensor {
   std::string name;
-  Vec3d position;   // [m]
-  Vec3d direction;  // unit
+  Vec3d position;     // [m]
+  Vec3d direction;    // unit
+  std::string field;  // where the scene defines it, e.g. "sensors[3]" or "sensor_grids[0]"
+};
+
+// A Box surface: a solid no sensor may lie in.
+struct SolidBox {
+  Vec3d min, max;  // [m]
+  uint32_t part = 0;
 };
 
 struct Site {
@@ -48,6 +71,7 @@ struct Scene {
   size_t dropped_degenerate = 0;  // zero-area OBJ triangles left out
   Window window;
   std::vector<Sensor> sensors;
+  std::vector<SolidBox> solid_boxes;  // every Box surface, indoor and outdoor
   std::optional<BlindSpec> blind;
   Site site;
 };
@@ -57,6 +81,9 @@ absl::StatusOr<v1::Scene> ReadSceneProto(const std::string& path);
 
 // Validates a scene message and assembles its fixed geometry. `path` names the file in
 // errors and anchors relative OBJ and weather paths. Errors name the file, field and reason.
+// Checks every field on its own (text, enums, finite and bounded numbers, shapes, the
+// blind's physical ranges); how surfaces, window and sensors fit together as a room needs
+// the tracer: ValidateScene (core/trace/room_check.h) checks both.
 absl::StatusOr<Scene> BuildScene(const v1::Scene& proto, const std::string& path);
 
 // ReadSceneProto + BuildScene.
@@ -64,6 +91,10 @@ absl::StatusOr<Scene> LoadScene(const std::string& path);
 
 // The complete geometry at `design` (blind included when the scene has one).
 TriangleMesh AssembleMesh(const Scene& scene, const BlindDesign& design);
+
+// True when a triangle has no area by the polygon check (area <= 1e-6 x its longest
+// edge²): as a polygon surface it would be refused.
+bool IsDegenerateTriangle(Vec3d a, Vec3d b, Vec3d c);
 
 // The blind design the scene file states (its parameters' values), or an empty design.
 BlindDesign DefaultDesign(const Scene& scene);

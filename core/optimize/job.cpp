@@ -5,18 +5,23 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
-#include <numbers>
-#include <set>
+#include <span>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "core/common/content_hash.h"
 #include "core/common/json_proto.h"
 #include "core/common/status_macros.h"
 #include "core/dc/two_stage.h"
+#include "core/geometry/scene_proto.h"
 #include "core/metrics/annual_metrics.h"
 #include "core/metrics/illuminance.h"
 #include "core/metrics/metric_errors.h"
 #include "core/metrics/occupancy.h"
+#include "core/optimize/build_info.h"
+#include "core/optimize/design_variables.h"
+#include "core/optimize/final_check.h"
+#include "core/optimize/hourly_illuminance.h"
 #include "core/optimize/metric_objective.h"
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
@@ -33,29 +38,6 @@ double Since(std::chrono::steady_clock::time_point start) {
 
 absl::Status Invalid(const std::string& field, const std::string& reason) {
   return absl::InvalidArgumentError(absl::StrCat("job ", field, ": ", reason));
-}
-
-// The blind variables a job may set, with their physical limits.
-struct VariableInfo {
-  const char* name;
-  double lowest;
-  double highest;
-  double BlindDesign::*field;
-  ParameterRange BlindSpec::*range;
-};
-constexpr VariableInfo kVariables[] = {
-    {"alpha", -std::numbers::pi / 2, std::numbers::pi / 2, &BlindDesign::tilt_rad,
-     &BlindSpec::tilt_rad},
-    {"width", 1e-6, 1e3, &BlindDesign::slat_width_m, &BlindSpec::slat_width_m},
-    {"spacing", 0, 1e3, &BlindDesign::slat_spacing_m, &BlindSpec::slat_spacing_m},
-    {"thickness", 1e-6, 1e3, &BlindDesign::slat_thickness_m, &BlindSpec::slat_thickness_m},
-};
-
-const VariableInfo* FindVariable(const std::string& name) {
-  for (const VariableInfo& v : kVariables) {
-    if (name == v.name) return &v;
-  }
-  return nullptr;
 }
 
 absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric) {
@@ -80,96 +62,17 @@ absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric) {
   }
 }
 
-absl::Status ValidateVariables(const v1::Job& job, const Scene& scene) {
-  if (job.variables_size() > 0 && !scene.blind) {
-    return Invalid("variables", "the scene has no blind to design");
-  }
-  std::set<std::string> seen;
-  for (int i = 0; i < job.variables_size(); ++i) {
-    const v1::DesignVariable& v = job.variables(i);
-    const std::string field = absl::StrCat("variables[", i, "]");
-    const VariableInfo* info = FindVariable(v.name());
-    if (!info) {
-      return Invalid(field + ".name", absl::StrCat("unknown design variable '", v.name(),
-                                                   "' (known: alpha, width, spacing, thickness)"));
-    }
-    if (!seen.insert(v.name()).second) {
-      return Invalid(field + ".name", absl::StrCat("variable '", v.name(), "' given twice"));
-    }
-    for (double x : {v.lower(), v.upper(), v.start(), v.step()}) {
-      if (!std::isfinite(x)) return Invalid(field, "lower, upper, start and step must be finite");
-    }
-    if (v.lower() > v.upper()) {
-      return Invalid(field,
-                     absl::StrCat("empty design range: lower ", v.lower(), " > upper ", v.upper()));
-    }
-    if (v.start() < v.lower() || v.start() > v.upper()) {
-      return Invalid(field + ".start", absl::StrCat("start ", v.start(), " is outside [", v.lower(),
-                                                    ", ", v.upper(), "]"));
-    }
-    if (v.lower() < info->lowest || v.upper() > info->highest) {
-      return Invalid(field, absl::StrCat(v.name(), " must stay within [", info->lowest, ", ",
-                                         info->highest, "]"));
-    }
-    if (v.step() < 0) return Invalid(field + ".step", "must be >= 0");
-    if (v.name() == "width") {
-      const double slats = MaxSlatCount(scene.window, *scene.blind, v.lower());
-      if (!(slats <= kMaxBlindSlats)) {
-        return Invalid(field + ".lower",
-                       absl::StrCat("at width ", v.lower(), " m the blind would need up to ", slats,
-                                    " slats; at most ", kMaxBlindSlats));
-      }
-    }
-  }
-  return absl::OkStatus();
-}
-
-absl::Status FillDefaults(v1::Job& job) {
-  v1::Budget& budget = *job.mutable_budget();
-  if (budget.max_evaluations() == 0) budget.set_max_evaluations(150);
-  if (budget.max_evaluations() < 1) return Invalid("budget.max_evaluations", "must be >= 1");
-  if (!(budget.max_seconds() >= 0)) return Invalid("budget.max_seconds", "must be >= 0");
-  if (budget.failed_cycles_to_stop() == 0) budget.set_failed_cycles_to_stop(10);
-  if (budget.failed_cycles_to_stop() < -1) {
-    return Invalid("budget.failed_cycles_to_stop", "must be >= -1");
-  }
-  FENESTRA_ASSIGN_OR_RETURN(sampling, ResolveSampling(job.sampling()));
-  *job.mutable_sampling() = sampling;
-
-  v1::MetricSettings& m = *job.mutable_metrics();
-  if (m.udi_lower_lux() == 0) m.set_udi_lower_lux(100);
-  if (m.udi_upper_lux() == 0) m.set_udi_upper_lux(3000);
-  if (m.da_threshold_lux() == 0) m.set_da_threshold_lux(300);
-  if (m.sda_time_fraction_percent() == 0) m.set_sda_time_fraction_percent(50);
-  if (m.occupied_start_h() == 0 && m.occupied_end_h() == 0) {
-    m.set_occupied_start_h(8);
-    m.set_occupied_end_h(18);
-  }
-  if (!(m.udi_lower_lux() >= 0 && m.udi_lower_lux() < m.udi_upper_lux())) {
-    return Invalid("metrics", "need 0 <= udi_lower_lux < udi_upper_lux");
-  }
-  for (int i = 0; i < job.neighborhoods_size(); ++i) {
-    const v1::Neighborhood& n = job.neighborhoods(i);
-    if (n.variables() < 0 || !(n.radius() > 0 && n.radius() <= 1)) {
-      return Invalid(absl::StrCat("neighborhoods[", i, "]"),
-                     "needs variables >= 0 and radius in (0, 1]");
-    }
-  }
-  if (job.objective().goal() == v1::GOAL_TARGET && !std::isfinite(job.objective().target())) {
-    return Invalid("objective.target", "must be finite");
-  }
-  return ToSceneMetric(job.objective().metric()).status();
-}
-
 BlindDesign DesignAt(const PreparedJob& job, const std::vector<double>& x) {
   BlindDesign design = DefaultDesign(job.scene);
   for (int i = 0; i < job.job.variables_size(); ++i) {
-    design.*(FindVariable(job.job.variables(i).name())->field) = x[i];
+    design.*(FindDesignVariable(job.job.variables(i).name())->field) = x[i];
   }
   return design;
 }
 
-v1::Evaluation ToProto(const PreparedJob& job, const VnsRecord& record) {
+// `search_start_seconds`: when the search started, in the job's time.
+v1::Evaluation ToProto(const PreparedJob& job, const VnsRecord& record,
+                       double search_start_seconds) {
   v1::Evaluation e;
   e.set_index(record.index);
   for (int i = 0; i < job.job.variables_size(); ++i) {
@@ -181,12 +84,43 @@ v1::Evaluation ToProto(const PreparedJob& job, const VnsRecord& record) {
   e.set_cached(record.cached);
   e.set_improved(record.improved);
   e.set_neighborhood(record.neighborhood);
+  e.set_elapsed_seconds(search_start_seconds + record.elapsed_seconds);
   return e;
+}
+
+// The best value against time: the evaluations that moved the incumbent.
+void AddBestOverTime(v1::JobResult& result) {
+  for (const v1::Evaluation& e : result.history()) {
+    if (!e.improved()) continue;
+    v1::BestSoFar& best = *result.add_best_over_time();
+    best.set_elapsed_seconds(e.elapsed_seconds());
+    best.set_evaluation(e.index());
+    *best.mutable_value() = e.value();
+  }
 }
 
 void SetEstimate(v1::Estimate* out, double value, double standard_error) {
   out->set_value(value);
   out->set_standard_error(standard_error);
+}
+
+// What a result says about how it was made: the job as run (its scene self-contained), the
+// weather's location and the versions.
+void DescribeRun(const v1::Job& spec, const Scene& scene, const EpwLocation& location,
+                 v1::JobResult& result) {
+  v1::Job& job = *result.mutable_job();
+  job = spec;
+  job.clear_scene_file();
+  job.clear_weather_file();
+  *job.mutable_scene() = SelfContainedSceneProto(scene);
+  std::vector<std::string> place;
+  for (const std::string& part : {location.city, location.region, location.country}) {
+    if (!part.empty() && part != "-") place.push_back(part);
+  }
+  result.set_weather_location(absl::StrJoin(place, ", "));
+  for (const auto& [name, version] : ComponentVersions()) {
+    (*result.mutable_versions())[name] = version;
+  }
 }
 
 v1::Metrics ToProto(const AnnualMetricsEstimate& m) {
@@ -210,6 +144,101 @@ v1::Metrics ToProto(const AnnualMetricsEstimate& m) {
   return out;
 }
 
+// What the annual metrics of a job's designs need: the sky matrix, the occupied steps and
+// the lit analysed ones (the rest are dark or not counted), the metric settings and the
+// objective's metric.
+struct AnnualSetting {
+  SkyMatrix sky;
+  std::vector<bool> occupied;
+  std::vector<int> columns;  // lit analysed steps, ascending
+  int analysed_hours = 0;
+  MetricOptions options;
+  SceneMetric metric = SceneMetric::kUdiMean;
+};
+
+absl::StatusOr<AnnualSetting> MakeAnnualSetting(const PreparedJob& job) {
+  const v1::MetricSettings& m = job.job.metrics();
+  AnnualSetting setting;
+  SkyMatrixOptions sky_options;
+  sky_options.ground_reflectance = job.scene.site.ground_reflectance;
+  FENESTRA_ASSIGN_OR_RETURN(sky, BuildSkyMatrix(job.weather, sky_options));
+  setting.sky = std::move(sky);
+  std::vector<double> hours;
+  for (const SkyStep& step : setting.sky.steps) hours.push_back(step.hour);
+  FENESTRA_ASSIGN_OR_RETURN(occupied,
+                            OccupiedSteps(hours, {m.occupied_start_h(), m.occupied_end_h()}));
+  setting.occupied = std::move(occupied);
+  const HourBasis hour_basis = m.all_hours() ? HourBasis::kAllHours : HourBasis::kOccupied;
+  for (const int c : LitColumns(setting.sky.radiance)) {
+    if (hour_basis == HourBasis::kAllHours || setting.occupied[c]) setting.columns.push_back(c);
+  }
+  setting.analysed_hours = AnalysedHours(setting.occupied, hour_basis);
+  setting.options.udi_lower_lux = m.udi_lower_lux();
+  setting.options.udi_upper_lux = m.udi_upper_lux();
+  setting.options.da_threshold_lux = m.da_threshold_lux();
+  setting.options.sda_min_da_percent = m.sda_time_fraction_percent();
+  setting.options.hours = hour_basis;
+  FENESTRA_ASSIGN_OR_RETURN(metric, ToSceneMetric(job.job.objective().metric()));
+  setting.metric = metric;
+  return setting;
+}
+
+// The final check (final_check.h) of design `x` against `two_stage`, the one-stage metrics
+// taken as the search takes the two-stage ones. Cancelled as RunFinalCheck.
+absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualSetting& setting,
+                                           const std::vector<double>& x,
+                                           const v1::Estimate& two_stage, DcBackend* backend,
+                                           const std::function<bool()>& cancelled) {
+  const DaylightMetric metric =
+      [&](std::span<const Matrix> dc_batches) -> absl::StatusOr<Evaluation> {
+    FENESTRA_ASSIGN_OR_RETURN(
+        metrics,
+        AnnualMetricsWithErrors(dc_batches, std::span<const Matrix>(&setting.sky.radiance, 1),
+                                setting.columns, setting.occupied, setting.options));
+    return MetricEvaluation(std::move(metrics), setting.metric);
+  };
+  FinalCheckOptions options;
+  options.batches = job.job.sampling().batches();
+  options.seed = job.job.sampling().seed();
+  options.cancelled = cancelled;
+  absl::StatusOr<FinalCheckOutcome> outcome =
+      RunFinalCheck(job.scene, DesignAt(job, x), two_stage, metric, options, backend);
+  if (absl::IsCancelled(outcome.status())) return outcome.status();
+  if (!outcome.ok()) {
+    return absl::Status(outcome.status().code(),
+                        absl::StrCat("final check: ", outcome.status().message()));
+  }
+  if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&outcome->one_stage.payload)) {
+    *outcome->check.mutable_one_stage_metrics() = ToProto(*metrics);
+  }
+  return std::move(outcome->check);
+}
+
+// The final check of the search's best design into `result` (which holds the search's
+// history), then reported once more with the check. A cancel during the check leaves it out.
+absl::Status CheckBestDesign(const PreparedJob& job, const AnnualSetting& setting,
+                             const VnsResult& search, DcBackend* backend,
+                             const JobCallbacks& callbacks,
+                             std::chrono::steady_clock::time_point start, v1::JobResult& result) {
+  if (callbacks.stage) callbacks.stage("check");
+  absl::StatusOr<v1::FinalCheck> check =
+      CheckDesign(job, setting, search.best_x, result.best_value(), backend, callbacks.cancelled);
+  if (absl::IsCancelled(check.status())) return absl::OkStatus();
+  if (!check.ok()) return check.status();
+  *result.mutable_final_check() = *check;
+  if (callbacks.progress) {
+    JobProgress last;
+    last.evaluations = search.evaluations;
+    last.max_evaluations = job.job.budget().max_evaluations();
+    last.current = result.history(result.history_size() - 1);
+    last.best = result.history(search.best_index);
+    last.elapsed_seconds = Since(start);
+    last.final_check = *std::move(check);
+    callbacks.progress(last);
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<v1::Job> ReadJobFile(const std::string& path) {
@@ -218,86 +247,19 @@ absl::StatusOr<v1::Job> ReadJobFile(const std::string& path) {
   return job;
 }
 
-absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
-  v1::Sampling s = given;
-  if (s.outdoor_paths() == 0) s.set_outdoor_paths(20'000'000);
-  if (s.outdoor_bounces() == 0) s.set_outdoor_bounces(30);
-  if (s.indoor_paths_per_sensor() == 0) s.set_indoor_paths_per_sensor(200'000);
-  if (s.indoor_bounces() == 0) s.set_indoor_bounces(5);
-  if (s.seed() == 0) s.set_seed(1);
-  if (s.basis_cells() == 0) s.set_basis_cells(288);
-  if (s.backend().empty()) s.set_backend("auto");
-  if (s.batches() == 0) s.set_batches(8);
-  if (s.basis_cells() != 288 && s.basis_cells() != 1152) {
-    return Invalid("sampling.basis_cells", "must be 288 or 1152");
-  }
-  if (s.window_columns() < 0 || s.window_columns() > 16 || s.window_rows() < 0 ||
-      s.window_rows() > 16) {
-    return Invalid("sampling.window_columns/window_rows", "must be in [0, 16] (0 = automatic)");
-  }
-  const int64_t window_cells =
-      int64_t{s.basis_cells()} * std::max(1, s.window_columns()) * std::max(1, s.window_rows());
-  if (s.outdoor_paths() < 2 * window_cells) {
-    return Invalid("sampling.outdoor_paths",
-                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ")"));
-  }
-  if (s.batches() < 2 || s.batches() > 64) return Invalid("sampling.batches", "must be in [2, 64]");
-  if (s.indoor_paths_per_sensor() < s.batches()) {
-    return Invalid("sampling.indoor_paths_per_sensor", "must be at least the batch count");
-  }
-  if (s.outdoor_bounces() < -1 || s.indoor_bounces() < -1) {
-    return Invalid("sampling", "bounces must be >= 1, or -1 for unlimited");
-  }
-  if (s.backend() != "auto" && s.backend() != "cpu" && s.backend() != "cuda") {
-    return Invalid("sampling.backend",
-                   absl::StrCat("must be cpu, cuda or auto, got '", s.backend(), "'"));
-  }
-  return s;
-}
-
 absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& base_dir) {
-  PreparedJob prepared;
-  prepared.job = job;
-  const fs::path base(base_dir);
-
-  // The scene: inline or from a file next to the job
-  if (job.has_scene() && !job.scene_file().empty()) {
-    return Invalid("scene", "give either scene or scene_file, not both");
-  }
-  if (!job.scene_file().empty()) {
-    FENESTRA_ASSIGN_OR_RETURN(scene, LoadScene((base / job.scene_file()).string()));
-    prepared.scene = std::move(scene);
-  } else if (job.has_scene()) {
-    FENESTRA_ASSIGN_OR_RETURN(scene, BuildScene(job.scene(), (base / "job.scene").string()));
-    prepared.scene = std::move(scene);
-  } else {
-    return Invalid("scene", "a scene or scene_file is required");
-  }
-
+  FENESTRA_ASSIGN_OR_RETURN(prepared, ValidateJob(job, base_dir));
   // The weather: the job's, else the scene's site
   if (!job.weather_file().empty()) {
-    prepared.weather_file = (base / job.weather_file()).lexically_normal().string();
+    prepared.weather_file = (fs::path(base_dir) / job.weather_file()).lexically_normal().string();
   } else {
     prepared.weather_file = prepared.scene.site.weather_file;
   }
   if (prepared.weather_file.empty()) {
     return Invalid("weather_file", "no weather file (neither the job nor the scene's site)");
   }
-  if (!fs::is_regular_file(prepared.weather_file)) {
-    return Invalid("weather_file", absl::StrCat(prepared.weather_file, ": not found"));
-  }
-  FENESTRA_RETURN_IF_ERROR(ValidateVariables(job, prepared.scene));
-  FENESTRA_RETURN_IF_ERROR(FillDefaults(prepared.job));
-  // Enough outdoor paths for every window cell, the automatic parts resolved
-  const WindowParts parts = SamplingWindowParts(prepared.job.sampling(), prepared.scene.window);
-  const int64_t window_cells =
-      int64_t{prepared.job.sampling().basis_cells()} * parts.columns * parts.rows;
-  if (prepared.job.sampling().outdoor_paths() < 2 * window_cells) {
-    return Invalid("sampling.outdoor_paths",
-                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ": ",
-                                parts.columns, "x", parts.rows, " window parts x ",
-                                prepared.job.sampling().basis_cells(), " direction cells)"));
-  }
+  FENESTRA_ASSIGN_OR_RETURN(weather, ReadEpw(prepared.weather_file));
+  prepared.weather = std::move(weather);
   return prepared;
 }
 
@@ -362,23 +324,11 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   const v1::Job& spec = job.job;
   v1::JobResult result;
 
-  // Sky matrix, the occupied hours and the lit analysed ones (the rest are dark or not counted)
+  // Sky matrix, the occupied hours and the lit analysed ones, the metric settings
   if (callbacks.stage) callbacks.stage("sky");
-  FENESTRA_ASSIGN_OR_RETURN(weather, ReadEpw(job.weather_file));
-  SkyMatrixOptions sky_options;
-  sky_options.ground_reflectance = job.scene.site.ground_reflectance;
-  FENESTRA_ASSIGN_OR_RETURN(sky, BuildSkyMatrix(weather, sky_options));
-  std::vector<double> hours;
-  for (const SkyStep& step : sky.steps) hours.push_back(step.hour);
-  FENESTRA_ASSIGN_OR_RETURN(occupied, OccupiedSteps(hours, {spec.metrics().occupied_start_h(),
-                                                            spec.metrics().occupied_end_h()}));
-  const HourBasis hour_basis =
-      spec.metrics().all_hours() ? HourBasis::kAllHours : HourBasis::kOccupied;
-  std::vector<int> columns;
-  for (const int c : LitColumns(sky.radiance)) {
-    if (hour_basis == HourBasis::kAllHours || occupied[c]) columns.push_back(c);
-  }
-  const int analysed_hours = AnalysedHours(occupied, hour_basis);
+  FENESTRA_ASSIGN_OR_RETURN(setting, MakeAnnualSetting(job));
+  const std::vector<int>& columns = setting.columns;
+  const MetricOptions& metric_options = setting.options;
   result.mutable_timings()->set_sky_seconds(Since(start));
 
   // Outdoor matrix: the cached one, or traced now
@@ -399,13 +349,6 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
 
   // The objective: indoor stage with the same random streams for every design
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
-  MetricOptions metric_options;
-  metric_options.udi_lower_lux = spec.metrics().udi_lower_lux();
-  metric_options.udi_upper_lux = spec.metrics().udi_upper_lux();
-  metric_options.da_threshold_lux = spec.metrics().da_threshold_lux();
-  metric_options.sda_min_da_percent = spec.metrics().sda_time_fraction_percent();
-  metric_options.hours = hour_basis;
-  FENESTRA_ASSIGN_OR_RETURN(metric, ToSceneMetric(spec.objective().metric()));
   IndoorOptions indoor_options;
   indoor_options.paths_per_sensor = spec.sampling().indoor_paths_per_sensor();
   indoor_options.max_bounces = spec.sampling().indoor_bounces();
@@ -417,32 +360,22 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
     return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
   }
   // S over the lit analysed hours, in lux
-  Matrix lit_sky(sky.radiance.rows(), static_cast<Eigen::Index>(columns.size()));
-  for (size_t c = 0; c < columns.size(); ++c) {
-    lit_sky.col(c) = kWhiteEfficacyLumensPerWatt * sky.radiance.col(columns[c]);
-  }
+  const Matrix lit_sky = SkyColumnsInLux(setting.sky.radiance, columns);
 
   // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O) S, as
   // the backend does it best (on the CPU the paths recorded once, then replayed per design;
   // on the GPU I and E never leave the device), for the designs within the job's ranges
   if (callbacks.stage) callbacks.stage("indoor paths");
-  Scene ranged = job.scene;
-  if (ranged.blind) {
-    for (const v1::DesignVariable& v : spec.variables()) {
-      ParameterRange& range = (*ranged.blind).*(FindVariable(v.name())->range);
-      range.min = std::min(range.min, v.lower());
-      range.max = std::max(range.max, v.upper());
-    }
-  }
+  const Scene ranged = WithJobRanges(job.scene, spec);
   FENESTRA_ASSIGN_OR_RETURN(
       design_tallies,
       backend->MakeDesignTallies(ranged, indoor_options, outdoor->coefficients, lit_sky));
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     FENESTRA_ASSIGN_OR_RETURN(tallies, design_tallies->Tally(DesignAt(job, x), metric_options));
-    FENESTRA_ASSIGN_OR_RETURN(metrics,
-                              AnnualMetricsFromTallies(tallies, analysed_hours, metric_options));
-    return MetricEvaluation(std::move(metrics), metric);
+    FENESTRA_ASSIGN_OR_RETURN(
+        metrics, AnnualMetricsFromTallies(tallies, setting.analysed_hours, metric_options));
+    return MetricEvaluation(std::move(metrics), setting.metric);
   };
 
   // The search
@@ -475,20 +408,35 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   vns.seed = spec.sampling().seed();
   VnsCallbacks vns_callbacks;
   vns_callbacks.cancelled = callbacks.cancelled;
+  if (callbacks.stage) callbacks.stage("search");
+  const double search_start = Since(start);
   if (callbacks.progress) {
     vns_callbacks.progress = [&](const VnsProgress& p) {
       JobProgress progress;
       progress.evaluations = p.evaluations;
       progress.max_evaluations = p.max_evaluations;
-      progress.current = ToProto(job, *p.current);
-      progress.best = ToProto(job, *p.best);
+      progress.current = ToProto(job, *p.current, search_start);
+      progress.best = ToProto(job, *p.best, search_start);
       progress.elapsed_seconds = Since(start);
       progress.remaining_seconds = p.remaining_seconds;
       callbacks.progress(progress);
     };
   }
-  if (callbacks.stage) callbacks.stage("search");
   FENESTRA_ASSIGN_OR_RETURN(search, RunVns(variables, objective, vns, vns_callbacks));
+
+  // The best design's hourly illuminance, for reports and other tools
+  design_tallies.reset();  // the search's paths are no longer needed
+  if (search.evaluations > 0 && search.stop_reason != StopReason::kCancelled &&
+      static_cast<int64_t>(job.scene.sensors.size() * setting.sky.steps.size()) <=
+          kMaxHourlyIlluminanceValues) {
+    const auto hourly_start = std::chrono::steady_clock::now();
+    FENESTRA_ASSIGN_OR_RETURN(
+        hourly, DesignHourlyIlluminance(job.scene, DesignAt(job, search.best_x), indoor_options,
+                                        outdoor->coefficients, setting.sky, *backend));
+    *result.mutable_best_hourly() = std::move(hourly);
+    result.mutable_timings()->set_best_hourly_seconds(Since(hourly_start));
+  }
+  DescribeRun(spec, ranged, job.weather.location, result);
 
   // The result
   for (size_t i = 0; i < variables.size(); ++i) {
@@ -498,15 +446,37 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&search.best.payload)) {
     *result.mutable_best_metrics() = ToProto(*metrics);
   }
-  for (const VnsRecord& record : search.history) *result.add_history() = ToProto(job, record);
+  for (const VnsRecord& record : search.history) {
+    *result.add_history() = ToProto(job, record, search_start);
+  }
+  AddBestOverTime(result);
   result.set_evaluations(search.evaluations);
   result.set_stop_reason(std::string(StopReasonName(search.stop_reason)));
   result.mutable_timings()->set_evaluation_seconds(search.evaluation_seconds);
-  result.mutable_timings()->set_total_seconds(Since(start));
   result.set_outdoor_mean_relative_standard_error(
       MeanRelativeError(outdoor->coefficients, outdoor->standard_error, 0.01, false));
   result.set_backend(backend->Name());
+
+  // The final check: the best design by the one-stage method
+  if (spec.sampling().final_check() && search.stop_reason != StopReason::kCancelled) {
+    FENESTRA_RETURN_IF_ERROR(
+        CheckBestDesign(job, setting, search, backend.get(), callbacks, start, result));
+  }
+  result.mutable_timings()->set_total_seconds(Since(start));
   return result;
+}
+
+absl::StatusOr<v1::FinalCheck> CheckJobDesign(
+    const PreparedJob& job, const google::protobuf::Map<std::string, double>& design,
+    const v1::Estimate& two_stage) {
+  std::vector<double> x;
+  for (const v1::DesignVariable& v : job.job.variables()) {
+    const auto it = design.find(v.name());
+    x.push_back(it == design.end() ? v.start() : it->second);
+  }
+  FENESTRA_ASSIGN_OR_RETURN(setting, MakeAnnualSetting(job));
+  FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(job.job.sampling().backend()));
+  return CheckDesign(job, setting, x, two_stage, backend.get(), {});
 }
 
 }  // namespace fenestra

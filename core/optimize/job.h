@@ -6,12 +6,14 @@
 // local mode and the service's workers run exactly this.
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "absl/status/statusor.h"
 #include "core/common/radiance_matrix.h"
 #include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
+#include "core/sky/epw.h"
 #include "fenestra/v1/job.pb.h"
 
 namespace fenestra {
@@ -31,20 +33,36 @@ struct OutdoorMatrix {
   std::string key;  // OutdoorMatrixKey of what it was computed from
 };
 
-// A job checked and resolved: scene loaded, weather file found, variables known, defaults
-// filled in. Preparing does all validation, so a job that prepares runs.
+// Objective evaluations of a job whose budget leaves them open (job.proto).
+inline constexpr int kDefaultMaxEvaluations = 150;
+
+// A job checked and resolved: scene loaded, weather read, variables known, defaults filled
+// in. Preparing does all validation, so a job that prepares runs.
 struct PreparedJob {
   v1::Job job;  // with defaults filled in and paths resolved
   Scene scene;
   std::string weather_file;
+  EpwData weather;  // parsed (PrepareJob only)
 };
 
 // Reads a job file (the JSON form of fenestra.v1.Job; unknown fields are errors).
 absl::StatusOr<v1::Job> ReadJobFile(const std::string& path);
 
-// Validates `job` and fills in defaults. Relative scene_file/weather_file paths are taken
-// from `base_dir` (the job file's folder). Errors name the field and the reason.
+// The door for jobs: validates everything but the weather and fills in defaults. Every
+// string (CheckMessageText), the scene (BuildScene; a relative scene_file is taken from
+// `base_dir`), design variables within a real blind's bounds, budget, sampling, metric
+// settings, objective and neighborhoods (finite, in range, known enum values), then the room
+// (CheckRoom) with the blind at every design of the job's ranges. InvalidArgument naming the
+// field and the reason.
+absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& base_dir);
+
+// ValidateJob, then the weather: the job's weather_file (relative to `base_dir`), else the
+// scene's site.weather_file, read and parsed (ReadEpw).
 absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& base_dir);
+
+// `scene` with its blind's ranges widened to the job's design variables: what the search
+// may generate.
+Scene WithJobRanges(const Scene& scene, const v1::Job& job);
 
 // A content hash of everything the outdoor matrix depends on: the outdoor triangles and
 // their materials, the window, and the outdoor sampling settings (paths, bounces, seed,
@@ -64,7 +82,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& sampling);
 absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1::Sampling& sampling,
                                                    const std::function<bool()>& cancelled = {});
 
-// What a running job reports after each evaluation.
+// What a running job reports after each evaluation, and once more after its final check.
 struct JobProgress {
   int evaluations = 0;
   int max_evaluations = 0;
@@ -72,10 +90,12 @@ struct JobProgress {
   v1::Evaluation best;
   double elapsed_seconds = 0;
   double remaining_seconds = 0;  // estimate
+  // Only in the report after the final check: its result.
+  std::optional<v1::FinalCheck> final_check;
 };
 
 struct JobCallbacks {
-  // A stage starts: "sky", "outdoor", "search".
+  // A stage starts: "sky", "outdoor", "indoor paths", "search", "check" (the final check).
   std::function<void(const std::string& stage)> stage;
   std::function<void(const JobProgress&)> progress;
   // Polled between evaluations; true stops the search at that checkpoint.
@@ -83,9 +103,20 @@ struct JobCallbacks {
 };
 
 // Runs the job. `outdoor` may hold a cached outdoor matrix whose key equals
-// OutdoorMatrixKey(job); otherwise (null) it is computed. A cancelled job returns its
-// result so far with stop_reason "cancelled". `outdoor` with another key is an error.
+// OutdoorMatrixKey(job); otherwise (null) it is computed. After the search the best design
+// is checked by the one-stage method (sampling.final_check, core/optimize/final_check.h),
+// unless the job was cancelled; a cancel during the check leaves it out. A cancelled job
+// returns its result so far with stop_reason "cancelled". `outdoor` with another key is an
+// error.
 absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix* outdoor,
                                      const JobCallbacks& callbacks = {});
+
+// The final check (JobResult.final_check, core/optimize/final_check.h) of `design` (variable
+// name -> value, as JobResult.best_design; a variable left out is at its start) against the
+// two-stage estimate `two_stage` of the job's metric, with the job's sky, metric settings,
+// batches, seed and backend: what RunJob does after its search (bench/final_check_bench.cpp).
+absl::StatusOr<v1::FinalCheck> CheckJobDesign(
+    const PreparedJob& job, const google::protobuf::Map<std::string, double>& design,
+    const v1::Estimate& two_stage);
 
 }  // namespace fenestra

@@ -2,8 +2,11 @@
 
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/strings/ascii.h"
@@ -11,6 +14,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
+#include "core/common/text.h"
 
 namespace fenestra {
 namespace {
@@ -123,30 +127,172 @@ absl::Status ParseLocation(absl::string_view line, const LineErrors& error, EpwL
   for (int i = 0; i < 4; ++i) {
     const absl::string_view text = Trim(fields[first + i]);
     if (!ParseDouble(text, numbers[i].value)) {
-      return error(1, "LOCATION ", numbers[i].name, " is not a number: '", text, "'");
+      return error(1, "LOCATION ", numbers[i].name, " is not a number: ", QuoteText(text));
     }
     if (*numbers[i].value < numbers[i].lo || *numbers[i].value > numbers[i].hi) {
-      return error(1, "LOCATION ", numbers[i].name, " ", text, " is outside [", numbers[i].lo, ", ",
-                   numbers[i].hi, "]");
+      return error(1, "LOCATION ", numbers[i].name, " ", *numbers[i].value, " is outside [",
+                   numbers[i].lo, ", ", numbers[i].hi, "]");
     }
   }
   return absl::OkStatus();
 }
 
+// A day of the year, as EPW dates write it.
+struct MonthDay {
+  int month = 1;
+  int day = 1;
+  bool operator==(const MonthDay&) const = default;
+};
+
+// One DATA PERIODS entry: the rows cover whole days from `start` to `end`.
+struct DataPeriod {
+  MonthDay start, end;
+};
+
+// "m/d" or "m/d/yyyy" (the year is not used).
+bool ParseMonthDay(absl::string_view text, MonthDay* date) {
+  const std::vector<absl::string_view> parts = absl::StrSplit(Trim(text), '/');
+  if (parts.size() != 2 && parts.size() != 3) return false;
+  int year = 0;
+  if (!ParseInt(parts[0], &date->month) || !ParseInt(parts[1], &date->day)) return false;
+  if (parts.size() == 3 && !ParseInt(parts[2], &year)) return false;
+  return date->month >= 1 && date->month <= 12 && date->day >= 1 &&
+         date->day <= kDaysInMonth[date->month - 1];
+}
+
+// DATA PERIODS,<count>,<records per hour>, then per period: name, start weekday, start
+// date, end date.
 absl::Status ParseDataPeriods(absl::string_view line, int line_number, const LineErrors& error,
-                              int* records_per_hour) {
+                              int* records_per_hour, std::vector<DataPeriod>* periods) {
   const std::vector<absl::string_view> fields = absl::StrSplit(line, ',');
-  int periods = 0;
-  if (fields.size() < 3 || !ParseInt(fields[1], &periods) || periods < 1) {
+  int count = 0;
+  if (fields.size() < 3 || !ParseInt(fields[1], &count) || count < 1) {
     return error(line_number, "DATA PERIODS needs a number of periods >= 1");
   }
   if (!ParseInt(fields[2], records_per_hour) || *records_per_hour < 1 || *records_per_hour > 60 ||
       60 % *records_per_hour != 0) {
-    return error(line_number, "DATA PERIODS records per hour must divide 60, got '",
-                 Trim(fields[2]), "'");
+    return error(line_number, "DATA PERIODS records per hour must divide 60, got ",
+                 QuoteText(Trim(fields[2])));
+  }
+  if (fields.size() < 3 + 4 * static_cast<size_t>(count)) {
+    return error(line_number, "DATA PERIODS declares ", count, " periods but has ", fields.size(),
+                 " fields; each period needs 4 (name, start weekday, start date, end date)");
+  }
+  for (int k = 0; k < count; ++k) {
+    DataPeriod period;
+    const size_t start = 5 + 4 * static_cast<size_t>(k), end = start + 1;
+    if (!ParseMonthDay(fields[start], &period.start) || !ParseMonthDay(fields[end], &period.end)) {
+      return error(line_number, "DATA PERIODS fields ", start + 1, " and ", end + 1,
+                   " (start and end date of period ", k + 1, ") must be month/day dates, got ",
+                   QuoteText(Trim(fields[start])), " and ", QuoteText(Trim(fields[end])));
+    }
+    periods->push_back(period);
   }
   return absl::OkStatus();
 }
+
+// One time step: a day, an hour (1..24) and the interval within the hour (1..records per
+// hour).
+struct Step {
+  MonthDay date;
+  int hour = 1;
+  int interval = 1;
+  bool operator==(const Step&) const = default;
+};
+
+std::string DescribeStep(const Step& s, int records_per_hour) {
+  return absl::StrCat(
+      s.date.month, "/", s.date.day, " hour ", s.hour,
+      records_per_hour > 1 ? absl::StrCat(" minute ", s.interval * 60 / records_per_hour) : "");
+}
+
+MonthDay NextDay(MonthDay d) {
+  if (d.day < kDaysInMonth[d.month - 1]) return {d.month, d.day + 1};
+  return {d.month % 12 + 1, 1};
+}
+
+// Checks that the data rows are consecutive time steps covering the DATA PERIODS exactly:
+// each period from hour 1 of its start date to hour 24 of its end date. February 29 may be
+// present or left out.
+class StepSequence {
+ public:
+  StepSequence(std::vector<DataPeriod> periods, int records_per_hour)
+      : periods_(std::move(periods)), records_per_hour_(records_per_hour) {}
+
+  absl::Status Next(const EpwRecord& record, const LineErrors& error) {
+    if (period_ >= periods_.size()) {
+      return error(record.line, "a row after the end of the last data period (",
+                   DescribeEnd(periods_.back()), "); the DATA PERIODS line must cover every row");
+    }
+    const Step step{{record.month, record.day}, record.hour, IntervalOf(record)};
+    if (step.interval < 1) {
+      return error(record.line, DescribeColumn(kMinute), " ", record.minute,
+                   " is not the end of a ", 60 / records_per_hour_, "-minute interval");
+    }
+    if (!Expected(step)) {
+      return error(record.line, "columns 2-5 (month, day, hour, minute) give ",
+                   DescribeStep(step, records_per_hour_), ", expected ", DescribeExpected(),
+                   ": rows must be consecutive time steps of the DATA PERIODS");
+    }
+    previous_ = step;
+    last_line_ = record.line;
+    const DataPeriod& period = periods_[period_];
+    if (step.date == period.end && step.hour == 24 && step.interval == records_per_hour_) {
+      ++period_;
+      previous_.reset();
+    }
+    return absl::OkStatus();
+  }
+
+  // After the last row: every period must be complete.
+  absl::Status Finish(const LineErrors& error) const {
+    if (period_ >= periods_.size()) return absl::OkStatus();
+    if (!previous_) {
+      return error(last_line_, "the rows end before data period ", period_ + 1, " (",
+                   DescribeEnd(periods_[period_]), ") begins: the file is truncated");
+    }
+    return error(last_line_, "the rows end at ", DescribeStep(*previous_, records_per_hour_),
+                 ", before the end of data period ", period_ + 1, " (",
+                 DescribeEnd(periods_[period_]), "): the file is truncated");
+  }
+
+ private:
+  int IntervalOf(const EpwRecord& r) const {
+    if (records_per_hour_ == 1) return 1;
+    const int minutes = 60 / records_per_hour_;
+    return r.minute % minutes == 0 ? r.minute / minutes : 0;
+  }
+
+  bool Expected(const Step& step) const {
+    if (!previous_) return step == Step{periods_[period_].start, 1, 1};
+    Step next = *previous_;
+    if (next.interval < records_per_hour_)
+      return step == Step{next.date, next.hour, next.interval + 1};
+    if (next.hour < 24) return step == Step{next.date, next.hour + 1, 1};
+    const MonthDay day = NextDay(next.date);
+    if (step == Step{day, 1, 1}) return true;
+    // February 29 may be left out
+    return day == MonthDay{2, 29} && step == Step{MonthDay{3, 1}, 1, 1};
+  }
+
+  std::string DescribeExpected() const {
+    if (!previous_) {
+      return absl::StrCat(DescribeStep({periods_[period_].start, 1, 1}, records_per_hour_),
+                          " (the start of data period ", period_ + 1, ")");
+    }
+    return absl::StrCat("the step after ", DescribeStep(*previous_, records_per_hour_));
+  }
+
+  std::string DescribeEnd(const DataPeriod& p) const {
+    return absl::StrCat(p.start.month, "/", p.start.day, " to ", p.end.month, "/", p.end.day);
+  }
+
+  std::vector<DataPeriod> periods_;
+  int records_per_hour_;
+  size_t period_ = 0;
+  std::optional<Step> previous_;
+  int last_line_ = 0;
+};
 
 // Parses one data row into `record`; counts replaced radiation values in `replaced`.
 absl::Status ParseRecord(absl::string_view line, int line_number, int records_per_hour,
@@ -164,8 +310,8 @@ absl::Status ParseRecord(absl::string_view line, int line_number, int records_pe
                          &record->minute};
   for (int column = kYear; column <= kMinute; ++column) {
     if (!ParseInt(fields[column], date_fields[column])) {
-      return error(line_number, DescribeColumn(column), " is not an integer: '",
-                   Trim(fields[column]), "'");
+      return error(line_number, DescribeColumn(column),
+                   " is not an integer: ", QuoteText(Trim(fields[column])));
     }
   }
   if (record->month < 1 || record->month > 12) {
@@ -190,7 +336,7 @@ absl::Status ParseRecord(absl::string_view line, int line_number, int records_pe
     if (text.empty()) return absl::OkStatus();
     double v;
     if (!ParseDouble(text, &v)) {
-      return error(line_number, DescribeColumn(column), " is not a number: '", text, "'");
+      return error(line_number, DescribeColumn(column), " is not a number: ", QuoteText(text));
     }
     if (v < missing) *value = v;
     return absl::OkStatus();
@@ -221,18 +367,46 @@ absl::Status ParseRecord(absl::string_view line, int line_number, int records_pe
     const absl::string_view text = Trim(fields[column]);
     const bool empty = text.empty();
     if (!empty && !ParseDouble(text, value)) {
-      return error(line_number, DescribeColumn(column), " is not a number: '", text, "'");
+      return error(line_number, DescribeColumn(column), " is not a number: ", QuoteText(text));
     }
     const bool missing = empty || *value >= kMissingRadiation;
     if (!missing && *value >= 0) continue;
     if (!options.treat_missing_as_zero) {
       return error(line_number, DescribeColumn(column), " is ", missing ? "missing" : "negative",
-                   " ('", text, "'); the treat-missing-as-zero option reads such values as 0");
+                   " (", QuoteText(text),
+                   "); the treat-missing-as-zero option reads such values as 0");
     }
     *value = 0;
     ++*replaced;
   }
   return absl::OkStatus();
+}
+
+// Reads the header lines into `data` and `periods`; returns the index of the first line
+// after them.
+absl::StatusOr<size_t> ParseHeader(const std::vector<absl::string_view>& lines,
+                                   const LineErrors& error, EpwData* data,
+                                   std::vector<DataPeriod>* periods) {
+  if (lines.empty() || !absl::StartsWithIgnoreCase(lines[0], "LOCATION,")) {
+    return error(1, "an EPW file starts with a LOCATION line");
+  }
+  if (absl::Status s = ParseLocation(lines[0], error, &data->location); !s.ok()) return s;
+  for (size_t index = 1;; ++index) {
+    const int line_number = static_cast<int>(index) + 1;
+    if (index >= lines.size() || index >= kMaxHeaderLines) {
+      return error(line_number, "no DATA PERIODS line in the first ", kMaxHeaderLines,
+                   " lines of the header");
+    }
+    const absl::string_view line = Trim(lines[index]);
+    if (absl::StartsWithIgnoreCase(line, "DATA PERIODS,")) {
+      absl::Status s = ParseDataPeriods(line, line_number, error, &data->records_per_hour, periods);
+      if (!s.ok()) return s;
+      return index + 1;
+    }
+    if (!line.empty() && absl::ascii_isdigit(static_cast<unsigned char>(line[0]))) {
+      return error(line_number, "data row before the DATA PERIODS header line");
+    }
+  }
 }
 
 }  // namespace
@@ -244,36 +418,14 @@ absl::StatusOr<EpwData> ParseEpw(absl::string_view text, absl::string_view sourc
   const LineErrors error(data.source);
   std::vector<absl::string_view> lines = absl::StrSplit(text, '\n');
   for (absl::string_view& line : lines) absl::ConsumeSuffix(&line, "\r");
+  std::vector<DataPeriod> periods;
+  absl::StatusOr<size_t> first_row = ParseHeader(lines, error, &data, &periods);
+  if (!first_row.ok()) return first_row.status();
 
-  // Header: LOCATION first, DATA PERIODS last
-  if (lines.empty() || !absl::StartsWithIgnoreCase(lines[0], "LOCATION,")) {
-    return error(1, "an EPW file starts with a LOCATION line");
-  }
-  if (absl::Status s = ParseLocation(lines[0], error, &data.location); !s.ok()) return s;
-  size_t index = 1;
-  for (;; ++index) {
-    const int line_number = static_cast<int>(index) + 1;
-    if (index >= lines.size() || index >= kMaxHeaderLines) {
-      return error(line_number, "no DATA PERIODS line in the first ", kMaxHeaderLines,
-                   " lines of the header");
-    }
-    const absl::string_view line = Trim(lines[index]);
-    if (absl::StartsWithIgnoreCase(line, "DATA PERIODS,")) {
-      if (absl::Status s = ParseDataPeriods(line, line_number, error, &data.records_per_hour);
-          !s.ok()) {
-        return s;
-      }
-      ++index;
-      break;
-    }
-    if (!line.empty() && absl::ascii_isdigit(static_cast<unsigned char>(line[0]))) {
-      return error(line_number, "data row before the DATA PERIODS header line");
-    }
-  }
-
-  // Data rows
-  data.records.reserve(lines.size() - index);
-  for (; index < lines.size(); ++index) {
+  // Data rows, consecutive steps of the data periods
+  StepSequence sequence(std::move(periods), data.records_per_hour);
+  data.records.reserve(lines.size() - *first_row);
+  for (size_t index = *first_row; index < lines.size(); ++index) {
     if (Trim(lines[index]).empty()) continue;
     EpwRecord record;
     if (absl::Status s =
@@ -282,11 +434,13 @@ absl::StatusOr<EpwData> ParseEpw(absl::string_view text, absl::string_view sourc
         !s.ok()) {
       return s;
     }
+    if (absl::Status s = sequence.Next(record, error); !s.ok()) return s;
     data.records.push_back(std::move(record));
   }
   if (data.records.empty()) {
     return absl::InvalidArgumentError(absl::StrCat(data.source, ": no data rows"));
   }
+  if (absl::Status s = sequence.Finish(error); !s.ok()) return s;
   return data;
 }
 

@@ -27,6 +27,61 @@ TEST(ConfigTest, EmptyConfigGetsTheDocumentedDefaults) {
   EXPECT_EQ(config->limits().max_message_bytes(), 64 << 20);
   EXPECT_EQ(config->limits().max_queued_jobs(), 64);
   EXPECT_EQ(config->limits().max_sites(), 1000);
+  EXPECT_EQ(config->limits().max_data_dir_bytes(), int64_t{10} << 30);
+  EXPECT_EQ(config->limits().max_concurrent_heavy_requests(), 2);
+  EXPECT_EQ(config->limits().max_queued_jobs_per_user(), 8);
+  EXPECT_EQ(config->limits().max_sites_per_user(), 100);
+  EXPECT_EQ(config->limits().max_upload_bytes_per_user(), 256 << 20);
+  EXPECT_EQ(config->auth(), "token");
+  EXPECT_TRUE(config->tls_cert_file().empty());
+  EXPECT_FALSE(config->allow_plaintext());
+}
+
+TEST(ConfigTest, LoopbackAddresses) {
+  for (const char* local :
+       {"localhost:50051", "LocalHost:1", "127.0.0.1:50051", "127.8.9.10:0", "[::1]:50051",
+        "ipv4:127.0.0.1:5", "ipv6:[::1]:5", "[::ffff:127.0.0.1]:5", "unix:/run/fenestra.sock"}) {
+    EXPECT_TRUE(IsLoopbackAddress(local)) << local;
+  }
+  for (const char* exposed :
+       {"0.0.0.0:50051", "[::]:50051", ":50051", "192.168.1.4:50051", "fenestra.example.org:50051",
+        "localhost.example.org:1", "128.0.0.1:5", "[::2]:5", "[::1:5"}) {
+    EXPECT_FALSE(IsLoopbackAddress(exposed)) << exposed;
+  }
+}
+
+TEST(ConfigTest, BeyondLoopbackNeedsTlsAndTokens) {
+  v1::DaemonConfig config;
+  config.set_listen_address("0.0.0.0:50051");
+  absl::Status status = ResolveConfig(config).status();
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), HasSubstr("tls_cert_file and tls_key_file"));
+  EXPECT_THAT(status.message(), HasSubstr("allow_plaintext"));
+  config.set_allow_plaintext(true);
+  EXPECT_TRUE(ResolveConfig(config).ok());
+  config.set_allow_plaintext(false);
+  config.set_tls_cert_file("server.crt");
+  EXPECT_THAT(ResolveConfig(config).status().message(), HasSubstr("go together"));
+  config.set_tls_key_file("server.key");
+  EXPECT_TRUE(ResolveConfig(config).ok());
+  // auth none: loopback only, TLS or not
+  config.set_auth("none");
+  status = ResolveConfig(config).status();
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), HasSubstr("auth none"));
+  EXPECT_THAT(status.message(), HasSubstr("loopback"));
+  config.set_listen_address("127.0.0.1:0");
+  EXPECT_TRUE(ResolveConfig(config).ok());
+  config.set_auth("password");
+  EXPECT_THAT(ResolveConfig(config).status().message(), HasSubstr("auth must be token or none"));
+  // Client certificates are checked on top of the server's TLS
+  config = v1::DaemonConfig();
+  config.set_tls_client_ca_file("ca.pem");
+  EXPECT_THAT(ResolveConfig(config).status().message(), HasSubstr("tls_client_ca_file"));
+  config = v1::DaemonConfig();
+  config.mutable_limits()->set_max_upload_bytes_per_user(-1);
+  EXPECT_THAT(ResolveConfig(config).status().message(),
+              HasSubstr("limits.max_upload_bytes_per_user"));
 }
 
 TEST(ConfigTest, BadValuesNameTheField) {
@@ -62,7 +117,13 @@ TEST(ConfigTest, ExampleConfigurationResolves) {
   absl::StatusOr<v1::DaemonConfig> config =
       ReadConfigFile(FENESTRA_SOURCE_DIR "/deploy/fenestrad.example.json");
   ASSERT_TRUE(config.ok()) << config.status();
-  EXPECT_TRUE(ResolveConfig(*config).ok());
+  absl::StatusOr<v1::DaemonConfig> resolved = ResolveConfig(*config);
+  ASSERT_TRUE(resolved.ok()) << resolved.status();
+  // All interfaces, so TLS and tokens
+  EXPECT_FALSE(IsLoopbackAddress(resolved->listen_address()));
+  EXPECT_FALSE(resolved->tls_cert_file().empty());
+  EXPECT_FALSE(resolved->allow_plaintext());
+  EXPECT_EQ(resolved->auth(), "token");
 }
 
 }  // namespace

@@ -153,5 +153,64 @@ TEST(OutdoorCacheTest, FailuresAreNotCachedAndWaitsCanBeCancelled) {
   EXPECT_NE(cache.Find("slow"), nullptr);
 }
 
+TEST(OutdoorCacheTest, MatricesNoOneHoldsAreReadBackFromTheirFiles) {
+  const std::string dir = FreshDir("held");
+  OutdoorCache cache(dir);
+  ASSERT_TRUE(cache.Load().ok());
+  const OutdoorMatrix m = TestMatrix("k");
+  std::weak_ptr<const OutdoorMatrix> held;
+  {
+    auto shared = std::make_shared<const OutdoorMatrix>(m);
+    held = shared;
+    ASSERT_TRUE(cache.Put(shared).ok());
+    EXPECT_EQ(cache.Find("k"), shared);  // while held, the same object
+  }
+  EXPECT_TRUE(held.expired());  // the cache keeps no matrix alive
+  EXPECT_TRUE(cache.Contains("k"));
+  std::shared_ptr<const OutdoorMatrix> read = cache.Find("k");
+  ASSERT_NE(read, nullptr);
+  EXPECT_TRUE(read->coefficients == m.coefficients);
+  EXPECT_FALSE(cache.LoadedFromDisk("k"));  // this process computed it
+  // A file that turned corrupt since is dropped
+  read.reset();
+  std::ofstream(cache.PathFor("k"), std::ios::binary | std::ios::trunc) << "garbage";
+  EXPECT_EQ(cache.Find("k"), nullptr);
+  EXPECT_FALSE(cache.Contains("k"));
+  EXPECT_FALSE(fs::exists(cache.PathFor("k")));
+}
+
+TEST(OutdoorCacheTest, EvictionTakesTheLeastRecentlyUsedMatrixNoOneUses) {
+  const std::string dir = FreshDir("evict");
+  OutdoorCache cache(dir);
+  ASSERT_TRUE(cache.Load().ok());
+  for (const char* key : {"a", "b", "c", "d"}) {
+    ASSERT_TRUE(cache.Put(std::make_shared<const OutdoorMatrix>(TestMatrix(key))).ok());
+  }
+  std::shared_ptr<const OutdoorMatrix> held_c = cache.Find("c");      // a job holds c
+  (void)cache.Find("a");                                              // a used last
+  cache.SetInUse([](const std::string& key) { return key == "b"; });  // a site uses b
+  // Least recently used first: d, then a; never b (in use) or c (held)
+  ASSERT_TRUE(cache.EvictOne());
+  EXPECT_FALSE(cache.Contains("d"));
+  EXPECT_FALSE(fs::exists(cache.PathFor("d")));
+  ASSERT_TRUE(cache.EvictOne());
+  EXPECT_FALSE(cache.Contains("a"));
+  EXPECT_FALSE(cache.EvictOne());
+  EXPECT_TRUE(cache.Contains("b"));
+  EXPECT_TRUE(cache.Contains("c"));
+}
+
+TEST(OutdoorCacheTest, WithoutRoomAMatrixIsKeptInMemory) {
+  const std::string dir = FreshDir("no_room");
+  std::unique_ptr<DataDir> data_dir = *DataDir::Open(dir, 1000);
+  OutdoorCache cache(data_dir->outdoor_dir().string(), data_dir.get());
+  ASSERT_TRUE(cache.Load().ok());
+  const absl::Status put = cache.Put(std::make_shared<const OutdoorMatrix>(TestMatrix("k")));
+  EXPECT_EQ(put.code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_FALSE(fs::exists(cache.PathFor("k")));
+  ASSERT_NE(cache.Find("k"), nullptr);
+  EXPECT_FALSE(cache.EvictOne());  // nothing on disk to evict
+}
+
 }  // namespace
 }  // namespace fenestra

@@ -3,6 +3,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "tests/core/sky/epw_fixture.h"
@@ -10,6 +12,7 @@
 namespace fenestra {
 namespace {
 
+using ::fenestra::testing::EpwDay;
 using ::fenestra::testing::EpwHeader;
 using ::fenestra::testing::EpwRow;
 using ::testing::AllOf;
@@ -18,6 +21,13 @@ using ::testing::HasSubstr;
 const std::string kMontevideo =
     FENESTRA_SOURCE_DIR "/examples/weather/URY_Montevideo.865800_IWEC.epw";
 const std::string kSkyData = FENESTRA_SOURCE_DIR "/tests/data/sky/";
+
+// The header of a file holding the one day 1/1 (hour h is on line 8 + h).
+std::string OneDayHeader(double latitude_deg = 45, double longitude_deg = 7,
+                         double time_zone_hours = 1, int records_per_hour = 1) {
+  return EpwHeader(latitude_deg, longitude_deg, time_zone_hours, records_per_hour, "10", " 1/ 1",
+                   " 1/ 1");
+}
 
 std::string ErrorOf(const std::string& text, const EpwReadOptions& options = {}) {
   absl::StatusOr<EpwData> epw = ParseEpw(text, "fixture.epw", options);
@@ -111,7 +121,7 @@ TEST(EpwTest, TimeZoneOutOfRange) {
 
 TEST(EpwTest, TimeZonePlus14IsAccepted) {
   // Kiribati's Line Islands keep UTC+14.
-  const std::string text = EpwHeader(1.9, -157.4, 14) + EpwRow(1, 1, 1, 0, 0);
+  const std::string text = OneDayHeader(1.9, -157.4, 14) + EpwDay(1, 1);
   absl::StatusOr<EpwData> epw = ParseEpw(text, "fixture.epw");
   ASSERT_TRUE(epw.ok()) << epw.status();
   EXPECT_DOUBLE_EQ(epw->location.time_zone_hours, 14);
@@ -161,7 +171,7 @@ TEST(EpwTest, BadDates) {
 
 TEST(EpwTest, MissingRadiationFailsByDefault) {
   const std::string text =
-      EpwHeader(45, 7, 1) + EpwRow(1, 1, 11, 300, 100) + EpwRow(1, 1, 12, 9999, 100);
+      EpwHeader(45, 7, 1) + EpwRow(1, 1, 1, 300, 100) + EpwRow(1, 1, 2, 9999, 100);
   EXPECT_THAT(ErrorOf(text),
               AllOf(HasSubstr("fixture.epw, line 10:"),
                     HasSubstr("column 15 (direct normal radiation) is missing ('9999')")));
@@ -175,28 +185,31 @@ TEST(EpwTest, NegativeRadiationFailsByDefault) {
 }
 
 TEST(EpwTest, TreatMissingAsZeroCountsReplacements) {
-  const std::string text = EpwHeader(45, 7, 1) + EpwRow(1, 1, 11, 300, 100) +
-                           EpwRow(1, 1, 12, 9999, 100) + EpwRow(1, 1, 13, 9999, -1) +
-                           EpwRow(1, 1, 14, 200, 99999);
+  const std::string text = OneDayHeader() + EpwDay(1, 1,
+                                                   {{11, EpwRow(1, 1, 11, 300, 100)},
+                                                    {12, EpwRow(1, 1, 12, 9999, 100)},
+                                                    {13, EpwRow(1, 1, 13, 9999, -1)},
+                                                    {14, EpwRow(1, 1, 14, 200, 99999)}});
   absl::StatusOr<EpwData> epw =
       ParseEpw(text, "fixture.epw", EpwReadOptions{.treat_missing_as_zero = true});
   ASSERT_TRUE(epw.ok()) << epw.status();
   EXPECT_EQ(epw->replaced_radiation_values, 4);
-  ASSERT_EQ(epw->records.size(), 4u);
-  EXPECT_EQ(epw->records[0].direct_normal_wm2, 300);
-  EXPECT_EQ(epw->records[1].direct_normal_wm2, 0);
-  EXPECT_EQ(epw->records[1].diffuse_horizontal_wm2, 100);
-  EXPECT_EQ(epw->records[2].direct_normal_wm2, 0);
-  EXPECT_EQ(epw->records[2].diffuse_horizontal_wm2, 0);
-  EXPECT_EQ(epw->records[3].direct_normal_wm2, 200);
-  EXPECT_EQ(epw->records[3].diffuse_horizontal_wm2, 0);
+  ASSERT_EQ(epw->records.size(), 24u);
+  EXPECT_EQ(epw->records[10].direct_normal_wm2, 300);
+  EXPECT_EQ(epw->records[11].direct_normal_wm2, 0);
+  EXPECT_EQ(epw->records[11].diffuse_horizontal_wm2, 100);
+  EXPECT_EQ(epw->records[12].direct_normal_wm2, 0);
+  EXPECT_EQ(epw->records[12].diffuse_horizontal_wm2, 0);
+  EXPECT_EQ(epw->records[13].direct_normal_wm2, 200);
+  EXPECT_EQ(epw->records[13].diffuse_horizontal_wm2, 0);
 }
 
 TEST(EpwTest, OptionalFieldsMayBeMissing) {
-  const std::string text = EpwHeader(45, 7, 1) + EpwRow(1, 1, 12, 300, 100, 60, 99.9);
+  const std::string text =
+      OneDayHeader() + EpwDay(1, 1, {{12, EpwRow(1, 1, 12, 300, 100, 60, 99.9)}});
   absl::StatusOr<EpwData> epw = ParseEpw(text, "fixture.epw");
   ASSERT_TRUE(epw.ok()) << epw.status();
-  const EpwRecord& r = epw->records[0];
+  const EpwRecord& r = epw->records[11];
   EXPECT_FALSE(r.dew_point_c.has_value());
   EXPECT_FALSE(r.global_horizontal_wm2.has_value());
   EXPECT_FALSE(r.global_horizontal_lux.has_value());
@@ -206,7 +219,7 @@ TEST(EpwTest, OptionalFieldsMayBeMissing) {
 }
 
 TEST(EpwTest, CrLfLineEndingsAndTrailingBlankLines) {
-  std::string text = EpwHeader(45, 7, 1) + EpwRow(1, 1, 1, 0, 0) + EpwRow(1, 1, 2, 0, 0);
+  std::string text = OneDayHeader() + EpwDay(1, 1);
   std::string crlf;
   for (char c : text) {
     if (c == '\n') crlf += '\r';
@@ -215,17 +228,19 @@ TEST(EpwTest, CrLfLineEndingsAndTrailingBlankLines) {
   crlf += "\r\n\r\n";
   absl::StatusOr<EpwData> epw = ParseEpw(crlf, "fixture.epw");
   ASSERT_TRUE(epw.ok()) << epw.status();
-  EXPECT_EQ(epw->records.size(), 2u);
+  EXPECT_EQ(epw->records.size(), 24u);
   EXPECT_EQ(epw->records[1].hour, 2);
 }
 
 TEST(EpwTest, SubHourlyRecords) {
-  std::string text = EpwHeader(45, 7, 1, 4);
-  for (int minute : {15, 30, 45, 60}) text += EpwRow(1, 1, 1, 0, 0, minute);
+  std::string text = OneDayHeader(45, 7, 1, 4);
+  for (int hour = 1; hour <= 24; ++hour) {
+    for (int minute : {15, 30, 45, 60}) text += EpwRow(1, 1, hour, 0, 0, minute);
+  }
   absl::StatusOr<EpwData> epw = ParseEpw(text, "fixture.epw");
   ASSERT_TRUE(epw.ok()) << epw.status();
   EXPECT_EQ(epw->records_per_hour, 4);
-  ASSERT_EQ(epw->records.size(), 4u);
+  ASSERT_EQ(epw->records.size(), 96u);
   EXPECT_EQ(epw->records[0].minute, 15);
 }
 
@@ -239,6 +254,99 @@ TEST(EpwTest, LeapDayRows) {
 }
 
 TEST(EpwTest, NoDataRows) { EXPECT_THAT(ErrorOf(EpwHeader(45, 7, 1)), HasSubstr("no data rows")); }
+
+std::string Montevideo() {
+  std::ifstream in(kMontevideo, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The first `lines` lines of `text`.
+std::string FirstLines(const std::string& text, int lines) {
+  size_t end = 0;
+  for (int i = 0; i < lines; ++i) end = text.find('\n', end) + 1;
+  return text.substr(0, end);
+}
+
+// A file cut at a row boundary parses row by row; only the data period shows it is short.
+TEST(EpwTest, FileCutBetweenRowsIsTruncated) {
+  EXPECT_THAT(
+      ErrorOf(FirstLines(Montevideo(), 8 + 4000)),
+      AllOf(HasSubstr("fixture.epw, line 4008:"), HasSubstr("the rows end at 6/16 hour 16"),
+            HasSubstr("before the end of data period 1 (1/1 to 12/31)"), HasSubstr("truncated")));
+  // Cut inside the last field of a row: still 35 fields, so the row parses
+  std::string cut = FirstLines(Montevideo(), 8 + 100);
+  cut.resize(cut.size() - 3);
+  EXPECT_THAT(ErrorOf(cut), AllOf(HasSubstr("line 108:"), HasSubstr("truncated")));
+}
+
+TEST(EpwTest, MissingAndRepeatedHours) {
+  std::string gap = OneDayHeader();
+  for (int hour = 1; hour <= 24; ++hour) {
+    if (hour != 7) gap += EpwRow(1, 1, hour, 0, 0);
+  }
+  EXPECT_THAT(ErrorOf(gap), AllOf(HasSubstr("line 15:"),
+                                  HasSubstr("columns 2-5 (month, day, "
+                                            "hour, minute) give 1/1 hour 8"),
+                                  HasSubstr("expected the step after 1/1 hour 6")));
+  const std::string repeated = OneDayHeader() + EpwDay(1, 1, {{5, EpwRow(1, 1, 4, 0, 0)}});
+  EXPECT_THAT(ErrorOf(repeated), AllOf(HasSubstr("line 13:"), HasSubstr("give 1/1 hour 4")));
+  EXPECT_THAT(ErrorOf(OneDayHeader() + EpwRow(1, 1, 2, 0, 0)),
+              AllOf(HasSubstr("line 9:"), HasSubstr("expected 1/1 hour 1 (the start of data "
+                                                    "period 1)")));
+  EXPECT_THAT(ErrorOf(OneDayHeader() + EpwDay(1, 1) + EpwRow(1, 2, 1, 0, 0)),
+              AllOf(HasSubstr("line 33:"), HasSubstr("after the end of the last data period")));
+  std::string quarter = OneDayHeader(45, 7, 1, 4) + EpwRow(1, 1, 1, 0, 0, 10);
+  EXPECT_THAT(ErrorOf(quarter),
+              AllOf(HasSubstr("line 9:"), HasSubstr("column 5 (minute) 10 is not the end "
+                                                    "of a 15-minute interval")));
+}
+
+TEST(EpwTest, FebruaryTheTwentyNinthMayBeLeftOut) {
+  const std::string text =
+      EpwHeader(45, 7, 1, 1, "10", " 2/28", " 3/ 1") + EpwDay(2, 28) + EpwDay(3, 1);
+  absl::StatusOr<EpwData> epw = ParseEpw(text, "fixture.epw");
+  ASSERT_TRUE(epw.ok()) << epw.status();
+  EXPECT_EQ(epw->records.size(), 48u);
+}
+
+TEST(EpwTest, BadDataPeriodDates) {
+  EXPECT_THAT(ErrorOf(EpwHeader(45, 7, 1, 1, "10", " 1/ 1", "13/40") + EpwDay(1, 1)),
+              AllOf(HasSubstr("line 8:"), HasSubstr("start and end date of period 1"),
+                    HasSubstr("'13/40'")));
+  EXPECT_THAT(ErrorOf("LOCATION,A,-,B,C,0,45,7,1,10\nDATA PERIODS,2,1,Data,Sunday, 1/ 1,12/31\n"),
+              AllOf(HasSubstr("line 2:"), HasSubstr("declares 2 periods")));
+}
+
+// Not-a-number, infinity and garbage are refused naming the line and the column; the text
+// quoted in the message is escaped, so a file cannot inject a line break into a log.
+TEST(EpwTest, NotANumberGarbageAndControlCharacters) {
+  for (const std::string bad : {"nan", "NaN", "inf", "-Infinity", "1e999"}) {
+    std::string row = EpwRow(1, 1, 1, 300, 100);
+    row.replace(row.find(",300,"), 5, "," + bad + ",");
+    EXPECT_THAT(ErrorOf(OneDayHeader() + row),
+                AllOf(HasSubstr("line 9:"), HasSubstr("column 15 (direct normal radiation) is "
+                                                      "not a number: '" +
+                                                      bad + "'")));
+  }
+  std::string row = EpwRow(1, 1, 1, 300, 100);
+  row.replace(row.find(",100,"), 5, ",1\n2024 [info] forged\x1b[0m,");
+  const std::string message = ErrorOf(OneDayHeader() + row);
+  EXPECT_THAT(message, AllOf(HasSubstr("line 9:"), HasSubstr("expected 35 comma-separated")));
+  row = EpwRow(1, 1, 1, 300, 100);
+  row.replace(row.find(",100,"), 5, ",1\x1b[31m,");
+  EXPECT_THAT(ErrorOf(OneDayHeader() + row),
+              HasSubstr("column 16 (diffuse horizontal radiation) is not a number: '1\\x1b[31m'"));
+  EXPECT_THAT(ErrorOf(std::string("\x7f"
+                                  "ELF\x02\x01\x01\0\0garbage",
+                                  16)),
+              AllOf(HasSubstr("line 1:"), HasSubstr("starts with a LOCATION line")));
+  const std::string long_field(100000, '7');
+  row = EpwRow(1, 1, 1, 300, 100);
+  row.replace(row.find(",100,"), 5, ",x" + long_field + ",");
+  EXPECT_LT(ErrorOf(OneDayHeader() + row).size(), 300u);
+}
 
 }  // namespace
 }  // namespace fenestra

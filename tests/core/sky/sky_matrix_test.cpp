@@ -15,8 +15,8 @@ namespace fenestra {
 namespace {
 
 using ::fenestra::testing::ConstantYearEpw;
-using ::fenestra::testing::EpwHeader;
-using ::fenestra::testing::EpwRow;
+using ::fenestra::testing::Step;
+using ::fenestra::testing::Weather;
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180;
@@ -78,6 +78,10 @@ absl::StatusOr<SkyMatrix> SkyOf(const std::string& epw_text, const SkyMatrixOpti
   absl::StatusOr<EpwData> epw = ParseEpw(epw_text, "fixture.epw");
   if (!epw.ok()) return epw.status();
   return BuildSkyMatrix(*epw, options);
+}
+
+absl::StatusOr<SkyMatrix> SkyOf(const EpwData& weather, const SkyMatrixOptions& options = {}) {
+  return BuildSkyMatrix(weather, options);
 }
 
 class GendaymtxReferenceTest : public ::testing::TestWithParam<SkyQuantity> {};
@@ -170,11 +174,12 @@ TEST(SkyMatrixTest, StepCentres) {
 }
 
 TEST(SkyMatrixTest, SubHourlyFile) {
-  std::string text = EpwHeader(-34.83, -56.0, -3, 4);
+  std::vector<EpwRecord> steps;
   for (int hour = 12; hour <= 13; ++hour) {
-    for (int minute : {15, 30, 45, 60}) text += EpwRow(6, 21, hour, 400, 100, minute);
+    for (int minute : {15, 30, 45, 60}) steps.push_back(Step(6, 21, hour, 400, 100, minute));
   }
-  absl::StatusOr<SkyMatrix> sky = SkyOf(text);
+  const EpwData weather = Weather(-34.83, -56.0, -3, steps, 4);
+  absl::StatusOr<SkyMatrix> sky = SkyOf(weather);
   ASSERT_TRUE(sky.ok()) << sky.status();
   ASSERT_EQ(sky->steps.size(), 8u);
   EXPECT_DOUBLE_EQ(sky->steps[0].hour, 11.125);
@@ -197,9 +202,9 @@ TEST(SkyMatrixTest, LeapDayShiftsLaterDays) {
 }
 
 TEST(SkyMatrixTest, NightColumnsAreZeroAndFlagged) {
-  const std::string text = EpwHeader(45, 7, 1) + EpwRow(6, 21, 1, 0, 0) +
-                           EpwRow(6, 21, 13, 700, 120) + EpwRow(6, 21, 23, 0, 0);
-  absl::StatusOr<SkyMatrix> sky = SkyOf(text);
+  const EpwData weather =
+      Weather(45, 7, 1, {Step(6, 21, 1, 0, 0), Step(6, 21, 13, 700, 120), Step(6, 21, 23, 0, 0)});
+  absl::StatusOr<SkyMatrix> sky = SkyOf(weather);
   ASSERT_TRUE(sky.ok()) << sky.status();
   EXPECT_EQ(sky->daytime_steps, 1);
   EXPECT_FALSE(sky->steps[0].daytime);
@@ -226,11 +231,13 @@ TEST(SkyMatrixTest, AllZeroRadiation) {
 TEST(SkyMatrixTest, ColumnConservesTheInput) {
   absl::StatusOr<SkyPatches> patches = SkyPatches::Reinhart(1);
   ASSERT_TRUE(patches.ok());
-  const std::string text = EpwHeader(45, 7, 1) + EpwRow(6, 21, 13, 700, 120);
+  const EpwData weather = Weather(45, 7, 1, {Step(6, 21, 13, 700, 120)});
   for (SkyQuantity quantity : {SkyQuantity::kSolar, SkyQuantity::kVisible}) {
-    absl::StatusOr<SkyMatrix> all = SkyOf(text, {.quantity = quantity});
-    absl::StatusOr<SkyMatrix> sky_only = SkyOf(text, {.quantity = quantity, .include_sun = false});
-    absl::StatusOr<SkyMatrix> sun_only = SkyOf(text, {.quantity = quantity, .include_sky = false});
+    absl::StatusOr<SkyMatrix> all = SkyOf(weather, {.quantity = quantity});
+    absl::StatusOr<SkyMatrix> sky_only =
+        SkyOf(weather, {.quantity = quantity, .include_sun = false});
+    absl::StatusOr<SkyMatrix> sun_only =
+        SkyOf(weather, {.quantity = quantity, .include_sky = false});
     ASSERT_TRUE(all.ok() && sky_only.ok() && sun_only.ok());
     const double alt = all->steps[0].solar_altitude_rad;
     const PerezSkyCondition c =
@@ -256,7 +263,7 @@ TEST(SkyMatrixTest, ColumnConservesTheInput) {
     }
   }
   // Solar output: the sky patches give back the measured diffuse irradiance.
-  absl::StatusOr<SkyMatrix> solar = SkyOf(text, {.quantity = SkyQuantity::kSolar});
+  absl::StatusOr<SkyMatrix> solar = SkyOf(weather, {.quantity = SkyQuantity::kSolar});
   ASSERT_TRUE(solar.ok());
   double horizontal = 0;
   for (int bin = 1; bin < 146; ++bin) {
@@ -269,22 +276,22 @@ TEST(SkyMatrixTest, ColumnConservesTheInput) {
 }
 
 TEST(SkyMatrixTest, GroundReflectance) {
-  const std::string text = EpwHeader(45, 7, 1) + EpwRow(6, 21, 13, 700, 120);
-  absl::StatusOr<SkyMatrix> a = SkyOf(text, {.ground_reflectance = 0.2});
-  absl::StatusOr<SkyMatrix> b = SkyOf(text, {.ground_reflectance = 0.5});
-  absl::StatusOr<SkyMatrix> black = SkyOf(text, {.ground_reflectance = 0});
+  const EpwData weather = Weather(45, 7, 1, {Step(6, 21, 13, 700, 120)});
+  absl::StatusOr<SkyMatrix> a = SkyOf(weather, {.ground_reflectance = 0.2});
+  absl::StatusOr<SkyMatrix> b = SkyOf(weather, {.ground_reflectance = 0.5});
+  absl::StatusOr<SkyMatrix> black = SkyOf(weather, {.ground_reflectance = 0});
   ASSERT_TRUE(a.ok() && b.ok() && black.ok());
   EXPECT_NEAR(b->radiance(0, 0), 2.5 * a->radiance(0, 0), 1e-12);
   EXPECT_EQ(black->radiance(0, 0), 0);
   EXPECT_EQ(a->radiance(77, 0), b->radiance(77, 0));
-  EXPECT_FALSE(SkyOf(text, {.ground_reflectance = 1.5}).ok());
-  EXPECT_FALSE(SkyOf(text, {.ground_reflectance = -0.1}).ok());
-  EXPECT_FALSE(SkyOf(text, {.mf = 0}).ok());
+  EXPECT_FALSE(SkyOf(weather, {.ground_reflectance = 1.5}).ok());
+  EXPECT_FALSE(SkyOf(weather, {.ground_reflectance = -0.1}).ok());
+  EXPECT_FALSE(SkyOf(weather, {.mf = 0}).ok());
 }
 
 TEST(SkyMatrixTest, DiffuseZeroDirectPositive) {
-  const std::string text = EpwHeader(45, 7, 1) + EpwRow(6, 21, 13, 800, 0);
-  absl::StatusOr<SkyMatrix> sky = SkyOf(text);
+  const EpwData weather = Weather(45, 7, 1, {Step(6, 21, 13, 800, 0)});
+  absl::StatusOr<SkyMatrix> sky = SkyOf(weather);
   ASSERT_TRUE(sky.ok()) << sky.status();
   ExpectFiniteAndNonNegative(*sky);
   EXPECT_EQ(sky->daytime_steps, 1);
@@ -300,9 +307,9 @@ TEST(SkyMatrixTest, DiffuseZeroDirectPositive) {
 
 TEST(SkyMatrixTest, DirectWithSunBelowHorizon) {
   // 23:00-24:00 in June at 45 N: the sun is well below the horizon.
-  const std::string text = EpwHeader(45, 7, 1) + EpwRow(6, 21, 24, 300, 0) +
-                           EpwRow(6, 21, 23, 300, 40) + EpwRow(6, 21, 22, 0, 5);
-  absl::StatusOr<SkyMatrix> sky = SkyOf(text);
+  const EpwData weather =
+      Weather(45, 7, 1, {Step(6, 21, 24, 300, 0), Step(6, 21, 23, 300, 40), Step(6, 21, 22, 0, 5)});
+  absl::StatusOr<SkyMatrix> sky = SkyOf(weather);
   ASSERT_TRUE(sky.ok()) << sky.status();
   ExpectFiniteAndNonNegative(*sky);
   EXPECT_EQ(sky->direct_with_sun_down_steps, 2);
@@ -325,10 +332,11 @@ TEST(SkyMatrixTest, DirectWithSunBelowHorizon) {
 TEST(SkyMatrixTest, ClearnessAndBrightnessExtremes) {
   // Very clear (epsilon clamped at 11.9), very dark (delta clamped at 0.01), very bright
   // low sun (delta clamped at 0.6) and an overcast sky.
-  const std::string text = EpwHeader(45, 7, 1) + EpwRow(6, 21, 13, 1100, 0.5) +
-                           EpwRow(6, 21, 12, 0, 0.01) + EpwRow(6, 21, 6, 0, 600) +
-                           EpwRow(6, 21, 11, 0, 400) + EpwRow(6, 21, 10, 1e-5, 1e-5);
-  absl::StatusOr<SkyMatrix> sky = SkyOf(text);
+  const EpwData weather =
+      Weather(45, 7, 1,
+              {Step(6, 21, 13, 1100, 0.5), Step(6, 21, 12, 0, 0.01), Step(6, 21, 6, 0, 600),
+               Step(6, 21, 11, 0, 400), Step(6, 21, 10, 1e-5, 1e-5)});
+  absl::StatusOr<SkyMatrix> sky = SkyOf(weather);
   ASSERT_TRUE(sky.ok()) << sky.status();
   ExpectFiniteAndNonNegative(*sky);
   absl::StatusOr<SkyPatches> patches = SkyPatches::Reinhart(1);
@@ -358,20 +366,20 @@ TEST(SkyMatrixTest, PolarSites) {
 }
 
 TEST(SkyMatrixTest, ReinhartMf2) {
-  const std::string text =
-      EpwHeader(-34.83, -56, -3) + EpwRow(1, 15, 14, 650, 110) + EpwRow(1, 15, 3, 0, 0);
-  absl::StatusOr<SkyMatrix> sky = SkyOf(text, {.mf = 2});
+  const EpwData weather =
+      Weather(-34.83, -56, -3, {Step(1, 15, 14, 650, 110), Step(1, 15, 3, 0, 0)});
+  absl::StatusOr<SkyMatrix> sky = SkyOf(weather, {.mf = 2});
   ASSERT_TRUE(sky.ok()) << sky.status();
   EXPECT_EQ(sky->radiance.rows(), 578);
   ExpectFiniteAndNonNegative(*sky);
-  absl::StatusOr<SkyMatrix> mf1 = SkyOf(text);
+  absl::StatusOr<SkyMatrix> mf1 = SkyOf(weather);
   ASSERT_TRUE(mf1.ok());
   absl::StatusOr<SkyPatches> p1 = SkyPatches::Reinhart(1);
   absl::StatusOr<SkyPatches> p2 = SkyPatches::Reinhart(2);
   ASSERT_TRUE(p1.ok() && p2.ok());
   // Same sun flux and same ground in both bases
-  absl::StatusOr<SkyMatrix> sun1 = SkyOf(text, {.include_sky = false});
-  absl::StatusOr<SkyMatrix> sun2 = SkyOf(text, {.mf = 2, .include_sky = false});
+  absl::StatusOr<SkyMatrix> sun1 = SkyOf(weather, {.include_sky = false});
+  absl::StatusOr<SkyMatrix> sun2 = SkyOf(weather, {.mf = 2, .include_sky = false});
   ASSERT_TRUE(sun1.ok() && sun2.ok());
   EXPECT_NEAR(SkyFlux(*p1, sun1->radiance, 0), SkyFlux(*p2, sun2->radiance, 0), 1e-9);
   EXPECT_DOUBLE_EQ(sky->radiance(0, 0), mf1->radiance(0, 0));

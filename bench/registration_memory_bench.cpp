@@ -1,0 +1,180 @@
+// The memory fenestrad takes for a large site registration: a real daemon (a child process
+// with a temporary data directory) is sent the city office with 600 000 extra outdoor
+// triangles (a 60 MB request) through gRPC, and its resident memory (/proc/PID/status
+// VmRSS, sampled every 5 ms, and VmHWM, the kernel's peak) is recorded before, at the peak
+// and after each step: the registration and its outdoor matrix, two more registrations,
+// deleting every site. A SiteService.List during a registration is timed too.
+//
+//   registration_memory_bench [--triangles N] [--outdoor-paths N] [--fenestrad PATH]
+#include <fcntl.h>
+#include <grpcpp/grpcpp.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "fenestra/v1/service.grpc.pb.h"
+#include "tests/server/large_registration.h"
+
+namespace fenestra {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Samples the daemon's VmRSS every 5 ms while alive; Peak() is the largest since Reset().
+class RssSampler {
+ public:
+  explicit RssSampler(pid_t pid) : pid_(pid), thread_([this] { Loop(); }) {}
+  ~RssSampler() {
+    stop_ = true;
+    thread_.join();
+  }
+  void Reset() { peak_ = ProcessStatusMiB(pid_, "VmRSS"); }
+  double Peak() const { return peak_; }
+
+ private:
+  void Loop() {
+    while (!stop_) {
+      const double rss = ProcessStatusMiB(pid_, "VmRSS");
+      if (rss > peak_) peak_ = rss;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+  pid_t pid_;
+  std::atomic<bool> stop_ = false;
+  std::atomic<double> peak_ = 0;
+  std::thread thread_;
+};
+
+int Main(int argc, char** argv) {
+  int triangles = 600'000;
+  int64_t outdoor_paths = 20'000;
+  std::string fenestrad = FENESTRAD;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (std::string(argv[i]) == "--triangles") triangles = std::stoi(argv[i + 1]);
+    if (std::string(argv[i]) == "--outdoor-paths") outdoor_paths = std::stoll(argv[i + 1]);
+    if (std::string(argv[i]) == "--fenestrad") fenestrad = argv[i + 1];
+  }
+  const std::string dir =
+      fs::temp_directory_path() / ("registration_memory_bench." + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string port_file = dir + "/port";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    const int log = open((dir + "/fenestrad.log").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(log, STDERR_FILENO);
+    execl(fenestrad.c_str(), fenestrad.c_str(), "--listen", "127.0.0.1:0", "--data-dir",
+          (dir + "/data").c_str(), "--port-file", port_file.c_str(), "--workers", "1", "--backend",
+          "cpu", "--auth", "none", nullptr);
+    _exit(127);
+  }
+  while (!fs::exists(port_file)) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  int port = 0;
+  std::ifstream(port_file) >> port;
+  auto channel = grpc::CreateCustomChannel("127.0.0.1:" + std::to_string(port),
+                                           grpc::InsecureChannelCredentials(), [] {
+                                             grpc::ChannelArguments args;
+                                             args.SetMaxSendMessageSize(128 << 20);
+                                             args.SetMaxReceiveMessageSize(128 << 20);
+                                             return args;
+                                           }());
+  auto sites = v1::SiteService::NewStub(channel);
+  RssSampler sampler(pid);
+  const auto list = [&] {
+    grpc::ClientContext context;
+    v1::ListSitesResponse response;
+    (void)sites->List(&context, v1::ListSitesRequest(), &response);
+    return response;
+  };
+  const auto wait_ready = [&] {
+    while (true) {
+      bool computing = false;
+      const v1::ListSitesResponse listed = list();
+      for (const v1::SiteInfo& s : listed.sites()) {
+        computing |= s.state() == v1::SITE_STATE_COMPUTING;
+      }
+      if (!computing) return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  };
+  const auto settle_and_report = [&](const std::string& step, double before, double seconds) {
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    std::printf("%-44s %8.0f %8.0f %8.0f %8.0f %7.1f\n", step.c_str(), before, sampler.Peak(),
+                ProcessStatusMiB(pid, "VmRSS"), ProcessStatusMiB(pid, "VmHWM"), seconds);
+    std::fflush(stdout);
+  };
+
+  std::printf("fenestrad resident memory [MiB] (VmRSS before, sampled peak, after; VmHWM)\n");
+  std::printf("%-44s %8s %8s %8s %8s %7s\n", "step", "before", "peak", "after", "VmHWM", "s");
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  for (int k = 0; k < 3; ++k) {
+    const v1::RegisterSiteRequest request = LargeRegistration(triangles, outdoor_paths, 0.01 * k);
+    const double before = ProcessStatusMiB(pid, "VmRSS");
+    sampler.Reset();
+    const auto start = Clock::now();
+    // A List while the registration is processed
+    std::atomic<double> list_seconds = -1;
+    std::thread lister([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+      const auto list_start = Clock::now();
+      list();
+      list_seconds = Seconds(list_start);
+    });
+    grpc::ClientContext context;
+    v1::SiteInfo info;
+    const grpc::Status status = sites->Register(&context, request, &info);
+    if (!status.ok()) {
+      std::fprintf(stderr, "Register: %s\n", status.error_message().c_str());
+      return 1;
+    }
+    const double register_seconds = Seconds(start);
+    const double register_peak = sampler.Peak();
+    lister.join();
+    wait_ready();
+    settle_and_report("register " + info.id() + " (" +
+                          std::to_string(request.ByteSizeLong() >> 20) + " MiB, " +
+                          std::to_string(triangles) + " triangles) and trace",
+                      before, Seconds(start));
+    std::printf(
+        "    Register answered in %.2f s (peak until then %.0f MiB); a List meanwhile "
+        "took %.3f s\n",
+        register_seconds, register_peak, list_seconds.load());
+  }
+  const double before = ProcessStatusMiB(pid, "VmRSS");
+  sampler.Reset();
+  const auto start = Clock::now();
+  const v1::ListSitesResponse listed = list();
+  for (const v1::SiteInfo& s : listed.sites()) {
+    grpc::ClientContext context;
+    v1::DeleteSiteRequest request;
+    request.set_id(s.id());
+    v1::DeleteSiteResponse response;
+    (void)sites->Delete(&context, request, &response);
+  }
+  settle_and_report("delete every site", before, Seconds(start));
+  kill(pid, SIGTERM);
+  waitpid(pid, nullptr, 0);
+  fs::remove_all(dir);
+  return 0;
+}
+
+}  // namespace
+}  // namespace fenestra
+
+int main(int argc, char** argv) { return fenestra::Main(argc, argv); }

@@ -1,0 +1,258 @@
+// The floor plan: the room's indoor surfaces projected on the floor plane (x east, y north),
+// the window, and the sensors coloured by the best design's UDI and DA.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "client/report/sections.h"
+#include "client/report/svg.h"
+
+namespace fenestra {
+namespace {
+
+constexpr double kPlanMaxWidth = 320, kPlanMaxHeight = 640;  // [px]
+constexpr double kLeft = 64, kTop = 30, kLabelRoom = 40, kBarRoom = 56, kBottom = 60;
+constexpr double kPadding = 0.5;  // around the room [m]
+constexpr double kSensorRadius = 7;
+constexpr size_t kMaxLabelledSensors = 200;
+
+using Xy = std::pair<double, double>;
+
+// The eight corners of the window's opening (outer and inner face) in plan.
+std::vector<Xy> WindowCorners(const Window& w) {
+  std::vector<Xy> corners;
+  for (const double depth : {0.0, w.depth_m}) {
+    for (const double a : {-0.5, 0.5}) {
+      for (const double u : {-0.5, 0.5}) {
+        const Vec3d p =
+            w.center - depth * w.normal + (a * w.width_m) * w.across + (u * w.height_m) * w.up;
+        corners.emplace_back(p.x, p.y);
+      }
+    }
+  }
+  return corners;
+}
+
+// The plan's extent [m]: indoor triangles, window and sensors, padded.
+struct Extent {
+  double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
+  double max_x = -min_x, max_y = -min_x;
+  void Add(double x, double y) {
+    min_x = std::min(min_x, x), max_x = std::max(max_x, x);
+    min_y = std::min(min_y, y), max_y = std::max(max_y, y);
+  }
+};
+
+Extent PlanExtent(const Scene& scene) {
+  Extent e;
+  const TriangleMesh& mesh = scene.fixed;
+  for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
+    if (mesh.side[t] != Side::kIndoor) continue;
+    for (int k = 0; k < 3; ++k) e.Add(mesh.vertices[3 * t + k].x, mesh.vertices[3 * t + k].y);
+  }
+  for (const auto& [x, y] : WindowCorners(scene.window)) e.Add(x, y);
+  for (const Sensor& s : scene.sensors) e.Add(s.position.x, s.position.y);
+  e.min_x -= kPadding, e.min_y -= kPadding, e.max_x += kPadding, e.max_y += kPadding;
+  return e;
+}
+
+// Floors and other flat surfaces filled, walls as thick lines, then the window.
+void DrawRoom(Svg& svg, const Chart& chart, const Scene& scene) {
+  const TriangleMesh& mesh = scene.fixed;
+  std::vector<Points> walls;
+  svg.BeginGroup("room");
+  for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
+    if (mesh.side[t] != Side::kIndoor) continue;
+    const Vec3d* v = &mesh.vertices[3 * t];
+    const Vec3d normal = Cross(v[1] - v[0], v[2] - v[0]);
+    if (std::abs(normal.z) > 0.2 * Length(normal)) {
+      svg.Polygon({{chart.X(v[0].x), chart.Y(v[0].y)},
+                   {chart.X(v[1].x), chart.Y(v[1].y)},
+                   {chart.X(v[2].x), chart.Y(v[2].y)}},
+                  "plan-floor");
+      continue;
+    }
+    // A wall's triangle projects to a segment: its two vertices farthest apart in plan
+    double longest = -1;
+    Points segment;
+    for (int a = 0; a < 3; ++a) {
+      const Vec3d p = v[a], q = v[(a + 1) % 3];
+      const double d = std::hypot(p.x - q.x, p.y - q.y);
+      if (d > longest) {
+        longest = d;
+        segment = {{chart.X(p.x), chart.Y(p.y)}, {chart.X(q.x), chart.Y(q.y)}};
+      }
+    }
+    walls.push_back(segment);
+  }
+  for (const Points& w : walls)
+    svg.Line(w[0].first, w[0].second, w[1].first, w[1].second, "plan-wall");
+  Points window;
+  for (const auto& [x, y] : ConvexHull(WindowCorners(scene.window))) {
+    window.emplace_back(chart.X(x), chart.Y(y));
+  }
+  svg.Polygon(window, "plan-window");
+  svg.EndGroup();
+}
+
+// "window 2.00 x 1.50 m" just outside the window's outer face, along it.
+void LabelWindow(Svg& svg, const Chart& chart, const Window& w) {
+  const std::string text = fmt::format("window {:.2f} × {:.2f} m", w.width_m, w.height_m);
+  const double n = std::hypot(w.normal.x, w.normal.y);
+  const double x = chart.X(w.center.x), y = chart.Y(w.center.y);
+  if (n < 0.5) {  // a roof light: the label over its middle
+    svg.Text(x, y - 8, text, "plan-label", Anchor::kMiddle);
+    return;
+  }
+  // Outward on the page; the text reads along the wall, glyphs rising up or to the left
+  const double ox = w.normal.x / n, oy = -w.normal.y / n;
+  const bool along_x = std::abs(oy) >= std::abs(ox);
+  const double rises_outward = along_x ? -oy : -ox;
+  const double gap = rises_outward >= 0 ? 6 : 17;
+  svg.Text(x + gap * ox, y + gap * oy, text, "plan-label", Anchor::kMiddle, along_x ? 0 : -90);
+}
+
+void DrawNorthArrow(Svg& svg, double x, double y) {
+  svg.Polygon({{x, y}, {x + 6, y + 16}, {x, y + 12}, {x - 6, y + 16}}, "north-arrow");
+  svg.Text(x, y - 4, "N", "plan-label", Anchor::kMiddle);
+}
+
+// Sensor labels fit when no label box overlaps another or another sensor.
+std::string SensorValue(const v1::Estimate& e) {
+  return WithError(e.value(), e.standard_error(), 1);
+}
+
+// Each sensor's name sits above it and its value below, centred; they fit when no two
+// sensors closer than a label's width share a column of labels.
+bool LabelsFit(const std::vector<Xy>& at, double label_width) {
+  if (at.size() > kMaxLabelledSensors) return false;
+  for (size_t i = 0; i < at.size(); ++i) {
+    for (size_t j = i + 1; j < at.size(); ++j) {
+      const double dx = std::abs(at[j].first - at[i].first);
+      const double dy = std::abs(at[j].second - at[i].second);
+      if (dx < label_width + 4 && dy < 2 * kSensorRadius + 30) return false;
+    }
+  }
+  return true;
+}
+
+// One plan with the sensors coloured by `values` [%].
+std::string PlanFigure(const ReportData& data, const std::string& id, const std::string& what,
+                       const std::string& short_name,
+                       const google::protobuf::RepeatedPtrField<v1::Estimate>& values) {
+  const Scene& scene = *data.scene;
+  const Extent e = PlanExtent(scene);
+  const double scale =
+      std::min(kPlanMaxWidth / (e.max_x - e.min_x), kPlanMaxHeight / (e.max_y - e.min_y));
+  const double width = (e.max_x - e.min_x) * scale, height = (e.max_y - e.min_y) * scale;
+  Svg svg(id, "plan-plot", kLeft + width + kLabelRoom + kBarRoom, kTop + height + kBottom,
+          "Floor plan with the sensors coloured by " + what);
+  Chart chart(svg, kLeft, kTop, width, height, {"x, east [m]", e.min_x, e.max_x},
+              {"y, north [m]", e.min_y, e.max_y});
+  chart.DrawAxes(std::max(2, static_cast<int>(width / 60)),
+                 std::max(2, static_cast<int>(height / 60)));
+  DrawRoom(svg, chart, scene);
+  LabelWindow(svg, chart, scene.window);
+  DrawNorthArrow(svg, kLeft + width - 14, kTop + 20);
+
+  std::vector<Xy> at;
+  for (const Sensor& s : scene.sensors)
+    at.emplace_back(chart.X(s.position.x), chart.Y(s.position.y));
+  double longest = 0;
+  for (int i = 0; i < values.size(); ++i) {
+    longest = std::max(
+        {longest, TextWidth(scene.sensors[i].name, 11), TextWidth(SensorValue(values[i]), 11.5)});
+  }
+  const bool labelled = LabelsFit(at, longest);
+  svg.BeginGroup("sensors");
+  for (size_t i = 0; i < at.size(); ++i) {
+    const v1::Estimate& v = values[static_cast<int>(i)];
+    svg.Circle(at[i].first, at[i].second, kSensorRadius, "sensor", ViridisColor(v.value() / 100));
+    if (!labelled) continue;
+    svg.Text(at[i].first, at[i].second - kSensorRadius - 4, scene.sensors[i].name, "sensor-name",
+             Anchor::kMiddle);
+    svg.Text(at[i].first, at[i].second + kSensorRadius + 13, SensorValue(v), "sensor-value",
+             Anchor::kMiddle);
+  }
+  svg.EndGroup();
+  if (data.map_sensor >= 0) {
+    svg.Circle(at[data.map_sensor].first, at[data.map_sensor].second, kSensorRadius + 4,
+               "map-sensor");
+  }
+  ViridisColorBar(svg, kLeft + width + kLabelRoom, kTop + 20, std::min(height - 20, 220.0), 0, 100,
+                  short_name + " [%]");
+  std::string figure = "<figure class=\"plot\">" + svg.Finish() + "<figcaption>" + EscapeXml(what) +
+                       " of each sensor, best design";
+  if (!labelled) figure += " (values in the table below)";
+  if (data.map_sensor >= 0) figure += "; the ring marks the temporal map's sensor";
+  return figure + "</figcaption></figure>\n";
+}
+
+// Mean illuminance of each sensor over the occupied steps [lx].
+std::vector<double> OccupiedMeans(const ReportData& data) {
+  const v1::HourlyIlluminance& h = data.result.best_hourly();
+  const int steps = h.month_size();
+  std::vector<double> means;
+  for (int i = 0; i < h.sensors_size(); ++i) {
+    double sum = 0;
+    int count = 0;
+    for (int j = 0; j < steps; ++j) {
+      if (!data.occupied[j]) continue;
+      sum += h.illuminance_lux(i * steps + j);
+      ++count;
+    }
+    means.push_back(count > 0 ? sum / count : 0);
+  }
+  return means;
+}
+
+std::string SensorTable(const ReportData& data, const std::string& udi, const std::string& da) {
+  const Scene& scene = *data.scene;
+  const v1::Metrics& m = data.result.best_metrics();
+  const bool hourly = data.map_sensor >= 0;
+  const std::vector<double> means = hourly ? OccupiedMeans(data) : std::vector<double>();
+  std::vector<std::vector<std::string>> rows;
+  for (size_t i = 0; i < scene.sensors.size(); ++i) {
+    const Sensor& s = scene.sensors[i];
+    const int k = static_cast<int>(i);
+    rows.push_back({s.name, fmt::format("{:.2f}", s.position.x),
+                    fmt::format("{:.2f}", s.position.y), fmt::format("{:.2f}", s.position.z),
+                    WithError(m.sensor_udi(k).value(), m.sensor_udi(k).standard_error(), 1),
+                    WithError(m.sensor_da(k).value(), m.sensor_da(k).standard_error(), 1),
+                    hourly ? fmt::format("{:.0f}", means[i]) : "not recorded"});
+  }
+  return HtmlTable("sensor-table",
+                   {"sensor", "x [m]", "y [m]", "z [m]", udi, da, "mean E, occupied hours [lx]"},
+                   rows);
+}
+
+}  // namespace
+
+std::string FloorPlanSection(const ReportData& data) {
+  const std::string heading = "Floor plan and sensors";
+  if (!data.scene) {
+    return Section("floor-plan", heading,
+                   NotRecorded("The scene", "this result does not hold its job"));
+  }
+  const int sensors = static_cast<int>(data.scene->sensors.size());
+  const v1::Metrics& m = data.result.best_metrics();
+  if (m.sensor_udi_size() != sensors || m.sensor_da_size() != sensors) {
+    return Section("floor-plan", heading,
+                   NotRecorded("Per-sensor metrics", "the result holds none"));
+  }
+  const v1::MetricSettings& settings = data.result.job().metrics();
+  const std::string udi =
+      fmt::format("UDI {:g}–{:g} lx [%]", settings.udi_lower_lux(), settings.udi_upper_lux());
+  const std::string da = fmt::format("DA{:g} [%]", settings.da_threshold_lux());
+  std::string body = Note(
+      "Indoor surfaces seen from above: floors shaded, walls as lines, the window's opening in "
+      "blue; north is up. Each sensor shows its value ± standard error for the best design.");
+  body += "<div class=\"figures\">" +
+          PlanFigure(data, "plot-floor-udi", udi, "UDI", m.sensor_udi()) +
+          PlanFigure(data, "plot-floor-da", da, "DA", m.sensor_da()) + "</div>\n";
+  return Section("floor-plan", heading, body + SensorTable(data, udi, da));
+}
+
+}  // namespace fenestra

@@ -1,0 +1,30 @@
+#pragma once
+
+// The report of a job result: one self-contained HTML page (inline SVG figures, an inline
+// stylesheet with a print layout; no scripts, fonts or other resources) with the search,
+// the design space, the floor plan with the sensors' metrics, a temporal map of one
+// sensor's illuminance, the blind in section, and the settings, timings and versions.
+#include <string>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "fenestra/v1/job.pb.h"
+
+namespace fenestra {
+
+struct ReportOptions {
+  // Names the result on the page and in errors: its file, or the job's id.
+  std::string source;
+  // The temporal map's sensor: a name, or an index from 0; empty = the lowest UDI.
+  std::string sensor;
+};
+
+// The page. InvalidArgument naming the field when the result is inconsistent, or naming
+// --sensor when there is no such sensor.
+absl::StatusOr<std::string> RenderReport(const v1::JobResult& result, const ReportOptions& options);
+
+// RenderReport written to `path` (atomically: nothing is left at `path` on failure).
+absl::Status WriteReport(const v1::JobResult& result, const ReportOptions& options,
+                         const std::string& path);
+
+}  // namespace fenestra

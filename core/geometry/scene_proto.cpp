@@ -1,0 +1,82 @@
+#include "core/geometry/scene_proto.h"
+
+namespace fenestra {
+namespace {
+
+void SetVec3(const Vec3d& v, v1::Vec3* out) {
+  out->set_x(v.x);
+  out->set_y(v.y);
+  out->set_z(v.z);
+}
+
+void SetParameter(const ParameterRange& range, v1::Parameter* out) {
+  out->set_value(range.value);
+  out->set_min(range.min);
+  out->set_max(range.max);
+}
+
+void AddSurfaces(const Scene& scene, v1::Scene& out) {
+  const TriangleMesh& mesh = scene.fixed;
+  for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
+    const Vec3d* v = &mesh.vertices[3 * t];
+    // A sliver of a fanned polygon would fail the polygon check; it holds no area
+    if (IsDegenerateTriangle(v[0], v[1], v[2])) continue;
+    v1::Surface& surface = *out.add_surfaces();
+    surface.set_name(mesh.part_names[mesh.part[t]]);
+    surface.set_material(scene.materials[mesh.material[t]].name);
+    surface.set_side(mesh.side[t] == Side::kIndoor ? v1::SIDE_INDOOR : v1::SIDE_OUTDOOR);
+    for (int k = 0; k < 3; ++k) SetVec3(v[k], surface.mutable_polygon()->add_vertices());
+  }
+}
+
+void SetBlind(const Scene& scene, v1::VenetianBlind& out) {
+  const BlindSpec& spec = *scene.blind;
+  out.set_material(scene.materials[spec.material].name);
+  out.set_orientation(spec.vertical ? v1::VenetianBlind::VERTICAL : v1::VenetianBlind::HORIZONTAL);
+  SetParameter(spec.tilt_rad, out.mutable_tilt_rad());
+  SetParameter(spec.slat_width_m, out.mutable_slat_width_m());
+  SetParameter(spec.slat_spacing_m, out.mutable_slat_spacing_m());
+  SetParameter(spec.slat_thickness_m, out.mutable_slat_thickness_m());
+  out.set_wall_gap_m(spec.wall_gap_m);
+  out.set_side_margin_m(spec.side_margin_m);
+}
+
+}  // namespace
+
+v1::Scene SelfContainedSceneProto(const Scene& scene) {
+  v1::Scene out;
+  out.set_name(scene.name);
+  for (const Material& m : scene.materials) {
+    v1::Material& material = *out.add_materials();
+    material.set_name(m.name);
+    material.set_reflectance(m.reflectance);
+    if (m.transmittance >= 0) material.set_transmittance(m.transmittance);
+  }
+  AddSurfaces(scene, out);
+
+  const Window& w = scene.window;
+  v1::Window& window = *out.mutable_window();
+  SetVec3(w.center, window.mutable_center());
+  SetVec3(w.normal, window.mutable_outward_normal());
+  SetVec3(w.up, window.mutable_up());
+  window.set_width_m(w.width_m);
+  window.set_height_m(w.height_m);
+  window.set_depth_m(w.depth_m);
+
+  for (const Sensor& s : scene.sensors) {
+    v1::Sensor& sensor = *out.add_sensors();
+    sensor.set_name(s.name);
+    SetVec3(s.position, sensor.mutable_position());
+    SetVec3(s.direction, sensor.mutable_direction());
+  }
+  if (scene.blind) SetBlind(scene, *out.mutable_blind());
+
+  v1::Site& site = *out.mutable_site();
+  site.set_latitude_deg(scene.site.latitude_deg);
+  site.set_longitude_deg(scene.site.longitude_deg);
+  site.set_time_zone_h(scene.site.time_zone_h);
+  site.set_ground_reflectance(scene.site.ground_reflectance);
+  return out;
+}
+
+}  // namespace fenestra

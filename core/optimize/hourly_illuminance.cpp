@@ -1,0 +1,71 @@
+#include "core/optimize/hourly_illuminance.h"
+
+#include <cmath>
+#include <vector>
+
+#include "core/common/status_macros.h"
+#include "core/metrics/illuminance.h"
+
+namespace fenestra {
+namespace {
+
+// Month, day and hour of each step, and the sensors' names.
+void SetAxes(const Scene& scene, const SkyMatrix& sky, v1::HourlyIlluminance& out) {
+  for (const Sensor& s : scene.sensors) out.add_sensors(s.name);
+  for (const SkyStep& step : sky.steps) {
+    out.add_month(step.month);
+    out.add_day(step.day);
+    out.add_hour(step.hour);
+  }
+}
+
+}  // namespace
+
+Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns) {
+  Matrix lux(radiance.rows(), static_cast<Eigen::Index>(columns.size()));
+  for (size_t c = 0; c < columns.size(); ++c) {
+    lux.col(c) = kWhiteEfficacyLumensPerWatt * radiance.col(columns[c]);
+  }
+  return lux;
+}
+
+absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
+    const Scene& scene, const BlindDesign& design, const IndoorOptions& options,
+    const Matrix& outdoor, const SkyMatrix& sky, DcBackend& backend) {
+  v1::HourlyIlluminance out;
+  SetAxes(scene, sky, out);
+  const int64_t sensors = static_cast<int64_t>(scene.sensors.size());
+  const int64_t steps = static_cast<int64_t>(sky.steps.size());
+  out.mutable_illuminance_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
+  out.mutable_standard_error_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
+  if (options.batches < 2) {
+    return absl::InvalidArgumentError("standard errors need at least 2 indoor batches");
+  }
+  const std::vector<int> lit = LitColumns(sky.radiance);
+  if (lit.empty()) return out;
+
+  // E_b = (I_b O) S over the steps with daylight, for each batch b
+  FENESTRA_ASSIGN_OR_RETURN(indoor, ComputeIndoorStage(scene, design, options, &backend));
+  FENESTRA_ASSIGN_OR_RETURN(product,
+                            backend.MakeAnnualProduct(outdoor, SkyColumnsInLux(sky.radiance, lit)));
+  FENESTRA_ASSIGN_OR_RETURN(batches, product->Apply(indoor.batches));
+
+  // Their mean, and its standard error from the spread of the batches
+  const double count = static_cast<double>(batches.size());
+  Matrix mean = Matrix::Zero(sensors, static_cast<Eigen::Index>(lit.size()));
+  for (const Matrix& e : batches) mean += e;
+  mean /= count;
+  Matrix squares = Matrix::Zero(mean.rows(), mean.cols());
+  for (const Matrix& e : batches) squares.array() += (e - mean).array().square();
+  const Matrix standard_error = (squares / (count * (count - 1))).cwiseSqrt();
+  for (int64_t i = 0; i < sensors; ++i) {
+    for (size_t c = 0; c < lit.size(); ++c) {
+      const int k = static_cast<int>(i * steps + lit[c]);
+      out.set_illuminance_lux(k, static_cast<float>(mean(i, c)));
+      out.set_standard_error_lux(k, static_cast<float>(standard_error(i, c)));
+    }
+  }
+  return out;
+}
+
+}  // namespace fenestra

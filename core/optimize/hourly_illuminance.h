@@ -1,0 +1,35 @@
+#pragma once
+
+// The hourly illuminance of one design, for reports and other tools: the design's indoor
+// stage with the search's random streams, then the backend's annual product
+// E_b = (I_b O) S (core/dc/dc_backend.h) over every time step with daylight.
+#include <cstdint>
+#include <span>
+
+#include "absl/status/statusor.h"
+#include "core/common/radiance_matrix.h"
+#include "core/dc/dc_backend.h"
+#include "core/dc/two_stage.h"
+#include "core/geometry/scene.h"
+#include "core/sky/sky_matrix.h"
+#include "fenestra/v1/job.pb.h"
+
+namespace fenestra {
+
+// The most sensors x time steps a job result holds hourly illuminance for (job.proto,
+// JobResult.best_hourly): 8 MB of values and as much of errors.
+inline constexpr int64_t kMaxHourlyIlluminanceValues = 2'000'000;
+
+// Columns `columns` of a sky matrix's visible radiance [W sr-1 m-2] times the luminous
+// efficacy, so that (I O) S comes out in lux.
+Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns);
+
+// The illuminance of `design` at every sensor of `scene` and every step of `sky`, the mean
+// over the indoor stage's batches with its standard error. `outdoor` is O (window cells x
+// sky bins) traced with the parts and basis of `options`. Errors as ComputeIndoorStage and
+// AnnualProduct::Apply.
+absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
+    const Scene& scene, const BlindDesign& design, const IndoorOptions& options,
+    const Matrix& outdoor, const SkyMatrix& sky, DcBackend& backend);
+
+}  // namespace fenestra

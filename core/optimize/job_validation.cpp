@@ -1,0 +1,294 @@
+// The door for jobs: every field of a Job checked, defaults filled in (job.proto states
+// them; the constants here and in core/metrics are the only other place).
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <string>
+
+#include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
+#include "core/common/text.h"
+#include "core/metrics/annual_metrics.h"
+#include "core/metrics/occupancy.h"
+#include "core/optimize/design_variables.h"
+#include "core/optimize/job.h"
+#include "core/optimize/vns.h"
+#include "core/trace/room_check.h"
+
+namespace fenestra {
+namespace {
+
+// Illuminance thresholds beyond any daylight [lx]: direct sun peaks near 1.3e5 lx.
+constexpr double kMaxIlluminanceLux = 1e6;
+// Surface reflections per path: the reference cases use 30, Radiance's -ab rarely 10; past
+// 1000 even a white room (reflectance 0.99) has no light left to carry.
+constexpr int kMaxBounces = 1000;
+constexpr int kDefaultBasisCells = 288;
+constexpr int kDefaultBatches = 8;
+constexpr int64_t kDefaultOutdoorPaths = 20'000'000;
+constexpr int64_t kDefaultIndoorPaths = 200'000;
+constexpr int kDefaultOutdoorBounces = 30;
+constexpr int kDefaultIndoorBounces = 5;
+// Whether a job checks its best design by the one-stage method when its sampling does not say.
+constexpr bool kFinalCheckByDefault = true;
+
+absl::Status Invalid(const std::string& field, const std::string& reason) {
+  return absl::InvalidArgumentError(absl::StrCat("job ", field, ": ", reason));
+}
+
+bool AllFinite(std::initializer_list<double> values) {
+  return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
+}
+
+absl::StatusOr<Scene> SceneOf(const v1::Job& job, const std::string& base_dir) {
+  if (job.has_scene() && !job.scene_file().empty()) {
+    return Invalid("scene", "give either scene or scene_file, not both");
+  }
+  if (!job.scene_file().empty()) {
+    return LoadScene((std::filesystem::path(base_dir) / job.scene_file()).string());
+  }
+  if (!job.has_scene()) return Invalid("scene", "a scene or scene_file is required");
+  return BuildScene(job.scene(), (std::filesystem::path(base_dir) / "job.scene").string());
+}
+
+absl::Status CheckVariable(const v1::DesignVariable& v, const DesignVariableInfo& info,
+                           const std::string& field) {
+  if (!AllFinite({v.lower(), v.upper(), v.start(), v.step()})) {
+    return Invalid(field, "lower, upper, start and step must be finite");
+  }
+  if (v.lower() > v.upper()) {
+    return Invalid(field,
+                   absl::StrCat("empty design range: lower ", v.lower(), " > upper ", v.upper()));
+  }
+  if (v.start() < v.lower() || v.start() > v.upper()) {
+    return Invalid(field + ".start", absl::StrCat("start ", v.start(), " is outside [", v.lower(),
+                                                  ", ", v.upper(), "]"));
+  }
+  constexpr double kRounding = 1e-12;  // π/2 written in decimal
+  if (v.lower() < info.bounds.lowest - kRounding || v.upper() > info.bounds.highest + kRounding) {
+    return Invalid(
+        field, absl::StrCat(v.name(), " must stay within [", info.bounds.lowest, ", ",
+                            info.bounds.highest, "] ", info.unit, ", the range of a real blind"));
+  }
+  if (v.step() < 0) return Invalid(field + ".step", "must be >= 0");
+  return absl::OkStatus();
+}
+
+absl::Status CheckVariables(const v1::Job& job, const Scene& scene) {
+  if (job.variables_size() > 0 && !scene.blind) {
+    return Invalid("variables", "the scene has no blind to design");
+  }
+  std::set<std::string> seen;
+  for (int i = 0; i < job.variables_size(); ++i) {
+    const v1::DesignVariable& v = job.variables(i);
+    const std::string field = absl::StrCat("variables[", i, "]");
+    const DesignVariableInfo* info = FindDesignVariable(v.name());
+    if (!info) {
+      return Invalid(field + ".name", absl::StrCat("unknown design variable '", v.name(),
+                                                   "' (known: alpha, width, spacing, thickness)"));
+    }
+    if (!seen.insert(v.name()).second) {
+      return Invalid(field + ".name", absl::StrCat("variable '", v.name(), "' given twice"));
+    }
+    FENESTRA_RETURN_IF_ERROR(CheckVariable(v, *info, field));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status FillBudget(v1::Budget& budget) {
+  if (budget.max_evaluations() == 0) budget.set_max_evaluations(kDefaultMaxEvaluations);
+  if (budget.max_evaluations() < 1) return Invalid("budget.max_evaluations", "must be >= 1");
+  if (!(std::isfinite(budget.max_seconds()) && budget.max_seconds() >= 0)) {
+    return Invalid("budget.max_seconds", "must be a finite number >= 0 (0 = no limit)");
+  }
+  if (budget.failed_cycles_to_stop() == 0) {
+    budget.set_failed_cycles_to_stop(VnsOptions().failed_cycles_to_stop);
+  }
+  if (budget.failed_cycles_to_stop() < -1) {
+    return Invalid("budget.failed_cycles_to_stop", "must be >= -1");
+  }
+  return absl::OkStatus();
+}
+
+// A threshold in (lowest, kMaxIlluminanceLux] lx, or [0, ...] when `zero_allowed`.
+absl::Status CheckLux(double value, const std::string& field, bool zero_allowed) {
+  const bool low_ok = zero_allowed ? value >= 0 : value > 0;
+  if (!(low_ok && value <= kMaxIlluminanceLux)) {
+    return Invalid("metrics." + field, absl::StrCat("must be in ", zero_allowed ? "[" : "(", "0, ",
+                                                    kMaxIlluminanceLux, "] lx, got ", value));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status FillMetricSettings(v1::MetricSettings& m) {
+  const MetricOptions defaults;
+  const OccupancySchedule occupancy;
+  if (m.udi_lower_lux() == 0) m.set_udi_lower_lux(defaults.udi_lower_lux);
+  if (m.udi_upper_lux() == 0) m.set_udi_upper_lux(defaults.udi_upper_lux);
+  if (m.da_threshold_lux() == 0) m.set_da_threshold_lux(defaults.da_threshold_lux);
+  if (m.sda_time_fraction_percent() == 0) {
+    m.set_sda_time_fraction_percent(defaults.sda_min_da_percent);
+  }
+  if (m.occupied_start_h() == 0 && m.occupied_end_h() == 0) {
+    m.set_occupied_start_h(occupancy.start_hour);
+    m.set_occupied_end_h(occupancy.end_hour);
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckLux(m.udi_lower_lux(), "udi_lower_lux", true));
+  FENESTRA_RETURN_IF_ERROR(CheckLux(m.udi_upper_lux(), "udi_upper_lux", false));
+  if (!(m.udi_lower_lux() < m.udi_upper_lux())) {
+    return Invalid("metrics", absl::StrCat("udi_lower_lux ", m.udi_lower_lux(),
+                                           " must be below udi_upper_lux ", m.udi_upper_lux()));
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckLux(m.da_threshold_lux(), "da_threshold_lux", false));
+  if (!(m.sda_time_fraction_percent() > 0 && m.sda_time_fraction_percent() <= 100)) {
+    return Invalid("metrics.sda_time_fraction_percent",
+                   absl::StrCat("must be in (0, 100] %, got ", m.sda_time_fraction_percent()));
+  }
+  for (const auto& [hour, field] : {std::pair{m.occupied_start_h(), "occupied_start_h"},
+                                    std::pair{m.occupied_end_h(), "occupied_end_h"}}) {
+    if (!(hour >= 0 && hour <= 24)) {
+      return Invalid(absl::StrCat("metrics.", field),
+                     absl::StrCat("must be in [0, 24] h, got ", hour));
+    }
+  }
+  if (m.occupied_start_h() == m.occupied_end_h()) {
+    return Invalid("metrics", "occupied_start_h and occupied_end_h must differ");
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckObjective(const v1::Objective& objective) {
+  if (!v1::Metric_IsValid(objective.metric())) {
+    return Invalid("objective.metric",
+                   absl::StrCat("unknown metric ", static_cast<int>(objective.metric())));
+  }
+  if (!v1::Goal_IsValid(objective.goal())) {
+    return Invalid("objective.goal",
+                   absl::StrCat("unknown goal ", static_cast<int>(objective.goal()),
+                                " (GOAL_MAXIMIZE, GOAL_MINIMIZE or GOAL_TARGET)"));
+  }
+  if (!(objective.target() >= 0 && objective.target() <= 100)) {
+    return Invalid(
+        "objective.target",
+        absl::StrCat("must be in [0, 100] % (a metric's value), got ", objective.target()));
+  }
+  if (!(objective.target_tolerance() >= 0 && objective.target_tolerance() <= 100)) {
+    return Invalid("objective.target_tolerance",
+                   absl::StrCat("must be in [0, 100] %, got ", objective.target_tolerance()));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckNeighborhoods(const v1::Job& job) {
+  for (int i = 0; i < job.neighborhoods_size(); ++i) {
+    const v1::Neighborhood& n = job.neighborhoods(i);
+    if (n.variables() < 0 || !(n.radius() > 0 && n.radius() <= 1)) {
+      return Invalid(absl::StrCat("neighborhoods[", i, "]"),
+                     "needs variables >= 0 and radius in (0, 1]");
+    }
+  }
+  return absl::OkStatus();
+}
+
+// Enough outdoor paths for every window cell, the automatic parts resolved
+absl::Status CheckWindowCells(const v1::Sampling& sampling, const Window& window) {
+  const WindowParts parts = SamplingWindowParts(sampling, window);
+  const int64_t window_cells = int64_t{sampling.basis_cells()} * parts.columns * parts.rows;
+  if (sampling.outdoor_paths() < 2 * window_cells) {
+    return Invalid("sampling.outdoor_paths",
+                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ": ",
+                                parts.columns, "x", parts.rows, " window parts x ",
+                                sampling.basis_cells(), " direction cells)"));
+  }
+  return absl::OkStatus();
+}
+
+// The blind at every design of the job's ranges must fit the window and leave the sensors
+// in the room's air.
+absl::Status CheckRoomAtEveryDesign(const PreparedJob& prepared) {
+  const Scene ranged = WithJobRanges(prepared.scene, prepared.job);
+  if (ranged.blind) {
+    if (absl::Status fits = CheckBlindFits(*ranged.blind, ranged.window); !fits.ok()) {
+      return Invalid("variables", absl::StrCat("with the scene's blind: ", fits.message()));
+    }
+  }
+  return CheckRoom(ranged);
+}
+
+}  // namespace
+
+absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
+  v1::Sampling s = given;
+  if (s.outdoor_paths() == 0) s.set_outdoor_paths(kDefaultOutdoorPaths);
+  if (s.outdoor_bounces() == 0) s.set_outdoor_bounces(kDefaultOutdoorBounces);
+  if (s.indoor_paths_per_sensor() == 0) s.set_indoor_paths_per_sensor(kDefaultIndoorPaths);
+  if (s.indoor_bounces() == 0) s.set_indoor_bounces(kDefaultIndoorBounces);
+  if (s.seed() == 0) s.set_seed(1);
+  if (s.basis_cells() == 0) s.set_basis_cells(kDefaultBasisCells);
+  if (s.backend().empty()) s.set_backend("auto");
+  if (s.batches() == 0) s.set_batches(kDefaultBatches);
+  if (!s.has_final_check()) s.set_final_check(kFinalCheckByDefault);
+  if (s.basis_cells() != 288 && s.basis_cells() != 1152) {
+    return Invalid("sampling.basis_cells", "must be 288 or 1152");
+  }
+  if (s.window_columns() < 0 || s.window_columns() > 16 || s.window_rows() < 0 ||
+      s.window_rows() > 16) {
+    return Invalid("sampling.window_columns/window_rows", "must be in [0, 16] (0 = automatic)");
+  }
+  const int64_t window_cells =
+      int64_t{s.basis_cells()} * std::max(1, s.window_columns()) * std::max(1, s.window_rows());
+  if (s.outdoor_paths() < 2 * window_cells) {
+    return Invalid("sampling.outdoor_paths",
+                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ")"));
+  }
+  if (s.batches() < 2 || s.batches() > 64) return Invalid("sampling.batches", "must be in [2, 64]");
+  if (s.indoor_paths_per_sensor() < s.batches()) {
+    return Invalid("sampling.indoor_paths_per_sensor", "must be at least the batch count");
+  }
+  for (const int bounces : {s.outdoor_bounces(), s.indoor_bounces()}) {
+    if (bounces < -1 || bounces > kMaxBounces) {
+      return Invalid("sampling", absl::StrCat("bounces must be in [1, ", kMaxBounces,
+                                              "], or -1 for unlimited, got ", bounces));
+    }
+  }
+  if (s.backend() != "auto" && s.backend() != "cpu" && s.backend() != "cuda") {
+    return Invalid("sampling.backend",
+                   absl::StrCat("must be cpu, cuda or auto, got '", s.backend(), "'"));
+  }
+  return s;
+}
+
+Scene WithJobRanges(const Scene& scene, const v1::Job& job) {
+  Scene ranged = scene;
+  if (!ranged.blind) return ranged;
+  for (const v1::DesignVariable& v : job.variables()) {
+    const DesignVariableInfo* info = FindDesignVariable(v.name());
+    if (!info) continue;
+    ParameterRange& range = (*ranged.blind).*(info->range);
+    range.min = std::min(range.min, v.lower());
+    range.max = std::max(range.max, v.upper());
+  }
+  return ranged;
+}
+
+absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& base_dir) {
+  FENESTRA_RETURN_IF_ERROR(CheckMessageText(job, "job "));
+  PreparedJob prepared;
+  prepared.job = job;
+  FENESTRA_ASSIGN_OR_RETURN(scene, SceneOf(job, base_dir));
+  prepared.scene = std::move(scene);
+  FENESTRA_RETURN_IF_ERROR(CheckVariables(job, prepared.scene));
+  v1::Job& filled = prepared.job;
+  FENESTRA_RETURN_IF_ERROR(FillBudget(*filled.mutable_budget()));
+  FENESTRA_ASSIGN_OR_RETURN(sampling, ResolveSampling(filled.sampling()));
+  *filled.mutable_sampling() = sampling;
+  FENESTRA_RETURN_IF_ERROR(FillMetricSettings(*filled.mutable_metrics()));
+  FENESTRA_RETURN_IF_ERROR(CheckNeighborhoods(filled));
+  FENESTRA_RETURN_IF_ERROR(CheckObjective(filled.objective()));
+  FENESTRA_RETURN_IF_ERROR(CheckWindowCells(filled.sampling(), prepared.scene.window));
+  FENESTRA_RETURN_IF_ERROR(CheckRoomAtEveryDesign(prepared));
+  return prepared;
+}
+
+}  // namespace fenestra

@@ -1,0 +1,201 @@
+// The report page of a quick job, rendered by headless Chromium: it loads without console
+// errors or requests beyond itself, every figure is there with its content, no text
+// overlaps or leaves its figure, and it prints. A screenshot is kept as a test artifact.
+#include "client/report/html_report.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/geometry/blind.h"
+#include "core/geometry/scene.h"
+#include "tests/client/report/headless_chromium.h"
+#include "tests/quick_job.h"
+
+namespace fenestra {
+namespace {
+
+namespace fs = std::filesystem;
+using google::protobuf::Value;
+using ::testing::IsEmpty;
+
+// Per figure: its size and how many of its parts were drawn; the texts that overlap
+// another text of their figure or leave it.
+constexpr char kInspectFigures[] = R"js((() => {
+  const out = {figures: {}, overlaps: [], outside: []};
+  for (const svg of document.querySelectorAll('svg.figure')) {
+    const box = svg.getBoundingClientRect();
+    const count = (selector) => svg.querySelectorAll(selector).length;
+    out.figures[svg.id] = {width: box.width, height: box.height,
+                           points: count('.evaluations .point'), sensors: count('.sensor'),
+                           labels: count('.sensor-value'), cells: count('.map-cell'),
+                           occupancy: count('.occupied-hours .occupancy'), slats: count('.slat')};
+    const texts = [...svg.querySelectorAll('text')].map(t => [t.textContent, t.getBoundingClientRect()]);
+    for (const [text, r] of texts) {
+      if (r.left < box.left - 1 || r.right > box.right + 1 || r.top < box.top - 1 ||
+          r.bottom > box.bottom + 1) out.outside.push(svg.id + ': ' + text);
+    }
+    for (let i = 0; i < texts.length; ++i) {
+      for (let j = i + 1; j < texts.length; ++j) {
+        const a = texts[i][1], b = texts[j][1];
+        const w = Math.min(a.right, b.right) - Math.max(a.left, b.left);
+        const h = Math.min(a.bottom, b.bottom) - Math.max(a.top, b.top);
+        if (w > 1 && h > 1) out.overlaps.push(svg.id + ': ' + texts[i][0] + ' / ' + texts[j][0]);
+      }
+    }
+  }
+  return out;
+})())js";
+
+const Value& Get(const Value& v, const std::string& field) {
+  static const Value* const kNull = new Value();
+  const auto& fields = v.struct_value().fields();
+  const auto it = fields.find(field);
+  return it == fields.end() ? *kNull : it->second;
+}
+
+std::vector<std::string> Strings(const Value& list) {
+  std::vector<std::string> out;
+  for (const Value& v : list.list_value().values()) out.push_back(v.string_value());
+  return out;
+}
+
+class HtmlReportTest : public testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("fenestra_html_report_" +
+            std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    const v1::JobResult& result = QuickJobResult();
+    ASSERT_TRUE(result.has_best_hourly());
+    page_ = (dir_ / "report.html").string();
+    ASSERT_TRUE(WriteReport(result, {"quick.json", ""}, page_).ok());
+    absl::StatusOr<std::unique_ptr<HeadlessChromium>> browser =
+        HeadlessChromium::Start(CHROMIUM_EXECUTABLE, (dir_ / "profile").string());
+    ASSERT_TRUE(browser.ok()) << browser.status();
+    browser_ = *std::move(browser);
+    const absl::Status loaded = browser_->Load("file://" + page_, 1200, 900);
+    ASSERT_TRUE(loaded.ok()) << loaded;
+  }
+  void TearDown() override {
+    browser_.reset();
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+
+  Value Inspect() {
+    absl::StatusOr<Value> value = browser_->Evaluate(kInspectFigures);
+    EXPECT_TRUE(value.ok()) << value.status();
+    return value.ok() ? *value : Value();
+  }
+
+  fs::path dir_;
+  std::string page_;
+  std::unique_ptr<HeadlessChromium> browser_;
+};
+
+TEST_F(HtmlReportTest, LoadsWithoutErrorsOrRequestsAndDrawsEveryFigure) {
+  EXPECT_THAT(browser_->problems(), IsEmpty());
+  EXPECT_EQ(browser_->requests(), std::vector<std::string>{"file://" + page_});
+  absl::StatusOr<Value> scripts =
+      browser_->Evaluate("document.querySelectorAll('script, [src], link, iframe').length");
+  ASSERT_TRUE(scripts.ok()) << scripts.status();
+  EXPECT_EQ(scripts->number_value(), 0);
+
+  const v1::JobResult& result = QuickJobResult();
+  const Value figures = Get(Inspect(), "figures");
+  for (const char* id : {"plot-value-vs-evaluation", "plot-value-vs-time", "plot-error-vs-time",
+                         "plot-design-alpha", "plot-floor-udi", "plot-floor-da",
+                         "plot-temporal-map", "plot-blind-section", "plot-blind-detail"}) {
+    const Value& figure = Get(figures, id);
+    ASSERT_TRUE(figure.has_struct_value()) << id << " is missing";
+    EXPECT_GT(Get(figure, "width").number_value(), 200) << id;
+    EXPECT_GT(Get(figure, "height").number_value(), 150) << id;
+  }
+  EXPECT_EQ(Get(Get(figures, "plot-value-vs-evaluation"), "points").number_value(),
+            result.history_size());
+  EXPECT_EQ(Get(Get(figures, "plot-design-alpha"), "points").number_value(), result.history_size());
+  EXPECT_EQ(Get(Get(figures, "plot-floor-udi"), "sensors").number_value(), 9);
+  EXPECT_EQ(Get(Get(figures, "plot-floor-udi"), "labels").number_value(), 9);
+  EXPECT_GT(Get(Get(figures, "plot-temporal-map"), "cells").number_value(), 24);
+  EXPECT_EQ(Get(Get(figures, "plot-temporal-map"), "occupancy").number_value(), 1);
+  // As many slats as the generator makes at the best design
+  absl::StatusOr<Scene> scene = BuildScene(result.job().scene(), "result");
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  const std::map<std::string, double> best(result.best_design().begin(),
+                                           result.best_design().end());
+  absl::StatusOr<BlindDesign> design = DesignWithOverrides(*scene, best);
+  ASSERT_TRUE(design.ok()) << design.status();
+  EXPECT_EQ(Get(Get(figures, "plot-blind-section"), "slats").number_value(),
+            LayoutBlind(scene->window, *scene->blind, *design).slat_count);
+
+  // The tables, the job's final check and its recorded error against time
+  absl::StatusOr<Value> text = browser_->Evaluate(
+      "[document.querySelectorAll('#sensor-table tbody tr').length, "
+      "document.querySelectorAll('#best-metrics-table tbody tr').length, "
+      "document.querySelectorAll('#final-check-table tbody tr').length, "
+      "document.querySelectorAll('polyline.recorded-line').length]");
+  ASSERT_TRUE(text.ok()) << text.status();
+  const auto& values = text->list_value().values();
+  EXPECT_EQ(values[0].number_value(), 9);
+  EXPECT_EQ(values[1].number_value(), 7);
+  EXPECT_EQ(values[2].number_value(), 6);
+  EXPECT_EQ(values[3].number_value(), 1);
+}
+
+TEST_F(HtmlReportTest, NoTextOverlapsOrLeavesItsFigure) {
+  const Value inspected = Inspect();
+  EXPECT_THAT(Strings(Get(inspected, "overlaps")), IsEmpty());
+  EXPECT_THAT(Strings(Get(inspected, "outside")), IsEmpty());
+
+  // The screenshot, kept for people to look at
+  absl::StatusOr<std::string> png = browser_->Screenshot();
+  ASSERT_TRUE(png.ok()) << png.status();
+  ASSERT_GT(png->size(), 8u);
+  EXPECT_EQ(png->substr(1, 3), "PNG");
+  const fs::path artifact =
+      fs::path(FENESTRA_BINARY_DIR) / "test_artifacts" / "report_screenshot.png";
+  fs::create_directories(artifact.parent_path());
+  std::ofstream(artifact, std::ios::binary) << *png;
+  RecordProperty("screenshot", artifact.string());
+}
+
+TEST_F(HtmlReportTest, PrintsWithEveryFigure) {
+  ASSERT_TRUE(browser_->EmulateMedia("print").ok());
+  absl::StatusOr<Value> visible = browser_->Evaluate(
+      "[...document.querySelectorAll('svg.figure')].filter(s => s.getBoundingClientRect().width "
+      "> 100).length");
+  ASSERT_TRUE(visible.ok()) << visible.status();
+  EXPECT_EQ(visible->number_value(), 9);
+  absl::StatusOr<Value> background =
+      browser_->Evaluate("getComputedStyle(document.body).backgroundColor");
+  ASSERT_TRUE(background.ok()) << background.status();
+  EXPECT_EQ(background->string_value(), "rgb(255, 255, 255)");
+  absl::StatusOr<std::string> pdf = browser_->PrintToPdf();
+  ASSERT_TRUE(pdf.ok()) << pdf.status();
+  EXPECT_EQ(pdf->substr(0, 5), "%PDF-");
+  EXPECT_GT(pdf->size(), 20000u);
+  EXPECT_THAT(browser_->problems(), IsEmpty());
+}
+
+// The inspection itself finds overlapping and clipped texts
+TEST_F(HtmlReportTest, TheInspectionFindsOverlapsAndClippedTexts) {
+  const std::string page = (dir_ / "bad.html").string();
+  std::ofstream(page)
+      << "<!DOCTYPE html><html><body><svg class=\"figure\" id=\"bad\" width=\"200\" "
+         "height=\"60\"><text x=\"10\" y=\"20\">hello</text><text x=\"14\" "
+         "y=\"24\">world</text><text x=\"180\" y=\"50\">clipped</text>"
+         "</svg></body></html>";
+  ASSERT_TRUE(browser_->Load("file://" + page, 800, 600).ok());
+  const Value inspected = Inspect();
+  EXPECT_EQ(Strings(Get(inspected, "overlaps")), std::vector<std::string>{"bad: hello / world"});
+  EXPECT_EQ(Strings(Get(inspected, "outside")), std::vector<std::string>{"bad: clipped"});
+}
+
+}  // namespace
+}  // namespace fenestra

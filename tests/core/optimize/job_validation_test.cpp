@@ -1,0 +1,215 @@
+// ValidateJob and PrepareJob refuse every kind of bad job field, naming the field and the
+// reason; the example jobs pass.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+
+#include "core/optimize/job.h"
+
+namespace fenestra {
+namespace {
+
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+
+const std::string kOffice = FENESTRA_SOURCE_DIR "/examples/city_office";
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The quick tilt job with the four variables free, the scene inline.
+v1::Job QuickJob() {
+  absl::StatusOr<v1::Job> job = ReadJobFile(kOffice + "/alpha_max_quick.json");
+  EXPECT_TRUE(job.ok()) << job.status();
+  absl::StatusOr<v1::Scene> scene = ReadSceneProto(kOffice + "/scene.json");
+  EXPECT_TRUE(scene.ok()) << scene.status();
+  job->clear_scene_file();
+  *job->mutable_scene() = *scene;
+  return *job;
+}
+
+std::string ErrorOf(const v1::Job& job) {
+  absl::StatusOr<PreparedJob> prepared = ValidateJob(job, kOffice);
+  EXPECT_FALSE(prepared.ok()) << "accepted";
+  if (prepared.ok()) return "";
+  EXPECT_EQ(prepared.status().code(), absl::StatusCode::kInvalidArgument);
+  return std::string(prepared.status().message());
+}
+
+v1::DesignVariable& Variable(v1::Job& job, const std::string& name) {
+  for (v1::DesignVariable& v : *job.mutable_variables()) {
+    if (v.name() == name) return v;
+  }
+  ADD_FAILURE() << name;
+  return *job.add_variables();
+}
+
+TEST(JobValidationTest, ExampleJobsPrepare) {
+  for (const auto& file : std::filesystem::directory_iterator(kOffice)) {
+    if (file.path().filename() == "scene.json") continue;
+    absl::StatusOr<v1::Job> job = ReadJobFile(file.path().string());
+    ASSERT_TRUE(job.ok()) << job.status();
+    absl::StatusOr<PreparedJob> prepared = PrepareJob(*job, kOffice);
+    EXPECT_TRUE(prepared.ok()) << file.path() << ": " << prepared.status();
+    if (prepared.ok()) EXPECT_EQ(prepared->weather.records.size(), 8760u);
+  }
+  EXPECT_TRUE(ValidateJob(QuickJob(), kOffice).ok());
+}
+
+TEST(JobValidationTest, UnknownEnumValues) {
+  v1::Job job = QuickJob();
+  job.mutable_objective()->set_goal(static_cast<v1::Goal>(42));
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job objective.goal: unknown goal 42"));
+  job = QuickJob();
+  job.mutable_objective()->set_metric(static_cast<v1::Metric>(99));
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job objective.metric: unknown metric 99"));
+  job = QuickJob();
+  job.mutable_scene()->mutable_surfaces(0)->set_side(static_cast<v1::Side>(99));
+  EXPECT_THAT(ErrorOf(job), HasSubstr("surfaces[0].side: must be SIDE_INDOOR or SIDE_OUTDOOR"));
+  job = QuickJob();
+  job.mutable_scene()->mutable_blind()->set_orientation(
+      static_cast<v1::VenetianBlind::Orientation>(7));
+  EXPECT_THAT(ErrorOf(job), HasSubstr("blind.orientation: must be HORIZONTAL or VERTICAL, got 7"));
+}
+
+TEST(JobValidationTest, DesignVariablesOfARealBlind) {
+  v1::Job job = QuickJob();
+  Variable(job, "width").set_upper(2);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job variables[1]: width must stay within [0.001, 1] m"));
+  job = QuickJob();
+  Variable(job, "alpha").set_lower(-2);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("alpha must stay within [-1.5708, 1.5708] rad"));
+  job = QuickJob();
+  Variable(job, "spacing").set_upper(-0.1);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("empty design range"));
+  job = QuickJob();
+  Variable(job, "alpha").set_start(2);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job variables[0].start: start 2 is outside [0, 1.5708]"));
+  job = QuickJob();
+  Variable(job, "alpha").set_upper(kNaN);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("must be finite"));
+  // Slats as thick as they are wide, at some design of the ranges
+  job = QuickJob();
+  v1::DesignVariable& thickness = Variable(job, "thickness");
+  thickness.set_upper(0.1);
+  thickness.set_fixed(false);
+  EXPECT_THAT(ErrorOf(job), AllOf(HasSubstr("job variables: with the scene's blind: slats up to "
+                                            "0.1 m thick and from 0.05 m wide")));
+}
+
+// Slats narrow enough for more than kMaxBlindSlats at some design of the job's ranges: the
+// scene's slats, 5 cm at the narrowest, fit its 4 km window 80001 times; 2.5 cm ones would
+// need 160001
+TEST(JobValidationTest, TooManySlatsAtSomeDesignOfTheJob) {
+  v1::Job job = QuickJob();
+  job.mutable_scene()->mutable_window()->set_height_m(4000);
+  v1::DesignVariable& width = Variable(job, "width");
+  width.set_lower(0.025);
+  width.set_fixed(false);
+  EXPECT_THAT(ErrorOf(job),
+              AllOf(HasSubstr("job variables: with the scene's blind: slats from 0.025 m wide need "
+                              "up to 16000"),
+                    HasSubstr("a blind has at most 100000")));
+}
+
+// A sensor clear of the scene's slats (up to 15 cm wide) but where 60 cm slats would turn
+TEST(JobValidationTest, SensorsClearOfTheBlindAtEveryDesignOfTheJob) {
+  v1::Job job = QuickJob();
+  v1::Sensor& sensor = *job.mutable_scene()->add_sensors();
+  sensor.set_name("by the window");
+  sensor.mutable_position()->set_y(-0.4);
+  sensor.mutable_position()->set_z(7.65);
+  sensor.mutable_direction()->set_z(1);
+  ASSERT_TRUE(ValidateJob(job, kOffice).ok());
+  v1::DesignVariable& width = Variable(job, "width");
+  width.set_upper(0.6);
+  width.set_fixed(false);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("sensors[9] (\"by the window\") at (0, -0.4, 7.65) lies in "
+                                      "the space the blind's slats take"));
+}
+
+TEST(JobValidationTest, MetricSettings) {
+  const auto with = [](auto edit) {
+    v1::Job job = QuickJob();
+    edit(*job.mutable_metrics());
+    return ErrorOf(job);
+  };
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_occupied_start_h(25); }),
+              HasSubstr("job metrics.occupied_start_h: must be in [0, 24] h, got 25"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_occupied_end_h(-3); }),
+              HasSubstr("job metrics.occupied_end_h: must be in [0, 24] h, got -3"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_occupied_start_h(kNaN); }),
+              HasSubstr("metrics.occupied_start_h"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_occupied_end_h(8); }),
+              HasSubstr("occupied_start_h and occupied_end_h must differ"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_sda_time_fraction_percent(1e300); }),
+              HasSubstr("job metrics.sda_time_fraction_percent: must be in (0, 100] %"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_udi_lower_lux(3000); }),
+              HasSubstr("udi_lower_lux 3000 must be below udi_upper_lux 3000"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_udi_lower_lux(-100); }),
+              HasSubstr("job metrics.udi_lower_lux: must be in [0, 1e+06] lx, got -100"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_udi_upper_lux(kNaN); }),
+              HasSubstr("metrics.udi_upper_lux"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_da_threshold_lux(-300); }),
+              HasSubstr("job metrics.da_threshold_lux: must be in (0, 1e+06] lx"));
+}
+
+TEST(JobValidationTest, BudgetObjectiveAndSampling) {
+  v1::Job job = QuickJob();
+  job.mutable_budget()->set_max_seconds(std::numeric_limits<double>::infinity());
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job budget.max_seconds: must be a finite number >= 0"));
+  job = QuickJob();
+  job.mutable_objective()->set_target(kNaN);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job objective.target: must be in [0, 100] %"));
+  job = QuickJob();
+  job.mutable_objective()->set_target_tolerance(-1);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job objective.target_tolerance"));
+  job = QuickJob();
+  job.mutable_sampling()->set_indoor_bounces(1'000'000);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("bounces must be in [1, 1000], or -1 for unlimited"));
+  job = QuickJob();
+  job.add_neighborhoods()->set_radius(kNaN);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job neighborhoods[0]: needs variables >= 0"));
+}
+
+TEST(JobValidationTest, Names) {
+  v1::Job job = QuickJob();
+  job.set_name("tilt\n2024-01-01 [info] job-9 succeeded");
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job name: holds the control character U+000A at offset 4"));
+  job = QuickJob();
+  job.mutable_scene()->set_name(std::string(300, 'x'));
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job scene.name: is 300 bytes long, more than the 256"));
+  job = QuickJob();
+  job.mutable_scene()->mutable_sensors(2)->set_name("desk \xff");
+  EXPECT_THAT(ErrorOf(job),
+              HasSubstr("job scene.sensors[2].name: is not valid UTF-8 (byte 0xFF at offset 5)"));
+  job = QuickJob();
+  job.mutable_scene()->mutable_materials(1)->set_name("office\x1b[2J");
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job scene.materials[1].name: holds the control character "
+                                      "U+001B"));
+  job = QuickJob();
+  job.mutable_scene()->set_name("Büro Süd 東");  // UTF-8 is welcome
+  EXPECT_TRUE(ValidateJob(job, kOffice).ok());
+}
+
+TEST(JobValidationTest, PrepareRefusesBadWeather) {
+  const std::string dir = ::testing::TempDir() + "/job_validation_weather";
+  std::filesystem::create_directories(dir);
+  std::ifstream in(FENESTRA_SOURCE_DIR "/examples/weather/URY_Montevideo.865800_IWEC.epw");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.resize(text.size() / 2);  // cut in the middle of the year
+  std::ofstream(dir + "/cut.epw") << text;
+  v1::Job job = QuickJob();
+  job.set_weather_file("cut.epw");
+  absl::StatusOr<PreparedJob> prepared = PrepareJob(job, dir);
+  ASSERT_FALSE(prepared.ok());
+  EXPECT_THAT(prepared.status().message(),
+              AllOf(HasSubstr("cut.epw, line "), HasSubstr("truncated")));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace fenestra
