@@ -45,7 +45,9 @@ struct Sensor {
   std::string name;
   Vec3d position;     // [m]
   Vec3d direction;    // unit
-  std::string field;  // where the scene defines it, e.g. "sensors[3]" or "sensor_grids[0]"
+  // Where the scene defines it, e.g. "sensors[3]" or "sensor_grids[0]"; empty for a sensor
+  // made in code.
+  std::string field = {};
 };
 
 // A Box surface: a solid no sensor may lie in.

@@ -54,7 +54,9 @@ TEST(JobValidationTest, ExampleJobsPrepare) {
     ASSERT_TRUE(job.ok()) << job.status();
     absl::StatusOr<PreparedJob> prepared = PrepareJob(*job, kOffice);
     EXPECT_TRUE(prepared.ok()) << file.path() << ": " << prepared.status();
-    if (prepared.ok()) EXPECT_EQ(prepared->weather.records.size(), 8760u);
+    if (prepared.ok()) {
+      EXPECT_EQ(prepared->weather.records.size(), 8760u);
+    }
   }
   EXPECT_TRUE(ValidateJob(QuickJob(), kOffice).ok());
 }
