@@ -192,10 +192,9 @@ absl::StatusOr<std::vector<Matrix>> ReadRadianceMatrixComponents(const std::stri
   }
   const long value_bytes = format == "float" ? 4 : format == "double" ? 8 : 1;
   if (rows > data_bytes / value_bytes / cols / comps) {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": the header says NROWS=", rows,
-                                                   " NCOLS=", cols, " NCOMP=", comps, " but only ",
-                                                   data_bytes, " bytes of ", format,
-                                                   " data follow"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": the header says NROWS=", rows, " NCOLS=", cols, " NCOMP=", comps,
+                     " but only ", data_bytes, " bytes of ", format, " data follow"));
   }
   absl::StatusOr<Matrix> interleaved =
       format == "ascii" ? ParseTable(path, in, rows, cols * comps)

@@ -71,10 +71,10 @@ absl::Status CheckBlindFits(const BlindSpec& spec, const Window& window) {
   }
   if (const double slats = MaxSlatCount(window, spec, spec.slat_width_m.min);
       !(slats <= kMaxBlindSlats)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "slats from ", spec.slat_width_m.min, " m wide need up to ", slats, " slats across the window's ",
-        frame.stack_extent_m, " m ", spec.vertical ? "width" : "height", "; a blind has at most ",
-        kMaxBlindSlats));
+    return absl::InvalidArgumentError(
+        absl::StrCat("slats from ", spec.slat_width_m.min, " m wide need up to ", slats,
+                     " slats across the window's ", frame.stack_extent_m, " m ",
+                     spec.vertical ? "width" : "height", "; a blind has at most ", kMaxBlindSlats));
   }
   return absl::OkStatus();
 }

@@ -43,8 +43,8 @@ struct Window {
 
 struct Sensor {
   std::string name;
-  Vec3d position;     // [m]
-  Vec3d direction;    // unit
+  Vec3d position;   // [m]
+  Vec3d direction;  // unit
   // Where the scene defines it, e.g. "sensors[3]" or "sensor_grids[0]"; empty for a sensor
   // made in code.
   std::string field = {};

@@ -8,7 +8,8 @@
 #include <fstream>
 #include <string>
 
-#include "client/grpc_client.h"
+#include "client/cli_util.h"
+#include "client/job_request.h"
 #include "server/outdoor_cache.h"
 
 namespace fenestra {

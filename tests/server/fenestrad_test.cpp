@@ -630,7 +630,7 @@ TEST_F(FenestradTest, BadInputIsRefusedBeforeAnythingIsStored) {
   };
   for (const auto& [what, edit, field] : scene_cases) {
     job_cases.push_back(
-        {what, [edit](v1::SubmitJobRequest& r) { edit(*r.mutable_job()->mutable_scene()); },
+        {what, [edit = edit](v1::SubmitJobRequest& r) { edit(*r.mutable_job()->mutable_scene()); },
          field});
   }
   for (const auto& [what, edit, field] : job_cases) {
@@ -665,7 +665,7 @@ TEST_F(FenestradTest, BadInputIsRefusedBeforeAnythingIsStored) {
       };
   for (const auto& [what, edit, field] : scene_cases) {
     site_cases.push_back(
-        {what, [edit](v1::RegisterSiteRequest& r) { edit(*r.mutable_scene()); }, field});
+        {what, [edit = edit](v1::RegisterSiteRequest& r) { edit(*r.mutable_scene()); }, field});
   }
   for (const auto& [what, edit, field] : site_cases) {
     v1::RegisterSiteRequest request = site_request();

@@ -80,8 +80,8 @@ TEST_F(RadianceMatrixTest, HeaderClaimingMoreValuesThanTheFileHoldsIsAnError) {
                              "NROWS=2\nNCOLS=3333333333333332\nNCOMP=1\nFORMAT=float\n\n",
                              "NROWS=4611686018427387904\nNCOLS=4\nNCOMP=1\nFORMAT=double\n\n",
                              "NROWS=1\nNCOLS=4\nNCOMP=3\nFORMAT=float\n\n"}) {
-    std::ofstream(Path("m.mtx"), std::ios::binary)
-        << "#?RADIANCE\n" << header << "1 2 3 4 5 6 7 8\n";
+    std::ofstream(Path("m.mtx"), std::ios::binary) << "#?RADIANCE\n"
+                                                   << header << "1 2 3 4 5 6 7 8\n";
     const absl::StatusOr<Matrix> read = ReadRadianceMatrix(Path("m.mtx"));
     ASSERT_FALSE(read.ok()) << header;
     EXPECT_EQ(read.status().code(), absl::StatusCode::kInvalidArgument);
