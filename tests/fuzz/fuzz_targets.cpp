@@ -18,6 +18,7 @@
 #include "core/optimize/job.h"
 #include "core/sky/epw.h"
 #include "core/sky/sky_matrix.h"
+#include "core/trace/room_check.h"
 #include "fenestra/v1/service.pb.h"
 #include "server/checksum.h"
 #include "server/config.h"
@@ -91,89 +92,60 @@ const Workspace& TheWorkspace() {
   return workspace;
 }
 
-// The checks of JobService.Submit before the job is stored (server/job_manager.cpp), for a
-// request on no site; the uploaded weather is taken as saved at `weather_path`.
-absl::Status CheckSubmitJobRequest(const v1::SubmitJobRequest& request, const v1::Limits& limits,
-                                   const std::string& weather_path) {
-  v1::Job job = request.job();
-  if (!job.scene_file().empty()) return absl::InvalidArgumentError("job.scene_file: a path");
-  if (!job.has_scene()) return absl::InvalidArgumentError("job.scene: is required");
-  if (absl::Status s = CheckInlineScene(job.scene()); !s.ok()) return s;
-  double min_slat_width_m = 0;
-  for (const v1::DesignVariable& v : job.variables()) {
-    if (v.name() == "width") min_slat_width_m = v.fixed() ? v.start() : v.lower();
-  }
-  if (absl::Status s = CheckSceneLimits(job.scene(), limits, min_slat_width_m); !s.ok()) return s;
-  if (absl::Status s = CheckBudgetLimits(job.budget(), limits); !s.ok()) return s;
-  if (request.weather_epw().empty()) return absl::InvalidArgumentError("no weather file");
-  job.set_weather_file(weather_path);
-  job.mutable_scene()->mutable_site()->clear_weather_file();
-  if (job.sampling().backend().empty()) {
-    job.mutable_sampling()->set_backend(
-        request.default_backend().empty() ? "cpu" : request.default_backend());
-  }
-  absl::StatusOr<v1::Sampling> sampling = ResolveSampling(job.sampling());
-  if (!sampling.ok()) return sampling.status();
-  if (absl::Status s = CheckSamplingLimits(*sampling, limits, /*indoor=*/true); !s.ok()) return s;
-  absl::StatusOr<PreparedJob> prepared = PrepareJob(job, "");
-  if (!prepared.ok()) return prepared.status();
-  if (absl::Status s = CheckBudgetLimits(prepared->job.budget(), limits); !s.ok()) return s;
-  OutdoorMatrixKey(prepared->scene, prepared->job.sampling());
-
-  // What passed holds to the limits
-  const TriangleMesh mesh = AssembleMesh(prepared->scene, DefaultDesign(prepared->scene));
+// JobService.Submit's checks before anything is stored (CheckJobRequest, server/limits.h),
+// and what an accepted job holds to.
+absl::Status CheckSubmitJobRequest(const v1::SubmitJobRequest& request,
+                                   const v1::DaemonConfig& config) {
+  absl::StatusOr<CheckedJob> checked = CheckJobRequest(request, config);
+  if (!checked.ok()) return checked.status();
+  const PreparedJob& prepared = checked->prepared;
+  const v1::Limits& limits = config.limits();
+  OutdoorMatrixKey(prepared.scene, prepared.job.sampling());
+  const TriangleMesh mesh = AssembleMesh(prepared.scene, DefaultDesign(prepared.scene));
   Require(static_cast<int64_t>(mesh.TriangleCount()) <= limits.max_triangles(),
           "an accepted job's scene has more triangles than max_triangles");
-  Require(static_cast<int64_t>(prepared->scene.sensors.size()) <= limits.max_sensors(),
+  Require(static_cast<int64_t>(prepared.scene.sensors.size()) <= limits.max_sensors(),
           "an accepted job's scene has more sensors than max_sensors");
-  Require(
-      prepared->job.sampling().indoor_paths_per_sensor() <= limits.max_indoor_paths_per_sensor(),
-      "an accepted job has more indoor paths than max_indoor_paths_per_sensor");
+  Require(prepared.job.sampling().indoor_paths_per_sensor() <= limits.max_indoor_paths_per_sensor(),
+          "an accepted job has more indoor paths than max_indoor_paths_per_sensor");
+  Require(prepared.job.budget().max_evaluations() <= limits.max_evaluations(),
+          "an accepted job has more evaluations than max_evaluations");
   Require(AllFinite(mesh.vertices), "an accepted job's scene has non-finite vertices");
   return absl::OkStatus();
 }
 
-// The checks of SiteService.Register before the site is stored (server/site_manager.cpp).
+// SiteService.Register's checks before anything is stored (CheckSiteRequest), and what an
+// accepted site holds to.
 absl::Status CheckRegisterSiteRequest(const v1::RegisterSiteRequest& request,
-                                      const v1::Limits& limits) {
-  if (!request.has_scene()) return absl::InvalidArgumentError("scene: is required");
-  if (absl::Status s = CheckInlineScene(request.scene()); !s.ok()) return s;
-  if (absl::Status s = CheckSceneLimits(request.scene(), limits); !s.ok()) return s;
-  v1::Sampling sampling = request.sampling();
-  if (sampling.backend().empty()) sampling.set_backend("cpu");
-  absl::StatusOr<v1::Sampling> resolved = ResolveSampling(sampling);
-  if (!resolved.ok()) return resolved.status();
-  if (absl::Status s = CheckSamplingLimits(*resolved, limits, /*indoor=*/false); !s.ok()) return s;
-  v1::Scene scene_proto = request.scene();
-  scene_proto.mutable_site()->clear_weather_file();
-  absl::StatusOr<Scene> scene = BuildScene(scene_proto, "scene");
-  if (!scene.ok()) return scene.status();
-  OutdoorMatrixKey(*scene, *resolved);
-
-  // What passed holds to the limits
-  Require(static_cast<int64_t>(scene->fixed.TriangleCount()) <= limits.max_triangles(),
+                                      const v1::DaemonConfig& config) {
+  absl::StatusOr<CheckedSite> checked = CheckSiteRequest(request, config);
+  if (!checked.ok()) return checked.status();
+  const v1::Limits& limits = config.limits();
+  OutdoorMatrixKey(checked->scene, checked->sampling);
+  Require(static_cast<int64_t>(checked->scene.fixed.TriangleCount()) <= limits.max_triangles(),
           "an accepted site's scene has more triangles than max_triangles");
-  Require(resolved->outdoor_paths() <= limits.max_outdoor_paths(),
+  Require(checked->sampling.outdoor_paths() <= limits.max_outdoor_paths(),
           "an accepted site has more outdoor paths than max_outdoor_paths");
   return absl::OkStatus();
 }
 
-const v1::Limits& DefaultLimits() {
-  static const v1::Limits limits = [] {
-    v1::DaemonConfig config;
-    config.set_backend("cpu");
-    absl::StatusOr<v1::DaemonConfig> resolved = ResolveConfig(config);
+// The daemon's configuration when none is given, on the CPU.
+const v1::DaemonConfig& DefaultConfig() {
+  static const v1::DaemonConfig config = [] {
+    v1::DaemonConfig given;
+    given.set_backend("cpu");
+    absl::StatusOr<v1::DaemonConfig> resolved = ResolveConfig(given);
     Require(resolved.ok(), "the default daemon configuration does not resolve");
-    return resolved->limits();
+    return *resolved;
   }();
-  return limits;
+  return config;
 }
 
 }  // namespace
 
 absl::Status SceneJson(std::string_view bytes) {
   const std::string path = TheWorkspace().Write("city_office/fuzz_scene.json", bytes);
-  absl::StatusOr<Scene> scene = LoadScene(path);
+  absl::StatusOr<Scene> scene = LoadValidScene(path);
   if (!scene.ok()) return scene.status();
   const TriangleMesh mesh = AssembleMesh(*scene, DefaultDesign(*scene));
   Require(AllFinite(mesh.vertices), "a scene that loads has non-finite vertices");
@@ -278,14 +250,13 @@ absl::Status DaemonRequest(std::string_view bytes) {
     if (!request.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()))) {
       return absl::InvalidArgumentError("not a RegisterSiteRequest");
     }
-    return CheckRegisterSiteRequest(request, DefaultLimits());
+    return CheckRegisterSiteRequest(request, DefaultConfig());
   }
   v1::SubmitJobRequest request;
   if (!request.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()))) {
     return absl::InvalidArgumentError("not a SubmitJobRequest");
   }
-  return CheckSubmitJobRequest(request, DefaultLimits(),
-                               TheWorkspace().Path("weather/URY_Montevideo.865800_IWEC.epw"));
+  return CheckSubmitJobRequest(request, DefaultConfig());
 }
 
 std::span<const Target> Targets() {

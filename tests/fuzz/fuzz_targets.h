@@ -14,7 +14,8 @@
 namespace fenestra::fuzz {
 
 // A scene file as `fenestra scene check` reads it: JSON of fenestra.v1.Scene, built into
-// the core scene (LoadScene). Relative OBJ paths resolve next to the examples' scenes.
+// the core scene and checked as a room (LoadValidScene). Relative OBJ paths resolve next to
+// the examples' scenes.
 absl::Status SceneJson(std::string_view bytes);
 
 // A job file as `fenestra optimize --local` reads it: JSON of fenestra.v1.Job, validated
@@ -36,8 +37,9 @@ absl::Status RadianceMatrix(std::string_view bytes);
 absl::Status OutdoorCache(std::string_view bytes);
 
 // A request to fenestrad: the first byte picks SubmitJobRequest (even) or
-// RegisterSiteRequest (odd), the rest is the message in protobuf's binary form, checked as
-// JobService.Submit and SiteService.Register check it before any work.
+// RegisterSiteRequest (odd), the rest is the message in protobuf's binary form, checked by
+// the doors of JobService.Submit and SiteService.Register (CheckJobRequest,
+// CheckSiteRequest) under the default configuration.
 absl::Status DaemonRequest(std::string_view bytes);
 
 struct Target {
