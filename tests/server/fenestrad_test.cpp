@@ -1046,9 +1046,13 @@ TEST_F(FenestradStorageTest, LargeRegistrationMemoryIsBoundedAndGivenBack) {
                after = ProcessStatusMiB(d->pid(), "VmRSS");
   std::cout << "fenestrad resident memory: " << before << " MiB before, " << peak
             << " MiB at the peak, " << after << " MiB after\n";
-  // Measured 650-770 MiB at the peak and 30-35 MiB after (bench/results/memory_registration.txt)
+  // Measured 650-770 MiB at the peak and 30-35 MiB after (bench/results/memory_registration.txt).
+  // Under AddressSanitizer the allocator pads every block and holds freed ones in quarantine,
+  // so resident memory measures the sanitizer: the plain build checks the bounds.
+#if !FENESTRA_SANITIZE
   EXPECT_LT(peak, 1500);
   EXPECT_LT(after, 150);
+#endif
 }
 
 }  // namespace
