@@ -50,8 +50,9 @@ int main(int argc, char** argv) {
                   fenestra::SkyMatrixOptions{.quantity = fenestra::SkyQuantity::kSolar}},
         std::pair{"sky matrix MF 2, visible", fenestra::SkyMatrixOptions{.mf = 2}}}) {
     absl::StatusOr<fenestra::SkyMatrix> sky;
+    const fenestra::SkyMatrixOptions& sky_options = options;  // lambdas cannot capture bindings
     const std::vector<double> s =
-        TimeRuns(runs, [&] { sky = fenestra::BuildSkyMatrix(*epw, options); });
+        TimeRuns(runs, [&] { sky = fenestra::BuildSkyMatrix(*epw, sky_options); });
     if (!sky.ok()) {
       std::fprintf(stderr, "error: %s\n", std::string(sky.status().message()).c_str());
       return 1;

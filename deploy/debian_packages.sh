@@ -8,6 +8,8 @@ packages=(
   libgtest-dev libgmock-dev libcli11-dev libtinyobjloader-dev libsqlite3-dev zlib1g-dev libexpat1-dev
   libssl-dev openssl chromium
   python3 python3-grpcio python3-grpc-tools python3-numpy python3-yaml
+  # tests/run_all.sh's sanitizer and fuzzing builds: clang, libFuzzer, llvm-symbolizer
+  clang libclang-rt-14-dev llvm
 )
 missing=()
 for p in "${packages[@]}"; do

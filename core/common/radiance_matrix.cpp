@@ -178,14 +178,27 @@ absl::StatusOr<std::vector<Matrix>> ReadRadianceMatrixComponents(const std::stri
   if (comps < 1 || comps > 16) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": bad NCOMP=", comps));
   }
-  absl::StatusOr<Matrix> interleaved;
-  if (format == "ascii") {
-    interleaved = ParseTable(path, in, rows, cols * comps);
-  } else if (format == "float" || format == "double") {
-    interleaved = ReadBinary(path, in, rows, cols * comps, format == "float");
-  } else {
+  if (format != "ascii" && format != "float" && format != "double") {
     return absl::InvalidArgumentError(absl::StrCat(path, ": unsupported FORMAT=", format));
   }
+  // The header's size against the data that follows, before anything is allocated: a value
+  // takes 4 bytes as float, 8 as double, at least 1 as text
+  std::streamoff data_bytes = 0;
+  if (in) {
+    const std::streamoff data_start = in.tellg();
+    in.seekg(0, std::ios::end);
+    data_bytes = in.tellg() - data_start;
+    in.seekg(data_start);
+  }
+  const long value_bytes = format == "float" ? 4 : format == "double" ? 8 : 1;
+  if (rows > data_bytes / value_bytes / cols / comps) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": the header says NROWS=", rows, " NCOLS=", cols, " NCOMP=", comps,
+                     " but only ", data_bytes, " bytes of ", format, " data follow"));
+  }
+  absl::StatusOr<Matrix> interleaved =
+      format == "ascii" ? ParseTable(path, in, rows, cols * comps)
+                        : ReadBinary(path, in, rows, cols * comps, format == "float");
   if (!interleaved.ok()) return interleaved.status();
   return SplitComponents(*interleaved, comps);
 }

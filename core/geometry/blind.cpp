@@ -69,6 +69,13 @@ absl::Status CheckBlindFits(const BlindSpec& spec, const Window& window) {
                      frame.stack_extent_m, " m ", spec.vertical ? "width" : "height",
                      " across which they stack"));
   }
+  if (const double slats = MaxSlatCount(window, spec, spec.slat_width_m.min);
+      !(slats <= kMaxBlindSlats)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("slats from ", spec.slat_width_m.min, " m wide need up to ", slats,
+                     " slats across the window's ", frame.stack_extent_m, " m ",
+                     spec.vertical ? "width" : "height", "; a blind has at most ", kMaxBlindSlats));
+  }
   return absl::OkStatus();
 }
 
@@ -82,6 +89,10 @@ BlindLayout LayoutBlind(const Window& window, const BlindSpec& spec, const Blind
   layout.slat_count = 1 + static_cast<int>(std::ceil(gaps - kCountTolerance));
   layout.axis_depth_m = spec.wall_gap_m + 0.5 * std::sqrt(w * w + t * t);
   return layout;
+}
+
+double MaxSlatCount(const Window& window, const BlindSpec& spec, double min_slat_width_m) {
+  return 1 + std::ceil(BlindFrame(window, spec).stack_extent_m / min_slat_width_m);
 }
 
 BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design,

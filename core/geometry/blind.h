@@ -55,9 +55,18 @@ struct BlindLayout {
   double axis_depth_m = 0;  // distance of the slat axes behind the wall's inner face
 };
 
+// The most slats a blind may have (12 triangles each); scenes and jobs whose narrowest slats
+// would need more are refused.
+inline constexpr int kMaxBlindSlats = 100'000;
+
+// An upper bound on the slats LayoutBlind places in `window` for any design whose slat width
+// is at least `min_slat_width_m` [m] (the pitch is at least the width).
+double MaxSlatCount(const Window& window, const BlindSpec& spec, double min_slat_width_m);
+
 // Checks that every design within the spec's ranges is a blind that fits `window`: slats
-// thinner than wide, and no wider than the opening they stack across. InvalidArgument with
-// the reason (the caller adds the field).
+// thinner than wide, no wider than the opening they stack across, and at most
+// kMaxBlindSlats of them at the narrowest width. InvalidArgument with the reason (the caller
+// adds the field).
 absl::Status CheckBlindFits(const BlindSpec& spec, const Window& window);
 
 // Slat layout for `design` in `window` (see blind.cpp for the exact rule).

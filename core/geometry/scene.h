@@ -43,9 +43,11 @@ struct Window {
 
 struct Sensor {
   std::string name;
-  Vec3d position;     // [m]
-  Vec3d direction;    // unit
-  std::string field;  // where the scene defines it, e.g. "sensors[3]" or "sensor_grids[0]"
+  Vec3d position;   // [m]
+  Vec3d direction;  // unit
+  // Where the scene defines it, e.g. "sensors[3]" or "sensor_grids[0]"; empty for a sensor
+  // made in code.
+  std::string field = {};
 };
 
 // A Box surface: a solid no sensor may lie in.

@@ -78,7 +78,7 @@ struct ChunkSink {
   double* sum_squares;
   double sky_sum_squares = 0;
   double path_score[kTregenzaBinCount] = {};
-  int touched[kTregenzaBinCount];
+  int touched[kTregenzaBinCount] = {};
   int touched_count = 0;
 
   void Add(int bin, double value) {
@@ -225,8 +225,8 @@ struct PilotMode {
   Vec3f sensor_position;
   Vec3f sensor_normal;
   float inverse_cell_m;
-  uint64_t keys[kMaxRecords];
-  float weights[kMaxRecords];
+  uint64_t keys[kMaxRecords] = {};
+  float weights[kMaxRecords] = {};
   int records = 0;
   double score = 0;
 

@@ -147,7 +147,7 @@ FENESTRA_CPU_GPU inline bool StepBranch(const Intersector& scene, const SurfaceT
                                         int* pending_count, PathStats* stats, PathEnd* end) {
   if (*interactions >= settings.max_vertices) return Ended(end, PathEnd::kTruncated);
   // Find the closest hit; an escaping ray is the mode's to score
-  SurfaceHit hit;
+  SurfaceHit hit{};
   ++stats->rays;
   if (!scene.Intersect(path.origin, path.direction, &hit)) {
     mode.Escape(path);

@@ -630,7 +630,7 @@ TEST_F(FenestradTest, BadInputIsRefusedBeforeAnythingIsStored) {
   };
   for (const auto& [what, edit, field] : scene_cases) {
     job_cases.push_back(
-        {what, [edit](v1::SubmitJobRequest& r) { edit(*r.mutable_job()->mutable_scene()); },
+        {what, [edit = edit](v1::SubmitJobRequest& r) { edit(*r.mutable_job()->mutable_scene()); },
          field});
   }
   for (const auto& [what, edit, field] : job_cases) {
@@ -665,7 +665,7 @@ TEST_F(FenestradTest, BadInputIsRefusedBeforeAnythingIsStored) {
       };
   for (const auto& [what, edit, field] : scene_cases) {
     site_cases.push_back(
-        {what, [edit](v1::RegisterSiteRequest& r) { edit(*r.mutable_scene()); }, field});
+        {what, [edit = edit](v1::RegisterSiteRequest& r) { edit(*r.mutable_scene()); }, field});
   }
   for (const auto& [what, edit, field] : site_cases) {
     v1::RegisterSiteRequest request = site_request();
@@ -1047,9 +1047,13 @@ TEST_F(FenestradStorageTest, LargeRegistrationMemoryIsBoundedAndGivenBack) {
                after = ProcessStatusMiB(d->pid(), "VmRSS");
   std::cout << "fenestrad resident memory: " << before << " MiB before, " << peak
             << " MiB at the peak, " << after << " MiB after\n";
-  // Measured 650-770 MiB at the peak and 30-35 MiB after (bench/results/memory_registration.txt)
+  // Measured 650-770 MiB at the peak and 30-35 MiB after (bench/results/memory_registration.txt).
+  // Under AddressSanitizer the allocator pads every block and holds freed ones in quarantine,
+  // so resident memory measures the sanitizer: the plain build checks the bounds.
+#if !FENESTRA_SANITIZE
   EXPECT_LT(peak, 1500);
   EXPECT_LT(after, 150);
+#endif
 }
 
 }  // namespace

@@ -9,15 +9,18 @@
 #include <thread>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
+
 namespace fenestra {
 namespace {
 
 using ::testing::HasSubstr;
 
 TEST(WorkQueueTest, BoundsWaitingJobsButNotOtherTasks) {
-  WorkQueue queue(1, 2, 100);
+  // What the tasks use outlives the queue, whose workers may still run them as it goes
   std::atomic<bool> release = false;
   std::atomic<int> done = 0;
+  WorkQueue queue(1, 2, 100);
   auto block = [&] {
     while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(5));
     ++done;
@@ -56,11 +59,11 @@ void HoldWorker(WorkQueue& queue, const std::string& owner, std::atomic<bool>& r
 }
 
 TEST(WorkQueueTest, UsersTakeTurnsEachWithTheirOldestTask) {
-  WorkQueue queue(1, 100, 100);
-  std::atomic<bool> release = false;
-  HoldWorker(queue, "ann", release);  // ann was served last; bob and cy never
+  std::atomic<bool> release = false;  // these outlive the queue
   std::mutex mutex;
   std::vector<std::string> ran;
+  WorkQueue queue(1, 100, 100);
+  HoldWorker(queue, "ann", release);  // ann was served last; bob and cy never
   auto record = [&](const std::string& id) {
     return [&, id] {
       std::lock_guard lock(mutex);
@@ -87,8 +90,8 @@ TEST(WorkQueueTest, UsersTakeTurnsEachWithTheirOldestTask) {
 }
 
 TEST(WorkQueueTest, BoundsWaitingJobsPerUser) {
+  std::atomic<bool> release = false;  // outlives the queue
   WorkQueue queue(1, 10, 2);
-  std::atomic<bool> release = false;
   HoldWorker(queue, "ann", release);
   ASSERT_TRUE(queue.Push("a1", "ann", [] {}).ok());
   ASSERT_TRUE(queue.Push("a2", "ann", [] {}).ok());
@@ -112,8 +115,8 @@ TEST(WorkQueueTest, BoundsWaitingJobsPerUser) {
 }
 
 TEST(WorkQueueTest, StopLeavesWaitingTasksAndJoinWaitsForRunningOnes) {
-  WorkQueue queue(1, 10, 100);
   std::atomic<bool> finished = false, started_second = false;
+  WorkQueue queue(1, 10, 100);
   ASSERT_TRUE(queue
                   .Push("first", "ann",
                         [&] {
@@ -132,11 +135,11 @@ TEST(WorkQueueTest, StopLeavesWaitingTasksAndJoinWaitsForRunningOnes) {
 }
 
 TEST(WorkQueueTest, WorkersRunTasksConcurrently) {
-  WorkQueue queue(2, 10, 100);
   std::atomic<int> running = 0, peak = 0;
+  WorkQueue queue(2, 10, 100);
   for (int i = 0; i < 4; ++i) {
     ASSERT_TRUE(queue
-                    .Push("t" + std::to_string(i), "ann",
+                    .Push(absl::StrCat("t", i), "ann",
                           [&] {
                             peak = std::max(peak.load(), ++running);
                             std::this_thread::sleep_for(std::chrono::milliseconds(100));

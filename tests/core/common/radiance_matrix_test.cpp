@@ -74,5 +74,21 @@ TEST_F(RadianceMatrixTest, BadComponentsAndShortDataAreErrors) {
       << read.status();
 }
 
+// A header is checked against the data, components included, before anything is allocated.
+TEST_F(RadianceMatrixTest, HeaderClaimingMoreValuesThanTheFileHoldsIsAnError) {
+  for (const char* header : {"NROWS=1000000000000\nNCOLS=146\nNCOMP=1\nFORMAT=ascii\n\n",
+                             "NROWS=2\nNCOLS=3333333333333332\nNCOMP=1\nFORMAT=float\n\n",
+                             "NROWS=4611686018427387904\nNCOLS=4\nNCOMP=1\nFORMAT=double\n\n",
+                             "NROWS=1\nNCOLS=4\nNCOMP=3\nFORMAT=float\n\n"}) {
+    std::ofstream(Path("m.mtx"), std::ios::binary) << "#?RADIANCE\n"
+                                                   << header << "1 2 3 4 5 6 7 8\n";
+    const absl::StatusOr<Matrix> read = ReadRadianceMatrix(Path("m.mtx"));
+    ASSERT_FALSE(read.ok()) << header;
+    EXPECT_EQ(read.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_NE(read.status().message().find("the header says NROWS="), std::string::npos)
+        << read.status();
+  }
+}
+
 }  // namespace
 }  // namespace fenestra

@@ -183,7 +183,9 @@ TEST(OneStageTest, RouletteAndBounceLimitsAreUnbiased) {
     SCOPED_TRACE(testing::Message()
                  << "roulette " << c.roulette << " threshold " << c.threshold << " bounces "
                  << c.max_bounces << " weight windows " << c.weight_windows);
-    if (c.weight_windows) EXPECT_GT(result->importance_cells, 0u);
+    if (c.weight_windows) {
+      EXPECT_GT(result->importance_cells, 0u);
+    }
     EXPECT_NEAR(result->sky_sum(0), slab.SkySum(c.max_bounces),
                 4 * result->sky_sum_standard_error(0));
     EXPECT_LE(result->max_path_weight, 1.0);

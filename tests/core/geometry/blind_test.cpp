@@ -109,7 +109,7 @@ TEST(BlindTest, NoSlatReachesTheWallOrRevealsAtAnyTilt) {
 // Corners of slat k projected onto the cross-section plane (stack axis z, depth).
 std::vector<std::pair<double, double>> Section(const TriangleMesh& mesh, int k) {
   std::vector<std::pair<double, double>> points;
-  for (size_t i = 36 * k; i < 36 * (k + 1); ++i) {
+  for (int i = 36 * k; i < 36 * (k + 1); ++i) {
     points.push_back({mesh.vertices[i].z, Depth(mesh.vertices[i])});
   }
   return points;

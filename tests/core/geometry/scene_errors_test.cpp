@@ -126,6 +126,22 @@ TEST_F(SceneErrorsTest, ZeroOrNegativeSlatSizes) {
               {"blind.slat_spacing_m", "[-1, 0.1] must stay within [0, 1] m"});
 }
 
+// Sizes that would take more memory than a scene may use are errors before any is taken.
+TEST_F(SceneErrorsTest, TooManySensorsOrSlats) {
+  const std::string sensors = R"("sensors": [)";
+  ExpectError(Scene(sensors, R"("sensorGrids": [{"zM": 0.8, "xMinM": 0, "xMaxM": 1.8, "yMinM": 0,
+                                                "yMaxM": 2.8, "spacingM": 1e-5}], )" +
+                                 sensors),
+              {"sensor_grids[0]", "the grid holds 5.04e+10 cells", "at most 1000000 sensors"});
+  // The pitch is at least the width: a 10 km window over 5 cm slats needs 200001 of them
+  ExpectError(Scene(R"("heightM": 1)", R"("heightM": 10000)"),
+              {"blind:", "slats from 0.05 m wide need up to 200001 slats", "at most 100000"});
+  // Far more slats than an int counts: the width's bounds refuse it first
+  ExpectError(Scene(R"("slatWidthM": {"value": 0.1, "min": 0.05, "max": 0.15})",
+                    R"("slatWidthM": {"value": 1e-300})"),
+              {"blind.slat_width_m", "must stay within [0.001, 1] m"});
+}
+
 TEST_F(SceneErrorsTest, DesignValueOutsideItsRange) {
   ExpectError(Scene(R"("slatWidthM": {"value": 0.1)", R"("slatWidthM": {"value": 0.2)"),
               {"blind.slat_width_m", "value 0.2 is outside [0.05, 0.15]"});
@@ -195,8 +211,20 @@ TEST_F(SceneErrorsTest, HugeCoordinatesAndWindows) {
   ExpectError(Scene(R"("position": {"x": 0.5)", R"("position": {"x": 1e9)"),
               {"sensors[0].position", "lies beyond 100000 m"});
   ExpectError(Scene(R"("widthM": 1)", R"("widthM": 1e6)"), {"window: a corner", "lies beyond"});
+  ExpectError(Scene(R"({"x": 1, "y": 0, "z": 0})", R"({"x": 1e300, "y": 0, "z": 0})"),
+              {"surfaces[0].polygon.vertices[1]", "lies beyond 100000 m"});
   ExpectError(Scene(R"("depthM": 0.2)", R"("depthM": 50)"),
               {"window.depth_m", "must be in [0, 5] m"});
+  ExpectError(Scene(R"("depthM": 0.2)", R"("depthM": 1e308)"),
+              {"window.depth_m", "must be in [0, 5] m"});
+  // A window normal of huge or subnormal length is normalized, not overflowed to NaN
+  for (const char* normal :
+       {R"({"x": 0, "y": 5.9e236, "z": 0})", R"({"x": 0, "y": 1e-320, "z": 0})"}) {
+    absl::StatusOr<fenestra::Scene> scene = LoadScene(Scene(R"({"x": 0, "y": 1, "z": 0})", normal));
+    ASSERT_TRUE(scene.ok()) << scene.status();
+    EXPECT_EQ(scene->window.normal.y, 1.0) << normal;
+    EXPECT_EQ(scene->window.across.x, -1.0) << normal;
+  }
   // Directions of any finite size are normalized without overflow
   absl::StatusOr<fenestra::Scene> scene =
       LoadScene(Scene(R"("direction": {"x": 0, "y": 0, "z": 1})",

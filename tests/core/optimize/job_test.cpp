@@ -203,7 +203,9 @@ TEST(JobTest, BestOverTimeFollowsTheIncumbent) {
   for (int i = 0; i < history.size(); ++i) {
     EXPECT_EQ(history[i].index(), i);
     EXPECT_GT(history[i].elapsed_seconds(), 0);
-    if (i > 0) EXPECT_GE(history[i].elapsed_seconds(), history[i - 1].elapsed_seconds());
+    if (i > 0) {
+      EXPECT_GE(history[i].elapsed_seconds(), history[i - 1].elapsed_seconds());
+    }
     if (!history[i].cached()) {
       EXPECT_GT(history[i].seconds(), 0);
       EXPECT_GT(history[i].value().standard_error(), 0);

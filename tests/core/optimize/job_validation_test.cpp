@@ -54,7 +54,9 @@ TEST(JobValidationTest, ExampleJobsPrepare) {
     ASSERT_TRUE(job.ok()) << job.status();
     absl::StatusOr<PreparedJob> prepared = PrepareJob(*job, kOffice);
     EXPECT_TRUE(prepared.ok()) << file.path() << ": " << prepared.status();
-    if (prepared.ok()) EXPECT_EQ(prepared->weather.records.size(), 8760u);
+    if (prepared.ok()) {
+      EXPECT_EQ(prepared->weather.records.size(), 8760u);
+    }
   }
   EXPECT_TRUE(ValidateJob(QuickJob(), kOffice).ok());
 }
@@ -98,6 +100,21 @@ TEST(JobValidationTest, DesignVariablesOfARealBlind) {
   thickness.set_fixed(false);
   EXPECT_THAT(ErrorOf(job), AllOf(HasSubstr("job variables: with the scene's blind: slats up to "
                                             "0.1 m thick and from 0.05 m wide")));
+}
+
+// Slats narrow enough for more than kMaxBlindSlats at some design of the job's ranges: the
+// scene's slats, 5 cm at the narrowest, fit its 4 km window 80001 times; 2.5 cm ones would
+// need 160001
+TEST(JobValidationTest, TooManySlatsAtSomeDesignOfTheJob) {
+  v1::Job job = QuickJob();
+  job.mutable_scene()->mutable_window()->set_height_m(4000);
+  v1::DesignVariable& width = Variable(job, "width");
+  width.set_lower(0.025);
+  width.set_fixed(false);
+  EXPECT_THAT(ErrorOf(job),
+              AllOf(HasSubstr("job variables: with the scene's blind: slats from 0.025 m wide need "
+                              "up to 16000"),
+                    HasSubstr("a blind has at most 100000")));
 }
 
 // A sensor clear of the scene's slats (up to 15 cm wide) but where 60 cm slats would turn

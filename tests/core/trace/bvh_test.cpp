@@ -68,7 +68,9 @@ void CheckLeafBoxes(BvhQuality quality) {
   }
   EXPECT_LE(bvh->depth, 48);
   std::printf("%zu of %zu triangles split over several leaves\n", split, geometry.TriangleCount());
-  if (quality == BvhQuality::kMedium) EXPECT_EQ(split, 0u);
+  if (quality == BvhQuality::kMedium) {
+    EXPECT_EQ(split, 0u);
+  }
 }
 
 TEST(BvhTest, LeafBoxesCoverEveryTriangle) {
@@ -130,7 +132,7 @@ struct CheckedIntersector {
   int* rays;
   int* disagreements;
   bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const {
-    SurfaceHit expected;
+    SurfaceHit expected{};
     const bool found = bvh->Intersect(origin, direction, hit);
     const bool should = every_triangle->Intersect(origin, direction, &expected);
     const float t = Length(hit->position - origin), t_expected = Length(expected.position - origin);
