@@ -6,7 +6,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "server/job_store.h"
+#include "server/store/store.h"
 
 namespace fenestra {
 
