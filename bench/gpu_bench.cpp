@@ -153,12 +153,12 @@ int main(int argc, char** argv) {
   std::printf(
       "outdoor stage: %lld paths, 30 bounces, %dx%d window parts: %.4f s, %.3e rays, "
       "%.2f G rays/s\n",
-      static_cast<long long>(o.paths_per_cell * o.coefficients.rows()), outdoor.parts.columns,
+      static_cast<long long>(o.paths_per_cell * o.sky_view.size()), outdoor.parts.columns,
       outdoor.parts.rows, o.wall_seconds, static_cast<double>(o.rays_traced),
       o.rays_traced / o.wall_seconds / 1e9);
 
   // One candidate as a job evaluates it: the indoor stage, then the tallies of
-  // E = (I O) S over the lit occupied hours (formed and reduced on the GPU), then UDI with
+  // E_b = (I_b O_b) S over the lit occupied hours (formed and reduced on the GPU), then UDI with
   // its jackknife error
   const EpwData weather =
       ValueOrExit(ReadEpw(kRoot + "/examples/weather/URY_Montevideo.865800_IWEC.epw"));
@@ -181,39 +181,44 @@ int main(int argc, char** argv) {
   const MetricOptions metric_options;
   const int analysed_hours = AnalysedHours(occupied, metric_options.hours);
   const std::unique_ptr<DesignTallies> design_tallies =
-      ValueOrExit(gpu->MakeDesignTallies(office, indoor, o.coefficients, analysed_sky));
+      ValueOrExit(gpu->MakeDesignTallies(office, indoor, o.batches, analysed_sky));
   double kernel = 0, total = 0, prepare = 0;
   const int candidates = 20;
   uint64_t rays = 0;
   double udi = 0, udi_se = 0;
-  for (int c = 0; c <= candidates; ++c) {
-    const BlindDesign design = ValueOrExit(DesignWithOverrides(
+  auto candidate = [&](int c) {
+    return ValueOrExit(DesignWithOverrides(
         office, {{"alpha", 0.05 * c}, {"width", 0.10 + 0.002 * c}, {"spacing", 0.002 * c}}));
+  };
+  for (int c = 0; c <= candidates; ++c) {
+    const BlindDesign design = candidate(c);
     const auto start = std::chrono::steady_clock::now();
     const std::vector<HourTally> tallies =
         ValueOrExit(design_tallies->Tally(design, metric_options));
     const AnnualMetricsEstimate m =
         ValueOrExit(AnnualMetricsFromTallies(tallies, analysed_hours, metric_options));
-    const double elapsed = Since(start);
-    // Its parts: the indoor kernel (the stage traced alone), the design's mesh and BVH
+    if (c == 0) continue;  // warm-up
+    total += Since(start);
+    udi = m.value.scene.udi_mean_percent;
+    udi_se = m.standard_error.scene.udi_mean_percent;
+  }
+  // Their parts, after the candidates as a job evaluates them: the indoor kernel (the stage
+  // traced alone), the design's mesh and BVH
+  for (int c = 1; c <= candidates; ++c) {
+    const BlindDesign design = candidate(c);
     const IndoorResult i = ValueOrExit(ComputeIndoorStage(office, design, indoor, gpu.get()));
     const auto host = std::chrono::steady_clock::now();
     const TraceGeometry geometry = ValueOrExit(PrepareTraceGeometry(
         SelectSide(AssembleMesh(office, design), Side::kIndoor), office.materials));
     ValueOrExit(BuildBvh(geometry, BvhQuality::kMedium));
-    const double prepared = Since(host);
-    if (c == 0) continue;  // warm-up
+    prepare += Since(host);
     kernel += i.trace_seconds;
-    total += elapsed;
-    prepare += prepared;
     rays += i.rays_traced;
-    udi = m.value.scene.udi_mean_percent;
-    udi_se = m.standard_error.scene.udi_mean_percent;
   }
   std::printf(
       "candidate evaluation (9 sensors x 2e5 paths, 5 bounces, D S over %zu hours, UDI): %.2f ms "
       "(the indoor kernel %.2f ms at %.2f G closest-hit rays/s, the design's mesh and BVH "
-      "%.2f ms, the rest uploads, E = (I O) S, its tallies and the metrics); last UDI "
+      "%.2f ms, the rest uploads, E = (I_b O_b) S, its tallies and the metrics); last UDI "
       "%.2f ± %.2f %%\n",
       analysed.size(), 1e3 * total / candidates, 1e3 * kernel / candidates, rays / kernel / 1e9,
       1e3 * prepare / candidates, udi, udi_se);

@@ -62,7 +62,7 @@ class RssSampler {
 
 int Main(int argc, char** argv) {
   int triangles = 600'000;
-  int64_t outdoor_paths = 20'000;
+  int64_t outdoor_paths = 40'000;
   std::string fenestrad = FENESTRAD;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (std::string(argv[i]) == "--triangles") triangles = std::stoi(argv[i + 1]);

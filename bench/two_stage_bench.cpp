@@ -27,10 +27,12 @@ int main(int argc, char** argv) {
   std::printf(
       "outdoor stage: %lld paths (%lld per cell, %dx%d window parts x %d direction cells), 30 "
       "bounces, %zu triangles: %.3f s, %.3e rays (%.3e rays/s); mean relative SE of O %.4f\n",
-      static_cast<long long>(o.paths_per_cell * o.coefficients.rows()),
+      static_cast<long long>(o.paths_per_cell * o.sky_view.size()),
       static_cast<long long>(o.paths_per_cell), parts.columns, parts.rows, o.basis_cells,
       o.triangles, o.wall_seconds, static_cast<double>(o.rays_traced),
-      o.rays_traced / o.wall_seconds, MeanRelativeError(o.coefficients, o.standard_error));
+      o.rays_traced / o.wall_seconds,
+      MeanRelativeError(o.coefficients.topRows(o.sky_view.size()),
+                        o.standard_error.topRows(o.sky_view.size())));
 
   for (const double alpha : {0.0, 0.6, 1.5707963}) {
     const BlindDesign design = ValueOrExit(DesignWithOverrides(scene, {{"alpha", alpha}}));

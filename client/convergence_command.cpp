@@ -85,7 +85,7 @@ Estimate RunOnce(const ConvergenceArgs& a, DcInput& in, int k) {
   e.sky_sum = std::move(d.sky_sum);
   e.sky_sum_standard_error = std::move(d.sky_sum_standard_error);
   e.paths_per_sensor = i.paths_per_sensor;
-  e.outdoor_paths = o.paths_per_cell * o.coefficients.rows();
+  e.outdoor_paths = o.paths_per_cell * o.sky_view.size();
   e.rays = o.rays_traced + i.rays_traced;
   e.seconds = o.wall_seconds + i.wall_seconds;
   return e;

@@ -214,15 +214,16 @@ bool RunTwoStage(const DcArgs& a, DcInput& in, MatrixFormat format) {
             {a.indoor_matrix, &i.coefficients}},
            format);
 
-  // Report
+  // Report (O's window cells, not its identity rows)
+  const Eigen::Index cells = o.sky_view.size();
   fmt::print("dc two-stage on {}, {}x{} window parts x {} direction cells:\n", o.backend,
              in.parts.columns, in.parts.rows, o.basis_cells);
   fmt::print(
       "  outdoor stage: {} paths, {}, {} triangles, {} rays, {:.2f} s, mean relative SE of O "
       "{:.4f}\n",
-      o.paths_per_cell * o.coefficients.rows(), ReflectionLimit(outdoor_options.max_bounces),
-      o.triangles, o.rays_traced, o.wall_seconds,
-      MeanRelativeError(o.coefficients, o.standard_error));
+      o.paths_per_cell * cells, ReflectionLimit(outdoor_options.max_bounces), o.triangles,
+      o.rays_traced, o.wall_seconds,
+      MeanRelativeError(o.coefficients.topRows(cells), o.standard_error.topRows(cells)));
   fmt::print(
       "  indoor stage: {} sensors x {} paths in {} batches, {}, {} triangles, {} rays, {:.2f} "
       "s, mean relative SE of I {:.4f}\n",
@@ -231,7 +232,7 @@ bool RunTwoStage(const DcArgs& a, DcInput& in, MatrixFormat format) {
       MeanRelativeError(i.coefficients, i.standard_error));
   fmt::print("  D = I O: mean relative SE {:.4f}; sky sums with both stages' errors:\n",
              MeanRelativeError(d.coefficients, d.standard_error));
-  const Eigen::VectorXd indoor_variance = IndoorSkySumVariance(d);
+  const Eigen::VectorXd indoor_variance = IndoorSkySumVariance(i, o);
   PrintSkySums(in.scene, d.coefficients, d.sky_sum, d.sky_sum_standard_error, &indoor_variance);
   return a.target_error <= 0 || PrintOutcome(in.scene, run.outcome, a.target_error);
 }
@@ -249,9 +250,11 @@ void AddDcCommand(CLI::App& app) {
   command->add_option("--stderr", args->standard_error,
                       "Also write the standard error of each coefficient [sr]");
   command->add_option("--outdoor-matrix", args->outdoor_matrix,
-                      "Two-stage: also write O (cells x 146) [-]");
+                      "Two-stage: also write O ((window cells + 146) x 146: the window cells' "
+                      "reflected radiance, then the identity for the direct columns) [-]");
   command->add_option("--indoor-matrix", args->indoor_matrix,
-                      "Two-stage: also write I (sensors x cells) [sr]");
+                      "Two-stage: also write I (sensors x (window cells + 146): light through the "
+                      "window cells, then straight from each sky bin) [sr]");
   command->add_option("--format", args->format, "Matrix format")
       ->check(CLI::IsMember({"ascii", "float"}))
       ->capture_default_str();
@@ -263,7 +266,8 @@ void AddDcCommand(CLI::App& app) {
           "each next one, with its own random streams, is sized from the errors so far (error ~ "
           "1/sqrt(paths)) to land at {:.0f}% of the target; the rounds are merged by path "
           "count. Two-stage: from each sensor's variance split into the indoor stage's (the "
-          "scatter of its batches) and the outdoor stage's (the rest), and each stage's "
+          "scatter of its batches through the mean O) and the outdoor stage's (the rest), and "
+          "each stage's "
           "seconds per path, each round grows each stage by the factor that reaches the target "
           "in the least time (paths in proportion to sqrt(variance / seconds)); a stage whose "
           "share is already small is not traced again. Exit code {} when a limit stops it first "

@@ -42,6 +42,7 @@ void SetStageOptions(const DcFlags& flags, WindowParts parts, StageOptions& opti
   options.threads = flags.threads;
   options.basis_cells = flags.basis;
   options.parts = parts;
+  options.batches = flags.batches;
   SetRoulette(flags, options);
 }
 
@@ -100,9 +101,9 @@ void AddTwoStageFlags(CLI::App* command, DcFlags* flags, const std::string& path
       ->capture_default_str();
   command
       ->add_option("--batches", flags->batches,
-                   "Two-stage: independent batches of the indoor paths, whose scatter gives the "
-                   "indoor stage's share of the standard errors")
-      ->check(CLI::Range(2, 1024))
+                   "Two-stage: independent batches of each stage's paths, paired (D_b = I_b "
+                   "O_b); their scatter gives the standard errors, both stages' noise included")
+      ->check(CLI::Range(2, kMaxBatches))
       ->capture_default_str();
 }
 
@@ -203,7 +204,6 @@ IndoorOptions IndoorOptionsFrom(const DcFlags& flags, WindowParts parts) {
   IndoorOptions options;
   options.paths_per_sensor = flags.indoor_paths;
   options.max_bounces = flags.indoor_bounces;
-  options.batches = flags.batches;
   SetStageOptions(flags, parts, options);
   return options;
 }

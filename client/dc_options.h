@@ -15,11 +15,12 @@
 
 namespace fenestra {
 
-// Independent batches of the indoor stage's paths for `dc` and `convergence`: the indoor
-// part of D's standard error comes from their scatter, with batches - 1 degrees of freedom;
-// 32 estimates it within about 13% (8, the jobs' default, within 27%), which tracing to a
-// target error needs to stop near the target. The batch count leaves I itself unchanged.
-inline constexpr int kDcIndoorBatches = 32;
+// Independent batches of each stage's paths for `dc` and `convergence`, paired (D_b = I_b O_b):
+// D's standard errors, both stages' noise included, come from their scatter, with
+// batches - 1 degrees of freedom; 32 estimates them within about 13% (8, the jobs' default,
+// within 27%), which tracing to a target error needs to stop near the target. The batch
+// count leaves D itself unchanged up to the outdoor paths' rounding to whole batches.
+inline constexpr int kDcBatches = 32;
 
 struct DcFlags {
   std::string scene, set, method = "one-stage", backend = "cpu", window_parts = "auto";
@@ -36,7 +37,7 @@ struct DcFlags {
   int64_t outdoor_paths = 0, indoor_paths = 0;
   int outdoor_bounces = 0, indoor_bounces = 0;
   int basis = 0;
-  int batches = kDcIndoorBatches;
+  int batches = kDcBatches;
   CLI::App* command = nullptr;  // where the flags were added, to tell which were given
 };
 

@@ -8,6 +8,7 @@
 #include "client/cli_util.h"
 #include "client/commands.h"
 #include "client/progress_display.h"
+#include "client/report/html_report.h"
 #include "client/report/annual_outputs.h"
 #include "core/common/atomic_file.h"
 #include "core/optimize/job.h"
@@ -44,7 +45,7 @@ absl::Status WriteHistoryCsv(const std::string& path, const v1::JobResult& resul
 
 void AddOptimizeCommand(CLI::App& app) {
   struct Args {
-    std::string job, output, csv;
+    std::string job, output, csv, backend, report, sensor;
     bool local = false;
     AnnualOutputPaths annual;
   };
@@ -54,9 +55,14 @@ void AddOptimizeCommand(CLI::App& app) {
   cmd->add_flag("--local", args->local, "Run here, without the service")->required();
   cmd->add_option("-o,--output", args->output, "Result file (JSON); default: JOB.result.json");
   cmd->add_option("--csv", args->csv, "History as CSV; default: the result file with .csv");
+  cmd->add_option("--backend", args->backend,
+                  "Tracer for this run: cpu, cuda or auto, in place of the job's sampling.backend");
+  cmd->add_option("--report", args->report, "Also write the report page here (HTML)");
+  AddReportSensorOption(cmd, args->sensor);
   AddAnnualOutputOptions(cmd, args->annual);
   cmd->callback([args] {
-    const v1::Job job = ValueOrFail(ReadJobFile(args->job));
+    v1::Job job = ValueOrFail(ReadJobFile(args->job));
+    if (!args->backend.empty()) job.mutable_sampling()->set_backend(args->backend);
     const std::string base = std::filesystem::path(args->job).parent_path().string();
     const PreparedJob prepared = ValueOrFail(PrepareJob(job, base.empty() ? "." : base));
     std::string output = args->output;
@@ -80,6 +86,12 @@ void AddOptimizeCommand(CLI::App& app) {
     fmt::print("{}result: {}\nhistory: {}\n", FormatResult(result), output, csv);
     if (absl::Status s = WriteAnnualOutputs(result, args->annual); !s.ok()) Fail(s);
     fmt::print("{}", AnnualOutputLines(args->annual));
+    if (!args->report.empty()) {
+      if (absl::Status s = WriteReport(result, {output, args->sensor}, args->report); !s.ok()) {
+        Fail(s);
+      }
+      fmt::print("report: {}\n", args->report);
+    }
   });
 }
 

@@ -107,6 +107,13 @@ absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
   };
   if (config.listen_address().empty()) config.set_listen_address("localhost:50051");
   if (config.data_dir().empty()) config.set_data_dir("fenestra-data");
+  if (!config.health_listen().empty() && config.health_listen() == config.listen_address() &&
+      !absl::EndsWith(config.listen_address(), ":0")) {
+    return invalid("health_listen", absl::StrCat("must be another address than listen_address ('",
+                                                 config.listen_address(),
+                                                 "'): the health port serves only "
+                                                 "health checks, in plaintext"));
+  }
   if (config.worker_threads() < 0) return invalid("worker_threads", "must be >= 0");
   if (config.backend().empty()) config.set_backend("auto");
   // By default one worker per visible GPU (jobs spread over the GPUs), else one

@@ -110,6 +110,15 @@ absl::Status Daemon::OpenStore() {
 absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& config) {
   std::unique_ptr<Daemon> d(new Daemon(config));
   const v1::Limits& limits = config.limits();
+  // The health port first, so that probes find the process alive while the store opens
+  if (!config.health_listen().empty()) {
+    absl::StatusOr<std::unique_ptr<HealthServer>> health =
+        HealthServer::Start(config.health_listen());
+    if (!health.ok()) return health.status();
+    d->health_ = *std::move(health);
+    spdlog::info("health checks on {} (port {}, plaintext, the health service only)",
+                 config.health_listen(), d->health_->port());
+  }
   absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials = PortCredentials(config);
   if (!credentials.ok()) return credentials.status();
 
@@ -199,6 +208,8 @@ absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& co
           : absl::StrCat("store ", store->database().Describe(), " (lease ", config.lease_seconds(),
                          " s)"),
       config.worker_threads(), config.backend(), d->scheduler_->replica());
+  d->server_->GetHealthCheckService()->SetServingStatus(kReadinessService, true);
+  if (d->health_) d->health_->SetReady(true);
   return d;
 }
 
@@ -206,6 +217,7 @@ void Daemon::Shutdown() {
   if (stopped_) return;
   stopped_ = true;
   if (server_) server_->GetHealthCheckService()->SetServingStatus(false);
+  if (health_) health_->SetReady(false);
   if (jobs_) {
     jobs_->Shutdown(config_.shutdown_grace_seconds());
   } else if (scheduler_) {
@@ -215,6 +227,8 @@ void Daemon::Shutdown() {
     server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
     server_->Wait();
   }
+  // Last, so that liveness holds while jobs wind down
+  health_.reset();
   spdlog::info("fenestrad stopped");
 }
 

@@ -7,6 +7,7 @@
 #include "absl/status/statusor.h"
 #include "fenestra/v1/daemon.pb.h"
 #include "server/data_dir.h"
+#include "server/health.h"
 #include "server/heavy_requests.h"
 #include "server/job_manager.h"
 #include "server/outdoor_cache.h"
@@ -22,7 +23,8 @@ namespace fenestra {
 // files and uploaded weather files; or a PostgreSQL database shared with other replicas),
 // outdoor cache, scheduler (workers claiming jobs and site computations), sites, jobs and
 // the gRPC server (SiteService, JobService, health checking, and reflection with auth
-// none), over TLS when configured.
+// none), over TLS when configured; with config.health_listen, the health port too
+// (HealthServer).
 class Daemon {
  public:
   // Opens the store (SQLite: the data directory, FailedPrecondition naming it when it is
@@ -37,6 +39,8 @@ class Daemon {
 
   // The port the server listens on (useful with port 0).
   int port() const { return port_; }
+  // The health port (config.health_listen), or 0 when there is none.
+  int health_port() const { return health_ ? health_->port() : 0; }
 
   // Reports NOT_SERVING to health checks, refuses new work, lets running jobs reach the
   // end or a checkpoint (see JobManager::Shutdown), then stops the gRPC server.
@@ -49,6 +53,7 @@ class Daemon {
   absl::Status OpenStore();
 
   v1::DaemonConfig config_;
+  std::unique_ptr<HealthServer> health_;
   std::unique_ptr<DataDir> data_dir_;     // SQLite only
   std::unique_ptr<UploadStore> weather_;  // SQLite only
   std::unique_ptr<Store> store_;

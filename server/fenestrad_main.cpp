@@ -4,7 +4,9 @@
 // Configuration: a JSON file (fenestra.v1.DaemonConfig, --config) and flags, which win.
 // `fenestrad user add|list|revoke` manage the users of a daemon with token auth;
 // `fenestrad migrate` copies a data directory into a PostgreSQL store.
+// `fenestrad --check-config` checks a configuration without starting.
 #include <google/protobuf/stubs/logging.h>
+#include <google/protobuf/util/json_util.h>
 #include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -32,9 +34,9 @@ namespace fs = std::filesystem;
 // The settings given as flags; 0, empty or false = not given.
 struct Flags {
   std::string config_file, port_file;
-  std::string listen, data_dir, backend, log_level, auth, store;
+  std::string listen, health_listen, data_dir, backend, log_level, auth, store;
   std::string tls_cert, tls_key, tls_client_ca;
-  bool allow_plaintext = false;
+  bool allow_plaintext = false, check_config = false;
   int workers = 0, max_sensors = 0, max_evaluations = 0, max_message_bytes = 0, max_queued_jobs = 0,
       max_sites = 0, max_queued_jobs_per_user = 0, max_sites_per_user = 0, max_heavy_requests = 0;
   int64_t max_outdoor_paths = 0, max_indoor_paths = 0, max_triangles = 0,
@@ -45,6 +47,9 @@ struct Flags {
 void AddDaemonFlags(CLI::App& app, Flags& f) {
   app.add_option("--config", f.config_file, "JSON configuration file (fenestra.v1.DaemonConfig)");
   app.add_option("--listen", f.listen, "host:port to listen on [localhost:50051]");
+  app.add_option("--health-listen", f.health_listen,
+                 "host:port of a plaintext port serving only gRPC health checks, for probes "
+                 "(services liveness, fenestrad and \"\") [none]");
   app.add_option("--data-dir", f.data_dir,
                  "job store, users, outdoor cache and weather files [fenestra-data]");
   app.add_option("--store", f.store,
@@ -90,13 +95,20 @@ void AddDaemonFlags(CLI::App& app, Flags& f) {
   app.add_option("--shutdown-grace", f.grace,
                  "seconds running jobs may go on after SIGTERM before they are interrupted [10]");
   app.add_option("--log-level", f.log_level, "trace, debug, info, warn, error [info]");
-  app.add_option("--port-file", f.port_file, "write the port listened on to this file");
+  app.add_option("--port-file", f.port_file,
+                 "write the port listened on to this file (the health port on a second line "
+                 "with --health-listen)");
+  app.add_flag("--check-config", f.check_config,
+               "check the configuration (--config and the flags given), print it with its "
+               "defaults as JSON and exit (0: valid, 2: not) without opening or serving "
+               "anything");
 }
 
 // The flags given, on top of `config`.
 void ApplyFlags(const Flags& f, fenestra::v1::DaemonConfig& config) {
   fenestra::v1::Limits& l = *config.mutable_limits();
   if (!f.listen.empty()) config.set_listen_address(f.listen);
+  if (!f.health_listen.empty()) config.set_health_listen(f.health_listen);
   if (!f.data_dir.empty()) config.set_data_dir(f.data_dir);
   if (!f.store.empty()) config.set_store(f.store);
   if (f.lease_seconds) config.set_lease_seconds(f.lease_seconds);
@@ -265,7 +277,10 @@ int Serve(const fenestra::v1::DaemonConfig& config, const std::string& port_file
     return 1;
   }
   if (!port_file.empty()) {
-    std::ofstream(port_file + ".tmp") << (*daemon)->port() << "\n";
+    std::ofstream ports(port_file + ".tmp");
+    ports << (*daemon)->port() << "\n";
+    if ((*daemon)->health_port() != 0) ports << (*daemon)->health_port() << "\n";
+    ports.close();
     std::rename((port_file + ".tmp").c_str(), port_file.c_str());
   }
   int received = 0;
@@ -318,6 +333,15 @@ int main(int argc, char** argv) {
   if (!resolved.ok()) {
     spdlog::critical("{}", std::string(resolved.status().message()));
     return 2;
+  }
+  if (flags.check_config) {
+    std::string json;
+    google::protobuf::util::JsonPrintOptions options;
+    options.add_whitespace = true;
+    options.always_print_primitive_fields = true;
+    (void)google::protobuf::util::MessageToJsonString(*resolved, &json, options);
+    std::cout << json;
+    return 0;
   }
   spdlog::set_level(spdlog::level::from_str(resolved->log_level()));
   return Serve(*resolved, flags.port_file);

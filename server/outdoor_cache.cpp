@@ -18,7 +18,7 @@ namespace fenestra {
 namespace {
 
 constexpr char kMagic[8] = {'F', 'N', 'S', 'T', 'R', 'O', 'M', 'X'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;
 constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 + 32;
 
 void PutLittleEndian(std::string& out, uint64_t value, int bytes) {
@@ -54,6 +54,10 @@ std::string EncodeOutdoorMatrix(const OutdoorMatrix& matrix) {
   entry.set_seed(matrix.seed);
   entry.set_wall_seconds(matrix.wall_seconds);
   entry.set_backend(matrix.backend);
+  entry.set_batches(static_cast<int32_t>(matrix.batches.size()));
+  for (const Matrix& b : matrix.batches) {
+    entry.mutable_batch_coefficients()->Add(b.data(), b.data() + b.size());
+  }
   const std::string payload = entry.SerializeAsString();
 
   std::string out(kMagic, sizeof(kMagic));
@@ -88,7 +92,8 @@ absl::StatusOr<OutdoorMatrix> DecodeOutdoorMatrix(std::string_view bytes) {
   }
   const int64_t n = int64_t{entry.rows()} * entry.cols();
   if (entry.rows() <= 0 || entry.cols() <= 0 || entry.coefficients_size() != n ||
-      (entry.standard_error_size() != 0 && entry.standard_error_size() != n)) {
+      (entry.standard_error_size() != 0 && entry.standard_error_size() != n) ||
+      entry.batches() < 2 || entry.batch_coefficients_size() != n * entry.batches()) {
     return absl::DataLossError("matrix sizes do not match");
   }
   OutdoorMatrix matrix;
@@ -99,6 +104,11 @@ absl::StatusOr<OutdoorMatrix> DecodeOutdoorMatrix(std::string_view bytes) {
     matrix.standard_error = Matrix(entry.rows(), entry.cols());
     std::copy(entry.standard_error().begin(), entry.standard_error().end(),
               matrix.standard_error.data());
+  }
+  for (int b = 0; b < entry.batches(); ++b) {
+    Matrix batch(entry.rows(), entry.cols());
+    std::copy_n(entry.batch_coefficients().begin() + b * n, n, batch.data());
+    matrix.batches.push_back(std::move(batch));
   }
   matrix.basis_cells = entry.basis_cells();
   matrix.parts = {std::max(1, entry.window_columns()), std::max(1, entry.window_rows())};
@@ -140,7 +150,9 @@ absl::StatusOr<OutdoorMatrix> ReadMatrixFile(const std::string& path, const std:
 }
 
 int64_t MatrixBytes(const OutdoorMatrix& m) {
-  return static_cast<int64_t>(sizeof(double)) * (m.coefficients.size() + m.standard_error.size());
+  int64_t values = m.coefficients.size() + m.standard_error.size();
+  for (const Matrix& batch : m.batches) values += batch.size();
+  return static_cast<int64_t>(sizeof(double)) * values;
 }
 
 }  // namespace

@@ -18,7 +18,7 @@
 
 namespace fenestra {
 
-// Cache file format: "FNSTROMX", version (u32 LE, 1), reserved (u32), payload size (u64 LE,
+// Cache file format: "FNSTROMX", version (u32 LE, 2), reserved (u32), payload size (u64 LE,
 // bytes), SHA-256 of the payload (32 bytes), then the payload: a serialized
 // fenestra.v1.OutdoorMatrixEntry.
 std::string EncodeOutdoorMatrix(const OutdoorMatrix& matrix);

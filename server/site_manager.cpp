@@ -22,7 +22,7 @@ int64_t NowUnixMs() {
 }
 
 double MeanRelativeStandardError(const OutdoorMatrix& matrix) {
-  return MeanRelativeError(matrix.coefficients, matrix.standard_error, 0.01, false);
+  return OutdoorMeanRelativeError(matrix);
 }
 
 namespace {

@@ -8,7 +8,7 @@
 
 namespace fenestra {
 
-// The job: `evaluations` designs, 2000 indoor paths per sensor, 20000 outdoor paths.
+// The job: `evaluations` designs, 2000 indoor paths per sensor, 40000 outdoor paths.
 inline v1::Job QuickJob(int evaluations = 4) {
   absl::StatusOr<v1::Job> job =
       ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json");
@@ -16,7 +16,7 @@ inline v1::Job QuickJob(int evaluations = 4) {
   if (!job.ok()) return {};
   job->mutable_budget()->set_max_evaluations(evaluations);
   job->mutable_sampling()->set_indoor_paths_per_sensor(2000);
-  job->mutable_sampling()->set_outdoor_paths(20000);
+  job->mutable_sampling()->set_outdoor_paths(40000);
   job->mutable_sampling()->set_backend("cpu");
   return *job;
 }

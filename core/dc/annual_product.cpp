@@ -1,5 +1,5 @@
-// The annual product E_b = (I_b O) S on the CPU: every batch in one pair of Eigen products
-// (on all cores with OpenMP); the default tallies of E for the metrics.
+// The annual product E_b = (I_b O_b) S on the CPU (Eigen, on all cores with OpenMP); the
+// default tallies of E for the metrics.
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -13,16 +13,18 @@ namespace {
 
 class CpuAnnualProduct : public AnnualProduct {
  public:
-  CpuAnnualProduct(Matrix outdoor, Matrix sky)
+  CpuAnnualProduct(std::vector<Matrix> outdoor, Matrix sky)
       : outdoor_(std::move(outdoor)), sky_(std::move(sky)) {}
 
   absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
-    FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, outdoor_.rows()));
-    return SplitBatches((stacked * outdoor_) * sky_, indoor_batches.size());
+    FENESTRA_RETURN_IF_ERROR(CheckPairs(indoor_batches, outdoor_));
+    // Every batch's light through the window, then all batches' E in one product
+    return SplitBatches(ThroughWindow(indoor_batches, outdoor_) * sky_, indoor_batches.size());
   }
 
  private:
-  Matrix outdoor_, sky_;
+  std::vector<Matrix> outdoor_;
+  Matrix sky_;
 };
 
 }  // namespace
@@ -33,13 +35,10 @@ absl::StatusOr<std::vector<HourTally>> AnnualProduct::Tally(
   return TallyBatchVersions(illuminance, options);
 }
 
-absl::StatusOr<std::unique_ptr<AnnualProduct>> DcBackend::MakeAnnualProduct(const Matrix& outdoor,
-                                                                            const Matrix& sky) {
-  if (outdoor.cols() != sky.rows()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("the outdoor matrix has ", outdoor.cols(), " sky bins, the sky ", sky.rows()));
-  }
-  return std::make_unique<CpuAnnualProduct>(outdoor, sky);
+absl::StatusOr<std::unique_ptr<AnnualProduct>> DcBackend::MakeAnnualProduct(
+    const std::vector<Matrix>& outdoor_batches, const Matrix& sky) {
+  FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor_batches, sky));
+  return std::make_unique<CpuAnnualProduct>(outdoor_batches, sky);
 }
 
 }  // namespace fenestra

@@ -163,6 +163,52 @@ absl::StatusOr<Matrix> StackIndoorBatches(const std::vector<Matrix>& batches, Ei
   return stacked;
 }
 
+absl::Status CheckOutdoorBatches(const std::vector<Matrix>& outdoor_batches, const Matrix& sky) {
+  if (outdoor_batches.size() < 2) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the outdoor matrix needs at least 2 batches, got ", outdoor_batches.size()));
+  }
+  for (const Matrix& o : outdoor_batches) {
+    if (o.rows() != outdoor_batches[0].rows() || o.cols() != kDaylightBins) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("an outdoor batch is ", o.rows(), " x ", o.cols(), ", expected ",
+                       outdoor_batches[0].rows(), " x ", kDaylightBins));
+    }
+  }
+  if (sky.rows() != kDaylightBins) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the outdoor matrix has ", kDaylightBins, " sky bins, the sky ", sky.rows()));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckPairs(const std::vector<Matrix>& indoor_batches,
+                        const std::vector<Matrix>& outdoor_batches) {
+  if (indoor_batches.size() != outdoor_batches.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("the indoor stage has ", indoor_batches.size(),
+                                                   " batches, the outdoor matrix ",
+                                                   outdoor_batches.size(), "; they pair up"));
+  }
+  return StackIndoorBatches(indoor_batches, outdoor_batches[0].rows()).status();
+}
+
+Matrix ThroughWindow(const std::vector<Matrix>& indoor_batches,
+                     const std::vector<Matrix>& outdoor_batches) {
+  const Eigen::Index sensors = indoor_batches.empty() ? 0 : indoor_batches[0].rows();
+  Matrix through = Matrix::Zero(sensors * static_cast<Eigen::Index>(indoor_batches.size()),
+                                outdoor_batches.empty() ? 0 : outdoor_batches[0].cols());
+  for (size_t b = 0; b < indoor_batches.size(); ++b) {
+    const Matrix& i = indoor_batches[b];
+    const Matrix& o = outdoor_batches[b];
+    auto rows = through.middleRows(static_cast<Eigen::Index>(b) * sensors, sensors);
+    for (Eigen::Index k = 0; k < i.cols(); ++k) {
+      if (i.col(k).isZero(0)) continue;
+      rows.noalias() += i.col(k) * o.row(k);
+    }
+  }
+  return through;
+}
+
 std::vector<Matrix> SplitBatches(const Matrix& stacked, size_t count) {
   std::vector<Matrix> batches;
   const Eigen::Index rows = count == 0 ? 0 : stacked.rows() / static_cast<Eigen::Index>(count);

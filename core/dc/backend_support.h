@@ -40,6 +40,22 @@ int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count)
 // InvalidArgument unless every batch has the same rows and `cells` columns.
 absl::StatusOr<Matrix> StackIndoorBatches(const std::vector<Matrix>& batches, Eigen::Index cells);
 
+// The outdoor batches of an annual product: at least 2, of equal shape, 146 sky bins as
+// columns like the sky's rows; or InvalidArgument.
+absl::Status CheckOutdoorBatches(const std::vector<Matrix>& outdoor_batches, const Matrix& sky);
+
+// Indoor batches that pair with the outdoor ones: as many, each with the same rows and as
+// many columns as O_b has rows; or InvalidArgument.
+absl::Status CheckPairs(const std::vector<Matrix>& indoor_batches,
+                        const std::vector<Matrix>& outdoor_batches);
+
+// The batches' light through the window, I_b O_b for every b, one above the other
+// ((B x sensors) x 146), for batches that pair up (CheckPairs). With a handful of sensors a
+// matrix product per batch would spend its time packing O_b; rank-one updates read each
+// row of O_b once and skip the columns of I_b that no path reached.
+Matrix ThroughWindow(const std::vector<Matrix>& indoor_batches,
+                     const std::vector<Matrix>& outdoor_batches);
+
 // The inverse: `count` batches of equal rows from a stacked matrix.
 std::vector<Matrix> SplitBatches(const Matrix& stacked, size_t count);
 

@@ -15,6 +15,7 @@
 #if FENESTRA_WITH_CUDA
 #include "core/trace/bvh.h"
 #include "core/trace/cuda/cuda_tracer.h"
+#include "core/trace/window_cells.h"
 #endif
 
 namespace fenestra {
@@ -76,20 +77,29 @@ struct DeviceTallies {
   CudaTracer::TallyRequest request;
 };
 
-// The annual product on the GPU. The tracer holds one product's O and S at a time; a
+// The annual product on the GPU. The tracer holds one product's O_b and S at a time; a
 // product whose matrices were replaced by a later one uploads its own again.
 class CudaAnnualProduct : public AnnualProduct {
  public:
-  CudaAnnualProduct(CudaTracer* tracer, int* current, int generation, Matrix outdoor, Matrix sky)
+  CudaAnnualProduct(CudaTracer* tracer, int* current, int generation,
+                    const std::vector<Matrix>& outdoor, Matrix sky)
       : tracer_(tracer),
         current_(current),
         generation_(generation),
-        outdoor_(std::move(outdoor)),
-        sky_(std::move(sky)) {}
+        batches_(static_cast<int>(outdoor.size())),
+        rows_(outdoor[0].rows()),
+        sky_(std::move(sky)) {
+    outdoor_.resize(rows_ * static_cast<Eigen::Index>(outdoor.size()), kDaylightBins);
+    for (size_t b = 0; b < outdoor.size(); ++b) outdoor_.middleRows(b * rows_, rows_) = outdoor[b];
+  }
 
   absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
-    if (indoor_batches.empty()) return std::vector<Matrix>{};
-    FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, outdoor_.rows()));
+    if (static_cast<int>(indoor_batches.size()) != batches_) {
+      return absl::InvalidArgumentError(absl::StrCat("the indoor stage has ", indoor_batches.size(),
+                                                     " batches, the outdoor matrix ", batches_,
+                                                     "; they pair up"));
+    }
+    FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
     FENESTRA_RETURN_IF_ERROR(Hold());
     Matrix illuminance(stacked.rows(), sky_.cols());
     FENESTRA_RETURN_IF_ERROR(Check(tracer_->AnnualProduct(
@@ -101,11 +111,11 @@ class CudaAnnualProduct : public AnnualProduct {
   absl::StatusOr<std::vector<HourTally>> Tally(const std::vector<Matrix>& indoor_batches,
                                                const MetricOptions& options) override {
     const int batches = static_cast<int>(indoor_batches.size());
-    if (batches < 2) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("standard errors need at least 2 batches, got ", batches));
+    if (batches != batches_) {
+      return absl::InvalidArgumentError(absl::StrCat("the indoor stage has ", batches,
+                                                     " batches, the outdoor matrix ", batches_));
     }
-    FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, outdoor_.rows()));
+    FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
     FENESTRA_RETURN_IF_ERROR(Hold());
     const int sensors = static_cast<int>(indoor_batches[0].rows());
     DeviceTallies tallies(batches, sensors, options);
@@ -114,11 +124,11 @@ class CudaAnnualProduct : public AnnualProduct {
     return tallies.Versions(sky_.cols());
   }
 
-  // Makes the tracer hold this product's O and S (a later product may have replaced them).
+  // Makes the tracer hold this product's O_b and S (a later product may have replaced them).
   absl::Status Hold() {
     if (*current_ == generation_) return absl::OkStatus();
     FENESTRA_RETURN_IF_ERROR(
-        Check(tracer_->SetAnnualProduct(outdoor_.data(), static_cast<int>(outdoor_.rows()),
+        Check(tracer_->SetAnnualProduct(outdoor_.data(), batches_, static_cast<int>(rows_),
                                         sky_.data(), static_cast<int>(sky_.cols()))));
     *current_ = generation_;
     return absl::OkStatus();
@@ -130,7 +140,54 @@ class CudaAnnualProduct : public AnnualProduct {
   CudaTracer* tracer_;
   int* current_;
   int generation_;
-  Matrix outdoor_, sky_;
+  int batches_;
+  Eigen::Index rows_;  // of each O_b
+  Matrix outdoor_;     // the O_b one above the other
+  Matrix sky_;
+};
+
+// The tracer's outdoor scene, shared by the indoor stages of one backend: each holder
+// uploads its own when another one replaced it.
+struct OutdoorSlot {
+  int current = 0;  // the holder whose scene the tracer holds
+  int made = 0;     // holders made
+};
+
+class OutdoorHolder {
+ public:
+  static absl::StatusOr<OutdoorHolder> Make(CudaTracer* tracer, OutdoorSlot* slot,
+                                            const Scene& scene, WindowParts parts,
+                                            const HemisphereBasis& basis) {
+    FENESTRA_ASSIGN_OR_RETURN(geometry, OutdoorViewGeometry(scene));
+    FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(geometry, BvhQuality::kHigh));
+    std::vector<uint8_t> met =
+        WindowCellsMeetingSurfaces(geometry, LocalWindow(geometry, scene.window, parts), basis);
+    return OutdoorHolder(tracer, slot, std::move(geometry), std::move(bvh), std::move(met));
+  }
+  // Makes the tracer hold this outdoor scene.
+  absl::Status Hold() {
+    if (slot_->current == generation_) return absl::OkStatus();
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->SetOutdoorScene(bvh_, met_)));
+    slot_->current = generation_;
+    return absl::OkStatus();
+  }
+  const TraceGeometry& geometry() const { return geometry_; }
+
+ private:
+  OutdoorHolder(CudaTracer* tracer, OutdoorSlot* slot, TraceGeometry geometry, BvhLayout bvh,
+                std::vector<uint8_t> met)
+      : tracer_(tracer),
+        slot_(slot),
+        generation_(++slot->made),
+        geometry_(std::move(geometry)),
+        bvh_(std::move(bvh)),
+        met_(std::move(met)) {}
+  CudaTracer* tracer_;
+  OutdoorSlot* slot_;
+  int generation_;
+  TraceGeometry geometry_;
+  BvhLayout bvh_;
+  std::vector<uint8_t> met_;
 };
 
 // A search's objective on the GPU: per design the room and blind are uploaded, then the
@@ -138,11 +195,13 @@ class CudaAnnualProduct : public AnnualProduct {
 class CudaDesignTallies : public DesignTallies {
  public:
   CudaDesignTallies(CudaTracer* tracer, Scene scene, const IndoorOptions& options,
-                    const HemisphereBasis& basis, std::unique_ptr<CudaAnnualProduct> product)
+                    const HemisphereBasis& basis, OutdoorHolder outdoor,
+                    std::unique_ptr<CudaAnnualProduct> product)
       : tracer_(tracer),
         scene_(std::move(scene)),
         options_(options),
         basis_(basis),
+        outdoor_(std::move(outdoor)),
         product_(std::move(product)) {}
 
   absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
@@ -151,6 +210,7 @@ class CudaDesignTallies : public DesignTallies {
         geometry, PrepareTraceGeometry(SelectSide(AssembleMesh(scene_, design), Side::kIndoor),
                                        scene_.materials));
     FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, geometry, BvhQuality::kMedium));
+    FENESTRA_RETURN_IF_ERROR(outdoor_.Hold());
     FENESTRA_RETURN_IF_ERROR(product_->Hold());
     const std::vector<TraceSensor> sensors = LocalSensors(geometry, scene_.sensors);
     PathSettings path = IndoorPathSettings(options_);
@@ -159,7 +219,8 @@ class CudaDesignTallies : public DesignTallies {
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(Check(tracer_->IndoorAnnualTally(
         sensors.data(), static_cast<int>(sensors.size()),
-        LocalWindow(geometry, scene_.window, options_.parts), basis_,
+        LocalWindow(geometry, scene_.window, options_.parts),
+        OutdoorOffset(geometry, outdoor_.geometry()), basis_,
         static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, options_.seed, path,
         tallies.request, &counters)));
     return tallies.Versions(product_->steps());
@@ -170,6 +231,7 @@ class CudaDesignTallies : public DesignTallies {
   Scene scene_;
   IndoorOptions options_;
   HemisphereBasis basis_;
+  OutdoorHolder outdoor_;
   std::unique_ptr<CudaAnnualProduct> product_;
 };
 
@@ -179,29 +241,32 @@ class CudaBackend : public DcBackend {
 
   std::string Name() const override { return absl::StrCat("cuda (", tracer_->device_name(), ")"); }
 
-  absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(const Matrix& outdoor,
-                                                                   const Matrix& sky) override {
-    FENESTRA_RETURN_IF_ERROR(CheckProduct(outdoor, sky));
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(
+      const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
+    FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor_batches, sky));
     return std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_current_,
-                                               ++annual_generation_, outdoor, sky);
+                                               ++annual_generation_, outdoor_batches, sky);
   }
 
-  absl::StatusOr<std::unique_ptr<DesignTallies>> MakeDesignTallies(const Scene& scene,
-                                                                   const IndoorOptions& options,
-                                                                   const Matrix& outdoor,
-                                                                   const Matrix& sky) override {
+  absl::StatusOr<std::unique_ptr<DesignTallies>> MakeDesignTallies(
+      const Scene& scene, const IndoorOptions& options, const std::vector<Matrix>& outdoor_batches,
+      const Matrix& sky) override {
     FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
-    FENESTRA_RETURN_IF_ERROR(CheckProduct(outdoor, sky));
-    if (outdoor.rows() !=
-        static_cast<Eigen::Index>(options.parts.columns) * options.parts.rows * basis.cell_count) {
+    FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor_batches, sky));
+    const Eigen::Index columns =
+        Eigen::Index{options.parts.columns} * options.parts.rows * basis.cell_count + kDaylightBins;
+    if (outdoor_batches[0].rows() != columns ||
+        static_cast<int>(outdoor_batches.size()) != options.batches) {
       return absl::InvalidArgumentError(absl::StrCat(
-          "the outdoor matrix has ", outdoor.rows(), " window cells, the indoor stage ",
-          options.parts.columns * options.parts.rows * basis.cell_count));
+          "the outdoor matrix has ", outdoor_batches[0].rows(), " rows in ", outdoor_batches.size(),
+          " batches, the indoor stage ", columns, " columns in ", options.batches));
     }
+    FENESTRA_ASSIGN_OR_RETURN(
+        outdoor, OutdoorHolder::Make(tracer_.get(), &outdoor_slot_, scene, options.parts, basis));
     auto product = std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_current_,
-                                                       ++annual_generation_, outdoor, sky);
+                                                       ++annual_generation_, outdoor_batches, sky);
     return std::make_unique<CudaDesignTallies>(tracer_.get(), scene, options, basis,
-                                               std::move(product));
+                                               std::move(outdoor), std::move(product));
   }
 
   absl::StatusOr<OneStageResult> OneStage(const TriangleMesh& mesh,
@@ -257,45 +322,48 @@ class CudaBackend : public DcBackend {
 
   absl::StatusOr<OutdoorTally> Outdoor(const TraceGeometry& geometry, const TraceWindow& window,
                                        const HemisphereBasis& basis, uint64_t paths_per_cell,
-                                       uint64_t seed, const PathSettings& path, int) override {
+                                       int batches, uint64_t seed, const PathSettings& path,
+                                       int) override {
     const auto start = std::chrono::steady_clock::now();
     FENESTRA_RETURN_IF_ERROR(Upload(geometry));
     OutdoorTally tally;
     tally.cells = WindowCellCount(window, basis);
+    tally.batches = batches;
     tally.paths_per_cell = paths_per_cell;
-    tally.sum.resize(static_cast<size_t>(tally.cells) * kDaylightBins);
-    tally.sum_squares.resize(tally.sum.size());
+    tally.batch_paths = BatchSizes(paths_per_cell, batches);
+    tally.sum.resize(static_cast<size_t>(batches) * tally.cells * kOutdoorRowSize);
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(
-        Check(tracer_->Outdoor(window, basis, paths_per_cell, seed, WithoutImportance(path),
-                               tally.sum.data(), tally.sum_squares.data(), &counters)));
+        Check(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,
+                               WithoutImportance(path), tally.sum.data(), &counters)));
     Count(counters, &tally.counters);
     tally.wall_seconds = Seconds(start);
     return tally;
   }
 
-  absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry,
+  absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry, const TraceGeometry& outdoor,
                                      const std::vector<TraceSensor>& sensors,
                                      const TraceWindow& window, const HemisphereBasis& basis,
                                      uint64_t paths_per_sensor, int batches, uint64_t seed,
                                      const PathSettings& path, int) override {
     const auto start = std::chrono::steady_clock::now();
-    // A room and its blind, built anew for every design of a search
+    // A room and its blind, built anew for every design of a search; the outdoor surfaces
     FENESTRA_RETURN_IF_ERROR(Upload(geometry, BvhQuality::kMedium));
+    FENESTRA_ASSIGN_OR_RETURN(outdoor_bvh, BuildBvh(outdoor, BvhQuality::kHigh));
+    FENESTRA_RETURN_IF_ERROR(Check(
+        tracer_->SetOutdoorScene(outdoor_bvh, OutdoorMetCells(geometry, outdoor, window, basis))));
+    outdoor_slot_.current = 0;
     IndoorTally tally;
     tally.sensors = static_cast<int>(sensors.size());
-    tally.cells = WindowCellCount(window, basis);
+    tally.columns = IndoorColumnCount(window, basis);
     tally.batches = batches;
     tally.paths_per_sensor = paths_per_sensor;
-    for (int b = 0; b < batches; ++b) {
-      tally.batch_paths.push_back(BatchStart(paths_per_sensor, batches, b + 1) -
-                                  BatchStart(paths_per_sensor, batches, b));
-    }
-    tally.sum.resize(static_cast<size_t>(batches) * sensors.size() * tally.cells);
+    tally.batch_paths = BatchSizes(paths_per_sensor, batches);
+    tally.sum.resize(static_cast<size_t>(batches) * sensors.size() * tally.columns);
     CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(Check(
-        tracer_->Indoor(sensors.data(), tally.sensors, window, basis, paths_per_sensor, batches,
-                        seed, WithoutImportance(path), tally.sum.data(), &counters)));
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->Indoor(
+        sensors.data(), tally.sensors, window, OutdoorOffset(geometry, outdoor), basis,
+        paths_per_sensor, batches, seed, WithoutImportance(path), tally.sum.data(), &counters)));
     Count(counters, &tally.counters);
     tally.wall_seconds = Seconds(start);
     tally.trace_seconds = counters.kernel_seconds;
@@ -303,11 +371,6 @@ class CudaBackend : public DcBackend {
   }
 
  private:
-  static absl::Status CheckProduct(const Matrix& outdoor, const Matrix& sky) {
-    if (outdoor.cols() == kDaylightBins && sky.rows() == kDaylightBins) return absl::OkStatus();
-    return absl::InvalidArgumentError(
-        absl::StrCat("the outdoor matrix has ", outdoor.cols(), " sky bins, the sky ", sky.rows()));
-  }
   static PathSettings WithoutImportance(PathSettings path) {
     path.importance = nullptr;
     return path;
@@ -328,6 +391,7 @@ class CudaBackend : public DcBackend {
   std::unique_ptr<CudaTracer> tracer_;
   int annual_generation_ = 0;  // products made
   int annual_current_ = 0;     // the product whose matrices the tracer holds
+  OutdoorSlot outdoor_slot_;
 };
 
 }  // namespace

@@ -77,13 +77,14 @@ struct OneStageResult {
 };
 
 // The annual illuminance of a design's indoor batches through a fixed outdoor matrix and
-// sky: E_b = (I_b O) S for each batch b (I_b sensors x window cells, O window cells x 146,
-// S 146 x steps with the luminous efficacy folded in, so E is in lux). Made once per job
-// by DcBackend::MakeAnnualProduct, applied once per design.
+// sky: E_b = (I_b O_b) S for each batch b, the outdoor stage's batch b paired with the
+// indoor stage's (I_b sensors x columns, O_b columns x 146, core/dc/two_stage.h; S 146 x
+// steps with the luminous efficacy folded in, so E is in lux). Made once per job by
+// DcBackend::MakeAnnualProduct, applied once per design.
 class AnnualProduct {
  public:
   virtual ~AnnualProduct() = default;
-  // InvalidArgument when a batch's columns are not O's rows.
+  // InvalidArgument when a batch's columns are not O's rows, or the batch counts differ.
   virtual absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) = 0;
   // The tallies of E of the mean of the B >= 2 batches, then of each leave-one-out mean
   // (TallyBatchVersions in core/metrics/metric_errors.h), every column of S an analysed hour.
@@ -118,25 +119,27 @@ class DcBackend {
                                                   const OneStageOptions& options) = 0;
 
   // The two-stage method's stages (core/dc/two_stage.h) over prepared geometry: outdoor
-  // paths from each basis cell of the window, indoor paths from each sensor in batches.
+  // paths from each window cell, indoor paths from each sensor, both in batches; the indoor
+  // stage tests its window connections against `outdoor` (the outdoor stage's geometry).
   // `threads` applies to CPU backends.
   virtual absl::StatusOr<OutdoorTally> Outdoor(const TraceGeometry& geometry,
                                                const TraceWindow& window,
                                                const HemisphereBasis& basis,
-                                               uint64_t paths_per_cell, uint64_t seed,
+                                               uint64_t paths_per_cell, int batches, uint64_t seed,
                                                const PathSettings& path, int threads) = 0;
   virtual absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry,
+                                             const TraceGeometry& outdoor,
                                              const std::vector<TraceSensor>& sensors,
                                              const TraceWindow& window,
                                              const HemisphereBasis& basis,
                                              uint64_t paths_per_sensor, int batches, uint64_t seed,
                                              const PathSettings& path, int threads) = 0;
 
-  // The annual product with `outdoor` and `sky` (AnnualProduct), computed where this
-  // backend computes: Eigen on the CPU by default, the GPU for CUDA. Must not outlive the
-  // backend.
-  virtual absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(const Matrix& outdoor,
-                                                                           const Matrix& sky);
+  // The annual product with the outdoor batches O_b and `sky` (AnnualProduct), computed
+  // where this backend computes: Eigen on the CPU by default, the GPU for CUDA. Must not
+  // outlive the backend.
+  virtual absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(
+      const std::vector<Matrix>& outdoor_batches, const Matrix& sky);
 
   // The indoor stage of `scene` for the designs within its blind's ranges, the way this
   // backend does it best (core/dc/two_stage.h, IndoorStages): by default each design
@@ -146,11 +149,12 @@ class DcBackend {
       const Scene& scene, const IndoorOptions& options);
 
   // A search's objective (DesignTallies) for the designs within `scene`'s blind ranges, with
-  // `outdoor` and `sky` as MakeAnnualProduct takes them: by default MakeIndoorStages and
-  // MakeAnnualProduct in turn; the GPU keeps I and E on the device. Must not outlive the
-  // backend.
+  // `outdoor_batches` and `sky` as MakeAnnualProduct takes them: by default
+  // MakeIndoorStages and MakeAnnualProduct in turn; the GPU keeps I and E on the device.
+  // Must not outlive the backend.
   virtual absl::StatusOr<std::unique_ptr<DesignTallies>> MakeDesignTallies(
-      const Scene& scene, const IndoorOptions& options, const Matrix& outdoor, const Matrix& sky);
+      const Scene& scene, const IndoorOptions& options, const std::vector<Matrix>& outdoor_batches,
+      const Matrix& sky);
 };
 
 // The Embree CPU backend (always available).

@@ -5,6 +5,7 @@
 #include "core/dc/backend_support.h"
 #include "core/dc/dc_backend.h"
 #include "core/dc/indoor_replay.h"
+#include "core/dc/two_stage.h"
 #include "core/trace/embree_scene.h"
 #include "core/trace/one_stage_cpu.h"
 #include "core/trace/trace_geometry.h"
@@ -64,11 +65,11 @@ class EmbreeBackend : public DcBackend {
 
   absl::StatusOr<OutdoorTally> Outdoor(const TraceGeometry& geometry, const TraceWindow& window,
                                        const HemisphereBasis& basis, uint64_t paths_per_cell,
-                                       uint64_t seed, const PathSettings& path,
+                                       int batches, uint64_t seed, const PathSettings& path,
                                        int threads) override {
     FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
     return TraceOutdoorCpu(scene->Intersector(), geometry.Surfaces(), window, basis, paths_per_cell,
-                           seed, path, threads);
+                           batches, seed, path, threads);
   }
 
   // Record the paths once, replay them per design; without a blind there is nothing to vary
@@ -79,13 +80,17 @@ class EmbreeBackend : public DcBackend {
     return std::unique_ptr<IndoorStages>(std::move(replay));
   }
 
-  absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry,
+  absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry, const TraceGeometry& outdoor,
                                      const std::vector<TraceSensor>& sensors,
                                      const TraceWindow& window, const HemisphereBasis& basis,
                                      uint64_t paths_per_sensor, int batches, uint64_t seed,
                                      const PathSettings& path, int threads) override {
     FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
-    return TraceIndoorCpu(scene->Intersector(), geometry.Surfaces(), sensors, window, basis,
+    FENESTRA_ASSIGN_OR_RETURN(outdoor_scene, EmbreeScene::Build(outdoor));
+    const std::vector<uint8_t> met = OutdoorMetCells(geometry, outdoor, window, basis);
+    const OutdoorView<EmbreeIntersector> view{outdoor_scene->Intersector(),
+                                              OutdoorOffset(geometry, outdoor), met.data()};
+    return TraceIndoorCpu(scene->Intersector(), geometry.Surfaces(), view, sensors, window, basis,
                           paths_per_sensor, batches, seed, path, threads);
   }
 };

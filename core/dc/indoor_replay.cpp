@@ -52,7 +52,7 @@ struct Connection {
   Vec3f origin;
   Vec3f direction;
   float distance;
-  int32_t cell;
+  int32_t column;  // of I: a window cell or a direct column (decided when recorded)
   double value;
 };
 
@@ -66,7 +66,7 @@ struct Resume {
 struct Chunk {
   uint32_t sensor = 0;
   int batch = 0;
-  std::vector<double> fixed;  // per window cell: what no blind can change
+  std::vector<double> fixed;  // per column of I: what no blind can change
   std::vector<Connection> connections;
   std::vector<Resume> resumes;
   uint64_t paths = 0;
@@ -101,27 +101,31 @@ struct RecordingIntersector {
 };
 
 // IndoorMode's contributions: a scored shadow ray becomes a Connection, anything else
-// (a bounce ray leaving through the window without touching the envelope) is fixed.
+// (a bounce ray leaving through the window without touching the envelope) is fixed. The
+// column (direct or window cell) depends on the outdoor surfaces only, so it is decided
+// here, once for every design.
 struct RecordingSink {
   Chunk* chunk;
   const RecordingIntersector* scene;
-  void Add(int cell, double value) {
+  void Add(int column, double value) {
     if (scene->connection_pending) {
       Connection c = scene->pending;
-      c.cell = cell;
+      c.column = column;
       c.value = value;
       chunk->connections.push_back(c);
       scene->connection_pending = false;
     } else {
-      chunk->fixed[cell] += value;
+      chunk->fixed[column] += value;
     }
   }
 };
 
+using OutdoorEmbreeView = OutdoorView<EmbreeIntersector>;
+
 // IndoorMode through the recording intersector; a ray stopped at the envelope is kept to
 // be resumed, not scored.
 struct RecordingMode {
-  IndoorMode<RecordingSink> inner;
+  IndoorMode<RecordingSink, OutdoorEmbreeView> inner;
   const RecordingIntersector* scene;
   Chunk* chunk;
   uint64_t path;
@@ -163,9 +167,12 @@ struct IndoorReplay::Data {
   Vec3d origin;  // the trace frame of every geometry here
   std::vector<TraceSensor> sensors;
   TraceWindow window;
+  std::unique_ptr<EmbreeScene> outdoor;  // the outdoor surfaces, for the direct test
+  std::vector<uint8_t> met;              // the window cells whose views all meet them
+  OutdoorEmbreeView outdoor_view;
   std::vector<Chunk> chunks;
   std::vector<uint64_t> batch_paths;
-  int cells = 0;
+  int columns = 0;  // of I
   uint64_t resumed = 0;
   double record_seconds = 0;
 };
@@ -191,7 +198,13 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
   FENESTRA_ASSIGN_OR_RETURN(embree, EmbreeScene::Build(geometry));
   data->sensors = LocalSensors(geometry, scene.sensors);
   data->window = LocalWindow(geometry, scene.window, options.parts);
-  data->cells = WindowCellCount(data->window, basis);
+  data->columns = IndoorColumnCount(data->window, basis);
+  FENESTRA_ASSIGN_OR_RETURN(outdoor, OutdoorViewGeometry(scene));
+  FENESTRA_ASSIGN_OR_RETURN(outdoor_scene, EmbreeScene::Build(outdoor));
+  data->outdoor = std::move(outdoor_scene);
+  data->met = OutdoorMetCells(geometry, outdoor, data->window, basis);
+  data->outdoor_view = {data->outdoor->Intersector(), OutdoorOffset(geometry, outdoor),
+                        data->met.data()};
   const BlindEnvelope envelope = EnvelopeOfBlind(scene.window, *scene.blind, kEnvelopeMargin);
   LocalEnvelope local;
   local.center = geometry.ToLocal(envelope.center);
@@ -204,9 +217,7 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
   // Chunks: (sensor, batch, part of the batch), as TraceIndoorCpu
   const int batches = options.batches;
   const uint64_t paths = static_cast<uint64_t>(options.paths_per_sensor);
-  for (int b = 0; b < batches; ++b) {
-    data->batch_paths.push_back(BatchStart(paths, batches, b + 1) - BatchStart(paths, batches, b));
-  }
+  data->batch_paths = BatchSizes(paths, batches);
   const uint64_t parts = 8;
   data->chunks.resize(data->sensors.size() * batches * parts);
   const PathSettings settings = IndoorPathSettings(options);
@@ -219,14 +230,15 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
     const uint64_t size = data->batch_paths[chunk.batch];
     const uint64_t first = first_in_batch + part * size / parts;
     const uint64_t last = first_in_batch + (part + 1) * size / parts;
-    chunk.fixed.assign(data->cells, 0.0);
+    chunk.fixed.assign(data->columns, 0.0);
     chunk.paths = last - first;
     RecordingIntersector scene_view{embree->Intersector(), local};
     const TraceSensor& sensor = data->sensors[chunk.sensor];
     RecordingSink sink{&chunk, &scene_view};
     for (uint64_t p = first; p < last; ++p) {
-      RecordingMode mode{IndoorMode<RecordingSink>{sensor.position, sensor.normal, data->window,
-                                                   &data->basis, settings.max_bounces, &sink},
+      RecordingMode mode{IndoorMode<RecordingSink, OutdoorEmbreeView>{
+                             sensor.position, sensor.normal, data->window, &data->basis,
+                             settings.max_bounces, &data->outdoor_view, &sink},
                          &scene_view, &chunk, p};
       TracePath<RecordingIntersector, RecordingMode, 0>(scene_view, geometry.Surfaces(), settings,
                                                         PathRandom(options.seed, chunk.sensor, p),
@@ -273,12 +285,12 @@ absl::StatusOr<IndoorResult> IndoorReplay::Compute(const BlindDesign& design) co
   const auto traced = std::chrono::steady_clock::now();
   IndoorTally tally;
   tally.sensors = static_cast<int>(d.sensors.size());
-  tally.cells = d.cells;
+  tally.columns = d.columns;
   tally.batches = d.options.batches;
   tally.paths_per_sensor = static_cast<uint64_t>(d.options.paths_per_sensor);
   tally.batch_paths = d.batch_paths;
   tally.threads = ResolveThreadCount(d.options.threads);
-  tally.sum.assign(static_cast<size_t>(tally.batches) * tally.sensors * tally.cells, 0.0);
+  tally.sum.assign(static_cast<size_t>(tally.batches) * tally.sensors * tally.columns, 0.0);
   TraceChunksCpu<Slot>(
       d.chunks.size(), tally.threads,
       [&](uint64_t c, Slot& slot) {
@@ -286,11 +298,14 @@ absl::StatusOr<IndoorResult> IndoorReplay::Compute(const BlindDesign& design) co
         slot.sum = chunk.fixed;
         for (const Connection& k : chunk.connections) {
           ++slot.counters.rays;
-          if (!blind_view.Occluded(k.origin, k.direction, k.distance)) slot.sum[k.cell] += k.value;
+          if (!blind_view.Occluded(k.origin, k.direction, k.distance)) {
+            slot.sum[k.column] += k.value;
+          }
         }
         const TraceSensor& sensor = d.sensors[chunk.sensor];
-        IndoorMode<Slot> mode{sensor.position, sensor.normal,        d.window,
-                              &d.basis,        settings.max_bounces, &slot};
+        IndoorMode<Slot, OutdoorEmbreeView> mode{
+            sensor.position,      sensor.normal,   d.window, &d.basis,
+            settings.max_bounces, &d.outdoor_view, &slot};
         for (const Resume& r : chunk.resumes) {
           PathStats stats{0, r.state.weight, PathEnd::kEscaped, 0, {0, 0, 0, 0, 0, 0}};
           PathState pending[1];
@@ -305,8 +320,8 @@ absl::StatusOr<IndoorResult> IndoorReplay::Compute(const BlindDesign& design) co
       [&](uint64_t c, const Slot& slot) {
         const Chunk& chunk = d.chunks[c];
         double* row = &tally.sum[(static_cast<size_t>(chunk.batch) * tally.sensors + chunk.sensor) *
-                                 tally.cells];
-        for (int k = 0; k < tally.cells; ++k) row[k] += slot.sum[k];
+                                 tally.columns];
+        for (int k = 0; k < tally.columns; ++k) row[k] += slot.sum[k];
         tally.counters.Add(slot.counters);
       });
   tally.trace_seconds = tally.wall_seconds = Seconds(traced);

@@ -147,6 +147,20 @@ std::pair<double, double> CheapestGrowth(const Eigen::VectorXd& x, const Eigen::
   return best;
 }
 
+// Merges the batches of two rounds batch by batch, weighted by `w`, into `merged`, and
+// sets its standard error from their scatter about `merged_mean`.
+void MergeBatches(const std::vector<Matrix>& a, const std::vector<Matrix>& b,
+                  std::pair<double, double> w, const Matrix& merged_mean,
+                  std::vector<Matrix>& merged, Matrix& standard_error) {
+  const double batches = static_cast<double>(b.size());
+  Matrix variance = Matrix::Zero(merged_mean.rows(), merged_mean.cols());
+  for (size_t k = 0; k < b.size(); ++k) {
+    merged[k] = MergeMeans(a[k], b[k], w);
+    variance += (merged[k] - merged_mean).cwiseAbs2();
+  }
+  standard_error = (variance / (batches * (batches - 1))).cwiseSqrt();
+}
+
 }  // namespace
 
 uint64_t RoundSeed(uint64_t seed, int round) {
@@ -192,10 +206,15 @@ absl::StatusOr<OutdoorResult> MergeRounds(const OutdoorResult& a, const OutdoorR
   if (a.basis_cells != b.basis_cells || !(a.parts == b.parts)) {
     return absl::InvalidArgumentError("outdoor rounds with different window cells");
   }
+  if (a.batches.size() != b.batches.size() || a.batches.size() < 2) {
+    return absl::InvalidArgumentError(
+        "outdoor rounds with different batch counts (at least 2 needed)");
+  }
   const auto w = Weights(a.paths_per_cell, b.paths_per_cell);
   OutdoorResult m = b;
   m.coefficients = MergeMeans(a.coefficients, b.coefficients, w);
-  m.standard_error = MergeErrors(a.standard_error, b.standard_error, w);
+  MergeBatches(a.batches, b.batches, w, m.coefficients, m.batches, m.standard_error);
+  m.sky_view = w.first * a.sky_view + w.second * b.sky_view;
   m.paths_per_cell = a.paths_per_cell + b.paths_per_cell;
   m.rays_traced = a.rays_traced + b.rays_traced;
   m.wall_seconds = a.wall_seconds + b.wall_seconds;
@@ -211,13 +230,7 @@ absl::StatusOr<IndoorResult> MergeRounds(const IndoorResult& a, const IndoorResu
   const auto w = Weights(a.paths_per_sensor, b.paths_per_sensor);
   IndoorResult m = b;
   m.coefficients = MergeMeans(a.coefficients, b.coefficients, w);
-  const double batches = static_cast<double>(b.batches.size());
-  Matrix variance = Matrix::Zero(m.coefficients.rows(), m.coefficients.cols());
-  for (size_t k = 0; k < b.batches.size(); ++k) {
-    m.batches[k] = MergeMeans(a.batches[k], b.batches[k], w);
-    variance += (m.batches[k] - m.coefficients).cwiseAbs2();
-  }
-  m.standard_error = (variance / (batches * (batches - 1))).cwiseSqrt();
+  MergeBatches(a.batches, b.batches, w, m.coefficients, m.batches, m.standard_error);
   m.paths_per_sensor = a.paths_per_sensor + b.paths_per_sensor;
   m.rays_traced = a.rays_traced + b.rays_traced;
   m.wall_seconds = a.wall_seconds + b.wall_seconds;
@@ -237,17 +250,16 @@ Eigen::VectorXd RelativeErrors(const Eigen::VectorXd& sky_sum,
   return relative;
 }
 
-Eigen::VectorXd IndoorSkySumVariance(const TwoStageResult& result) {
-  const Eigen::Index sensors = result.coefficients.rows();
-  const double batches = static_cast<double>(result.batches.size());
+Eigen::VectorXd IndoorSkySumVariance(const IndoorResult& indoor, const OutdoorResult& outdoor) {
+  const Eigen::Index sensors = indoor.coefficients.rows();
+  const double batches = static_cast<double>(indoor.batches.size());
   Eigen::VectorXd variance = Eigen::VectorXd::Zero(sensors);
-  if (batches < 2) return variance;
-  for (Eigen::Index i = 0; i < sensors; ++i) {
-    const double mean = result.coefficients.row(i).tail(kDaylightBins - 1).sum();
-    for (const Matrix& d : result.batches) {
-      variance(i) += std::pow(d.row(i).tail(kDaylightBins - 1).sum() - mean, 2);
-    }
-  }
+  if (batches < 2 || indoor.coefficients.cols() != outdoor.coefficients.rows()) return variance;
+  // The sky sum of I_b O is I_b times O's row sums over the sky bins
+  const Eigen::VectorXd sky_rows =
+      outdoor.coefficients.rightCols(kDaylightBins - 1).rowwise().sum();
+  const Eigen::VectorXd mean = indoor.coefficients * sky_rows;
+  for (const Matrix& batch : indoor.batches) variance += (batch * sky_rows - mean).cwiseAbs2();
   return variance / (batches * (batches - 1));
 }
 
@@ -318,7 +330,7 @@ absl::StatusOr<TwoStageToTarget> TraceTwoStageToTarget(
   FENESTRA_ASSIGN_OR_RETURN(i, ComputeIndoorStage(scene, design, indoor, backend));
   run.outdoor = std::move(o);
   run.indoor = std::move(i);
-  const int64_t window_cells = run.outdoor.coefficients.rows();
+  const int64_t window_cells = run.outdoor.sky_view.size();
   int outdoor_rounds = 1, indoor_rounds = 1;
   for (int round = 0;; ++round) {
     // Combine, report, stop when reached
@@ -328,7 +340,7 @@ absl::StatusOr<TwoStageToTarget> TraceTwoStageToTarget(
     RoundReport report = Report(round, d.sky_sum, d.sky_sum_standard_error, Seconds(start));
     report.paths_per_sensor = run.indoor.paths_per_sensor;
     report.outdoor_paths = run.outdoor.paths_per_cell * window_cells;
-    const Eigen::VectorXd indoor_variance = IndoorSkySumVariance(d);
+    const Eigen::VectorXd indoor_variance = IndoorSkySumVariance(run.indoor, run.outdoor);
     const Eigen::VectorXd variance = d.sky_sum_standard_error.cwiseAbs2();
     const size_t w = report.worst_sensor;
     report.indoor_variance_share =
@@ -370,8 +382,8 @@ absl::StatusOr<TwoStageToTarget> TraceTwoStageToTarget(
       run.indoor = std::move(merged);
     }
     if (plan.factor[1] > 1.01) {
-      outdoor.paths =
-          std::max<int64_t>(2 * window_cells, std::llround((plan.factor[1] - 1) * plan.paths[1]));
+      outdoor.paths = std::max<int64_t>(window_cells * outdoor.batches,
+                                        std::llround((plan.factor[1] - 1) * plan.paths[1]));
       outdoor.seed = RoundSeed(first_outdoor.seed, outdoor_rounds++);
       FENESTRA_ASSIGN_OR_RETURN(next, ComputeOutdoorStage(scene, outdoor, backend));
       FENESTRA_ASSIGN_OR_RETURN(merged, MergeRounds(run.outdoor, next));

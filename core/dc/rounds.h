@@ -24,8 +24,8 @@ namespace fenestra {
 uint64_t RoundSeed(uint64_t seed, int round);
 
 // Two independent estimates of the same quantity as one: the mean weighted by path counts,
-// standard errors sqrt(w_a^2 se_a^2 + w_b^2 se_b^2), counts and times added. The indoor
-// stage's batches are merged batch by batch (so they stay independent and alike) and its
+// standard errors sqrt(w_a^2 se_a^2 + w_b^2 se_b^2), counts and times added. The stages'
+// batches are merged batch by batch (so they stay independent, alike and paired) and their
 // standard errors come from their scatter, as for one trace. InvalidArgument when the shapes,
 // bases, window parts or batch counts differ.
 absl::StatusOr<OneStageResult> MergeRounds(const OneStageResult& a, const OneStageResult& b);
@@ -37,9 +37,10 @@ absl::StatusOr<IndoorResult> MergeRounds(const IndoorResult& a, const IndoorResu
 Eigen::VectorXd RelativeErrors(const Eigen::VectorXd& sky_sum,
                                const Eigen::VectorXd& sky_sum_standard_error);
 
-// Per sensor: the variance of D's sky sum from the indoor stage alone (the scatter of the
-// batches I_b O). The rest of sky_sum_standard_error^2 is the outdoor stage's.
-Eigen::VectorXd IndoorSkySumVariance(const TwoStageResult& result);
+// Per sensor: the variance of D's sky sum from the indoor stage alone, the scatter of the
+// batches I_b O through the mean O (to first order; the batch products I_b O_b see both
+// stages). The rest of CombineStages' sky_sum_standard_error^2 is the outdoor stage's.
+Eigen::VectorXd IndoorSkySumVariance(const IndoorResult& indoor, const OutdoorResult& outdoor);
 
 // When tracing to a target error stops.
 struct TargetErrorOptions {

@@ -12,6 +12,7 @@
 #include "core/dc/backend_support.h"
 #include "core/trace/trace_geometry.h"
 #include "core/trace/two_stage_cpu.h"
+#include "core/trace/window_cells.h"
 
 namespace fenestra {
 namespace {
@@ -51,6 +52,48 @@ absl::Status CheckParts(WindowParts parts) {
                                                    parts.rows));
   }
   return absl::OkStatus();
+}
+
+absl::Status CheckBatches(int batches) {
+  if (batches < 2 || batches > kMaxBatches) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("batches must be 2 to ", kMaxBatches, ", got ", batches));
+  }
+  return absl::OkStatus();
+}
+
+// Mean and standard error of the mean of B >= 2 equally shaped batch matrices.
+void MeanAndError(const std::vector<Matrix>& batches, Matrix* mean, Matrix* standard_error) {
+  const double count = static_cast<double>(batches.size());
+  *mean = Matrix::Zero(batches[0].rows(), batches[0].cols());
+  for (const Matrix& b : batches) *mean += b / count;
+  Matrix variance = Matrix::Zero(mean->rows(), mean->cols());
+  for (const Matrix& b : batches) variance += (b - *mean).cwiseAbs2();
+  *standard_error = (variance / (count * (count - 1))).cwiseSqrt();
+}
+
+// O's batches from the outdoor sums: per window cell the reflected light over the paths
+// whose first segment met a surface (0 where none did), then the identity.
+OutdoorResult OutdoorResultFromTally(const OutdoorTally& tally) {
+  OutdoorResult result;
+  const int cells = tally.cells;
+  result.sky_view = Eigen::VectorXd::Zero(cells);
+  for (int b = 0; b < tally.batches; ++b) {
+    Matrix o = Matrix::Zero(cells + kDaylightBins, kDaylightBins);
+    const double paths = static_cast<double>(tally.batch_paths[b]);
+    for (int k = 0; k < cells; ++k) {
+      const double* row = &tally.sum[(static_cast<size_t>(b) * cells + k) * kOutdoorRowSize];
+      const double met = paths - row[kFirstEscapeEntry];
+      for (int j = 0; met > 0 && j < kDaylightBins; ++j) o(k, j) = row[j] / met;
+      result.sky_view(k) += row[kFirstEscapeEntry];
+    }
+    o.bottomRows(kDaylightBins).setIdentity();
+    result.batches.push_back(std::move(o));
+  }
+  result.sky_view /= static_cast<double>(tally.paths_per_cell);
+  MeanAndError(result.batches, &result.coefficients, &result.standard_error);
+  result.paths_per_cell = static_cast<int64_t>(tally.paths_per_cell);
+  return result;
 }
 
 }  // namespace
@@ -114,48 +157,65 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const Outd
   FENESTRA_RETURN_IF_ERROR(CheckParts(options.parts));
   FENESTRA_RETURN_IF_ERROR(CheckPaths(options.max_bounces, options.russian_roulette,
                                       options.roulette_threshold, options.threads));
+  FENESTRA_RETURN_IF_ERROR(CheckBatches(options.batches));
   const int64_t window_cells =
       int64_t{basis.cell_count} * options.parts.columns * options.parts.rows;
-  if (options.paths < window_cells * 2) {
+  if (options.paths < window_cells * options.batches) {
     return absl::InvalidArgumentError(
-        absl::StrCat("outdoor paths must be at least 2 per window cell (", 2 * window_cells,
-                     "), got ", options.paths));
+        absl::StrCat("outdoor paths must be at least one per window cell and batch (",
+                     window_cells * options.batches, "), got ", options.paths));
   }
-  const TriangleMesh outdoor = SelectSide(scene.fixed, Side::kOutdoor);
-  FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(outdoor, scene.materials));
+  FENESTRA_ASSIGN_OR_RETURN(geometry, OutdoorGeometry(scene));
   std::unique_ptr<DcBackend> fallback;
   if (backend == nullptr) backend = (fallback = MakeEmbreeBackend()).get();
 
-  // Trace, then O = sums / paths per cell
+  // Trace, then O_b = reflected sums / paths whose first segment met a surface
   const uint64_t per_cell = static_cast<uint64_t>(options.paths / window_cells);
   FENESTRA_ASSIGN_OR_RETURN(
       tally, backend->Outdoor(geometry, LocalWindow(geometry, scene.window, options.parts), basis,
-                              per_cell, options.seed,
+                              per_cell, options.batches, options.seed,
                               Settings(options.max_bounces, options.russian_roulette,
                                        options.roulette_threshold),
                               options.threads));
-  OutdoorResult result;
+  OutdoorResult result = OutdoorResultFromTally(tally);
   result.basis_cells = basis.cell_count;
   result.parts = options.parts;
-  result.paths_per_cell = static_cast<int64_t>(per_cell);
-  result.coefficients.resize(tally.cells, kDaylightBins);
-  result.standard_error.resize(tally.cells, kDaylightBins);
-  const double n = static_cast<double>(per_cell);
-  for (int k = 0; k < tally.cells; ++k) {
-    for (int j = 0; j < kDaylightBins; ++j) {
-      const double sum = tally.sum[k * kDaylightBins + j];
-      const double mean = sum / n;
-      const double variance =
-          std::max(0.0, (tally.sum_squares[k * kDaylightBins + j] - sum * mean) / (n - 1));
-      result.coefficients(k, j) = mean;
-      result.standard_error(k, j) = std::sqrt(variance / n);
-    }
-  }
   result.rays_traced = tally.counters.rays;
-  result.triangles = outdoor.TriangleCount();
+  result.triangles = geometry.TriangleCount();
   result.backend = backend->Name();
   result.wall_seconds = Seconds(start);
   return result;
+}
+
+absl::StatusOr<TraceGeometry> OutdoorGeometry(const Scene& scene) {
+  return PrepareTraceGeometry(SelectSide(scene.fixed, Side::kOutdoor), scene.materials);
+}
+
+absl::StatusOr<TraceGeometry> OutdoorViewGeometry(const Scene& scene) {
+  const TriangleMesh outdoor = SelectSide(scene.fixed, Side::kOutdoor);
+  TriangleMesh in_front;
+  in_front.part_names = outdoor.part_names;
+  const Window& w = scene.window;
+  for (size_t t = 0; t < outdoor.TriangleCount(); ++t) {
+    const Vec3d* v = &outdoor.vertices[3 * t];
+    const double front = std::max({Dot(v[0] - w.center, w.normal), Dot(v[1] - w.center, w.normal),
+                                   Dot(v[2] - w.center, w.normal)});
+    if (front > 0) {
+      in_front.Add(v[0], v[1], v[2], outdoor.material[t], Side::kOutdoor, outdoor.part[t]);
+    }
+  }
+  return PrepareTraceGeometry(in_front, scene.materials);
+}
+
+Vec3f OutdoorOffset(const TraceGeometry& indoor, const TraceGeometry& outdoor) {
+  const Vec3d d = indoor.origin - outdoor.origin;
+  return {static_cast<float>(d.x), static_cast<float>(d.y), static_cast<float>(d.z)};
+}
+
+std::vector<uint8_t> OutdoorMetCells(const TraceGeometry& indoor, const TraceGeometry& outdoor,
+                                     TraceWindow window, const HemisphereBasis& basis) {
+  window.center = window.center + OutdoorOffset(indoor, outdoor);
+  return WindowCellsMeetingSurfaces(outdoor, window, basis);
 }
 
 absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options) {
@@ -163,7 +223,7 @@ absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options)
   FENESTRA_RETURN_IF_ERROR(CheckParts(options.parts));
   FENESTRA_RETURN_IF_ERROR(CheckPaths(options.max_bounces, options.russian_roulette,
                                       options.roulette_threshold, options.threads));
-  if (options.batches < 2) return absl::InvalidArgumentError("batches must be at least 2");
+  FENESTRA_RETURN_IF_ERROR(CheckBatches(options.batches));
   if (options.paths_per_sensor < options.batches) {
     return absl::InvalidArgumentError(
         absl::StrCat("indoor paths per sensor must be at least the batch count (", options.batches,
@@ -179,24 +239,18 @@ PathSettings IndoorPathSettings(const IndoorOptions& options) {
 IndoorResult IndoorResultFromTally(const IndoorTally& tally, const IndoorOptions& options) {
   IndoorResult result;
   result.parts = options.parts;
-  const int sensors = tally.sensors, cells = tally.cells, batches = tally.batches;
-  result.coefficients = Matrix::Zero(sensors, cells);
-  for (int b = 0; b < batches; ++b) {
-    Matrix batch(sensors, cells);
+  const int sensors = tally.sensors, columns = tally.columns;
+  for (int b = 0; b < tally.batches; ++b) {
+    Matrix batch(sensors, columns);
     for (int s = 0; s < sensors; ++s) {
-      for (int k = 0; k < cells; ++k) {
-        batch(s, k) = tally.sum[(static_cast<size_t>(b) * sensors + s) * cells + k] /
+      for (int k = 0; k < columns; ++k) {
+        batch(s, k) = tally.sum[(static_cast<size_t>(b) * sensors + s) * columns + k] /
                       static_cast<double>(tally.batch_paths[b]);
       }
     }
-    result.coefficients += batch / batches;
     result.batches.push_back(std::move(batch));
   }
-  Matrix variance = Matrix::Zero(sensors, cells);
-  for (const Matrix& batch : result.batches) {
-    variance += (batch - result.coefficients).cwiseAbs2();
-  }
-  result.standard_error = (variance / (batches * (batches - 1.0))).cwiseSqrt();
+  MeanAndError(result.batches, &result.coefficients, &result.standard_error);
   result.paths_per_sensor = options.paths_per_sensor;
   result.trace_seconds = tally.trace_seconds;
   result.rays_traced = tally.counters.rays;
@@ -209,12 +263,13 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
   FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
   const TriangleMesh indoor = SelectSide(AssembleMesh(scene, design), Side::kIndoor);
   FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(indoor, scene.materials));
+  FENESTRA_ASSIGN_OR_RETURN(outdoor, OutdoorViewGeometry(scene));
   std::unique_ptr<DcBackend> fallback;
   if (backend == nullptr) backend = (fallback = MakeEmbreeBackend()).get();
 
   // Trace, then I_b = batch sums / batch paths
   FENESTRA_ASSIGN_OR_RETURN(
-      tally, backend->Indoor(geometry, LocalSensors(geometry, scene.sensors),
+      tally, backend->Indoor(geometry, outdoor, LocalSensors(geometry, scene.sensors),
                              LocalWindow(geometry, scene.window, options.parts), basis,
                              static_cast<uint64_t>(options.paths_per_sensor), options.batches,
                              options.seed, IndoorPathSettings(options), options.threads));
@@ -234,49 +289,26 @@ absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
   }
   if (indoor.coefficients.cols() != outdoor.coefficients.rows()) {
     return absl::InvalidArgumentError(absl::StrCat("indoor matrix has ", indoor.coefficients.cols(),
-                                                   " window cells, outdoor matrix ",
-                                                   outdoor.coefficients.rows()));
+                                                   " columns, outdoor matrix ",
+                                                   outdoor.coefficients.rows(), " rows"));
   }
-  // Every batch's D in one product (I is the mean of its batches, so D is the mean of theirs)
+  if (indoor.batches.size() != outdoor.batches.size() || indoor.batches.size() < 2) {
+    return absl::InvalidArgumentError(absl::StrCat("indoor matrix has ", indoor.batches.size(),
+                                                   " batches, outdoor matrix ",
+                                                   outdoor.batches.size(), "; they pair up"));
+  }
+  // D_b = I_b O_b; D and its errors from the batches
   TwoStageResult result;
-  const Eigen::Index rows = indoor.coefficients.rows();
-  const double batches = static_cast<double>(indoor.batches.size());
-  FENESTRA_ASSIGN_OR_RETURN(stacked,
-                            StackIndoorBatches(indoor.batches, outdoor.coefficients.rows()));
-  result.batches = SplitBatches(stacked * outdoor.coefficients, indoor.batches.size());
-  result.coefficients = Matrix::Zero(rows, outdoor.coefficients.cols());
-  for (const Matrix& d : result.batches) result.coefficients += d / batches;
-  Matrix indoor_variance = Matrix::Zero(rows, result.coefficients.cols());
-  for (const Matrix& d : result.batches) indoor_variance += (d - result.coefficients).cwiseAbs2();
-  if (batches > 1) indoor_variance /= batches * (batches - 1);
-  const Matrix outdoor_variance =
-      indoor.coefficients.cwiseAbs2() * outdoor.standard_error.cwiseAbs2();
-  result.standard_error = (indoor_variance + outdoor_variance).cwiseSqrt();
-
-  // Sky sums: indoor error from the batches; outdoor error from each cell's row sum. A path
-  // scores one bin, so a row sum's second moment is the sum of its entries' second moments:
-  // var(row) = sum_j se_j^2 + (sum_j m_j^2 - (sum_j m_j)^2) / (n - 1)
-  const Eigen::Index sensors = result.coefficients.rows(), cells = outdoor.coefficients.rows();
-  const double n = static_cast<double>(std::max<int64_t>(2, outdoor.paths_per_cell));
-  Eigen::VectorXd row_variance(cells);
-  for (Eigen::Index k = 0; k < cells; ++k) {
-    const auto m = outdoor.coefficients.row(k).tail(kDaylightBins - 1);
-    const auto se = outdoor.standard_error.row(k).tail(kDaylightBins - 1);
-    row_variance(k) =
-        std::max(0.0, se.squaredNorm() + (m.squaredNorm() - m.sum() * m.sum()) / (n - 1));
-  }
-  result.sky_sum.resize(sensors);
-  result.sky_sum_standard_error.resize(sensors);
-  for (Eigen::Index i = 0; i < sensors; ++i) {
-    result.sky_sum(i) = result.coefficients.row(i).tail(kDaylightBins - 1).sum();
-    double variance = 0;
-    for (const Matrix& d : result.batches) {
-      variance += std::pow(d.row(i).tail(kDaylightBins - 1).sum() - result.sky_sum(i), 2);
-    }
-    if (batches > 1) variance /= batches * (batches - 1);
-    variance += indoor.coefficients.row(i).cwiseAbs2().dot(row_variance);
-    result.sky_sum_standard_error(i) = std::sqrt(variance);
-  }
+  result.batches =
+      SplitBatches(ThroughWindow(indoor.batches, outdoor.batches), indoor.batches.size());
+  MeanAndError(result.batches, &result.coefficients, &result.standard_error);
+  std::vector<Matrix> sky_sums;
+  for (const Matrix& d : result.batches)
+    sky_sums.push_back(d.rightCols(kDaylightBins - 1).rowwise().sum());
+  Matrix sky_sum, sky_sum_error;
+  MeanAndError(sky_sums, &sky_sum, &sky_sum_error);
+  result.sky_sum = sky_sum.col(0);
+  result.sky_sum_standard_error = sky_sum_error.col(0);
   return result;
 }
 
@@ -316,9 +348,10 @@ class StagedDesignTallies : public DesignTallies {
 }  // namespace
 
 absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::MakeDesignTallies(
-    const Scene& scene, const IndoorOptions& options, const Matrix& outdoor, const Matrix& sky) {
+    const Scene& scene, const IndoorOptions& options, const std::vector<Matrix>& outdoor_batches,
+    const Matrix& sky) {
   FENESTRA_ASSIGN_OR_RETURN(stages, MakeIndoorStages(scene, options));
-  FENESTRA_ASSIGN_OR_RETURN(product, MakeAnnualProduct(outdoor, sky));
+  FENESTRA_ASSIGN_OR_RETURN(product, MakeAnnualProduct(outdoor_batches, sky));
   return std::make_unique<StagedDesignTallies>(std::move(stages), std::move(product));
 }
 

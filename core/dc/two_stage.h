@@ -5,13 +5,26 @@
 // D = I O. The outdoor stage sees only outdoor surfaces, the indoor stage only indoor
 // surfaces and the blind; each builds its own acceleration structure from them.
 //
-// Window sampling: the outdoor stage starts its paths at uniform points of the whole
-// window rectangle, and the indoor stage connects to uniform window points, so O is the
-// mean over the window area of the radiance arriving from each direction cell. A
-// centre-only estimate (paths from the window's centre) would instead take the view from
-// one point; it differs where the outdoor view changes across the window (the sill and
-// head see different parts of a street canyon), and it makes I O inconsistent with the
-// one-stage D, which integrates over the whole opening.
+// Window sampling: the outdoor stage starts its paths at uniform points of each window part,
+// and the indoor stage connects to uniform window points, so O is the mean over the part's
+// area of the radiance arriving from each direction cell. A centre-only estimate (paths
+// from the window's centre) would instead take the view from one point; it differs where
+// the outdoor view changes across the window (the sill and head see different parts of a
+// street canyon), and it makes I O inconsistent with the one-stage D, which integrates
+// over the whole opening.
+//
+// Direct light: the indoor stage tests each window connection against the outdoor
+// surfaces; light that comes straight from the sky goes into a column per sky bin (I's
+// direct part), and only light whose view meets an outdoor surface goes through the window
+// cells and O (core/trace/two_stage_modes.h). O's rows are the window cells (the mean
+// radiance of what the cell sees, given that it sees a surface), then the identity for
+// the direct columns: D = I O. Averaged over a cell, the sky's edge against the buildings
+// moved a sensor by 3.6% (6.4% with a black city) where slats in the window plane let it
+// see each cell only in strips (bench/results/two_stage_bias.txt).
+//
+// Errors: both stages are traced in the same number B of independent batches, and batch b
+// of D is I_b O_b, so D (their mean) and every metric's jackknife see the noise of both
+// stages and the covariance that sensors and hours share through O.
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>
@@ -42,8 +55,12 @@ WindowParts AutomaticWindowParts(const Window& window);
 // WindowParts from "COLUMNSxROWS" (e.g. "4x2"), or InvalidArgument.
 absl::StatusOr<WindowParts> ParseWindowParts(const std::string& text);
 
+// Independent batches of each stage, by default, and at most.
+inline constexpr int kDefaultBatches = 8;
+inline constexpr int kMaxBatches = 64;
+
 struct OutdoorOptions {
-  int64_t paths = 20'000'000;  // in total, spread evenly over the window cells
+  int64_t paths = 20'000'000;  // in total, evenly over the window cells; >= cells x batches
   int max_bounces = 30;        // surface reflections; < 0 = unlimited (roulette)
   uint64_t seed = 1;
   int threads = 0;  // CPU threads; 0 = every hardware thread
@@ -51,17 +68,24 @@ struct OutdoorOptions {
   WindowParts parts;
   bool russian_roulette = true;
   double roulette_threshold = 1.0;  // as OneStageOptions
+  // Independent batches of every window cell's paths; the indoor stage's batches pair
+  // with them (CombineStages), so both must have the same count.
+  int batches = kDefaultBatches;
 };
 
-// O: mean radiance arriving at each window part from each direction cell per unit
-// radiance of each sky bin [-], with standard errors from the per-path second moment.
-// Rows: window cells, part * basis_cells + direction cell.
+// O: per unit radiance of each sky bin [-], rows part * basis_cells + direction cell: the
+// mean radiance arriving at the window part from the direction cell where its view meets an
+// outdoor surface; then one row per sky bin, the identity, for I's direct columns. The mean
+// of independent batch estimates, with the standard error of that mean.
 struct OutdoorResult {
-  Matrix coefficients;    // window cells x 146
-  Matrix standard_error;  // window cells x 146
+  Matrix coefficients;          // (window cells + 146) x 146
+  Matrix standard_error;        // (window cells + 146) x 146
+  std::vector<Matrix> batches;  // per batch: (window cells + 146) x 146
+  // Per window cell: the fraction of its paths whose first segment reached the sky.
+  Eigen::VectorXd sky_view;
   int basis_cells = 0;
   WindowParts parts;
-  int64_t paths_per_cell = 0;
+  int64_t paths_per_cell = 0;  // in all batches
   uint64_t rays_traced = 0;
   size_t triangles = 0;  // outdoor triangles traced against
   double wall_seconds = 0;
@@ -75,18 +99,21 @@ struct IndoorOptions {
   int threads = 0;
   int basis_cells = 288;
   WindowParts parts;
-  int batches = 8;  // independent batches of paths (standard errors, metric errors)
+  int batches = kDefaultBatches;  // independent batches of paths, as OutdoorOptions::batches
   bool russian_roulette = true;
   double roulette_threshold = 1.0;
 };
 
-// I: irradiance at each sensor per unit radiance leaving each window part from each
-// direction cell [sr], as the mean of independent batch estimates.
+// I [sr]: irradiance at each sensor per unit radiance arriving at each window part from
+// each direction cell where the view meets an outdoor surface (columns part * basis_cells
+// + direction cell), then per unit radiance of each sky bin seen straight through the
+// window (the direct part, one column per bin, 0 = ground); the mean of independent batch
+// estimates.
 struct IndoorResult {
   WindowParts parts;
-  Matrix coefficients;          // sensors x cells
-  Matrix standard_error;        // sensors x cells, from the batches
-  std::vector<Matrix> batches;  // per batch: sensors x cells
+  Matrix coefficients;          // sensors x (window cells + 146)
+  Matrix standard_error;        // sensors x (window cells + 146), from the batches
+  std::vector<Matrix> batches;  // per batch: sensors x (window cells + 146)
   int64_t paths_per_sensor = 0;
   uint64_t rays_traced = 0;
   size_t triangles = 0;      // indoor triangles traced against (blind included)
@@ -95,14 +122,13 @@ struct IndoorResult {
   std::string backend;
 };
 
-// D = I O with its standard error: the indoor part from the batches (their covariances
-// included), the outdoor part sum_k I_ik^2 se(O_kj)^2 (cells are traced independently).
+// D = I O as the mean of the batch products I_b O_b, with standard errors from their
+// spread: both stages' noise and every covariance between entries included.
 struct TwoStageResult {
   Matrix coefficients;          // sensors x 146 [sr]
   Matrix standard_error;        // sensors x 146 [sr]
-  std::vector<Matrix> batches;  // I_b O, sensors x 146
-  // Per sensor: the sum of D over the sky bins (1..145) [sr] and its standard error, both
-  // stages' errors included (O's through each cell's row sum, from the per-path moments).
+  std::vector<Matrix> batches;  // I_b O_b, sensors x 146
+  // Per sensor: the sum of D over the sky bins (1..145) [sr] and its standard error.
   Eigen::VectorXd sky_sum;
   Eigen::VectorXd sky_sum_standard_error;
 };
@@ -115,7 +141,8 @@ absl::StatusOr<HemisphereBasis> BasisFor(int cells);
 absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const OutdoorOptions& options,
                                                   DcBackend* backend = nullptr);
 
-// The indoor stage of `scene` at `design`: indoor surfaces and the blind only.
+// The indoor stage of `scene` at `design`: indoor surfaces and the blind, and the outdoor
+// surfaces only to tell direct light from light through the window cells.
 absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindDesign& design,
                                                 const IndoorOptions& options,
                                                 DcBackend* backend = nullptr);
@@ -136,10 +163,27 @@ absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options)
 PathSettings IndoorPathSettings(const IndoorOptions& options);
 IndoorResult IndoorResultFromTally(const IndoorTally& tally, const IndoorOptions& options);
 
+// The outdoor surfaces of `scene`, prepared for tracing (empty when there are none): all of
+// them for the outdoor stage; for the indoor stage's test whether a view from the window
+// reaches the sky, only those with a point in front of the window's plane (no ray that
+// leaves the window outwards can meet the others: the facade around the window, the
+// building behind it), which makes the test about twice as fast.
+absl::StatusOr<TraceGeometry> OutdoorGeometry(const Scene& scene);
+absl::StatusOr<TraceGeometry> OutdoorViewGeometry(const Scene& scene);
+
+// The offset of an OutdoorView: `outdoor`'s frame position of `indoor`'s frame origin.
+Vec3f OutdoorOffset(const TraceGeometry& indoor, const TraceGeometry& outdoor);
+
+// The window cells of an OutdoorView whose every view meets one of `outdoor`'s surfaces
+// (core/trace/window_cells.h), for `window` given in `indoor`'s frame.
+std::vector<uint8_t> OutdoorMetCells(const TraceGeometry& indoor, const TraceGeometry& outdoor,
+                                     TraceWindow window, const HemisphereBasis& basis);
+
 // The window in `geometry`'s local frame, split into `parts`.
 TraceWindow LocalWindow(const TraceGeometry& geometry, const Window& window, WindowParts parts);
 
-// D = I O. InvalidArgument when the bases or the window parts differ.
+// D = I O, batch by batch. InvalidArgument when the bases, the window parts or the batch
+// counts differ.
 absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
                                              const OutdoorResult& outdoor);
 

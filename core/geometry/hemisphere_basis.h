@@ -63,11 +63,13 @@ FENESTRA_CPU_GPU inline int BasisCell(const HemisphereBasis& basis, Vec3T<T> d) 
   return first + j;
 }
 
-// A direction uniformly distributed in solid angle within `cell`, from two uniform numbers
-// in [0, 1). Returns a unit vector in the local frame.
+// A direction within `cell` from two uniform numbers in [0, 1): distributed uniformly in
+// solid angle, or with `projected` in projected solid angle (density proportional to
+// cos θ, the measure in which radiance crossing the hemisphere's base carries flux).
+// Returns a unit vector in the local frame.
 template <typename T>
-FENESTRA_CPU_GPU inline Vec3T<T> SampleBasisCell(const HemisphereBasis& basis, int cell, T u1,
-                                                 T u2) {
+FENESTRA_CPU_GPU inline Vec3T<T> SampleBasisCell(const HemisphereBasis& basis, int cell, T u1, T u2,
+                                                 bool projected = false) {
   int ring = 0;
   while (basis.cumulative[ring] <= cell) ++ring;
   const int first = ring == 0 ? 0 : basis.cumulative[ring - 1];
@@ -75,7 +77,10 @@ FENESTRA_CPU_GPU inline Vec3T<T> SampleBasisCell(const HemisphereBasis& basis, i
   const T n = static_cast<T>(basis.cell_count);
   const T cos_hi = T(1) - static_cast<T>(first) / n;
   const T cos_lo = T(1) - static_cast<T>(basis.cumulative[ring]) / n;
-  const T cos_theta = cos_hi - u1 * (cos_hi - cos_lo);
+  // Uniform in cos θ (solid angle) or in cos² θ (projected solid angle)
+  const T cos_theta =
+      projected ? sqrt(fmax(T(0), cos_hi * cos_hi - u1 * (cos_hi * cos_hi - cos_lo * cos_lo)))
+                : cos_hi - u1 * (cos_hi - cos_lo);
   const T sin_theta = sqrt(fmax(T(0), T(1) - cos_theta * cos_theta));
   const T phi =
       (static_cast<T>(cell - first) + u2) * T(2 * 3.14159265358979323846) / static_cast<T>(count);

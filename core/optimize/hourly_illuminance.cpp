@@ -31,7 +31,7 @@ Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns) {
 
 absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
     const Scene& scene, const BlindDesign& design, const IndoorOptions& options,
-    const Matrix& outdoor, const SkyMatrix& sky, DcBackend& backend) {
+    const std::vector<Matrix>& outdoor_batches, const SkyMatrix& sky, DcBackend& backend) {
   v1::HourlyIlluminance out;
   SetAxes(scene, sky, out);
   const int64_t sensors = static_cast<int64_t>(scene.sensors.size());
@@ -39,15 +39,15 @@ absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
   out.mutable_illuminance_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
   out.mutable_standard_error_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
   if (options.batches < 2) {
-    return absl::InvalidArgumentError("standard errors need at least 2 indoor batches");
+    return absl::InvalidArgumentError("standard errors need at least 2 batches");
   }
   const std::vector<int> lit = LitColumns(sky.radiance);
   if (lit.empty()) return out;
 
-  // E_b = (I_b O) S over the steps with daylight, for each batch b
+  // E_b = (I_b O_b) S over the steps with daylight, for each batch b
   FENESTRA_ASSIGN_OR_RETURN(indoor, ComputeIndoorStage(scene, design, options, &backend));
-  FENESTRA_ASSIGN_OR_RETURN(product,
-                            backend.MakeAnnualProduct(outdoor, SkyColumnsInLux(sky.radiance, lit)));
+  FENESTRA_ASSIGN_OR_RETURN(
+      product, backend.MakeAnnualProduct(outdoor_batches, SkyColumnsInLux(sky.radiance, lit)));
   FENESTRA_ASSIGN_OR_RETURN(batches, product->Apply(indoor.batches));
 
   // Their mean, and its standard error from the spread of the batches

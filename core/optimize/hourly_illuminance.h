@@ -2,9 +2,10 @@
 
 // The hourly illuminance of one design, for reports and other tools: the design's indoor
 // stage with the search's random streams, then the backend's annual product
-// E_b = (I_b O) S (core/dc/dc_backend.h) over every time step with daylight.
+// E_b = (I_b O_b) S (core/dc/dc_backend.h) over every time step with daylight.
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/common/radiance_matrix.h"
@@ -25,11 +26,12 @@ inline constexpr int64_t kMaxHourlyIlluminanceValues = 2'000'000;
 Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns);
 
 // The illuminance of `design` at every sensor of `scene` and every step of `sky`, the mean
-// over the indoor stage's batches with its standard error. `outdoor` is O (window cells x
-// sky bins) traced with the parts and basis of `options`. Errors as ComputeIndoorStage and
+// over the paired batches with its standard error (both stages' noise). `outdoor_batches`
+// are O's batches O_b ((window cells + 146) x sky bins, core/dc/two_stage.h) traced with the
+// parts, basis and batch count of `options`. Errors as ComputeIndoorStage and
 // AnnualProduct::Apply.
 absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
     const Scene& scene, const BlindDesign& design, const IndoorOptions& options,
-    const Matrix& outdoor, const SkyMatrix& sky, DcBackend& backend);
+    const std::vector<Matrix>& outdoor_batches, const SkyMatrix& sky, DcBackend& backend);
 
 }  // namespace fenestra

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <span>
 
 #include "absl/strings/str_cat.h"
@@ -26,6 +28,8 @@
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
 #include "core/sky/sky_matrix.h"
+#include "google/protobuf/io/coded_stream.h"
+#include "google/protobuf/io/zero_copy_stream_impl_lite.h"
 
 namespace fenestra {
 namespace {
@@ -214,12 +218,20 @@ absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualS
   return std::move(outcome->check);
 }
 
+// A job's clock: this process's time since RunJob started, after the time of the checkpoint
+// it resumed from [s].
+struct JobClock {
+  std::chrono::steady_clock::time_point start;
+  double resumed_seconds = 0;
+  double Seconds() const { return resumed_seconds + Since(start); }
+};
+
 // The final check of the search's best design into `result` (which holds the search's
 // history), then reported once more with the check. A cancel during the check leaves it out.
 absl::Status CheckBestDesign(const PreparedJob& job, const AnnualSetting& setting,
                              const VnsResult& search, DcBackend* backend,
-                             const JobCallbacks& callbacks,
-                             std::chrono::steady_clock::time_point start, v1::JobResult& result) {
+                             const JobCallbacks& callbacks, const JobClock& clock,
+                             v1::JobResult& result) {
   if (callbacks.stage) callbacks.stage("check");
   absl::StatusOr<v1::FinalCheck> check =
       CheckDesign(job, setting, search.best_x, result.best_value(), backend, callbacks.cancelled);
@@ -232,11 +244,198 @@ absl::Status CheckBestDesign(const PreparedJob& job, const AnnualSetting& settin
     last.max_evaluations = job.job.budget().max_evaluations();
     last.current = result.history(result.history_size() - 1);
     last.best = result.history(search.best_index);
-    last.elapsed_seconds = Since(start);
+    last.elapsed_seconds = clock.Seconds();
     last.final_check = *std::move(check);
     callbacks.progress(last);
   }
   return absl::OkStatus();
+}
+
+// The search of a job: its variables, in the job's order, and its options.
+struct SearchSettings {
+  std::vector<DesignVariable> variables;
+  VnsOptions options;
+};
+
+SearchSettings MakeSearchSettings(const v1::Job& spec) {
+  SearchSettings search;
+  for (const v1::DesignVariable& v : spec.variables()) {
+    search.variables.push_back({v.name(), v.lower(), v.upper(), v.start(), v.fixed(), v.step()});
+  }
+  VnsOptions& vns = search.options;
+  if (spec.neighborhoods_size() > 0) {
+    vns.neighborhoods.clear();
+    for (const v1::Neighborhood& n : spec.neighborhoods()) {
+      vns.neighborhoods.push_back({n.variables(), n.radius()});
+    }
+  }
+  switch (spec.objective().goal()) {
+    case v1::GOAL_MINIMIZE:
+      vns.objective.sense = ObjectiveSense::kMinimize;
+      break;
+    case v1::GOAL_TARGET:
+      vns.objective.sense = ObjectiveSense::kTarget;
+      vns.objective.target = spec.objective().target();
+      vns.objective.target_tolerance = spec.objective().target_tolerance();
+      break;
+    default:
+      vns.objective.sense = ObjectiveSense::kMaximize;
+  }
+  vns.max_evaluations = spec.budget().max_evaluations();
+  vns.max_seconds = spec.budget().max_seconds();
+  vns.failed_cycles_to_stop = std::max(0, spec.budget().failed_cycles_to_stop());
+  vns.seed = spec.sampling().seed();
+  return search;
+}
+
+absl::Status CheckCheckpointFormat(const v1::SearchCheckpoint& checkpoint) {
+  if (checkpoint.format() == kSearchCheckpointFormat) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrCat("search checkpoint: format ", checkpoint.format(),
+                                                 ", but this build reads format ",
+                                                 kSearchCheckpointFormat, " only"));
+}
+
+// The search so far that `checkpoint` holds, once it is known to be of this format, of `job`
+// (whose content hash is `job_hash`) and a history its search makes (CheckVnsResume).
+absl::StatusOr<VnsResult> ResumedSearch(const PreparedJob& job, const std::string& job_hash,
+                                        const SearchSettings& search,
+                                        const v1::SearchCheckpoint& checkpoint) {
+  FENESTRA_RETURN_IF_ERROR(CheckCheckpointFormat(checkpoint));
+  if (checkpoint.job_hash() != job_hash) {
+    return absl::InvalidArgumentError(
+        "search checkpoint: it belongs to another job (its content hash differs)");
+  }
+  if (checkpoint.history_size() == 0) {
+    return absl::InvalidArgumentError("search checkpoint: no steps");
+  }
+  const double job_seconds = checkpoint.history(checkpoint.history_size() - 1).elapsed_seconds();
+  if (!(job_seconds >= 0) || !std::isfinite(job_seconds)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "search checkpoint: the last step's elapsed_seconds ", job_seconds, " is not a time"));
+  }
+  // The history on the search's clock
+  const double search_start = job_seconds - checkpoint.search_seconds();
+  VnsResult so_far;
+  so_far.elapsed_seconds = checkpoint.search_seconds();
+  for (const v1::Evaluation& e : checkpoint.history()) {
+    VnsRecord record;
+    record.index = e.index();
+    for (const DesignVariable& v : search.variables) {
+      const auto value = e.design().find(v.name);
+      if (value == e.design().end()) {
+        return absl::InvalidArgumentError(absl::StrCat("search checkpoint: step ", e.index(),
+                                                       " has no value of variable '", v.name, "'"));
+      }
+      record.x.push_back(value->second);
+    }
+    if (e.design_size() != static_cast<int>(search.variables.size())) {
+      return absl::InvalidArgumentError(absl::StrCat("search checkpoint: step ", e.index(),
+                                                     " has variables the job does not have"));
+    }
+    record.evaluation.value = e.value().value();
+    record.evaluation.standard_error = e.value().standard_error();
+    record.evaluation_seconds = e.seconds();
+    record.elapsed_seconds = e.elapsed_seconds() - search_start;
+    record.cached = e.cached();
+    record.improved = e.improved();
+    record.neighborhood = e.neighborhood();
+    so_far.history.push_back(std::move(record));
+  }
+  if (absl::Status replay = CheckVnsResume(search.variables, search.options, so_far);
+      !replay.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("search checkpoint: ", replay.message()));
+  }
+  return so_far;
+}
+
+// Where a job's search starts: from nothing, or from a checkpoint.
+struct SearchStart {
+  v1::SearchCheckpoint checkpoint;  // kept up to date after each step
+  std::optional<VnsResult> so_far;  // the search resumed
+  double resumed_seconds = 0;       // the job's clock at the checkpoint [s]
+};
+
+// The start of the job's search: from `resume` when given (ResumedSearch), else new.
+absl::StatusOr<SearchStart> StartOfSearch(const PreparedJob& job, const SearchSettings& settings,
+                                          const v1::SearchCheckpoint* resume) {
+  SearchStart start;
+  if (resume == nullptr) {
+    start.checkpoint.set_format(kSearchCheckpointFormat);
+    start.checkpoint.set_job_hash(JobContentHash(job));
+    return start;
+  }
+  FENESTRA_ASSIGN_OR_RETURN(so_far, ResumedSearch(job, JobContentHash(job), settings, *resume));
+  start.so_far = std::move(so_far);
+  start.checkpoint = *resume;
+  start.resumed_seconds = resume->history(resume->history_size() - 1).elapsed_seconds();
+  return start;
+}
+
+// The indoor stage of the job's designs.
+IndoorOptions JobIndoorOptions(const PreparedJob& job) {
+  const v1::Sampling& sampling = job.job.sampling();
+  IndoorOptions options;
+  options.paths_per_sensor = sampling.indoor_paths_per_sensor();
+  options.max_bounces = sampling.indoor_bounces();
+  options.seed = sampling.seed();
+  options.basis_cells = sampling.basis_cells();
+  options.parts = SamplingWindowParts(sampling, job.scene.window);
+  options.batches = sampling.batches();
+  return options;
+}
+
+// The search into `result`: the best design and its value and metrics, every step (moved
+// from `checkpoint`, which holds them in the job's terms), the counts and why it stopped.
+void AddSearch(const SearchSettings& settings, const VnsResult& search,
+               v1::SearchCheckpoint& checkpoint, v1::JobResult& result) {
+  for (size_t i = 0; i < settings.variables.size(); ++i) {
+    (*result.mutable_best_design())[settings.variables[i].name] = search.best_x[i];
+  }
+  SetEstimate(result.mutable_best_value(), search.best.value, search.best.standard_error);
+  if (checkpoint.has_best_metrics()) *result.mutable_best_metrics() = checkpoint.best_metrics();
+  result.mutable_history()->Swap(checkpoint.mutable_history());
+  AddBestOverTime(result);
+  result.set_evaluations(search.evaluations);
+  result.set_stop_reason(std::string(StopReasonName(search.stop_reason)));
+  result.mutable_timings()->set_evaluation_seconds(search.evaluation_seconds);
+}
+
+// The job's search from the start or from `so_far`, keeping `checkpoint` (that of `so_far`,
+// else new) up to date after each step and handing it out with the progress.
+absl::StatusOr<VnsResult> RunJobSearch(const PreparedJob& job, const SearchSettings& search,
+                                       const ObjectiveFunction& objective,
+                                       const JobCallbacks& callbacks, const JobClock& clock,
+                                       const VnsResult* so_far, v1::SearchCheckpoint& checkpoint) {
+  // When the search started, on the job's clock
+  const double search_start = clock.Seconds() - (so_far ? so_far->elapsed_seconds : 0);
+  VnsCallbacks vns_callbacks;
+  vns_callbacks.cancelled = callbacks.cancelled;
+  vns_callbacks.checkpoint = [&](const VnsResult& state) {
+    const VnsRecord& step = state.history.back();
+    *checkpoint.add_history() = ToProto(job, step, search_start);
+    if (step.improved) {
+      if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&step.evaluation.payload)) {
+        *checkpoint.mutable_best_metrics() = ToProto(*metrics);
+      } else {
+        checkpoint.clear_best_metrics();
+      }
+    }
+    checkpoint.set_search_seconds(state.elapsed_seconds);
+    if (callbacks.checkpoint) callbacks.checkpoint(checkpoint);
+  };
+  if (callbacks.progress) {
+    vns_callbacks.progress = [&](const VnsProgress& p) {
+      JobProgress progress;
+      progress.evaluations = p.evaluations;
+      progress.max_evaluations = p.max_evaluations;
+      progress.current = checkpoint.history(p.current->index);
+      progress.best = checkpoint.history(p.best->index);
+      progress.elapsed_seconds = clock.Seconds();
+      progress.remaining_seconds = p.remaining_seconds;
+      callbacks.progress(progress);
+    };
+  }
+  return RunVns(search.variables, objective, search.options, vns_callbacks, so_far);
 }
 
 }  // namespace
@@ -265,7 +464,7 @@ absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& ba
 
 std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
   ContentHash hash;
-  hash.String("fenestra outdoor matrix v1");
+  hash.String("fenestra outdoor matrix v2");
   const TriangleMesh& mesh = scene.fixed;
   for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
     if (mesh.side[t] != Side::kOutdoor) continue;
@@ -282,9 +481,17 @@ std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
   hash.Value(w.width_m), hash.Value(w.height_m);
   hash.Value(sampling.outdoor_paths()), hash.Value(sampling.outdoor_bounces());
   hash.Value(sampling.seed()), hash.Value(sampling.basis_cells());
+  hash.Value(sampling.batches());
   const WindowParts parts = SamplingWindowParts(sampling, scene.window);
   hash.Value(parts.columns), hash.Value(parts.rows);
   return hash.Hex();
+}
+
+double OutdoorMeanRelativeError(const OutdoorMatrix& matrix) {
+  const Eigen::Index cells = std::max<Eigen::Index>(0, matrix.coefficients.rows() - kDaylightBins);
+  if (cells == 0 || matrix.standard_error.rows() != matrix.coefficients.rows()) return 0;
+  return MeanRelativeError(matrix.coefficients.topRows(cells), matrix.standard_error.topRows(cells),
+                           0.01, false);
 }
 
 WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Window& window) {
@@ -302,14 +509,16 @@ absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1:
   options.seed = sampling.seed();
   options.basis_cells = sampling.basis_cells();
   options.parts = SamplingWindowParts(sampling, scene.window);
+  options.batches = sampling.batches();
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(sampling.backend()));
   FENESTRA_ASSIGN_OR_RETURN(result, ComputeOutdoorStage(scene, options, backend.get()));
   OutdoorMatrix matrix;
   matrix.coefficients = std::move(result.coefficients);
   matrix.standard_error = std::move(result.standard_error);
+  matrix.batches = std::move(result.batches);
   matrix.basis_cells = result.basis_cells;
   matrix.parts = result.parts;
-  matrix.paths = result.paths_per_cell * result.coefficients.rows();
+  matrix.paths = result.paths_per_cell * result.sky_view.size();
   matrix.bounces = sampling.outdoor_bounces();
   matrix.seed = sampling.seed();
   matrix.wall_seconds = result.wall_seconds;
@@ -318,11 +527,65 @@ absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1:
   return matrix;
 }
 
+std::string JobContentHash(const PreparedJob& job) {
+  // The job with its scene inline (a scene_file, or the scene left out, says nothing of the
+  // scene's content), serialized deterministically
+  v1::Job content = job.job;
+  content.clear_scene_file();
+  *content.mutable_scene() = SelfContainedSceneProto(job.scene);
+  std::string bytes;
+  {
+    google::protobuf::io::StringOutputStream stream(&bytes);
+    google::protobuf::io::CodedOutputStream coded(&stream);
+    coded.SetSerializationDeterministic(true);
+    content.SerializeToCodedStream(&coded);
+  }
+  ContentHash hash;
+  hash.String("fenestra job v1");
+  hash.String(bytes);
+
+  // The weather: the site and every record
+  const EpwLocation& site = job.weather.location;
+  hash.Value(site.latitude_deg), hash.Value(site.longitude_deg);
+  hash.Value(site.time_zone_hours), hash.Value(site.elevation_m);
+  hash.Value(job.weather.records_per_hour);
+  for (const EpwRecord& r : job.weather.records) {
+    for (const int v : {r.year, r.month, r.day, r.hour, r.minute}) hash.Value(v);
+    hash.Value(r.direct_normal_wm2), hash.Value(r.diffuse_horizontal_wm2);
+    for (const std::optional<double>& v :
+         {r.dry_bulb_c, r.dew_point_c, r.global_horizontal_wm2, r.global_horizontal_lux,
+          r.direct_normal_lux, r.diffuse_horizontal_lux}) {
+      hash.Value(v.has_value());
+      hash.Value(v.value_or(0.0));
+    }
+  }
+  return hash.Hex();
+}
+
+absl::StatusOr<v1::SearchCheckpoint> ParseSearchCheckpoint(std::string_view bytes) {
+  v1::SearchCheckpoint checkpoint;
+  if (bytes.size() > static_cast<size_t>(INT_MAX) ||
+      !checkpoint.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()))) {
+    return absl::DataLossError(
+        absl::StrCat("search checkpoint: ", bytes.size(),
+                     " bytes that are not a serialized fenestra.v1.SearchCheckpoint"));
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckCheckpointFormat(checkpoint));
+  return checkpoint;
+}
+
 absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix* outdoor,
-                                     const JobCallbacks& callbacks) {
+                                     const JobCallbacks& callbacks,
+                                     const v1::SearchCheckpoint* resume) {
   const auto start = std::chrono::steady_clock::now();
   const v1::Job& spec = job.job;
   v1::JobResult result;
+
+  // The search, and where it starts: a checkpoint is checked before any work
+  const SearchSettings search_settings = MakeSearchSettings(spec);
+  FENESTRA_ASSIGN_OR_RETURN(from, StartOfSearch(job, search_settings, resume));
+  v1::SearchCheckpoint& checkpoint = from.checkpoint;
+  const JobClock clock{start, from.resumed_seconds};
 
   // Sky matrix, the occupied hours and the lit analysed ones, the metric settings
   if (callbacks.stage) callbacks.stage("sky");
@@ -349,27 +612,25 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
 
   // The objective: indoor stage with the same random streams for every design
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
-  IndoorOptions indoor_options;
-  indoor_options.paths_per_sensor = spec.sampling().indoor_paths_per_sensor();
-  indoor_options.max_bounces = spec.sampling().indoor_bounces();
-  indoor_options.seed = spec.sampling().seed();
-  indoor_options.basis_cells = spec.sampling().basis_cells();
-  indoor_options.parts = SamplingWindowParts(spec.sampling(), job.scene.window);
-  indoor_options.batches = spec.sampling().batches();
+  const IndoorOptions indoor_options = JobIndoorOptions(job);
   if (!(outdoor->parts == indoor_options.parts)) {
     return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
+  }
+  if (static_cast<int>(outdoor->batches.size()) != indoor_options.batches) {
+    return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
   }
   // S over the lit analysed hours, in lux
   const Matrix lit_sky = SkyColumnsInLux(setting.sky.radiance, columns);
 
-  // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O) S, as
+  // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O_b) S, as
   // the backend does it best (on the CPU the paths recorded once, then replayed per design;
-  // on the GPU I and E never leave the device), for the designs within the job's ranges
+  // on the GPU I and E never leave the device), for the designs within the job's ranges.
+  // A design's paths depend on the seed alone, never on the designs before it, so a resumed
+  // search evaluates as the uninterrupted one would.
   if (callbacks.stage) callbacks.stage("indoor paths");
   const Scene ranged = WithJobRanges(job.scene, spec);
-  FENESTRA_ASSIGN_OR_RETURN(
-      design_tallies,
-      backend->MakeDesignTallies(ranged, indoor_options, outdoor->coefficients, lit_sky));
+  FENESTRA_ASSIGN_OR_RETURN(design_tallies, backend->MakeDesignTallies(ranged, indoor_options,
+                                                                       outdoor->batches, lit_sky));
   const ObjectiveFunction objective =
       [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     FENESTRA_ASSIGN_OR_RETURN(tallies, design_tallies->Tally(DesignAt(job, x), metric_options));
@@ -379,50 +640,10 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   };
 
   // The search
-  std::vector<DesignVariable> variables;
-  for (const v1::DesignVariable& v : spec.variables()) {
-    variables.push_back({v.name(), v.lower(), v.upper(), v.start(), v.fixed(), v.step()});
-  }
-  VnsOptions vns;
-  if (spec.neighborhoods_size() > 0) {
-    vns.neighborhoods.clear();
-    for (const v1::Neighborhood& n : spec.neighborhoods()) {
-      vns.neighborhoods.push_back({n.variables(), n.radius()});
-    }
-  }
-  switch (spec.objective().goal()) {
-    case v1::GOAL_MINIMIZE:
-      vns.objective.sense = ObjectiveSense::kMinimize;
-      break;
-    case v1::GOAL_TARGET:
-      vns.objective.sense = ObjectiveSense::kTarget;
-      vns.objective.target = spec.objective().target();
-      vns.objective.target_tolerance = spec.objective().target_tolerance();
-      break;
-    default:
-      vns.objective.sense = ObjectiveSense::kMaximize;
-  }
-  vns.max_evaluations = spec.budget().max_evaluations();
-  vns.max_seconds = spec.budget().max_seconds();
-  vns.failed_cycles_to_stop = std::max(0, spec.budget().failed_cycles_to_stop());
-  vns.seed = spec.sampling().seed();
-  VnsCallbacks vns_callbacks;
-  vns_callbacks.cancelled = callbacks.cancelled;
   if (callbacks.stage) callbacks.stage("search");
-  const double search_start = Since(start);
-  if (callbacks.progress) {
-    vns_callbacks.progress = [&](const VnsProgress& p) {
-      JobProgress progress;
-      progress.evaluations = p.evaluations;
-      progress.max_evaluations = p.max_evaluations;
-      progress.current = ToProto(job, *p.current, search_start);
-      progress.best = ToProto(job, *p.best, search_start);
-      progress.elapsed_seconds = Since(start);
-      progress.remaining_seconds = p.remaining_seconds;
-      callbacks.progress(progress);
-    };
-  }
-  FENESTRA_ASSIGN_OR_RETURN(search, RunVns(variables, objective, vns, vns_callbacks));
+  FENESTRA_ASSIGN_OR_RETURN(search,
+                            RunJobSearch(job, search_settings, objective, callbacks, clock,
+                                         from.so_far ? &*from.so_far : nullptr, checkpoint));
 
   // The best design's hourly illuminance, for reports and other tools
   design_tallies.reset();  // the search's paths are no longer needed
@@ -432,37 +653,23 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
     const auto hourly_start = std::chrono::steady_clock::now();
     FENESTRA_ASSIGN_OR_RETURN(
         hourly, DesignHourlyIlluminance(job.scene, DesignAt(job, search.best_x), indoor_options,
-                                        outdoor->coefficients, setting.sky, *backend));
+                                        outdoor->batches, setting.sky, *backend));
     *result.mutable_best_hourly() = std::move(hourly);
     result.mutable_timings()->set_best_hourly_seconds(Since(hourly_start));
   }
   DescribeRun(spec, ranged, job.weather.location, result);
 
   // The result
-  for (size_t i = 0; i < variables.size(); ++i) {
-    (*result.mutable_best_design())[variables[i].name] = search.best_x[i];
-  }
-  SetEstimate(result.mutable_best_value(), search.best.value, search.best.standard_error);
-  if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&search.best.payload)) {
-    *result.mutable_best_metrics() = ToProto(*metrics);
-  }
-  for (const VnsRecord& record : search.history) {
-    *result.add_history() = ToProto(job, record, search_start);
-  }
-  AddBestOverTime(result);
-  result.set_evaluations(search.evaluations);
-  result.set_stop_reason(std::string(StopReasonName(search.stop_reason)));
-  result.mutable_timings()->set_evaluation_seconds(search.evaluation_seconds);
-  result.set_outdoor_mean_relative_standard_error(
-      MeanRelativeError(outdoor->coefficients, outdoor->standard_error, 0.01, false));
+  AddSearch(search_settings, search, checkpoint, result);
+  result.set_outdoor_mean_relative_standard_error(OutdoorMeanRelativeError(*outdoor));
   result.set_backend(backend->Name());
 
   // The final check: the best design by the one-stage method
   if (spec.sampling().final_check() && search.stop_reason != StopReason::kCancelled) {
     FENESTRA_RETURN_IF_ERROR(
-        CheckBestDesign(job, setting, search, backend.get(), callbacks, start, result));
+        CheckBestDesign(job, setting, search, backend.get(), callbacks, clock, result));
   }
-  result.mutable_timings()->set_total_seconds(Since(start));
+  result.mutable_timings()->set_total_seconds(clock.Seconds());
   return result;
 }
 

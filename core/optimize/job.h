@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "absl/status/statusor.h"
 #include "core/common/radiance_matrix.h"
@@ -21,8 +22,9 @@ namespace fenestra {
 // The outdoor matrix O of a site: window direction cells x 146 sky bins [-], with its
 // standard error and how it was made.
 struct OutdoorMatrix {
-  Matrix coefficients;
+  Matrix coefficients;  // O (core/dc/two_stage.h): window cells + 146 rows
   Matrix standard_error;
+  std::vector<Matrix> batches;  // O_b, paired with the indoor batches
   int basis_cells = 0;
   WindowParts parts;
   int64_t paths = 0;
@@ -74,6 +76,10 @@ std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling);
 // leaves them open.
 WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Window& window);
 
+// Mean relative standard error of the window cells' entries of O (not the identity rows),
+// over the entries above 1% of the matrix's largest.
+double OutdoorMeanRelativeError(const OutdoorMatrix& matrix);
+
 // Fills in the defaults of `sampling` (see job.proto) and checks its ranges.
 absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& sampling);
 
@@ -98,9 +104,26 @@ struct JobCallbacks {
   // A stage starts: "sky", "outdoor", "indoor paths", "search", "check" (the final check).
   std::function<void(const std::string& stage)> stage;
   std::function<void(const JobProgress&)> progress;
-  // Polled between evaluations; true stops the search at that checkpoint.
+  // Polled between evaluations; true stops the search there.
   std::function<bool()> cancelled;
+  // After each step of the search (an evaluation or a cache hit), before `progress`: what
+  // continues the job from there (RunJob's `resume`). The search's state only, built step by
+  // step (one evaluation appended); valid during the call.
+  std::function<void(const v1::SearchCheckpoint&)> checkpoint;
 };
+
+// The SearchCheckpoint format this build writes and reads.
+inline constexpr uint32_t kSearchCheckpointFormat = 1;
+
+// A content hash of the job as prepared, 32 hexadecimal digits: the job a SearchCheckpoint
+// belongs to. It covers `job.job` with the prepared scene inline (serialized
+// deterministically) and the weather's site and records: the same content gives the same
+// hash whatever the files' paths, another scene or weather file under the same path another.
+std::string JobContentHash(const PreparedJob& job);
+
+// A checkpoint from the bytes a store kept (SerializeAsString). DataLoss for bytes that do
+// not parse, InvalidArgument for a format other than kSearchCheckpointFormat.
+absl::StatusOr<v1::SearchCheckpoint> ParseSearchCheckpoint(std::string_view bytes);
 
 // Runs the job. `outdoor` may hold a cached outdoor matrix whose key equals
 // OutdoorMatrixKey(job); otherwise (null) it is computed. After the search the best design
@@ -108,8 +131,17 @@ struct JobCallbacks {
 // unless the job was cancelled; a cancel during the check leaves it out. A cancelled job
 // returns its result so far with stop_reason "cancelled". `outdoor` with another key is an
 // error.
+//
+// `resume`, a checkpoint of this job (JobCallbacks::checkpoint, from any process), continues
+// its search after the last step: no step is done again, and the job's clock goes on from
+// the checkpoint's (time between the checkpoint and the resume left out; the stages before
+// the search are done again and counted). With a deterministic backend (cpu) the result is
+// an uninterrupted run's, times aside. InvalidArgument, before any stage, for a checkpoint of
+// another format, of another job (JobContentHash) or whose history this job's search does
+// not make.
 absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix* outdoor,
-                                     const JobCallbacks& callbacks = {});
+                                     const JobCallbacks& callbacks = {},
+                                     const v1::SearchCheckpoint* resume = nullptr);
 
 // The final check (JobResult.final_check, core/optimize/final_check.h) of `design` (variable
 // name -> value, as JobResult.best_design; a variable left out is at its start) against the

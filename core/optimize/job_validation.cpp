@@ -9,6 +9,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
 #include "core/common/text.h"
+#include "core/dc/two_stage.h"
 #include "core/metrics/annual_metrics.h"
 #include "core/metrics/occupancy.h"
 #include "core/optimize/design_variables.h"
@@ -25,7 +26,6 @@ constexpr double kMaxIlluminanceLux = 1e6;
 // 1000 even a white room (reflectance 0.99) has no light left to carry.
 constexpr int kMaxBounces = 1000;
 constexpr int kDefaultBasisCells = 288;
-constexpr int kDefaultBatches = 8;
 constexpr int64_t kDefaultOutdoorPaths = 20'000'000;
 constexpr int64_t kDefaultIndoorPaths = 200'000;
 constexpr int kDefaultOutdoorBounces = 30;
@@ -195,11 +195,13 @@ absl::Status CheckNeighborhoods(const v1::Job& job) {
 absl::Status CheckWindowCells(const v1::Sampling& sampling, const Window& window) {
   const WindowParts parts = SamplingWindowParts(sampling, window);
   const int64_t window_cells = int64_t{sampling.basis_cells()} * parts.columns * parts.rows;
-  if (sampling.outdoor_paths() < 2 * window_cells) {
-    return Invalid("sampling.outdoor_paths",
-                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ": ",
-                                parts.columns, "x", parts.rows, " window parts x ",
-                                sampling.basis_cells(), " direction cells)"));
+  const int batches = sampling.batches();
+  if (sampling.outdoor_paths() < window_cells * batches) {
+    return Invalid(
+        "sampling.outdoor_paths",
+        absl::StrCat("must be at least one per window cell and batch (", window_cells * batches,
+                     ": ", parts.columns, "x", parts.rows, " window parts x ",
+                     sampling.basis_cells(), " direction cells x ", batches, " batches)"));
   }
   return absl::OkStatus();
 }
@@ -236,13 +238,16 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
       s.window_rows() > 16) {
     return Invalid("sampling.window_columns/window_rows", "must be in [0, 16] (0 = automatic)");
   }
+  if (s.batches() < 2 || s.batches() > kMaxBatches) {
+    return Invalid("sampling.batches", absl::StrCat("must be in [2, ", kMaxBatches, "]"));
+  }
   const int64_t window_cells =
       int64_t{s.basis_cells()} * std::max(1, s.window_columns()) * std::max(1, s.window_rows());
-  if (s.outdoor_paths() < 2 * window_cells) {
+  if (s.outdoor_paths() < window_cells * s.batches()) {
     return Invalid("sampling.outdoor_paths",
-                   absl::StrCat("must be at least 2 per window cell (", 2 * window_cells, ")"));
+                   absl::StrCat("must be at least one per window cell and batch (",
+                                window_cells * s.batches(), ")"));
   }
-  if (s.batches() < 2 || s.batches() > 64) return Invalid("sampling.batches", "must be in [2, 64]");
   if (s.indoor_paths_per_sensor() < s.batches()) {
     return Invalid("sampling.indoor_paths_per_sensor", "must be at least the batch count");
   }

@@ -4,11 +4,13 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <random>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "core/common/status_macros.h"
 
 namespace fenestra {
 namespace {
@@ -103,6 +105,252 @@ double Constrain(const DesignVariable& v, double x, BoundaryRule rule) {
   return x;
 }
 
+// One run of the search: its state between steps (the result so far and where it goes on),
+// and the steps.
+class Search {
+ public:
+  Search(std::span<const DesignVariable> variables, const ObjectiveFunction& objective,
+         const VnsOptions& options, const VnsCallbacks& callbacks)
+      : variables_(variables),
+        objective_(objective),
+        options_(options),
+        callbacks_(callbacks),
+        start_time_(Clock::now()),
+        rng_(options.seed) {
+    for (size_t i = 0; i < variables.size(); ++i) {
+      if (IsFree(variables[i])) free_.push_back(i);
+    }
+  }
+
+  // Evaluates the start design.
+  absl::Status Start();
+  // Takes `so_far`'s history as done by this search, checking each step against the replay.
+  absl::Status Replay(const VnsResult& so_far);
+  // Steps until a stopping rule holds; the result.
+  absl::StatusOr<VnsResult> Run();
+
+ private:
+  double Elapsed() const { return resumed_seconds_ + SecondsSince(start_time_); }
+  std::vector<double> StartDesign() const;
+  std::vector<double> Propose();
+  absl::StatusOr<VnsRecord> Evaluate(std::vector<double> x, int neighborhood);
+  void Record(VnsRecord record);
+  void Publish();
+  std::optional<StopReason> StopBeforeStep();
+
+  std::span<const DesignVariable> variables_;
+  const ObjectiveFunction& objective_;
+  const VnsOptions& options_;
+  const VnsCallbacks& callbacks_;
+  const Clock::time_point start_time_;
+  double resumed_seconds_ = 0;  // the clock at the checkpoint resumed from
+  std::vector<size_t> free_;    // indices of the free variables
+  std::mt19937_64 rng_;
+  VnsResult state_;
+  std::map<std::vector<double>, int> cache_;  // design -> history index of its evaluation
+  int neighborhood_ = 0;                      // of the next step
+  int failed_cycles_ = 0;
+  int consecutive_hits_ = 0;
+};
+
+std::vector<double> Search::StartDesign() const {
+  std::vector<double> start;
+  for (const DesignVariable& v : variables_) start.push_back(v.start);
+  return start;
+}
+
+// Moves v randomly chosen free variables of the incumbent (v and the radius of the current
+// neighborhood).
+std::vector<double> Search::Propose() {
+  const Neighborhood& n = options_.neighborhoods[neighborhood_];
+  const size_t count = n.variables == Neighborhood::kAllVariables
+                           ? free_.size()
+                           : std::min(free_.size(), static_cast<size_t>(n.variables));
+  std::vector<size_t> order = free_;
+  std::vector<double> x = state_.best_x;
+  for (size_t c = 0; c < count; ++c) {
+    std::swap(order[c], order[c + UniformIndex(rng_, order.size() - c)]);
+    const DesignVariable& v = variables_[order[c]];
+    const double delta = (2 * Uniform01(rng_) - 1) * n.radius_fraction * (v.upper - v.lower);
+    x[order[c]] = Constrain(v, x[order[c]] + delta, options_.boundary);
+  }
+  return x;
+}
+
+// The step at design `x`: looked up in the cache, else evaluated.
+absl::StatusOr<VnsRecord> Search::Evaluate(std::vector<double> x, int neighborhood) {
+  VnsRecord record;
+  record.index = static_cast<int>(state_.history.size());
+  record.neighborhood = neighborhood;
+  if (auto hit = cache_.find(x); hit != cache_.end()) {
+    const VnsRecord& earlier = state_.history[hit->second];
+    record.evaluation = earlier.evaluation;
+    record.score = earlier.score;
+    record.cached = true;
+  } else {
+    const Clock::time_point t0 = Clock::now();
+    absl::StatusOr<Evaluation> evaluation = objective_(x);
+    record.evaluation_seconds = SecondsSince(t0);
+    if (!evaluation.ok()) {
+      return absl::Status(evaluation.status().code(),
+                          absl::StrCat("evaluating x = (", absl::StrJoin(x, ", "),
+                                       "): ", evaluation.status().message()));
+    }
+    if (!std::isfinite(evaluation->value) || !std::isfinite(evaluation->standard_error)) {
+      return absl::InvalidArgumentError(absl::StrCat("the objective returned ", evaluation->value,
+                                                     " +- ", evaluation->standard_error,
+                                                     " at x = (", absl::StrJoin(x, ", "), ")"));
+    }
+    record.evaluation = *std::move(evaluation);
+    record.score = Score(options_.objective, record.evaluation.value);
+  }
+  record.x = std::move(x);
+  return record;
+}
+
+// Appends a step to the history: whether it moves the incumbent (the start does), and where
+// the search goes on (next neighborhood, failed cycles, run of cache hits).
+void Search::Record(VnsRecord record) {
+  if (record.cached) {
+    ++state_.cache_hits;
+  } else {
+    ++state_.evaluations;
+    state_.evaluation_seconds += record.evaluation_seconds;
+    cache_.emplace(record.x, record.index);
+  }
+  if (record.neighborhood < 0) {
+    record.improved = true;
+  } else {
+    const VnsRecord& best = state_.history[state_.best_index];
+    const double margin =
+        std::max(options_.min_improvement,
+                 options_.min_improvement_standard_errors *
+                     std::hypot(record.evaluation.standard_error, best.evaluation.standard_error));
+    record.improved = record.score > best.score + margin;
+    consecutive_hits_ = record.cached ? consecutive_hits_ + 1 : 0;
+    if (record.improved) {
+      ++state_.improvements;
+      neighborhood_ = 0;
+      failed_cycles_ = 0;
+    } else if (++neighborhood_ == static_cast<int>(options_.neighborhoods.size())) {
+      neighborhood_ = 0;
+      ++failed_cycles_;
+    }
+  }
+  state_.elapsed_seconds = record.elapsed_seconds;
+  state_.history.push_back(std::move(record));
+  const VnsRecord& step = state_.history.back();
+  if (step.improved) {
+    state_.best_index = step.index;
+    state_.best_x = step.x;
+    state_.best = step.evaluation;
+    state_.best_score = step.score;
+  }
+}
+
+// Hands out the step just recorded: the checkpoint, then the progress.
+void Search::Publish() {
+  if (callbacks_.checkpoint) callbacks_.checkpoint(state_);
+  if (!callbacks_.progress) return;
+  VnsProgress progress;
+  progress.evaluations = state_.evaluations;
+  progress.max_evaluations = options_.max_evaluations;
+  progress.current = &state_.history.back();
+  progress.best = &state_.history[state_.best_index];
+  progress.elapsed_seconds = state_.history.back().elapsed_seconds;
+  const double per_evaluation = progress.elapsed_seconds / std::max(state_.evaluations, 1);
+  progress.remaining_seconds = per_evaluation * (options_.max_evaluations - state_.evaluations);
+  if (options_.max_seconds > 0) {
+    progress.remaining_seconds = std::clamp(options_.max_seconds - progress.elapsed_seconds, 0.0,
+                                            progress.remaining_seconds);
+  }
+  callbacks_.progress(progress);
+}
+
+absl::Status Search::Start() {
+  FENESTRA_ASSIGN_OR_RETURN(first, Evaluate(StartDesign(), -1));
+  first.elapsed_seconds = Elapsed();
+  Record(std::move(first));
+  Publish();
+  return absl::OkStatus();
+}
+
+absl::Status Search::Replay(const VnsResult& so_far) {
+  if (so_far.history.empty()) {
+    return absl::InvalidArgumentError("resume: the search so far has no steps");
+  }
+  if (!(so_far.elapsed_seconds >= 0) || !std::isfinite(so_far.elapsed_seconds)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("resume: elapsed_seconds ", so_far.elapsed_seconds, " is not a time"));
+  }
+  for (const VnsRecord& done : so_far.history) {
+    const int i = static_cast<int>(state_.history.size());
+    auto differs = [&](const std::string& what) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("resume: step ", i, " differs from this search's (", what,
+                       "): the history belongs to another search (variables, options or seed)"));
+    };
+    if (done.index != i) return differs(absl::StrCat("index ", done.index));
+    if (done.neighborhood != (i == 0 ? -1 : neighborhood_)) {
+      return differs(absl::StrCat("neighborhood ", done.neighborhood));
+    }
+    if (done.x != (i == 0 ? StartDesign() : Propose())) {
+      return differs(absl::StrCat("design (", absl::StrJoin(done.x, ", "), ")"));
+    }
+    if (!std::isfinite(done.evaluation.value) || !std::isfinite(done.evaluation.standard_error) ||
+        !std::isfinite(done.evaluation_seconds) || !std::isfinite(done.elapsed_seconds)) {
+      return differs("a value or time that is not finite");
+    }
+    const auto hit = cache_.find(done.x);
+    if (done.cached != (hit != cache_.end())) return differs("cache hit");
+    if (done.cached) {
+      const Evaluation& earlier = state_.history[hit->second].evaluation;
+      if (done.evaluation.value != earlier.value ||
+          done.evaluation.standard_error != earlier.standard_error) {
+        return differs("a cache hit with another value than its design's evaluation");
+      }
+    }
+    VnsRecord step = done;
+    step.score = Score(options_.objective, step.evaluation.value);
+    Record(std::move(step));
+    if (state_.history.back().improved != done.improved) return differs("improvement");
+  }
+  resumed_seconds_ = so_far.elapsed_seconds;
+  state_.elapsed_seconds = so_far.elapsed_seconds;
+  return absl::OkStatus();
+}
+
+// The stopping rules, checked before each step but the start.
+std::optional<StopReason> Search::StopBeforeStep() {
+  if (options_.failed_cycles_to_stop > 0 && failed_cycles_ >= options_.failed_cycles_to_stop) {
+    return StopReason::kAllNeighborhoodsFailed;
+  }
+  if (consecutive_hits_ >= options_.max_consecutive_cache_hits) return StopReason::kSpaceExhausted;
+  if (free_.empty()) return StopReason::kNoFreeVariables;
+  if (options_.objective.sense == ObjectiveSense::kTarget &&
+      -state_.best_score <= options_.objective.target_tolerance) {
+    return StopReason::kTargetReached;
+  }
+  if (state_.evaluations >= options_.max_evaluations) return StopReason::kEvaluationBudget;
+  if (options_.max_seconds > 0 && Elapsed() >= options_.max_seconds) return StopReason::kTimeBudget;
+  if (callbacks_.cancelled && callbacks_.cancelled()) return StopReason::kCancelled;
+  return std::nullopt;
+}
+
+absl::StatusOr<VnsResult> Search::Run() {
+  while (true) {
+    if (const std::optional<StopReason> stop = StopBeforeStep()) {
+      state_.stop_reason = *stop;
+      state_.elapsed_seconds = Elapsed();
+      return std::move(state_);
+    }
+    FENESTRA_ASSIGN_OR_RETURN(step, Evaluate(Propose(), neighborhood_));
+    step.elapsed_seconds = Elapsed();
+    Record(std::move(step));
+    Publish();
+  }
+}
+
 }  // namespace
 
 std::vector<Neighborhood> DefaultNeighborhoods() {
@@ -131,170 +379,25 @@ std::string_view StopReasonName(StopReason reason) {
 
 absl::StatusOr<VnsResult> RunVns(std::span<const DesignVariable> variables,
                                  const ObjectiveFunction& objective, const VnsOptions& options,
-                                 const VnsCallbacks& callbacks) {
-  if (absl::Status ok = CheckInputs(variables, options); !ok.ok()) return ok;
-  const Clock::time_point start_time = Clock::now();
-  std::mt19937_64 rng(options.seed);
-  std::vector<size_t> free;
-  for (size_t i = 0; i < variables.size(); ++i) {
-    if (IsFree(variables[i])) free.push_back(i);
+                                 const VnsCallbacks& callbacks, const VnsResult* resume) {
+  FENESTRA_RETURN_IF_ERROR(CheckInputs(variables, options));
+  Search search(variables, objective, options, callbacks);
+  if (resume != nullptr) {
+    FENESTRA_RETURN_IF_ERROR(search.Replay(*resume));
+  } else {
+    if (callbacks.cancelled && callbacks.cancelled()) {
+      return absl::CancelledError("cancelled before the first evaluation");
+    }
+    FENESTRA_RETURN_IF_ERROR(search.Start());
   }
+  return search.Run();
+}
 
-  VnsResult result;
-  std::map<std::vector<double>, int> cache;  // design -> history index of its evaluation
-  auto cancelled = [&] { return callbacks.cancelled && callbacks.cancelled(); };
-
-  // Evaluates (or looks up) one design and appends it to the history
-  auto step = [&](std::vector<double> x, int neighborhood) -> absl::StatusOr<VnsRecord*> {
-    VnsRecord record;
-    record.index = static_cast<int>(result.history.size());
-    record.neighborhood = neighborhood;
-    if (auto hit = cache.find(x); hit != cache.end()) {
-      const VnsRecord& earlier = result.history[hit->second];
-      record.evaluation = earlier.evaluation;
-      record.score = earlier.score;
-      record.cached = true;
-      ++result.cache_hits;
-    } else {
-      const Clock::time_point t0 = Clock::now();
-      absl::StatusOr<Evaluation> evaluation = objective(x);
-      record.evaluation_seconds = SecondsSince(t0);
-      result.evaluation_seconds += record.evaluation_seconds;
-      ++result.evaluations;
-      if (!evaluation.ok()) {
-        return absl::Status(evaluation.status().code(),
-                            absl::StrCat("evaluating x = (", absl::StrJoin(x, ", "),
-                                         "): ", evaluation.status().message()));
-      }
-      if (!std::isfinite(evaluation->value) || !std::isfinite(evaluation->standard_error)) {
-        return absl::InvalidArgumentError(absl::StrCat("the objective returned ", evaluation->value,
-                                                       " +- ", evaluation->standard_error,
-                                                       " at x = (", absl::StrJoin(x, ", "), ")"));
-      }
-      record.evaluation = *std::move(evaluation);
-      record.score = Score(options.objective, record.evaluation.value);
-      cache.emplace(x, record.index);
-    }
-    record.x = std::move(x);
-    result.history.push_back(std::move(record));
-    return &result.history.back();
-  };
-
-  auto report = [&] {
-    if (!callbacks.progress) return;
-    VnsProgress progress;
-    progress.evaluations = result.evaluations;
-    progress.max_evaluations = options.max_evaluations;
-    progress.current = &result.history.back();
-    progress.best = &result.history[result.best_index];
-    progress.elapsed_seconds = result.history.back().elapsed_seconds;
-    const double per_evaluation = progress.elapsed_seconds / std::max(result.evaluations, 1);
-    progress.remaining_seconds = per_evaluation * (options.max_evaluations - result.evaluations);
-    if (options.max_seconds > 0) {
-      progress.remaining_seconds = std::clamp(options.max_seconds - progress.elapsed_seconds, 0.0,
-                                              progress.remaining_seconds);
-    }
-    callbacks.progress(progress);
-  };
-
-  auto target_reached = [&] {
-    return options.objective.sense == ObjectiveSense::kTarget &&
-           -result.history[result.best_index].score <= options.objective.target_tolerance;
-  };
-
-  // Evaluate the start
-  if (cancelled()) return absl::CancelledError("cancelled before the first evaluation");
-  std::vector<double> start;
-  for (const DesignVariable& v : variables) start.push_back(v.start);
-  {
-    auto first = step(start, -1);
-    if (!first.ok()) return first.status();
-    (*first)->improved = true;
-    (*first)->elapsed_seconds = SecondsSince(start_time);
-  }
-  result.best_index = 0;
-  report();
-
-  // Search the neighborhoods of the incumbent
-  const int neighborhoods = static_cast<int>(options.neighborhoods.size());
-  int k = 0;
-  int failed_cycles = 0;
-  int consecutive_hits = 0;
-  StopReason stop;
-  while (true) {
-    if (free.empty()) {
-      stop = StopReason::kNoFreeVariables;
-      break;
-    }
-    if (target_reached()) {
-      stop = StopReason::kTargetReached;
-      break;
-    }
-    if (result.evaluations >= options.max_evaluations) {
-      stop = StopReason::kEvaluationBudget;
-      break;
-    }
-    if (options.max_seconds > 0 && SecondsSince(start_time) >= options.max_seconds) {
-      stop = StopReason::kTimeBudget;
-      break;
-    }
-    if (cancelled()) {
-      stop = StopReason::kCancelled;
-      break;
-    }
-
-    // Move v randomly chosen free variables of the incumbent
-    const Neighborhood& n = options.neighborhoods[k];
-    const size_t count = n.variables == Neighborhood::kAllVariables
-                             ? free.size()
-                             : std::min(free.size(), static_cast<size_t>(n.variables));
-    std::vector<size_t> order = free;
-    std::vector<double> x = result.history[result.best_index].x;
-    for (size_t c = 0; c < count; ++c) {
-      std::swap(order[c], order[c + UniformIndex(rng, order.size() - c)]);
-      const DesignVariable& v = variables[order[c]];
-      const double delta = (2 * Uniform01(rng) - 1) * n.radius_fraction * (v.upper - v.lower);
-      x[order[c]] = Constrain(v, x[order[c]] + delta, options.boundary);
-    }
-
-    auto current = step(std::move(x), k);
-    if (!current.ok()) return current.status();
-    VnsRecord& record = **current;
-    const VnsRecord& best = result.history[result.best_index];
-    const double margin =
-        std::max(options.min_improvement,
-                 options.min_improvement_standard_errors *
-                     std::hypot(record.evaluation.standard_error, best.evaluation.standard_error));
-    record.improved = record.score > best.score + margin;
-    record.elapsed_seconds = SecondsSince(start_time);
-    consecutive_hits = record.cached ? consecutive_hits + 1 : 0;
-    if (record.improved) {
-      result.best_index = record.index;
-      ++result.improvements;
-      k = 0;
-      failed_cycles = 0;
-    } else if (++k == neighborhoods) {
-      k = 0;
-      ++failed_cycles;
-    }
-    report();
-    if (options.failed_cycles_to_stop > 0 && failed_cycles >= options.failed_cycles_to_stop) {
-      stop = StopReason::kAllNeighborhoodsFailed;
-      break;
-    }
-    if (consecutive_hits >= options.max_consecutive_cache_hits) {
-      stop = StopReason::kSpaceExhausted;
-      break;
-    }
-  }
-
-  const VnsRecord& best = result.history[result.best_index];
-  result.best_x = best.x;
-  result.best = best.evaluation;
-  result.best_score = best.score;
-  result.stop_reason = stop;
-  result.elapsed_seconds = SecondsSince(start_time);
-  return result;
+absl::Status CheckVnsResume(std::span<const DesignVariable> variables, const VnsOptions& options,
+                            const VnsResult& resume) {
+  FENESTRA_RETURN_IF_ERROR(CheckInputs(variables, options));
+  const ObjectiveFunction unused;  // a replay never evaluates
+  return Search(variables, unused, options, {}).Replay(resume);
 }
 
 }  // namespace fenestra

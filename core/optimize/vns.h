@@ -18,6 +18,12 @@
 // distributions), so the sequence of designs is the same for the same seed on every
 // platform and standard library, provided the objective is deterministic and no time
 // budget or cancellation cuts the run short.
+//
+// A search can stop and go on later, in another process: after each step it hands out its
+// result so far (VnsCallbacks::checkpoint), and RunVns continues from one (`resume`). All of
+// its state follows from its history: replaying it (the same proposals, without calling the
+// objective) rebuilds the random stream, the cache, the incumbent and the neighborhood, and
+// checks the history against the search that replays it.
 #pragma once
 
 #include <any>
@@ -109,7 +115,7 @@ struct VnsRecord {
   Evaluation evaluation;
   double score = 0;               // what the search maximizes (see ObjectiveSense)
   double evaluation_seconds = 0;  // time in the objective; 0 when cached
-  double elapsed_seconds = 0;     // since the start of the run, after this step
+  double elapsed_seconds = 0;     // search clock after this step (VnsResult::elapsed_seconds)
   bool cached = false;            // served from the cache, not evaluated
   bool improved = false;          // became the incumbent (the start does)
   int neighborhood = -1;          // index into VnsOptions::neighborhoods; -1 = start
@@ -124,11 +130,6 @@ struct VnsProgress {
   // Seconds left at the current rate until the evaluation or time budget, whichever comes
   // first; the search may stop earlier.
   double remaining_seconds = 0;
-};
-
-struct VnsCallbacks {
-  std::function<void(const VnsProgress&)> progress;  // after each step; may be empty
-  std::function<bool()> cancelled;  // polled before each step; true stops; may be empty
 };
 
 enum class StopReason {
@@ -146,25 +147,49 @@ enum class StopReason {
 std::string_view StopReasonName(StopReason reason);
 
 struct VnsResult {
-  std::vector<double> best_x;  // the incumbent at the end
+  std::vector<double> best_x;  // the incumbent
   Evaluation best;
   double best_score = 0;
-  int best_index = 0;  // into history
+  int best_index = 0;  // into history: its last step that improved
   std::vector<VnsRecord> history;
   int evaluations = 0;
   int cache_hits = 0;
   int improvements = 0;  // moves of the incumbent, the start excluded
   StopReason stop_reason = StopReason::kEvaluationBudget;
+  // The search's clock [s]: since it started, the time between a checkpoint and its resume
+  // left out.
   double elapsed_seconds = 0;
   double evaluation_seconds = 0;  // total time in the objective
+};
+
+struct VnsCallbacks {
+  std::function<void(const VnsProgress&)> progress;  // after each step; may be empty
+  std::function<bool()> cancelled;  // polled before each step; true stops; may be empty
+  // After each step (an evaluation or a cache hit), before `progress`: the result so far,
+  // from which RunVns's `resume` goes on. Its stop_reason means nothing yet, its
+  // elapsed_seconds is the step's. May be empty.
+  std::function<void(const VnsResult& so_far)> checkpoint;
 };
 
 // Runs the search from the variables' start values. InvalidArgument for bad variables or
 // options, or a non-finite value from the objective; the objective's own error status as
 // returned (with the design prepended); Cancelled when cancelled before the start was
 // evaluated. A cancellation after that returns the result so far with kCancelled.
+//
+// With `resume`, a result so far of the same search (same variables and options;
+// VnsCallbacks::checkpoint), the search goes on after its last step as if it had never
+// stopped: its history is replayed without calling the objective, and
+// the clock continues from its elapsed_seconds. Only its history and elapsed_seconds are
+// read; the rest is rebuilt. InvalidArgument when the history is not one this search makes
+// (a step's design, neighborhood, cache hit or improvement differs from the replay's).
 absl::StatusOr<VnsResult> RunVns(std::span<const DesignVariable> variables,
                                  const ObjectiveFunction& objective, const VnsOptions& options = {},
-                                 const VnsCallbacks& callbacks = {});
+                                 const VnsCallbacks& callbacks = {},
+                                 const VnsResult* resume = nullptr);
+
+// What RunVns checks of its inputs and of `resume` (the replay of its history), without
+// running the search: a resumed job refuses a bad checkpoint before its costly stages.
+absl::Status CheckVnsResume(std::span<const DesignVariable> variables, const VnsOptions& options,
+                            const VnsResult& resume);
 
 }  // namespace fenestra

@@ -122,9 +122,15 @@ struct BvhIntersector {
     return Traverse(origin, direction, distance, true, nullptr);
   }
 
-  // Closest hit below t_max; with any_hit, stops at the first hit (and fills no `hit`).
-  FENESTRA_CPU_GPU bool Traverse(Vec3f origin, Vec3f direction, float t_max, bool any_hit,
-                                 SurfaceHit* hit) const {
+  // Closest hit below t_max; with any_hit, stops at the first hit (and fills no `hit`). On
+  // the GPU a kernel calls one copy of it: the indoor stage queries at three places (its
+  // rays, its window connections, their outdoor test), and inlined at each it took twice
+  // as long (bench/README.md); the one-stage kernel loses 5% of its rays per second.
+#if defined(__CUDA_ARCH__)
+  __noinline__
+#endif
+      FENESTRA_CPU_GPU bool
+      Traverse(Vec3f origin, Vec3f direction, float t_max, bool any_hit, SurfaceHit* hit) const {
     const WatertightRay ray(origin, direction);
     // A zero direction component becomes a tiny one: its slab test then needs no NaN case
     // (0 x inf), and it stays conservative (a ray in a slab's plane enters the box)

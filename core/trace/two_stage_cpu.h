@@ -45,59 +45,70 @@ void TraceChunksCpu(uint64_t count, int threads, TraceChunk trace_chunk, Fold fo
   for (uint64_t c = 0; c < count; ++c) fold(c, slots[c]);
 }
 
-// Outdoor stage: paths_per_cell paths per basis cell; O[cell, bin] sums of weight and
-// weight² (a path escapes through one bin: the per-path second moment).
+// Outdoor stage: paths_per_cell paths per window cell in `batches` equal, contiguous batches
+// of path indices; per (batch, cell) a row of kOutdoorRowSize sums (OutdoorMode: the
+// reflected light per sky bin, then the paths whose first segment reached the sky).
 struct OutdoorTally {
   int cells = 0;
+  int batches = 0;
   uint64_t paths_per_cell = 0;
-  std::vector<double> sum;          // cells x kTregenzaBinCount
-  std::vector<double> sum_squares;  // cells x kTregenzaBinCount
+  std::vector<uint64_t> batch_paths;  // paths of each cell in each batch
+  std::vector<double> sum;            // [(batch * cells + cell) * kOutdoorRowSize + entry]
   TraceCounters counters;
   int threads = 0;
   double wall_seconds = 0;
 };
 
+// The batch sizes of `paths` split into `batches`.
+inline std::vector<uint64_t> BatchSizes(uint64_t paths, int batches) {
+  std::vector<uint64_t> sizes;
+  for (int b = 0; b < batches; ++b) {
+    sizes.push_back(BatchStart(paths, batches, b + 1) - BatchStart(paths, batches, b));
+  }
+  return sizes;
+}
+
 template <class Intersector>
 OutdoorTally TraceOutdoorCpu(const Intersector& scene, const SurfaceTable& surfaces,
                              const TraceWindow& window, const HemisphereBasis& basis,
-                             uint64_t paths_per_cell, uint64_t seed, const PathSettings& path,
-                             int threads) {
+                             uint64_t paths_per_cell, int batches, uint64_t seed,
+                             const PathSettings& path, int threads) {
   struct Slot {
-    double sum[kTregenzaBinCount] = {};
-    double sum_squares[kTregenzaBinCount] = {};
+    double sum[kOutdoorRowSize] = {};
     TraceCounters counters;
-    void Add(int bin, double value) {
-      sum[bin] += value;
-      sum_squares[bin] += value * value;
-    }
+    void Add(int bin, double value) { sum[bin] += value; }
+    void AddFirstEscape() { sum[kFirstEscapeEntry] += 1.0; }
   };
   const auto start = std::chrono::steady_clock::now();
-  const uint64_t chunk_paths = std::max<uint64_t>(4096, (paths_per_cell + 63) / 64);
-  const uint64_t chunks_per_cell = (paths_per_cell + chunk_paths - 1) / chunk_paths;
   OutdoorTally tally;
   tally.cells = WindowCellCount(window, basis);
+  tally.batches = batches;
   tally.paths_per_cell = paths_per_cell;
+  tally.batch_paths = BatchSizes(paths_per_cell, batches);
   tally.threads = ResolveThreadCount(threads);
-  tally.sum.assign(static_cast<size_t>(tally.cells) * kTregenzaBinCount, 0.0);
-  tally.sum_squares.assign(tally.sum.size(), 0.0);
+  tally.sum.assign(static_cast<size_t>(batches) * tally.cells * kOutdoorRowSize, 0.0);
+  // Chunks: (cell, batch, part of the batch)
+  const uint64_t batch_paths = (paths_per_cell + batches - 1) / batches;
+  const uint64_t parts = std::max<uint64_t>(1, std::min<uint64_t>(8, batch_paths / 4096));
   TraceChunksCpu<Slot>(
-      chunks_per_cell * tally.cells, tally.threads,
+      static_cast<uint64_t>(tally.cells) * batches * parts, tally.threads,
       [&](uint64_t c, Slot& slot) {
-        const int cell = static_cast<int>(c / chunks_per_cell);
-        const uint64_t first = (c % chunks_per_cell) * chunk_paths;
-        const uint64_t last = std::min(paths_per_cell, first + chunk_paths);
+        const int cell = static_cast<int>(c / (batches * parts));
+        const int b = static_cast<int>((c / parts) % batches);
+        const uint64_t part = c % parts;
+        const uint64_t batch_first = BatchStart(paths_per_cell, batches, b);
+        const uint64_t size = tally.batch_paths[b];
         OutdoorMode<Slot> mode{window, &basis, cell, &slot};
-        for (uint64_t p = first; p < last; ++p) {
+        for (uint64_t p = batch_first + part * size / parts;
+             p < batch_first + (part + 1) * size / parts; ++p) {
           slot.counters.Add(TracePath(scene, surfaces, path,
                                       PathRandom(seed, kOutdoorStreamBase + cell, p), mode));
         }
       },
       [&](uint64_t c, const Slot& slot) {
-        const size_t row = (c / chunks_per_cell) * kTregenzaBinCount;
-        for (int b = 0; b < kTregenzaBinCount; ++b) {
-          tally.sum[row + b] += slot.sum[b];
-          tally.sum_squares[row + b] += slot.sum_squares[b];
-        }
+        const uint64_t cell = c / (batches * parts), b = (c / parts) % batches;
+        double* row = &tally.sum[(b * tally.cells + cell) * kOutdoorRowSize];
+        for (int e = 0; e < kOutdoorRowSize; ++e) row[e] += slot.sum[e];
         tally.counters.Add(slot.counters);
       });
   tally.wall_seconds =
@@ -106,13 +117,14 @@ OutdoorTally TraceOutdoorCpu(const Intersector& scene, const SurfaceTable& surfa
 }
 
 // Indoor stage: paths_per_sensor paths per sensor in `batches` equal, contiguous batches of
-// path indices; sums of the contributions per (batch, sensor, cell).
+// path indices; sums of the contributions per (batch, sensor, column): the window cells,
+// then the sky bins' direct columns (IndoorColumnCount).
 struct IndoorTally {
   int sensors = 0;
-  int cells = 0;
+  int columns = 0;
   int batches = 0;
   uint64_t paths_per_sensor = 0;
-  std::vector<double> sum;            // [(batch * sensors + sensor) * cells + cell]
+  std::vector<double> sum;            // [(batch * sensors + sensor) * columns + column]
   std::vector<uint64_t> batch_paths;  // paths in each batch
   TraceCounters counters;
   int threads = 0;
@@ -120,29 +132,27 @@ struct IndoorTally {
   double trace_seconds = 0;  // the tracing itself (on a GPU: the kernel)
 };
 
-template <class Intersector>
+template <class Intersector, class Outdoor>
 IndoorTally TraceIndoorCpu(const Intersector& scene, const SurfaceTable& surfaces,
-                           const std::vector<TraceSensor>& sensors, const TraceWindow& window,
-                           const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
-                           uint64_t seed, const PathSettings& path, int threads) {
+                           const Outdoor& outdoor, const std::vector<TraceSensor>& sensors,
+                           const TraceWindow& window, const HemisphereBasis& basis,
+                           uint64_t paths_per_sensor, int batches, uint64_t seed,
+                           const PathSettings& path, int threads) {
   struct Slot {
     std::vector<double> sum;
     TraceCounters counters;
     void Add(int cell, double value) { sum[cell] += value; }
   };
   const auto start = std::chrono::steady_clock::now();
-  const int cells = WindowCellCount(window, basis);
+  const int columns = IndoorColumnCount(window, basis);
   IndoorTally tally;
   tally.sensors = static_cast<int>(sensors.size());
-  tally.cells = cells;
+  tally.columns = columns;
   tally.batches = batches;
   tally.paths_per_sensor = paths_per_sensor;
   tally.threads = ResolveThreadCount(threads);
-  tally.sum.assign(static_cast<size_t>(batches) * sensors.size() * cells, 0.0);
-  for (int b = 0; b < batches; ++b) {
-    tally.batch_paths.push_back(BatchStart(paths_per_sensor, batches, b + 1) -
-                                BatchStart(paths_per_sensor, batches, b));
-  }
+  tally.sum.assign(static_cast<size_t>(batches) * sensors.size() * columns, 0.0);
+  tally.batch_paths = BatchSizes(paths_per_sensor, batches);
   // Chunks: (sensor, batch, part of the batch)
   const uint64_t batch_paths = (paths_per_sensor + batches - 1) / batches;
   const uint64_t parts = std::max<uint64_t>(1, std::min<uint64_t>(8, batch_paths / 2048));
@@ -157,9 +167,9 @@ IndoorTally TraceIndoorCpu(const Intersector& scene, const SurfaceTable& surface
         const uint64_t batch_size = tally.batch_paths[b];
         const uint64_t first = batch_first + part * batch_size / parts;
         const uint64_t last = batch_first + (part + 1) * batch_size / parts;
-        slot.sum.assign(cells, 0.0);
-        IndoorMode<Slot> mode{
-            sensors[s].position, sensors[s].normal, window, &basis, path.max_bounces, &slot};
+        slot.sum.assign(columns, 0.0);
+        IndoorMode<Slot, Outdoor> mode{sensors[s].position, sensors[s].normal, window, &basis,
+                                       path.max_bounces,    &outdoor,          &slot};
         for (uint64_t p = first; p < last; ++p) {
           slot.counters.Add(TracePath(scene, surfaces, path, PathRandom(seed, s, p), mode));
         }
@@ -167,8 +177,8 @@ IndoorTally TraceIndoorCpu(const Intersector& scene, const SurfaceTable& surface
       [&](uint64_t c, const Slot& slot) {
         const uint64_t s = c / (batches * parts);
         const uint64_t b = (c / parts) % batches;
-        double* row = &tally.sum[(b * sensors.size() + s) * cells];
-        for (int k = 0; k < cells; ++k) row[k] += slot.sum[k];
+        double* row = &tally.sum[(b * sensors.size() + s) * columns];
+        for (int k = 0; k < columns; ++k) row[k] += slot.sum[k];
         tally.counters.Add(slot.counters);
       });
   tally.wall_seconds =

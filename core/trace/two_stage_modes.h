@@ -8,24 +8,41 @@
 // radiance averaged over each part rather than over the whole window, which matters where
 // the outdoor view changes across the window (a street's edge seen from a wide window).
 //
-// OutdoorMode: a path starts at a uniform point of its window part, its direction uniform
-// in solid angle within one basis cell, then bounces in the outdoor scene. Escaping through
-// sky bin j it adds its weight to O[cell, j], so O[cell, j] estimates the mean radiance
-// arriving at the window from the cell per unit radiance of bin j. A path that goes back
-// in through the window ends there: light that leaves the room and returns through the
-// window is the one interreflection the two-stage split leaves out.
+// Direct light is kept apart from the cells. A window connection (x_w, omega) whose ray
+// from x_w along omega meets no outdoor surface sees the sky patch of omega itself: the
+// indoor stage tests that ray against the outdoor surfaces and scores such light straight
+// into a column per sky bin (the direct part of I, no averaging over a cell). Only light
+// whose first outdoor segment meets a surface goes through the window cells and O, which
+// then holds the radiance of the outdoor surfaces, smooth in position and direction where
+// the sky's edge against the buildings (a step in radiance from sky to wall) is not. So
+// D = I O with I's columns the window cells, then the 146 sky bins, and O's rows the
+// reflected radiance of each window cell, then the identity. The test is only traced for
+// views from window cells that may reach the sky: from most cells of a window in a street
+// every view meets the street or the buildings across it (core/trace/window_cells.h).
+//
+// OutdoorMode: a path starts at a uniform point of its window part, its direction within
+// one basis cell distributed by projected solid angle (cos omega d omega dA is the measure
+// in which radiance crossing the window carries flux, so also the one in which the indoor
+// stage weights a cell), then bounces in the outdoor scene. A path whose first segment
+// reaches the sky is only counted (the indoor stage scores that light directly); any
+// other path escaping through sky bin j adds its weight to O[cell, j], so O[cell, j] / (the
+// paths whose first segment met a surface) estimates the mean radiance arriving at the
+// window from the cell per unit radiance of bin j, given that the view meets a surface. A
+// path that goes back in through the window ends there: light that leaves the room and
+// returns through the window is the one interreflection the two-stage split leaves out.
 //
 // IndoorMode: a path starts at a sensor, cosine-sampled, and bounces in the indoor scene.
 // Light from the window reaches each vertex (the sensor included, and every reflection the
 // bounce limit allows) by two techniques, combined by multiple importance sampling (power
 // heuristic): next-event estimation samples a uniform window point x_w and, if the
-// segment is clear, adds to I[sensor, cell(omega)] the irradiance the window delivers there
-// per unit radiance (at the sensor cos_s cos_w A / r^2; at a reflection
-// w rho cos_v cos_w A / r^2, the sensor's cosine-sampled estimator pi L with L = rho / pi
-// times the vertex's irradiance, w the path weight before the reflection); and a bounce ray
-// that leaves through the window adds pi w. Next-event estimation alone has infinite
-// variance where surfaces touch the window (the reveals): its 1 / r^2 grows without bound
-// at the window's edge, while there the bounce ray samples the window well.
+// segment is clear, scores the irradiance the window delivers there per unit radiance (at
+// the sensor cos_s cos_w A / r^2; at a reflection w rho cos_v cos_w A / r^2, the sensor's
+// cosine-sampled estimator pi L with L = rho / pi times the vertex's irradiance, w the path
+// weight before the reflection); and a bounce ray that leaves through the window scores
+// pi w. Next-event estimation alone has infinite variance where surfaces touch the window
+// (the reveals): its 1 / r^2 grows without bound at the window's edge, while there the
+// bounce ray samples the window well. Either way the score goes to the sky bin's direct
+// column or to the window cell of (x_w, omega), by the outdoor test above.
 #pragma once
 
 #include <math.h>
@@ -120,7 +137,44 @@ FENESTRA_CPU_GPU inline int WindowCellCount(const TraceWindow& window,
   return window.Parts() * basis.cell_count;
 }
 
-template <class Sink>  // Sink: void Add(int bin, double value)
+// Entries of a row of outdoor sums: the reflected light per sky bin, then the number of
+// paths whose first segment reached the sky.
+inline constexpr int kOutdoorRowSize = kTregenzaBinCount + 1;
+inline constexpr int kFirstEscapeEntry = kTregenzaBinCount;
+
+// Columns of the indoor matrix: the window cells, then the sky bins' direct columns.
+FENESTRA_CPU_GPU inline int IndoorColumnCount(const TraceWindow& window,
+                                              const HemisphereBasis& basis) {
+  return WindowCellCount(window, basis) + kTregenzaBinCount;
+}
+
+// The outdoor surfaces as the indoor stage sees them: whether the view from a window
+// point along omega reaches the sky, exactly as the first segment of an outdoor path.
+template <class Intersector>
+struct OutdoorView {
+  Intersector scene;   // the outdoor surfaces in front of the window, in their own frame
+  Vec3f offset;        // the outdoor frame's position of the indoor frame's origin [m]
+  const uint8_t* met;  // per window cell: every view from it meets a surface
+                       // (core/trace/window_cells.h), or null
+
+  FENESTRA_CPU_GPU bool SurelyMet(int cell) const { return met != nullptr && met[cell] != 0; }
+
+  FENESTRA_CPU_GPU bool Escapes(Vec3f point, Vec3f outward, Vec3f omega) const {
+    return !scene.Occluded(OffsetRayOrigin(point + offset, outward), omega, INFINITY);
+  }
+
+  // Light arriving through the window at `point` from `omega` (window cell `cell`), worth
+  // `value` per unit radiance: into the direct column of omega's sky bin when the view
+  // reaches the sky, else into the window cell. Sink: void Add(int column, double value).
+  template <class Sink>
+  FENESTRA_CPU_GPU void Score(const TraceWindow& window, const HemisphereBasis& basis, Vec3f point,
+                              Vec3f omega, int cell, double value, Sink* sink) const {
+    const bool direct = !SurelyMet(cell) && Escapes(point, window.normal, omega);
+    sink->Add(direct ? WindowCellCount(window, basis) + TregenzaBin(omega) : cell, value);
+  }
+};
+
+template <class Sink>  // Sink: void Add(int bin, double value); void AddFirstEscape()
 struct OutdoorMode {
   TraceWindow window;
   const HemisphereBasis* basis;
@@ -131,8 +185,8 @@ struct OutdoorMode {
   FENESTRA_CPU_GPU PathState Start(const Intersector&, const PathRandom& random) const {
     const Uniform4 u = random.Draw(0, 0);
     const int part = cell / basis->cell_count;
-    const Vec3f direction =
-        window.ToWorld(SampleBasisCell(*basis, cell - part * basis->cell_count, u.u[2], u.u[3]));
+    const Vec3f direction = window.ToWorld(
+        SampleBasisCell(*basis, cell - part * basis->cell_count, u.u[2], u.u[3], true));
     return PathState{OffsetRayOrigin(window.PartPoint(part, u.u[0], u.u[1]), window.normal),
                      direction, 1.0f, 0, 0};
   }
@@ -141,9 +195,14 @@ struct OutdoorMode {
   FENESTRA_CPU_GPU void AtReflection(const Intersector&, const PathState&, const ReflectionVertex&,
                                      const PathRandom&) const {}
 
-  // A ray that leaves back through the window goes into the room, which the outdoor
-  // stage does not see: it ends without reaching the sky.
+  // A first segment that reaches the sky is the indoor stage's direct light: counted only.
+  // A ray that leaves back through the window goes into the room, which the outdoor stage
+  // does not see: it ends without reaching the sky.
   FENESTRA_CPU_GPU void Escape(const PathState& path) {
+    if (path.vertex == 0) {
+      sink->AddFirstEscape();
+      return;
+    }
     if (window.Crosses(path.origin, path.direction)) return;
     sink->Add(TregenzaBin(path.direction), static_cast<double>(path.weight));
   }
@@ -151,13 +210,16 @@ struct OutdoorMode {
   FENESTRA_CPU_GPU void Finish(const PathStats&) const {}
 };
 
-template <class Sink>  // Sink: void Add(int cell, double value)
+// Sink: void Add(int column, double value) (IndoorColumnCount columns);
+// Outdoor: void Score(window, basis, point, omega, cell, value, Sink*), as OutdoorView.
+template <class Sink, class Outdoor>
 struct IndoorMode {
   Vec3f sensor_position;  // local frame
   Vec3f sensor_normal;    // unit
   TraceWindow window;
   const HemisphereBasis* basis;
   int32_t max_bounces;  // as PathSettings: reflections whose light may reach the sensor
+  const Outdoor* outdoor;
   Sink* sink;
 
   template <class Intersector>
@@ -187,12 +249,19 @@ struct IndoorMode {
     const int cell = BasisCell(*basis, Vec3f{Dot(path.direction, window.across),
                                              Dot(path.direction, window.up), cos_window});
     if (cell < 0) return;
-    const int part = window.PartAt(path.origin + path.direction * distance);
+    const Vec3f point = path.origin + path.direction * distance;
     const float mis =
         path.cosine > 0.0f
             ? PowerHeuristic(path.cosine * kInvPiF, WindowDensity(distance * distance, cos_window))
             : 1.0f;
-    sink->Add(part * basis->cell_count + cell, kPi * static_cast<double>(path.weight * mis));
+    Score(point, path.direction, window.PartAt(point) * basis->cell_count + cell,
+          kPi * static_cast<double>(path.weight * mis));
+  }
+
+  // Light reaching the window at `point` from `omega` (window cell `cell`), worth `value`
+  // per unit radiance: the outdoor surfaces tell its column (OutdoorView::Score).
+  FENESTRA_CPU_GPU void Score(Vec3f point, Vec3f omega, int cell, double value) {
+    outdoor->Score(window, *basis, point, omega, cell, value, sink);
   }
 
   FENESTRA_CPU_GPU void Finish(const PathStats&) const {}
@@ -208,7 +277,8 @@ struct IndoorMode {
   template <class Intersector>
   FENESTRA_CPU_GPU void Connect(const Intersector& scene, Vec3f position, Vec3f origin,
                                 Vec3f normal, float factor, const Uniform4& u) {
-    const Vec3f to_window = window.Point(u.u[0], u.u[1]) - position;
+    const Vec3f point = window.Point(u.u[0], u.u[1]);
+    const Vec3f to_window = point - position;
     const float distance_squared = Dot(to_window, to_window);
     if (!(distance_squared > 0.0f)) return;
     const Vec3f omega = to_window * (1.0f / sqrtf(distance_squared));
@@ -224,9 +294,9 @@ struct IndoorMode {
     if (scene.Occluded(origin, omega, distance * 0.9999995f)) return;
     const float mis =
         PowerHeuristic(WindowDensity(distance_squared, cos_window), cos_vertex * kInvPiF);
-    sink->Add(window.PartOf(u.u[0], u.u[1]) * basis->cell_count + cell,
-              static_cast<double>(factor * cos_vertex * cos_window * window.Area() /
-                                  distance_squared * mis));
+    Score(point, omega, window.PartOf(u.u[0], u.u[1]) * basis->cell_count + cell,
+          static_cast<double>(factor * cos_vertex * cos_window * window.Area() / distance_squared *
+                              mis));
   }
 };
 

@@ -21,7 +21,7 @@
 #include "client/cli_util.h"
 #include "client/job_request.h"
 #include "tests/child_process.h"
-#include "tests/client/certificates.h"
+#include "tests/certificates.h"
 #include "tests/client/recording_server.h"
 
 namespace fenestra {
@@ -348,14 +348,14 @@ TEST_F(GrpcClientTest, TheCliWarnsWhenTheTokenWouldTravelInClear) {
 // A real fenestrad
 // ---------------------------------------------------------------------------------------
 
-// The city-office tilt job with tiny sampling (20000 outdoor paths, 2000 indoor paths per
+// The city-office tilt job with tiny sampling (40000 outdoor paths, 2000 indoor paths per
 // sensor, 3 evaluations), as `fenestra job submit` sends it.
 v1::SubmitJobRequest TinyJobRequest() {
   absl::StatusOr<v1::SubmitJobRequest> request =
       SubmitRequestFromJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json");
   EXPECT_TRUE(request.ok()) << request.status();
   v1::Job& job = *request->mutable_job();
-  job.mutable_sampling()->set_outdoor_paths(20000);
+  job.mutable_sampling()->set_outdoor_paths(40000);
   job.mutable_sampling()->set_indoor_paths_per_sensor(2000);
   job.mutable_sampling()->set_backend("cpu");
   job.mutable_budget()->set_max_evaluations(3);

@@ -10,7 +10,7 @@
 #include <fstream>
 
 #include "tests/child_process.h"
-#include "tests/client/certificates.h"
+#include "tests/certificates.h"
 #include "tests/client/recording_server.h"
 
 namespace fenestra {

@@ -126,5 +126,30 @@ TEST(ConfigTest, ExampleConfigurationResolves) {
   EXPECT_EQ(resolved->auth(), "token");
 }
 
+TEST(ConfigTest, HealthPortIsOffByDefaultAndAnotherAddressThanTheMainPort) {
+  v1::DaemonConfig config;
+  absl::StatusOr<v1::DaemonConfig> resolved = ResolveConfig(config);
+  ASSERT_TRUE(resolved.ok()) << resolved.status();
+  EXPECT_TRUE(resolved->health_listen().empty());
+
+  // Plaintext beyond loopback, beside a main port with TLS: it tells only health
+  config.set_listen_address("0.0.0.0:50051");
+  config.set_tls_cert_file("server.crt");
+  config.set_tls_key_file("server.key");
+  config.set_health_listen("0.0.0.0:8081");
+  resolved = ResolveConfig(config);
+  ASSERT_TRUE(resolved.ok()) << resolved.status();
+  EXPECT_EQ(resolved->health_listen(), "0.0.0.0:8081");
+
+  config.set_health_listen("0.0.0.0:50051");
+  const absl::Status status = ResolveConfig(config).status();
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), HasSubstr("health_listen must be another address"));
+  // Port 0 picks a free port for each
+  config.set_listen_address("127.0.0.1:0");
+  config.set_health_listen("127.0.0.1:0");
+  EXPECT_TRUE(ResolveConfig(config).ok());
+}
+
 }  // namespace
 }  // namespace fenestra

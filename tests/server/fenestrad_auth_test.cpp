@@ -5,8 +5,8 @@
 
 #include <future>
 
+#include "tests/certificates.h"
 #include "tests/server/fenestrad_harness.h"
-#include "tests/server/test_certificates.h"
 
 namespace fenestra {
 namespace {
@@ -109,15 +109,6 @@ bool Ended(const v1::JobInfo& j) { return IsTerminal(j.state()); }
 
 class FenestradAuthTest : public FenestradTest {
  protected:
-  static void SetUpTestSuite() {
-    const std::string dir = testing::TempDir() + "/fenestrad_auth_test_certificates";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    certs_ = new TestCertificates;
-    MakeTestCertificates(dir, certs_);
-  }
-  static void TearDownTestSuite() { delete certs_; }
-
   // `fenestrad user add NAME` on this test's data directory; the token it prints.
   std::string AddUser(const std::string& name, bool admin = false) {
     std::vector<std::string> args = {FENESTRAD, "user", "add", name, "--data-dir", dir_ + "/data"};
@@ -131,7 +122,7 @@ class FenestradAuthTest : public FenestradTest {
   // A daemon with token auth and TLS (server certificate for 127.0.0.1), and channels that
   // trust its CA.
   std::unique_ptr<Daemon> StartTls(std::vector<std::string> flags = {}) {
-    flags.insert(flags.end(), {"--tls-cert", certs_->server_cert, "--tls-key", certs_->server_key});
+    flags.insert(flags.end(), {"--tls-cert", Certs().server_cert, "--tls-key", Certs().server_key});
     auto daemon = std::make_unique<Daemon>(dir_ + "/data", std::move(flags), TlsCredentials());
     daemon->Start();
     return daemon;
@@ -144,10 +135,10 @@ class FenestradAuthTest : public FenestradTest {
   }
   static std::shared_ptr<grpc::ChannelCredentials> TlsCredentials(bool client_certificate = false) {
     grpc::SslCredentialsOptions options;
-    options.pem_root_certs = ReadFile(certs_->ca);
+    options.pem_root_certs = ReadFile(Certs().ca_cert);
     if (client_certificate) {
-      options.pem_cert_chain = ReadFile(certs_->client_cert);
-      options.pem_private_key = ReadFile(certs_->client_key);
+      options.pem_cert_chain = ReadFile(Certs().client_cert);
+      options.pem_private_key = ReadFile(Certs().client_key);
     }
     return grpc::SslCredentials(options);
   }
@@ -168,8 +159,6 @@ class FenestradAuthTest : public FenestradTest {
     request.set_site_id(site_id);
     return request;
   }
-
-  static inline TestCertificates* certs_ = nullptr;
 };
 
 void ExpectStatus(const grpc::Status& status, grpc::StatusCode code, const std::string& text) {
@@ -327,7 +316,7 @@ TEST_F(FenestradAuthTest, UsersSeeAndActOnTheirOwnJobsAndSitesOnly) {
 
 TEST_F(FenestradAuthTest, TlsPortRefusesPlaintextAndMutualTlsRefusesClientsWithoutACertificate) {
   const std::string ann = AddUser("ann");
-  auto d = StartTls({"--tls-client-ca", certs_->ca});
+  auto d = StartTls({"--tls-client-ca", Certs().ca_cert});
   auto deadline = [] { return std::chrono::system_clock::now() + std::chrono::seconds(10); };
   auto list = [&](std::shared_ptr<grpc::ChannelCredentials> credentials) {
     auto channel = grpc::CreateChannel(d->address(), credentials);
@@ -343,9 +332,9 @@ TEST_F(FenestradAuthTest, TlsPortRefusesPlaintextAndMutualTlsRefusesClientsWitho
   EXPECT_EQ(list(grpc::InsecureChannelCredentials()).error_code(), grpc::StatusCode::UNAVAILABLE);
   // A TLS client that does not trust the server's CA gets nowhere either
   grpc::SslCredentialsOptions stranger;
-  stranger.pem_root_certs = ReadFile(certs_->client_cert);
-  stranger.pem_cert_chain = ReadFile(certs_->client_cert);
-  stranger.pem_private_key = ReadFile(certs_->client_key);
+  stranger.pem_root_certs = ReadFile(Certs().client_cert);
+  stranger.pem_cert_chain = ReadFile(Certs().client_cert);
+  stranger.pem_private_key = ReadFile(Certs().client_key);
   EXPECT_EQ(list(grpc::SslCredentials(stranger)).error_code(), grpc::StatusCode::UNAVAILABLE);
   EXPECT_THAT(d->Log(), HasSubstr("TLS with client certificates, auth token"));
 }
@@ -364,12 +353,12 @@ TEST_F(FenestradAuthTest, StartIsRefusedWhenItWouldExposeTheDaemon) {
   EXPECT_EQ(r.code, 2);
   EXPECT_THAT(r.err, HasSubstr("--tls-cert, --tls-key"));
   EXPECT_THAT(r.err, HasSubstr("--allow-plaintext"));
-  r = start({"--listen", "[::]:0", "--auth", "none", "--tls-cert", certs_->server_cert, "--tls-key",
-             certs_->server_key});
+  r = start({"--listen", "[::]:0", "--auth", "none", "--tls-cert", Certs().server_cert, "--tls-key",
+             Certs().server_key});
   EXPECT_EQ(r.code, 2);
   EXPECT_THAT(r.err, HasSubstr("auth none"));
   // Files that do not belong together stop the start before anything is served
-  r = start({"--tls-cert", certs_->server_cert, "--tls-key", certs_->client_key});
+  r = start({"--tls-cert", Certs().server_cert, "--tls-key", Certs().client_key});
   EXPECT_EQ(r.code, 1);
   EXPECT_THAT(r.err, HasSubstr("is not the key of the certificate"));
   EXPECT_FALSE(fs::exists(data + "/fenestra.db"));
@@ -455,7 +444,7 @@ TEST_F(FenestradAuthTest, PythonClientWithTlsAndAToken) {
                                         "--server",
                                         d->address(),
                                         "--outdoor-paths",
-                                        "20000",
+                                        "40000",
                                         "--indoor-paths",
                                         "2000",
                                         "--evaluations",
@@ -463,13 +452,13 @@ TEST_F(FenestradAuthTest, PythonClientWithTlsAndAToken) {
                                         FENESTRA_SOURCE_DIR
                                         "/examples/city_office/alpha_max_quick.json"};
   std::vector<std::string> args = run;
-  args.insert(args.end(), {"--tls-ca", certs_->ca, "--token-file", token_file});
+  args.insert(args.end(), {"--tls-ca", Certs().ca_cert, "--token-file", token_file});
   CliResult r = Daemon::RunCli(args);
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_THAT(r.out, HasSubstr("best design: alpha="));
   // Without the token
   args = run;
-  args.insert(args.end(), {"--tls-ca", certs_->ca});
+  args.insert(args.end(), {"--tls-ca", Certs().ca_cert});
   r = Daemon::RunCli(args);
   EXPECT_NE(r.code, 0);
   EXPECT_THAT(r.out + r.err, HasSubstr("fenestrad wants a token"));

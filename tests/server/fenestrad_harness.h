@@ -1,6 +1,6 @@
 // What the fenestrad tests share: a real fenestrad child process on a free localhost port
 // with a temporary data directory, the fenestra client run against it, gRPC stubs, and
-// tiny jobs (20000 outdoor paths, 2000 indoor paths per sensor).
+// tiny jobs (40000 outdoor paths, 2000 indoor paths per sensor).
 #pragma once
 
 #include <fcntl.h>
@@ -283,7 +283,7 @@ class FenestradTest : public testing::Test {
     v1::Job job = FromJson<v1::Job>(
         ReadFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json"));
     job.set_scene_file(FENESTRA_SOURCE_DIR "/examples/city_office/scene.json");
-    job.mutable_sampling()->set_outdoor_paths(20000);
+    job.mutable_sampling()->set_outdoor_paths(40000);
     job.mutable_sampling()->set_indoor_paths_per_sensor(2000);
     job.mutable_sampling()->set_backend("cpu");
     job.mutable_budget()->set_max_evaluations(evaluations);

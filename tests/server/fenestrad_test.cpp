@@ -1,6 +1,6 @@
 // fenestrad end to end: a real daemon on a free localhost port with a temporary data
 // directory, driven through the fenestra client (and, for status codes, a gRPC stub).
-// Jobs use tiny sampling (20000 outdoor paths, 2000 indoor paths per sensor).
+// Jobs use tiny sampling (40000 outdoor paths, 2000 indoor paths per sensor).
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sqlite3.h>
@@ -234,7 +234,7 @@ TEST_F(FenestradTest, ObjMeshesAreSentInlineAsPolygons) {
   std::ofstream(dir_ + "/scene.json") << ToJson(scene);
 
   CliResult r =
-      d->Cli({"site", "add", dir_ + "/scene.json", "--outdoor-paths", "20000", "--wait", "--json"});
+      d->Cli({"site", "add", dir_ + "/scene.json", "--outdoor-paths", "40000", "--wait", "--json"});
   ASSERT_EQ(r.code, 0) << r.err;
   const v1::SiteInfo site = FromJson<v1::SiteInfo>(r.out);
   EXPECT_EQ(site.state(), v1::SITE_STATE_READY);
@@ -321,7 +321,7 @@ TEST_F(FenestradTest, BadRequestsGetTheRightCodeAndTheDaemonKeepsServing) {
   r = d->Cli({"site", "add", "--job", WriteJob("tiny", TinyJob()), "--wait"});
   ASSERT_EQ(r.code, 0) << r.err;
   job = TinyJob();
-  job.mutable_sampling()->set_outdoor_paths(30000);
+  job.mutable_sampling()->set_outdoor_paths(50000);
   request = InlineRequest(job);
   request.set_site_id("site-1");
   expect(submit(request), grpc::StatusCode::INVALID_ARGUMENT, "does not match site site-1");
@@ -464,7 +464,7 @@ TEST_F(FenestradTest, PythonClientRegistersASiteAndRunsAJob) {
   auto d = StartDaemon();
   const CliResult r = Daemon::RunCli(
       {"/usr/bin/python3", FENESTRA_SOURCE_DIR "/examples/python_client.py", "--server",
-       d->address(), "--outdoor-paths", "20000", "--indoor-paths", "2000", "--evaluations", "6",
+       d->address(), "--outdoor-paths", "40000", "--indoor-paths", "2000", "--evaluations", "6",
        FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json"});
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_THAT(r.out, HasSubstr("site-1 ready"));
@@ -853,8 +853,9 @@ TEST_F(FenestradStorageTest, UploadsAreKeptOnlyWhileASiteOrUnfinishedJobUsesThem
 }
 
 TEST_F(FenestradStorageTest, DataDirectoryLimitEvictsUnusedMatricesThenRefusesNamingTheLimit) {
-  // 10.5 MiB (11.0 MB): a weather file is 1.6 MB, a tiny job's outdoor matrix 8.1 MB
-  auto d = StartDaemon({"--max-data-dir-bytes", "11010048"});
+  // 45.0 MB: a weather file is 1.6 MB, a tiny job's outdoor matrix 42.1 MB (O, its standard
+  // errors and its 8 batches, each 3602 x 146 doubles)
+  auto d = StartDaemon({"--max-data-dir-bytes", "45008192"});
   const std::string outdoor = d->data_dir() + "/outdoor";
   v1::SiteInfo first;
   ASSERT_TRUE(Register(*d, SiteRequest(TinyJob(), Weather()), &first).ok());
@@ -866,7 +867,7 @@ TEST_F(FenestradStorageTest, DataDirectoryLimitEvictsUnusedMatricesThenRefusesNa
   ASSERT_TRUE(DeleteSite(*d, first.id()).ok());
   EXPECT_EQ(FileNames(outdoor), first_matrix);
   v1::Job other = TinyJob();
-  other.mutable_sampling()->set_outdoor_paths(30000);
+  other.mutable_sampling()->set_outdoor_paths(50000);
   v1::SiteInfo second;
   ASSERT_TRUE(Register(*d, SiteRequest(other, Weather(1)), &second).ok());
   WaitSiteReady(*d, second.id());
@@ -880,7 +881,7 @@ TEST_F(FenestradStorageTest, DataDirectoryLimitEvictsUnusedMatricesThenRefusesNa
   request.set_weather_epw(Weather(2));
   const grpc::Status refused = SubmitRequest(*d, request);
   EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-  EXPECT_THAT(refused.error_message(), HasSubstr("max_data_dir_bytes = 11010048"));
+  EXPECT_THAT(refused.error_message(), HasSubstr("max_data_dir_bytes = 45008192"));
   EXPECT_THAT(refused.error_message(), testing::Not(HasSubstr(dir_)));
   EXPECT_EQ(FileNames(outdoor), second_matrix);
   EXPECT_EQ(FileNames(d->data_dir() + "/weather").size(), 1u);
@@ -888,14 +889,14 @@ TEST_F(FenestradStorageTest, DataDirectoryLimitEvictsUnusedMatricesThenRefusesNa
   // A job on what is stored still runs
   request.clear_weather_epw();
   request.set_site_id(second.id());
-  request.mutable_job()->mutable_sampling()->set_outdoor_paths(30000);
+  request.mutable_job()->mutable_sampling()->set_outdoor_paths(50000);
   v1::JobInfo job;
   ASSERT_TRUE(SubmitRequest(*d, request, &job).ok());
   EXPECT_EQ(WaitJob(*d, job.id(), Ended).state(), v1::JOB_STATE_SUCCEEDED);
 }
 
 TEST_F(FenestradStorageTest, FullDiskKeepsReadsRefusesWritesStoresFinalStatesAndStarts) {
-  MountTmpfs(dir_ + "/data", "24m");
+  MountTmpfs(dir_ + "/data", "64m");  // a tiny job's outdoor matrix is 42 MB
   auto d = StartDaemon();
   v1::SiteInfo site;
   ASSERT_TRUE(Register(*d, SiteRequest(TinyJob(), Weather()), &site).ok());
@@ -1026,7 +1027,7 @@ TEST_F(FenestradStorageTest, LargeRegistrationMemoryIsBoundedAndGivenBack) {
   const double before = ProcessStatusMiB(d->pid(), "VmRSS");
   {
     // 600 000 outdoor triangles, a 58 MiB request
-    const v1::RegisterSiteRequest request = LargeRegistration(600'000, 20'000);
+    const v1::RegisterSiteRequest request = LargeRegistration(600'000, 40'000);
     grpc::ChannelArguments args;
     args.SetMaxSendMessageSize(128 << 20);
     auto sites = v1::SiteService::NewStub(

@@ -18,8 +18,9 @@ namespace fs = std::filesystem;
 OutdoorMatrix TestMatrix(const std::string& key) {
   OutdoorMatrix m;
   m.key = key;
-  m.coefficients = Matrix::Random(288, 146).cwiseAbs();
+  m.coefficients = Matrix::Random(288 + 146, 146).cwiseAbs();
   m.standard_error = 0.01 * m.coefficients;
+  for (int b = 0; b < 4; ++b) m.batches.push_back(Matrix::Random(288 + 146, 146).cwiseAbs());
   m.basis_cells = 288;
   m.paths = 20000;
   m.bounces = 30;
@@ -49,14 +50,17 @@ TEST(OutdoorCacheTest, EncodeDecodeRoundTrip) {
   EXPECT_EQ(back->key, "abc");
   EXPECT_TRUE(back->coefficients == m.coefficients);
   EXPECT_TRUE(back->standard_error == m.standard_error);
+  ASSERT_EQ(back->batches.size(), 4u);
+  for (int b = 0; b < 4; ++b) EXPECT_TRUE(back->batches[b] == m.batches[b]);
   EXPECT_EQ(back->paths, 20000);
   EXPECT_EQ(back->seed, 7u);
   EXPECT_EQ(back->backend, "embree-cpu");
   EXPECT_EQ(back->parts, (WindowParts{1, 1}));
   // A window in parts keeps them
   OutdoorMatrix split = TestMatrix("def");
-  split.coefficients = Matrix::Random(288 * 6, 146).cwiseAbs();
+  split.coefficients = Matrix::Random(288 * 6 + 146, 146).cwiseAbs();
   split.standard_error = 0.01 * split.coefficients;
+  for (Matrix& b : split.batches) b = Matrix::Random(288 * 6 + 146, 146).cwiseAbs();
   split.parts = {3, 2};
   absl::StatusOr<OutdoorMatrix> split_back = DecodeOutdoorMatrix(EncodeOutdoorMatrix(split));
   ASSERT_TRUE(split_back.ok()) << split_back.status();

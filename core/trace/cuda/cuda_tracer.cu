@@ -95,6 +95,12 @@ struct SharedSink {
 #endif
   }
   FENESTRA_CPU_GPU void EndPath() {}
+  // OutdoorMode's count of first segments that reached the sky
+  FENESTRA_CPU_GPU void AddFirstEscape() {
+#if defined(__CUDA_ARCH__)
+    atomicAdd(&sum[kFirstEscapeEntry], 1.0);
+#endif
+  }
 };
 
 // Zeroes the block's shared row and counters.
@@ -207,53 +213,57 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   }
 }
 
+// Rows are (batch, window cell), from first_row on: row b * cells + cell holds the paths
+// [b N / batches, (b + 1) N / batches) of the cell.
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     OutdoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
-                  TraceWindow window, HemisphereBasis basis, uint64_t paths_per_cell, uint64_t seed,
-                  double* sum, double* sum_squares, unsigned long long* counters,
+                  TraceWindow window, HemisphereBasis basis, uint64_t paths_per_cell, int batches,
+                  uint64_t seed, unsigned int first_row, double* sum, unsigned long long* counters,
                   unsigned long long* next_path) {
-  __shared__ double row[2 * kTregenzaBinCount];
+  __shared__ double row[kOutdoorRowSize];
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
   if (threadIdx.x == 0) shared_basis = basis;
-  BeginRow(row, 2 * kTregenzaBinCount, block_counters);
-  const int cell = static_cast<int>(blockIdx.y);
-  SharedSink sink{row, row + kTregenzaBinCount};
+  BeginRow(row, kOutdoorRowSize, block_counters);
+  const unsigned int r = first_row + blockIdx.y;
+  const int cells = WindowCellCount(window, basis);
+  const int cell = static_cast<int>(r % cells);
+  const uint64_t b = r / cells;
+  SharedSink sink{row, nullptr};
   OutdoorMode<SharedSink> mode{window, &shared_basis, cell, &sink};
   ThreadCounts counts;
-  TracePaths(scene, surfaces, settings, mode, seed, kOutdoorStreamBase + cell, 0, paths_per_cell,
-             next_path + cell, counts);
+  TracePaths(scene, surfaces, settings, mode, seed, kOutdoorStreamBase + cell,
+             BatchFirst(paths_per_cell, batches, b), BatchFirst(paths_per_cell, batches, b + 1),
+             next_path + r, counts);
   counts.Flush(block_counters);
-  EndRow(row, kTregenzaBinCount, sum + cell * kTregenzaBinCount, block_counters, counters);
-  for (int i = threadIdx.x; i < kTregenzaBinCount; i += blockDim.x) {
-    if (row[kTregenzaBinCount + i] != 0.0) {
-      atomicAdd(&sum_squares[cell * kTregenzaBinCount + i], row[kTregenzaBinCount + i]);
-    }
-  }
+  EndRow(row, kOutdoorRowSize, sum + static_cast<size_t>(r) * kOutdoorRowSize, block_counters,
+         counters);
 }
 
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     IndoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
-                 const TraceSensor* sensors, int sensor_count, TraceWindow window,
-                 HemisphereBasis basis, uint64_t paths_per_sensor, int batches, uint64_t seed,
-                 double* sum, unsigned long long* counters, unsigned long long* next_path) {
-  extern __shared__ double row[];  // window cells
+                 OutdoorView<BvhIntersector> outdoor, const TraceSensor* sensors, int sensor_count,
+                 TraceWindow window, HemisphereBasis basis, uint64_t paths_per_sensor, int batches,
+                 uint64_t seed, double* sum, unsigned long long* counters,
+                 unsigned long long* next_path) {
+  extern __shared__ double row[];  // columns of I
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
   if (threadIdx.x == 0) shared_basis = basis;
-  const int cells = WindowCellCount(window, basis);
-  BeginRow(row, cells, block_counters);
+  const int columns = IndoorColumnCount(window, basis);
+  BeginRow(row, columns, block_counters);
   const int s = static_cast<int>(blockIdx.y) / batches;
   const int b = static_cast<int>(blockIdx.y) % batches;
   const uint64_t first = BatchFirst(paths_per_sensor, batches, b);
   const uint64_t last = BatchFirst(paths_per_sensor, batches, b + 1);
   SharedSink sink{row, nullptr};
-  IndoorMode<SharedSink> mode{sensors[s].position, sensors[s].normal,    window,
-                              &shared_basis,       settings.max_bounces, &sink};
+  IndoorMode<SharedSink, OutdoorView<BvhIntersector>> mode{
+      sensors[s].position,  sensors[s].normal, window, &shared_basis,
+      settings.max_bounces, &outdoor,          &sink};
   ThreadCounts counts;
   TracePaths(scene, surfaces, settings, mode, seed, s, first, last, next_path + blockIdx.y, counts);
   counts.Flush(block_counters);
-  EndRow(row, cells, sum + (static_cast<size_t>(b) * sensor_count + s) * cells, block_counters,
+  EndRow(row, columns, sum + (static_cast<size_t>(b) * sensor_count + s) * columns, block_counters,
          counters);
 }
 
@@ -288,26 +298,30 @@ __global__ void MultiplyKernel(const double* a, const double* b, double* c, int 
   if (row < m && col < n) c[static_cast<size_t>(row) * n + col] = sum;
 }
 
-// C = A B^T for row-major A (m x k) and B (n x k), one warp per entry of C: for a long k
-// and a small C (indoor rows through the window cells), where tiles would leave the device
-// idle.
+// C = A B_g^T for row-major A (m x k) and B_g (n x k), one warp per entry of C: for a long
+// k and a small C (indoor rows through the window cells), where tiles would leave the
+// device idle. The rows of A come in groups of group_rows, group g with its own B_g (the
+// batches of the annual product), one after the other from b.
 __global__ void MultiplyTransposedKernel(const double* a, const double* b, double* c, int m, int k,
-                                         int n) {
+                                         int n, int group_rows) {
   const int warp = static_cast<int>((blockIdx.x * blockDim.x + threadIdx.x) / 32);
   const int lane = static_cast<int>(threadIdx.x % 32);
   if (warp >= m * n) return;
-  const double* a_row = a + static_cast<size_t>(warp / n) * k;
-  const double* b_row = b + static_cast<size_t>(warp % n) * k;
+  const int row = warp / n;
+  const double* a_row = a + static_cast<size_t>(row) * k;
+  const double* b_row =
+      b + (static_cast<size_t>(row / group_rows) * n + static_cast<size_t>(warp % n)) * k;
   double sum = 0;
   for (int i = lane; i < k; i += 32) sum += a_row[i] * b_row[i];
   for (int offset = 16; offset > 0; offset /= 2) sum += __shfl_down_sync(0xffffffffu, sum, offset);
   if (lane == 0) c[warp] = sum;
 }
 
-void MultiplyTransposed(const double* a, const double* b, double* c, int m, int k, int n) {
+void MultiplyTransposed(const double* a, const double* b, double* c, int m, int k, int n,
+                        int group_rows) {
   const int threads = 256;
   const int blocks = static_cast<int>((static_cast<int64_t>(m) * n * 32 + threads - 1) / threads);
-  MultiplyTransposedKernel<<<blocks, threads>>>(a, b, c, m, k, n);
+  MultiplyTransposedKernel<<<blocks, threads>>>(a, b, c, m, k, n, group_rows);
 }
 
 void Multiply(const double* a, const double* b, double* c, int m, int k, int n) {
@@ -447,8 +461,9 @@ struct CudaTracer::Impl {
   int device = 0;
   int multiprocessors = 1;
   std::string name;
-  DeviceBuffer<BvhNode> nodes;
-  DeviceBuffer<BvhTriangle> triangles;
+  DeviceBuffer<BvhNode> nodes, outdoor_nodes;
+  DeviceBuffer<BvhTriangle> triangles, outdoor_triangles;
+  DeviceBuffer<uint8_t> outdoor_met;  // per window cell (OutdoorView::met)
   DeviceBuffer<uint32_t> triangle_material;
   DeviceBuffer<TraceMaterial> materials;
   DeviceBuffer<TraceSensor> sensors;
@@ -458,19 +473,20 @@ struct CudaTracer::Impl {
   DeviceBuffer<unsigned long long> counters;
   DeviceBuffer<unsigned long long> next_path;  // per row: paths taken so far
   PinnedBuffer staging;                        // large transfers
-  bool has_scene = false;
-  // The annual product: O transposed, S, the indoor rows, I O and E; E's tallies
+  bool has_scene = false, has_outdoor = false;
+  // The annual product: O_b transposed, S, the indoor rows, I_b O_b and E; E's tallies
   DeviceBuffer<double> outdoor_transposed, sky, indoor, through_window, illuminance;
   DeviceBuffer<unsigned long long> tally_counts, tally_hours;
   DeviceBuffer<double> tally_sums;
-  int cells = 0, steps = 0;
+  int cells = 0, steps = 0, outdoor_batches = 0;  // cells: columns of I, rows of O_b
 
   // The indoor stage's paths (CudaTracer::Indoor); the sums stay on the device without
   // host_sum.
   std::string TraceIndoor(const TraceSensor* host_sensors, int sensor_count,
-                          const TraceWindow& window, const HemisphereBasis& basis,
-                          uint64_t paths_per_sensor, int batches, uint64_t seed,
-                          const PathSettings& path, double* host_sum, CudaCounters* out);
+                          const TraceWindow& window, Vec3f outdoor_offset,
+                          const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
+                          uint64_t seed, const PathSettings& path, double* host_sum,
+                          CudaCounters* out);
   // The annual product and its tallies (after SetAnnualProduct): `rows` indoor rows from the
   // host into `indoor`; E = (I O) S from `indoor` into `illuminance`; E's tallies.
   cudaError_t UploadIndoor(const double* host_indoor, int rows);
@@ -478,6 +494,9 @@ struct CudaTracer::Impl {
   std::string Tally(int batches, int sensors, const TallyRequest& request);
 
   BvhIntersector Scene() const { return {nodes.get(), triangles.get()}; }
+  OutdoorView<BvhIntersector> Outdoor(Vec3f offset) const {
+    return {{outdoor_nodes.get(), outdoor_triangles.get()}, offset, outdoor_met.get()};
+  }
   SurfaceTable Surfaces() const { return {materials.get(), triangle_material.get()}; }
 
   // Blocks along x for `rows` rows of `paths` paths: as many as the device holds at once
@@ -624,31 +643,47 @@ std::string CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
 }
 
 std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
-                                uint64_t paths_per_cell, uint64_t seed, const PathSettings& path,
-                                double* sum, double* sum_squares, CudaCounters* counters) {
+                                uint64_t paths_per_cell, int batches, uint64_t seed,
+                                const PathSettings& path, double* sum, CudaCounters* counters) {
   Impl& d = *impl_;
-  const int cells = WindowCellCount(window, basis);
-  const dim3 grid(d.BlocksPerRow(OutdoorKernel, 0, paths_per_cell, cells), cells);
+  const unsigned int rows = static_cast<unsigned int>(WindowCellCount(window, basis) * batches);
+  const unsigned int per_row = d.BlocksPerRow(OutdoorKernel, 0, paths_per_cell / batches + 1, rows);
+  constexpr unsigned int kMaxGridRows = 65535;
   return d.Run(
-      cells, static_cast<size_t>(cells) * kTregenzaBinCount, true,
+      rows, static_cast<size_t>(rows) * kOutdoorRowSize, false,
       [&] {
-        OutdoorKernel<<<grid, kThreads>>>(d.Scene(), d.Surfaces(), path, window, basis,
-                                          paths_per_cell, seed, d.sum.get(), d.sum_squares.get(),
-                                          d.counters.get(), d.next_path.get());
+        for (unsigned int first = 0; first < rows; first += kMaxGridRows) {
+          const dim3 grid(per_row, std::min(kMaxGridRows, rows - first));
+          OutdoorKernel<<<grid, kThreads>>>(d.Scene(), d.Surfaces(), path, window, basis,
+                                            paths_per_cell, batches, seed, first, d.sum.get(),
+                                            d.counters.get(), d.next_path.get());
+        }
       },
-      sum, sum_squares, counters);
+      sum, nullptr, counters);
+}
+
+std::string CudaTracer::SetOutdoorScene(const BvhLayout& bvh, const std::vector<uint8_t>& met) {
+  cudaError_t e = cudaSetDevice(impl_->device);
+  if (e == cudaSuccess) e = impl_->outdoor_nodes.Upload(bvh.nodes.data(), bvh.nodes.size());
+  if (e == cudaSuccess) {
+    e = impl_->outdoor_triangles.Upload(bvh.triangles.data(), bvh.triangles.size());
+  }
+  if (e == cudaSuccess) e = impl_->outdoor_met.Upload(met.data(), met.size());
+  impl_->has_outdoor = e == cudaSuccess;
+  return e == cudaSuccess ? "" : Error(e);
 }
 
 std::string CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int sensor_count,
-                                          const TraceWindow& window, const HemisphereBasis& basis,
-                                          uint64_t paths_per_sensor, int batches, uint64_t seed,
-                                          const PathSettings& path, double* host_sum,
-                                          CudaCounters* out) {
+                                          const TraceWindow& window, Vec3f outdoor_offset,
+                                          const HemisphereBasis& basis, uint64_t paths_per_sensor,
+                                          int batches, uint64_t seed, const PathSettings& path,
+                                          double* host_sum, CudaCounters* out) {
   Impl& d = *this;
+  if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
   if (cudaError_t e = d.sensors.Upload(host_sensors, sensor_count); e != cudaSuccess)
     return Error(e);
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
-  const int cells = WindowCellCount(window, basis);
+  const int cells = IndoorColumnCount(window, basis);
   const size_t shared = static_cast<size_t>(cells) * sizeof(double);
   if (shared > kDefaultShared) {
     // Opt in to more shared memory per block, as far as the device allows
@@ -663,7 +698,8 @@ std::string CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int s
                              kCounters * sizeof(unsigned long long);
     if (shared > available) {
       return "CUDA: " + std::to_string(cells) +
-             " window cells do not fit the indoor kernel's shared memory (at most " +
+             " columns of the indoor matrix do not fit the indoor kernel's shared memory (at "
+             "most " +
              std::to_string(available / sizeof(double)) +
              " on this device): use fewer window parts or the 288-cell basis";
     }
@@ -678,34 +714,38 @@ std::string CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int s
       rows, static_cast<size_t>(batches) * sensor_count * cells, false,
       [&] {
         IndoorKernel<<<grid, kThreads, shared>>>(
-            d.Scene(), d.Surfaces(), path, d.sensors.get(), sensor_count, window, basis,
-            paths_per_sensor, batches, seed, d.sum.get(), d.counters.get(), d.next_path.get());
+            d.Scene(), d.Surfaces(), path, d.Outdoor(outdoor_offset), d.sensors.get(), sensor_count,
+            window, basis, paths_per_sensor, batches, seed, d.sum.get(), d.counters.get(),
+            d.next_path.get());
       },
       host_sum, nullptr, out);
 }
 
 std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
-                               const TraceWindow& window, const HemisphereBasis& basis,
-                               uint64_t paths_per_sensor, int batches, uint64_t seed,
-                               const PathSettings& path, double* sum, CudaCounters* counters) {
+                               const TraceWindow& window, Vec3f outdoor_offset,
+                               const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
+                               uint64_t seed, const PathSettings& path, double* sum,
+                               CudaCounters* counters) {
   if (sum == nullptr) return "CUDA tracer: no buffer for the indoor sums";
-  return impl_->TraceIndoor(sensors, sensor_count, window, basis, paths_per_sensor, batches, seed,
-                            path, sum, counters);
+  return impl_->TraceIndoor(sensors, sensor_count, window, outdoor_offset, basis, paths_per_sensor,
+                            batches, seed, path, sum, counters);
 }
 
 std::string CudaTracer::IndoorAnnualTally(const TraceSensor* sensors, int sensor_count,
-                                          const TraceWindow& window, const HemisphereBasis& basis,
-                                          uint64_t paths_per_sensor, int batches, uint64_t seed,
-                                          const PathSettings& path, const TallyRequest& request,
-                                          CudaCounters* counters) {
+                                          const TraceWindow& window, Vec3f outdoor_offset,
+                                          const HemisphereBasis& basis, uint64_t paths_per_sensor,
+                                          int batches, uint64_t seed, const PathSettings& path,
+                                          const TallyRequest& request, CudaCounters* counters) {
   Impl& d = *impl_;
   if (d.cells == 0) return kNoAnnualProduct;
-  if (d.cells != WindowCellCount(window, basis)) {
-    return "CUDA tracer: the annual product has " + std::to_string(d.cells) +
-           " window cells, the indoor stage " + std::to_string(WindowCellCount(window, basis));
+  if (d.cells != IndoorColumnCount(window, basis) || d.outdoor_batches != batches) {
+    return "CUDA tracer: the annual product has " + std::to_string(d.cells) + " rows in " +
+           std::to_string(d.outdoor_batches) + " batches, the indoor stage " +
+           std::to_string(IndoorColumnCount(window, basis)) + " columns in " +
+           std::to_string(batches);
   }
-  std::string error = d.TraceIndoor(sensors, sensor_count, window, basis, paths_per_sensor, batches,
-                                    seed, path, nullptr, counters);
+  std::string error = d.TraceIndoor(sensors, sensor_count, window, outdoor_offset, basis,
+                                    paths_per_sensor, batches, seed, path, nullptr, counters);
   if (!error.empty()) return error;
   const int rows = batches * sensor_count;
   cudaError_t e = d.indoor.Reserve(static_cast<size_t>(rows) * d.cells);
@@ -717,14 +757,18 @@ std::string CudaTracer::IndoorAnnualTally(const TraceSensor* sensors, int sensor
   return d.Tally(batches, sensor_count, request);
 }
 
-std::string CudaTracer::SetAnnualProduct(const double* outdoor, int cells, const double* sky,
-                                         int steps) {
+std::string CudaTracer::SetAnnualProduct(const double* outdoor, int batches, int cells,
+                                         const double* sky, int steps) {
   Impl& d = *impl_;
-  std::vector<double> transposed(static_cast<size_t>(cells) * kTregenzaBinCount);
-  for (int c = 0; c < cells; ++c) {
-    for (int j = 0; j < kTregenzaBinCount; ++j) {
-      transposed[static_cast<size_t>(j) * cells + c] =
-          outdoor[static_cast<size_t>(c) * kTregenzaBinCount + j];
+  if (batches < 1) return "CUDA tracer: the annual product needs outdoor batches";
+  const size_t size = static_cast<size_t>(cells) * kTregenzaBinCount;
+  std::vector<double> transposed(size * batches);
+  for (size_t b = 0; b < static_cast<size_t>(batches); ++b) {
+    for (int c = 0; c < cells; ++c) {
+      for (int j = 0; j < kTregenzaBinCount; ++j) {
+        transposed[b * size + static_cast<size_t>(j) * cells + c] =
+            outdoor[b * size + static_cast<size_t>(c) * kTregenzaBinCount + j];
+      }
     }
   }
   cudaError_t e = cudaSetDevice(d.device);
@@ -733,12 +777,17 @@ std::string CudaTracer::SetAnnualProduct(const double* outdoor, int cells, const
   if (e != cudaSuccess) return Error(e);
   d.cells = cells;
   d.steps = steps;
+  d.outdoor_batches = batches;
   return "";
 }
 
 std::string CudaTracer::AnnualProduct(const double* indoor, int rows, double* illuminance) {
   Impl& d = *impl_;
   if (d.cells == 0) return kNoAnnualProduct;
+  if (rows % d.outdoor_batches != 0) {
+    return "CUDA tracer: " + std::to_string(rows) + " indoor rows do not split into " +
+           std::to_string(d.outdoor_batches) + " batches";
+  }
   cudaError_t e = d.UploadIndoor(indoor, rows);
   if (e == cudaSuccess) e = d.FormIlluminance(rows);
   if (e == cudaSuccess) {
@@ -751,6 +800,10 @@ std::string CudaTracer::AnnualTally(const double* indoor, int batches, int senso
                                     const TallyRequest& request) {
   Impl& d = *impl_;
   if (d.cells == 0) return kNoAnnualProduct;
+  if (batches != d.outdoor_batches) {
+    return "CUDA tracer: " + std::to_string(batches) + " indoor batches, " +
+           std::to_string(d.outdoor_batches) + " outdoor";
+  }
   if (cudaError_t e = d.UploadIndoor(indoor, batches * sensors); e != cudaSuccess) return Error(e);
   return d.Tally(batches, sensors, request);
 }
@@ -769,7 +822,7 @@ cudaError_t CudaTracer::Impl::FormIlluminance(int rows) {
   if (e == cudaSuccess) e = illuminance.Reserve(static_cast<size_t>(rows) * steps);
   if (e != cudaSuccess) return e;
   MultiplyTransposed(indoor.get(), outdoor_transposed.get(), through_window.get(), rows, cells,
-                     kTregenzaBinCount);
+                     kTregenzaBinCount, rows / outdoor_batches);
   Multiply(through_window.get(), sky.get(), illuminance.get(), rows, kTregenzaBinCount, steps);
   return cudaGetLastError();
 }

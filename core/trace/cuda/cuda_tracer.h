@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/geometry/hemisphere_basis.h"
 #include "core/trace/bvh_layout.h"
@@ -57,23 +58,33 @@ class CudaTracer {
                        int batches, uint64_t seed, const PathSettings& path, double* sum,
                        double* sum_squares, CudaCounters* counters);
 
-  // Outdoor paths, paths_per_cell from each basis cell; sums per cell x kTregenzaBinCount,
-  // the same streams as TraceOutdoorCpu.
+  // Outdoor paths, paths_per_cell from each window cell in `batches` batches, the same
+  // streams as TraceOutdoorCpu; sum gets its layout (kOutdoorRowSize per batch and cell).
   std::string Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
-                      uint64_t paths_per_cell, uint64_t seed, const PathSettings& path, double* sum,
-                      double* sum_squares, CudaCounters* counters);
+                      uint64_t paths_per_cell, int batches, uint64_t seed, const PathSettings& path,
+                      double* sum, CudaCounters* counters);
 
-  // Indoor paths in `batches` contiguous batches per sensor, as TraceIndoorCpu; sum gets
-  // [(batch * sensors + sensor) * cells + cell].
+  // Uploads the outdoor surfaces' BVH, which the indoor stage tests its window connections
+  // against (OutdoorView), and per window cell whether all its views meet them
+  // (WindowCellsMeetingSurfaces, for the next indoor stages' parts and basis). "" or the
+  // error.
+  std::string SetOutdoorScene(const BvhLayout& bvh, const std::vector<uint8_t>& met);
+
+  // Indoor paths in `batches` contiguous batches per sensor, as TraceIndoorCpu, against the
+  // uploaded scene and outdoor scene (`outdoor_offset`: OutdoorView::offset); sum gets
+  // [(batch * sensors + sensor) * columns + column].
   std::string Indoor(const TraceSensor* sensors, int sensor_count, const TraceWindow& window,
-                     const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
-                     uint64_t seed, const PathSettings& path, double* sum, CudaCounters* counters);
+                     Vec3f outdoor_offset, const HemisphereBasis& basis, uint64_t paths_per_sensor,
+                     int batches, uint64_t seed, const PathSettings& path, double* sum,
+                     CudaCounters* counters);
 
-  // The annual product of the two-stage method, E = (I O) S, on the device: SetAnnualProduct
-  // uploads O (cells x kTregenzaBinCount) and S (kTregenzaBinCount x steps), row-major;
-  // AnnualProduct multiplies `rows` stacked indoor rows (rows x cells) through them into
-  // `illuminance` (rows x steps). "" or the error.
-  std::string SetAnnualProduct(const double* outdoor, int cells, const double* sky, int steps);
+  // The annual product of the two-stage method, E_b = (I_b O_b) S, on the device:
+  // SetAnnualProduct uploads the `batches` O_b (each cells x kTregenzaBinCount, one after
+  // the other; cells = the columns of I) and S (kTregenzaBinCount x steps), row-major;
+  // AnnualProduct multiplies `rows` stacked indoor rows (rows x cells, batch-major, rows / B
+  // per batch) through them into `illuminance` (rows x steps). "" or the error.
+  std::string SetAnnualProduct(const double* outdoor, int batches, int cells, const double* sky,
+                               int steps);
   std::string AnnualProduct(const double* indoor, int rows, double* illuminance);
 
   // What the annual metrics need of E (core/metrics/annual_metrics.h, HourTally), reduced on
@@ -89,17 +100,17 @@ class CudaTracer {
     double* sums;
     int64_t* hours;
   };
-  // The tallies of E = (I O) S for `indoor`, batches x sensors stacked rows (batch-major).
-  // "" or the error.
+  // The tallies of E_b = (I_b O_b) S for `indoor`, batches x sensors stacked rows
+  // (batch-major), as many batches as the product's. "" or the error.
   std::string AnnualTally(const double* indoor, int batches, int sensors,
                           const TallyRequest& request);
   // Indoor's paths, then the tallies of their I (each batch's sums over its paths), without
   // I leaving the device. "" or the error.
   std::string IndoorAnnualTally(const TraceSensor* sensors, int sensor_count,
-                                const TraceWindow& window, const HemisphereBasis& basis,
-                                uint64_t paths_per_sensor, int batches, uint64_t seed,
-                                const PathSettings& path, const TallyRequest& request,
-                                CudaCounters* counters);
+                                const TraceWindow& window, Vec3f outdoor_offset,
+                                const HemisphereBasis& basis, uint64_t paths_per_sensor,
+                                int batches, uint64_t seed, const PathSettings& path,
+                                const TallyRequest& request, CudaCounters* counters);
 
   std::string device_name() const;
 

@@ -90,6 +90,30 @@ TEST_F(ReportCliTest, OptimizeLocalWritesTheAnnualOutputsAndReportMakesThePage) 
   EXPECT_FALSE(fs::exists(Path("x.html")));
 }
 
+// --backend replaces the job's tracer (here a GPU the test machine may lack) and --report
+// writes the page of the result file in the same run.
+TEST_F(ReportCliTest, OptimizeLocalTakesTheBackendAndWritesTheReport) {
+  v1::Job job = QuickJob(2);
+  job.set_scene_file(FENESTRA_SOURCE_DIR "/examples/city_office/scene.json");
+  job.mutable_sampling()->set_backend("cuda");
+  std::ofstream(Path("gpu_job.json")) << ToJson(job, JsonLayout::kIndented);
+  CommandResult run =
+      RunCommand({FENESTRA_CLI, "optimize", "--local", Path("gpu_job.json"), "-o", Path("r.json"),
+                  "--backend", "cpu", "--report", Path("r.html")});
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_THAT(run.output, HasSubstr("report: " + Path("r.html")));
+  const v1::JobResult result = ReadResult(Path("r.json"));
+  EXPECT_EQ(result.backend(), "embree-cpu");
+  EXPECT_TRUE(Read(Path("r.html")) == *RenderReport(result, {Path("r.json"), ""}))
+      << "the page differs";
+
+  run = RunCommand({FENESTRA_CLI, "optimize", "--local", Path("gpu_job.json"), "-o",
+                    Path("x.json"), "--backend", "gpu"});
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_THAT(run.output, HasSubstr("sampling.backend"));
+  EXPECT_FALSE(fs::exists(Path("x.json")));
+}
+
 TEST_F(ReportCliTest, JobReportAndResultThroughFenestrad) {
   FenestradProcess daemon(FENESTRAD, Path("data"));
   ASSERT_FALSE(daemon.address().empty()) << daemon.Log();

@@ -13,14 +13,14 @@
 namespace fenestra {
 namespace {
 
-// The backend's annual product (I_b O) S is each batch's D times the sky.
+// The backend's annual product (I_b O_b) S is each batch's D times the sky.
 TEST(AnnualProductTest, IsDTimesTheSky) {
   const Scene scene = LoadExample("city_office");
   IndoorOptions indoor;
   indoor.paths_per_sensor = 4'000;
   indoor.parts = {2, 1};
   OutdoorOptions outdoor;
-  outdoor.paths = 2 * 288 * 20;
+  outdoor.paths = 2 * 288 * 16;
   outdoor.parts = indoor.parts;
   absl::StatusOr<IndoorResult> i = ComputeIndoorStage(scene, DefaultDesign(scene), indoor);
   absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor);
@@ -30,7 +30,7 @@ TEST(AnnualProductTest, IsDTimesTheSky) {
   const Matrix sky = Matrix::Random(kDaylightBins, 40).cwiseAbs();
   std::unique_ptr<DcBackend> backend = MakeEmbreeBackend();
   absl::StatusOr<std::unique_ptr<AnnualProduct>> product =
-      backend->MakeAnnualProduct(o->coefficients, sky);
+      backend->MakeAnnualProduct(o->batches, sky);
   ASSERT_TRUE(product.ok()) << product.status();
   absl::StatusOr<std::vector<Matrix>> e = (*product)->Apply(i->batches);
   ASSERT_TRUE(e.ok()) << e.status();
@@ -39,17 +39,22 @@ TEST(AnnualProductTest, IsDTimesTheSky) {
     const Matrix expected = d->batches[b] * sky;
     EXPECT_LT(((*e)[b] - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff());
   }
-  // Batches of another window split are rejected
-  std::vector<Matrix> wrong = {Matrix::Zero(9, 288)};
+  // Batches of another window split, or other batch counts, are rejected
+  std::vector<Matrix> wrong(i->batches.size(), Matrix::Zero(9, 288));
   EXPECT_EQ((*product)->Apply(wrong).status().code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_FALSE(backend->MakeAnnualProduct(o->coefficients, Matrix::Zero(10, 4)).ok());
+  std::vector<Matrix> fewer(i->batches.begin(), i->batches.end() - 1);
+  EXPECT_EQ((*product)->Apply(fewer).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_FALSE(backend->MakeAnnualProduct(o->batches, Matrix::Zero(10, 4)).ok());
+  EXPECT_FALSE(backend->MakeAnnualProduct({o->coefficients}, sky).ok());
 }
 
 // The default tallies are those of the mean and leave-one-out E formed from Apply's E.
 TEST(AnnualProductTest, TalliesTheVersionsOfE) {
   const int batches = 4, sensors = 5, cells = 12, hours = 40;
   std::srand(7);
-  const Matrix outdoor = Matrix::Random(cells, kDaylightBins).cwiseAbs();
+  std::vector<Matrix> outdoor;
+  for (int b = 0; b < batches; ++b)
+    outdoor.push_back(Matrix::Random(cells, kDaylightBins).cwiseAbs());
   // Hours from dim to bright, so E crosses 100, 300 and 3000 lx
   Matrix sky = Matrix::Random(kDaylightBins, hours).cwiseAbs();
   for (int h = 0; h < hours; ++h) sky.col(h) *= 0.2 * std::pow(1.13, h);
@@ -88,12 +93,17 @@ TEST(AnnualProductTest, TalliesTheVersionsOfE) {
       EXPECT_NEAR(got.sensors[i].sum, expected.sensors[i].sum, 1e-9 * expected.sensors[i].sum);
     }
   }
-  // One batch has no leave-one-out; a batch of another window split is rejected
+  // Each E_b is batch b through its own O_b
+  for (int b = 0; b < batches; ++b) {
+    const Matrix expected = indoor[b] * outdoor[b] * sky;
+    EXPECT_LT(((*e)[b] - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff());
+  }
+  // Another batch count, or a batch of another window split, is rejected
   EXPECT_EQ((*product)->Tally({indoor[0]}, options).status().code(),
             absl::StatusCode::kInvalidArgument);
-  EXPECT_EQ(
-      (*product)->Tally({Matrix::Zero(sensors, cells + 1), indoor[1]}, options).status().code(),
-      absl::StatusCode::kInvalidArgument);
+  std::vector<Matrix> wrong = indoor;
+  wrong[0] = Matrix::Zero(sensors, cells + 1);
+  EXPECT_EQ((*product)->Tally(wrong, options).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
 }  // namespace

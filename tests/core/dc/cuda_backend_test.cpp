@@ -105,23 +105,33 @@ TEST(CudaBackendTest, TwoStageMatchesEmbree) {
   ASSERT_TRUE(i_cpu.ok() && i_gpu.ok());
   ExpectParity(i_cpu->coefficients, i_cpu->standard_error, i_gpu->coefficients,
                i_gpu->standard_error, "indoor matrix");
+  // Both tell direct light from light through the window cells alike
+  const double direct_cpu = i_cpu->coefficients.rightCols(kDaylightBins).sum();
+  const double direct_gpu = i_gpu->coefficients.rightCols(kDaylightBins).sum();
+  EXPECT_GT(direct_cpu, 0.1 * i_cpu->coefficients.sum());
+  EXPECT_NEAR(direct_gpu, direct_cpu, 0.02 * direct_cpu);
+  absl::StatusOr<TwoStageResult> d_cpu = CombineStages(*i_cpu, *o_cpu);
+  absl::StatusOr<TwoStageResult> d_gpu = CombineStages(*i_gpu, *o_gpu);
+  ASSERT_TRUE(d_cpu.ok() && d_gpu.ok());
+  ExpectParity(d_cpu->coefficients, d_cpu->standard_error, d_gpu->coefficients,
+               d_gpu->standard_error, "daylight coefficients");
   std::printf("outdoor: CPU %.3f s, GPU %.3f s; indoor: CPU %.3f s, GPU %.3f s\n",
               o_cpu->wall_seconds, o_gpu->wall_seconds, i_cpu->wall_seconds, i_gpu->wall_seconds);
 }
 
-// A city-office-sized annual product with random entries: O (window cells x bins), S (bins x
-// steps) and 8 indoor batches of 9 sensors.
+// A city-office-sized annual product with random entries: 8 batches of O (window cells and
+// direct columns x bins) and of I (9 sensors), and S (bins x steps).
 struct RandomInputs {
-  Matrix outdoor, sky;
+  std::vector<Matrix> outdoor;
+  Matrix sky;
   std::vector<Matrix> indoor;
 };
 RandomInputs RandomProduct(int steps) {
-  const int cells = 3456, sensors = 9, batches = 8;
-  RandomInputs inputs{Matrix::Random(cells, kDaylightBins).cwiseAbs(),
-                      Matrix::Random(kDaylightBins, steps).cwiseAbs(),
-                      {}};
+  const int rows = 3456 + kDaylightBins, sensors = 9, batches = 8;
+  RandomInputs inputs{{}, Matrix::Random(kDaylightBins, steps).cwiseAbs(), {}};
   for (int b = 0; b < batches; ++b) {
-    inputs.indoor.push_back(Matrix::Random(sensors, cells).cwiseAbs());
+    inputs.outdoor.push_back(Matrix::Random(rows, kDaylightBins).cwiseAbs());
+    inputs.indoor.push_back(Matrix::Random(sensors, rows).cwiseAbs());
   }
   return inputs;
 }
@@ -138,18 +148,18 @@ MetricOptions QuartileLimits(const Matrix& illuminance) {
   return options;
 }
 
-// The annual product (I_b O) S on the GPU equals the CPU's, and a second product on the
+// The annual product (I_b O_b) S on the GPU equals the CPU's, and a second product on the
 // same backend does not disturb the first.
 TEST(CudaBackendTest, AnnualProductMatchesCpu) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
   const auto [outdoor, sky, indoor] = RandomProduct(4380);
-  const int cells = static_cast<int>(outdoor.rows()), batches = static_cast<int>(indoor.size());
+  const int rows = static_cast<int>(outdoor[0].rows()), batches = static_cast<int>(indoor.size());
   std::unique_ptr<DcBackend> cpu = MakeEmbreeBackend();
   absl::StatusOr<std::unique_ptr<AnnualProduct>> expected = cpu->MakeAnnualProduct(outdoor, sky);
   absl::StatusOr<std::unique_ptr<AnnualProduct>> first = gpu->MakeAnnualProduct(outdoor, sky);
   absl::StatusOr<std::unique_ptr<AnnualProduct>> second =
-      gpu->MakeAnnualProduct(Matrix::Zero(cells, kDaylightBins), sky);
+      gpu->MakeAnnualProduct(std::vector<Matrix>(batches, Matrix::Zero(rows, kDaylightBins)), sky);
   ASSERT_TRUE(expected.ok() && first.ok() && second.ok());
   absl::StatusOr<std::vector<Matrix>> e_cpu = (*expected)->Apply(indoor);
   absl::StatusOr<std::vector<Matrix>> e_zero = (*second)->Apply(indoor);
@@ -220,6 +230,7 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
   OutdoorOptions outdoor;
   outdoor.paths = 500'000;
   outdoor.parts = AutomaticWindowParts(scene.window);
+  outdoor.batches = 4;
   absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor, gpu.get());
   ASSERT_TRUE(o.ok()) << o.status();
   const Matrix sky = Matrix::Random(kDaylightBins, 500).cwiseAbs();
@@ -228,9 +239,9 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
   indoor.batches = 4;
   indoor.parts = outdoor.parts;
   absl::StatusOr<std::unique_ptr<DesignTallies>> on_device =
-      gpu->MakeDesignTallies(scene, indoor, o->coefficients, sky);
+      gpu->MakeDesignTallies(scene, indoor, o->batches, sky);
   absl::StatusOr<std::unique_ptr<DesignTallies>> in_turn =
-      gpu->DcBackend::MakeDesignTallies(scene, indoor, o->coefficients, sky);
+      gpu->DcBackend::MakeDesignTallies(scene, indoor, o->batches, sky);
   ASSERT_TRUE(on_device.ok() && in_turn.ok()) << on_device.status();
   // Limits at quartiles of E, so that sensors fall on either side of them
   absl::StatusOr<IndoorResult> i =

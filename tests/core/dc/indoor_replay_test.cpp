@@ -42,6 +42,11 @@ TEST(IndoorReplayTest, EqualsTheIndoorStage) {
     }
     const double difference = (traced->coefficients - replayed->coefficients).cwiseAbs().sum();
     EXPECT_LT(difference, 1e-6 * traced->coefficients.sum());
+    // Both kinds of column carry light: the direct ones (the view reaches the sky) and the
+    // window cells (it meets the street's buildings)
+    EXPECT_GT(replayed->coefficients.rightCols(kDaylightBins).sum(), 0);
+    EXPECT_GT(replayed->coefficients.leftCols(replayed->coefficients.cols() - kDaylightBins).sum(),
+              0);
   }
   // Outside the recorded ranges the replay would be wrong, so it refuses
   BlindDesign wide = DefaultDesign(scene);

@@ -77,6 +77,29 @@ TEST(MergeRoundsTest, IndoorBatchesMergeOneByOne) {
   EXPECT_EQ(m->paths_per_sensor, 200);
 }
 
+// The outdoor stage's batches merge as the indoor stage's, and pair up afterwards.
+TEST(MergeRoundsTest, OutdoorBatchesMergeOneByOne) {
+  OutdoorResult a, b;
+  a.paths_per_cell = 100, b.paths_per_cell = 300;
+  a.batches = {Matrix::Constant(2, 1, 1.0), Matrix::Constant(2, 1, 3.0)};
+  b.batches = {Matrix::Constant(2, 1, 5.0), Matrix::Constant(2, 1, 9.0)};
+  a.coefficients = Matrix::Constant(2, 1, 2.0);
+  b.coefficients = Matrix::Constant(2, 1, 7.0);
+  a.sky_view = Eigen::VectorXd::Constant(1, 0.2);
+  b.sky_view = Eigen::VectorXd::Constant(1, 0.6);
+  absl::StatusOr<OutdoorResult> m = MergeRounds(a, b);
+  ASSERT_TRUE(m.ok()) << m.status();
+  // Weights 1/4 and 3/4: batches 4 and 7.5 around 5.75
+  EXPECT_DOUBLE_EQ(m->batches[0](1, 0), 4.0);
+  EXPECT_DOUBLE_EQ(m->batches[1](1, 0), 7.5);
+  EXPECT_DOUBLE_EQ(m->coefficients(0, 0), 5.75);
+  EXPECT_DOUBLE_EQ(m->standard_error(0, 0), 1.75);
+  EXPECT_DOUBLE_EQ(m->sky_view(0), 0.5);
+  EXPECT_EQ(m->paths_per_cell, 400);
+  b.batches.push_back(b.batches[0]);
+  EXPECT_EQ(MergeRounds(a, b).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
 OneStageOptions PlainRoulette(int64_t paths, uint64_t seed) {
   OneStageOptions options;
   options.paths_per_sensor = paths;
@@ -183,9 +206,11 @@ IndoorOptions Indoor(int64_t paths) {
   return options;
 }
 
+// As many batches as Indoor's, to pair with them.
 OutdoorOptions Outdoor(int64_t paths) {
   OutdoorOptions options;
   options.paths = paths;
+  options.batches = 32;
   return options;
 }
 
@@ -201,7 +226,7 @@ TEST(TargetErrorTest, TwoStageReachesTheTargetAndSplitsTheVariance) {
   const Eigen::VectorXd relative = RelativeErrors(d.sky_sum, d.sky_sum_standard_error);
   EXPECT_LE(relative.maxCoeff(), 0.05);
   EXPECT_GE(relative.maxCoeff(), 0.7 * 0.05);
-  const Eigen::VectorXd indoor = IndoorSkySumVariance(d);
+  const Eigen::VectorXd indoor = IndoorSkySumVariance(run->indoor, run->outdoor);
   for (int s = 0; s < 3; ++s) {
     EXPECT_GT(indoor(s), 0);
     EXPECT_LT(indoor(s), std::pow(d.sky_sum_standard_error(s), 2));
@@ -212,7 +237,7 @@ TEST(TargetErrorTest, TwoStageReachesTheTargetAndSplitsTheVariance) {
   }
   // The result is the merged stages'
   EXPECT_EQ(run->indoor.paths_per_sensor, run->outcome.rounds.back().paths_per_sensor);
-  EXPECT_EQ(run->outdoor.paths_per_cell * run->outdoor.coefficients.rows(),
+  EXPECT_EQ(run->outdoor.paths_per_cell * run->outdoor.sky_view.size(),
             run->outcome.rounds.back().outdoor_paths);
 }
 

@@ -91,28 +91,31 @@ TEST(HourlyIlluminanceTest, TheResultSaysHowItWasMade) {
   EXPECT_TRUE(result.versions().contains("embree"));
 }
 
-// Two seeds differ by about their standard errors (the same outdoor matrix for both)
+// Two seeds of both stages differ by about their standard errors, which hold both stages'
+// noise
 TEST(HourlyIlluminanceTest, StandardErrorsMatchTheSpreadBetweenSeeds) {
   const Scene scene = LoadExample("city_office");
   absl::StatusOr<v1::Sampling> sampling = ResolveSampling(QuickJob().sampling());
   ASSERT_TRUE(sampling.ok()) << sampling.status();
-  absl::StatusOr<OutdoorMatrix> outdoor = ComputeOutdoorMatrix(scene, *sampling);
-  ASSERT_TRUE(outdoor.ok()) << outdoor.status();
   absl::StatusOr<EpwData> weather = ReadEpw(scene.site.weather_file);
   ASSERT_TRUE(weather.ok()) << weather.status();
   absl::StatusOr<SkyMatrix> sky = BuildSkyMatrix(*weather);
   ASSERT_TRUE(sky.ok()) << sky.status();
   IndoorOptions options;
   options.paths_per_sensor = 2000;
-  options.parts = outdoor->parts;
+  options.batches = sampling->batches();
   BlindDesign design = DefaultDesign(scene);
   design.tilt_rad = 0.5;
   std::unique_ptr<DcBackend> backend = MakeEmbreeBackend();
   std::vector<v1::HourlyIlluminance> runs;
   for (const uint64_t seed : {1, 2}) {
+    sampling->set_seed(seed);
+    absl::StatusOr<OutdoorMatrix> outdoor = ComputeOutdoorMatrix(scene, *sampling);
+    ASSERT_TRUE(outdoor.ok()) << outdoor.status();
+    options.parts = outdoor->parts;
     options.seed = seed;
     absl::StatusOr<v1::HourlyIlluminance> hourly =
-        DesignHourlyIlluminance(scene, design, options, outdoor->coefficients, *sky, *backend);
+        DesignHourlyIlluminance(scene, design, options, outdoor->batches, *sky, *backend);
     ASSERT_TRUE(hourly.ok()) << hourly.status();
     runs.push_back(*std::move(hourly));
   }
@@ -140,7 +143,7 @@ TEST(HourlyIlluminanceTest, NeedsTwoBatches) {
   SkyMatrix sky;
   std::unique_ptr<DcBackend> backend = MakeEmbreeBackend();
   absl::StatusOr<v1::HourlyIlluminance> hourly = DesignHourlyIlluminance(
-      scene, DefaultDesign(scene), options, Matrix::Zero(288, 146), sky, *backend);
+      scene, DefaultDesign(scene), options, {Matrix::Zero(288 + 146, 146)}, sky, *backend);
   EXPECT_EQ(hourly.status().code(), absl::StatusCode::kInvalidArgument);
 }
 

@@ -2,13 +2,17 @@
 
 #include <gtest/gtest.h>
 
+#include <climits>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "core/optimize/final_check.h"
+#include "google/protobuf/util/message_differencer.h"
 #include "tests/example_scene.h"
+#include "tests/quick_job.h"
 
 namespace fenestra {
 namespace {
@@ -16,7 +20,7 @@ namespace {
 // The quick tilt job (examples/city_office/alpha_max_quick.json: 10^4 indoor paths per
 // sensor) with `evaluations`, on the CPU; `unlimited`: both stages without a reflection
 // limit, as the final check traces.
-PreparedJob QuickJob(int evaluations, bool unlimited) {
+PreparedJob PrepareQuickJob(int evaluations, bool unlimited) {
   absl::StatusOr<v1::Job> job =
       ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json");
   EXPECT_TRUE(job.ok()) << job.status();
@@ -85,12 +89,12 @@ TEST(JobTest, WindowPartsAreResolvedAndChecked) {
   EXPECT_FALSE(ResolveSampling(few).ok());
 }
 
-// A job needs two outdoor paths per window cell of its resolved parts
+// A job needs an outdoor path per window cell of its resolved parts and batch
 TEST(JobTest, PrepareChecksOutdoorPathsAgainstTheWindowCells) {
   absl::StatusOr<v1::Job> job =
       ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json");
   ASSERT_TRUE(job.ok()) << job.status();
-  job->mutable_sampling()->set_outdoor_paths(5000);  // 4 x 3 x 288 cells need 6912
+  job->mutable_sampling()->set_outdoor_paths(20000);  // 4 x 3 x 288 cells x 8 batches: 27648
   absl::StatusOr<PreparedJob> prepared =
       PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
   ASSERT_FALSE(prepared.ok());
@@ -131,7 +135,7 @@ TEST(JobTest, FinalCheckIsOnUnlessTheSamplingSaysNo) {
 // Where both methods count the same light (no reflection limits), the one-stage check of the
 // best design agrees with the two-stage value within the errors (seed 1).
 TEST(JobTest, FinalCheckAgreesWhereBothMethodsCountTheSameLight) {
-  const PreparedJob job = QuickJob(8, /*unlimited=*/true);
+  const PreparedJob job = PrepareQuickJob(8, /*unlimited=*/true);
   const Reported r = RunReporting(job);
   ASSERT_TRUE(r.result.has_final_check());
   const v1::FinalCheck& c = r.result.final_check();
@@ -177,7 +181,7 @@ TEST(JobTest, FinalCheckAgreesWhereBothMethodsCountTheSameLight) {
 // The quick job as published, with at most 5 indoor and 10 outdoor reflections: the check,
 // which traces without a limit, finds the light the limits leave out (seed 1).
 TEST(JobTest, FinalCheckFindsTheLightTheReflectionLimitsLeaveOut) {
-  const Reported r = RunReporting(QuickJob(8, /*unlimited=*/false));
+  const Reported r = RunReporting(PrepareQuickJob(8, /*unlimited=*/false));
   ASSERT_TRUE(r.result.has_final_check());
   const v1::FinalCheck& c = r.result.final_check();
   Print(c);
@@ -188,7 +192,7 @@ TEST(JobTest, FinalCheckFindsTheLightTheReflectionLimitsLeaveOut) {
 // Error against time: each evaluation's value, error and time, and the best value's as the
 // search went, one entry per move of the incumbent.
 TEST(JobTest, BestOverTimeFollowsTheIncumbent) {
-  PreparedJob job = QuickJob(12, /*unlimited=*/false);
+  PreparedJob job = PrepareQuickJob(12, /*unlimited=*/false);
   job.job.mutable_sampling()->set_final_check(false);
   const Reported r = RunReporting(job);
   EXPECT_FALSE(r.result.has_final_check());
@@ -234,7 +238,7 @@ TEST(JobTest, BestOverTimeFollowsTheIncumbent) {
 // A cancelled job stops without its check.
 TEST(JobTest, CancelledJobLeavesTheCheckOut) {
   int reports = 0;
-  PreparedJob job = QuickJob(12, /*unlimited=*/false);
+  PreparedJob job = PrepareQuickJob(12, /*unlimited=*/false);
   JobCallbacks callbacks;
   std::vector<std::string> stages;
   callbacks.stage = [&](const std::string& stage) { stages.push_back(stage); };
@@ -248,5 +252,229 @@ TEST(JobTest, CancelledJobLeavesTheCheckOut) {
   EXPECT_EQ(reports, 3);
 }
 
+// Resuming: the quick tilt job (tests/quick_job.h) of 14 evaluations on the CPU, its outdoor
+// matrix traced once, run through and interrupted.
+class JobResumeTest : public ::testing::Test {
+ protected:
+  // What a run handed out and returned.
+  struct Run {
+    absl::StatusOr<v1::JobResult> result;
+    std::vector<std::string> checkpoints;  // serialized, one per step
+    std::vector<std::string> stages;
+  };
+
+  static void SetUpTestSuite() {
+    absl::StatusOr<PreparedJob> job =
+        PrepareJob(QuickJob(14), FENESTRA_SOURCE_DIR "/examples/city_office");
+    ASSERT_TRUE(job.ok()) << job.status();
+    job_ = new PreparedJob(*std::move(job));
+    absl::StatusOr<OutdoorMatrix> outdoor = ComputeOutdoorMatrix(job_->scene, job_->job.sampling());
+    ASSERT_TRUE(outdoor.ok()) << outdoor.status();
+    outdoor_ = new OutdoorMatrix(*std::move(outdoor));
+  }
+  static void TearDownTestSuite() {
+    delete outdoor_;
+    delete job_;
+  }
+
+  // The checkpoint after 6 steps, serialized.
+  static std::string AfterSixSteps() {
+    const Run run = RunJobOf(*job_, nullptr, 6);
+    EXPECT_EQ(run.checkpoints.size(), 6u);
+    return run.checkpoints.empty() ? std::string() : run.checkpoints.back();
+  }
+
+  // Runs `job` from `resume`, cancelled once the search has made `stop_at` steps.
+  static Run RunJobOf(const PreparedJob& job, const v1::SearchCheckpoint* resume = nullptr,
+                      int stop_at = INT_MAX) {
+    Run run;
+    int steps = 0;
+    JobCallbacks callbacks;
+    callbacks.stage = [&](const std::string& stage) { run.stages.push_back(stage); };
+    callbacks.checkpoint = [&](const v1::SearchCheckpoint& checkpoint) {
+      run.checkpoints.push_back(checkpoint.SerializeAsString());
+      steps = checkpoint.history_size();
+    };
+    callbacks.cancelled = [&] { return steps >= stop_at; };
+    run.result = RunJob(job, outdoor_, callbacks, resume);
+    return run;
+  }
+
+  static v1::SearchCheckpoint Parsed(const std::string& bytes) {
+    absl::StatusOr<v1::SearchCheckpoint> checkpoint = ParseSearchCheckpoint(bytes);
+    EXPECT_TRUE(checkpoint.ok()) << checkpoint.status();
+    return checkpoint.ok() ? *std::move(checkpoint) : v1::SearchCheckpoint();
+  }
+
+  // `history` without its times.
+  static void ClearTimes(google::protobuf::RepeatedPtrField<v1::Evaluation>& history) {
+    for (v1::Evaluation& e : history) {
+      e.clear_seconds();
+      e.clear_elapsed_seconds();
+    }
+  }
+  static v1::JobResult Timeless(v1::JobResult result) {
+    ClearTimes(*result.mutable_history());
+    for (v1::BestSoFar& best : *result.mutable_best_over_time()) best.clear_elapsed_seconds();
+    result.clear_timings();
+    result.mutable_final_check()->clear_seconds();
+    return result;
+  }
+  static v1::SearchCheckpoint Timeless(v1::SearchCheckpoint checkpoint) {
+    ClearTimes(*checkpoint.mutable_history());
+    checkpoint.clear_search_seconds();
+    return checkpoint;
+  }
+
+  template <class Message>
+  static void ExpectEqual(const Message& a, const Message& b) {
+    google::protobuf::util::MessageDifferencer differencer;
+    std::string differences;
+    differencer.ReportDifferencesToString(&differences);
+    EXPECT_TRUE(differencer.Compare(a, b)) << differences;
+  }
+
+  // The refusal of `checkpoint`, before any stage of the job.
+  static std::string Refusal(const PreparedJob& job, const v1::SearchCheckpoint& checkpoint) {
+    const Run run = RunJobOf(job, &checkpoint);
+    EXPECT_EQ(run.result.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_TRUE(run.stages.empty());
+    return std::string(run.result.status().message());
+  }
+
+  static PreparedJob* job_;
+  static OutdoorMatrix* outdoor_;
+};
+
+PreparedJob* JobResumeTest::job_ = nullptr;
+OutdoorMatrix* JobResumeTest::outdoor_ = nullptr;
+
+// Interrupted after 3 steps and after 9, resumed each time from the serialized checkpoint:
+// the result of the uninterrupted run, times aside, with no step done twice.
+TEST_F(JobResumeTest, ResumedJobEndsAsTheUninterruptedOne) {
+  const Run uninterrupted = RunJobOf(*job_);
+  ASSERT_TRUE(uninterrupted.result.ok()) << uninterrupted.result.status();
+  const v1::JobResult& full = *uninterrupted.result;
+  ASSERT_EQ(full.stop_reason(), "evaluation_budget");
+  ASSERT_TRUE(full.has_final_check());
+  ASSERT_GT(full.history_size(), 9);
+  ASSERT_EQ(uninterrupted.checkpoints.size(), static_cast<size_t>(full.history_size()));
+  int hits = 0;
+  for (const v1::Evaluation& e : full.history()) hits += e.cached() ? 1 : 0;
+  EXPECT_GT(hits, 0);  // the tilt's lower bound is proposed again
+  EXPECT_GT(full.best_over_time_size(), 1);
+
+  // Stopped after 3 steps: the checkpoint of the uninterrupted run's third step
+  const Run first = RunJobOf(*job_, nullptr, 3);
+  ASSERT_TRUE(first.result.ok()) << first.result.status();
+  EXPECT_EQ(first.result->stop_reason(), "cancelled");
+  ASSERT_EQ(first.checkpoints.size(), 3u);
+  const v1::SearchCheckpoint after_3 = Parsed(first.checkpoints.back());
+  EXPECT_EQ(after_3.format(), kSearchCheckpointFormat);
+  EXPECT_EQ(after_3.job_hash(), JobContentHash(*job_));
+  ExpectEqual(Timeless(after_3), Timeless(Parsed(uninterrupted.checkpoints[2])));
+
+  // Resumed, stopped after 9: the stages before the search again, the steps after the third
+  const Run second = RunJobOf(*job_, &after_3, 9);
+  ASSERT_TRUE(second.result.ok()) << second.result.status();
+  EXPECT_EQ(second.stages, (std::vector<std::string>{"sky", "indoor paths", "search"}));
+  ASSERT_EQ(second.checkpoints.size(), 6u);
+  EXPECT_EQ(Parsed(second.checkpoints.front()).history_size(), 4);
+  const v1::SearchCheckpoint after_9 = Parsed(second.checkpoints.back());
+  ExpectEqual(Timeless(after_9), Timeless(Parsed(uninterrupted.checkpoints[8])));
+  for (int i = 0; i < 3; ++i) ExpectEqual(after_9.history(i), after_3.history(i));  // as kept
+
+  // Resumed to the end: the uninterrupted result, the clock going on from the checkpoint's
+  const Run third = RunJobOf(*job_, &after_9);
+  ASSERT_TRUE(third.result.ok()) << third.result.status();
+  ExpectEqual(Timeless(*third.result), Timeless(full));
+  EXPECT_EQ(third.checkpoints.size(), uninterrupted.checkpoints.size() - 9);
+  for (int i = 0; i < 9; ++i) ExpectEqual(third.result->history(i), after_9.history(i));
+  const double stopped_at = after_9.history(8).elapsed_seconds();
+  EXPECT_GE(third.result->history(9).elapsed_seconds(),
+            stopped_at + third.result->timings().sky_seconds());
+  EXPECT_GE(third.result->timings().total_seconds(), stopped_at);
+
+  // Resumed after its last step: nothing is evaluated, the result is the same
+  const v1::SearchCheckpoint at_end = Parsed(uninterrupted.checkpoints.back());
+  const Run last = RunJobOf(*job_, &at_end);
+  ASSERT_TRUE(last.result.ok()) << last.result.status();
+  EXPECT_TRUE(last.checkpoints.empty());
+  ExpectEqual(Timeless(*last.result), Timeless(full));
+}
+
+// A checkpoint belongs to one job: any change of the job's content refuses it.
+TEST_F(JobResumeTest, CheckpointOfAnotherJobIsRefused) {
+  const v1::SearchCheckpoint checkpoint = Parsed(AfterSixSteps());
+  absl::StatusOr<PreparedJob> same =
+      PrepareJob(QuickJob(14), FENESTRA_SOURCE_DIR "/examples/city_office");
+  ASSERT_TRUE(same.ok()) << same.status();
+  EXPECT_EQ(JobContentHash(*same), JobContentHash(*job_));
+
+  for (const auto& change : std::vector<std::function<void(v1::Job&)>>{
+           [](v1::Job& j) { j.mutable_budget()->set_max_evaluations(15); },
+           [](v1::Job& j) { j.mutable_sampling()->set_seed(2); },
+           [](v1::Job& j) { j.mutable_metrics()->set_udi_upper_lux(2500); }}) {
+    v1::Job job = QuickJob(14);
+    change(job);
+    absl::StatusOr<PreparedJob> other =
+        PrepareJob(job, FENESTRA_SOURCE_DIR "/examples/city_office");
+    ASSERT_TRUE(other.ok()) << other.status();
+    EXPECT_NE(JobContentHash(*other), JobContentHash(*job_));
+    EXPECT_EQ(Refusal(*other, checkpoint),
+              "search checkpoint: it belongs to another job (its content hash differs)");
+  }
+
+  // The scene's and the weather's content count, not where they were read from
+  PreparedJob moved = *job_;
+  moved.job.set_scene_file("/elsewhere/scene.json");
+  moved.weather_file = "/elsewhere/weather.epw";
+  EXPECT_EQ(JobContentHash(moved), JobContentHash(*job_));
+  PreparedJob other_scene = *job_;
+  other_scene.scene.materials[0].reflectance *= 0.9;
+  EXPECT_NE(JobContentHash(other_scene), JobContentHash(*job_));
+  PreparedJob other_weather = *job_;
+  other_weather.weather.records[4000].diffuse_horizontal_wm2 += 1;
+  EXPECT_NE(JobContentHash(other_weather), JobContentHash(*job_));
+  EXPECT_NE(Refusal(other_weather, checkpoint).find("another job"), std::string::npos);
+}
+
+// Bytes that are no checkpoint, a format this build does not read, and a history the job's
+// search does not make are refused with what is wrong, before any stage.
+TEST_F(JobResumeTest, CorruptedOrUnknownCheckpointIsRefused) {
+  const std::string bytes = AfterSixSteps();
+
+  for (const std::string& bad : {std::string("\x0f\x01", 2), bytes.substr(0, bytes.size() - 3)}) {
+    absl::StatusOr<v1::SearchCheckpoint> parsed = ParseSearchCheckpoint(bad);
+    EXPECT_EQ(parsed.status().code(), absl::StatusCode::kDataLoss);
+    EXPECT_NE(parsed.status().message().find("not a serialized fenestra.v1.SearchCheckpoint"),
+              std::string::npos)
+        << parsed.status();
+  }
+  v1::SearchCheckpoint later = Parsed(bytes);
+  later.set_format(2);
+  const std::string expected = "search checkpoint: format 2, but this build reads format 1 only";
+  EXPECT_EQ(ParseSearchCheckpoint(later.SerializeAsString()).status().message(), expected);
+  EXPECT_EQ(Refusal(*job_, later), expected);
+  EXPECT_EQ(ParseSearchCheckpoint("").status().message(),
+            "search checkpoint: format 0, but this build reads format 1 only");
+
+  v1::SearchCheckpoint moved = Parsed(bytes);
+  (*moved.mutable_history(2)->mutable_design())["alpha"] += 0.01;
+  EXPECT_NE(Refusal(*job_, moved)
+                .find("search checkpoint: resume: step 2 differs from this "
+                      "search's (design ("),
+            std::string::npos);
+  v1::SearchCheckpoint flipped = Parsed(bytes);
+  flipped.mutable_history(4)->set_improved(!flipped.history(4).improved());
+  EXPECT_NE(Refusal(*job_, flipped).find("step 4 differs from this search's (improvement)"),
+            std::string::npos);
+  v1::SearchCheckpoint missing = Parsed(bytes);
+  missing.mutable_history(1)->mutable_design()->erase("alpha");
+  EXPECT_EQ(Refusal(*job_, missing), "search checkpoint: step 1 has no value of variable 'alpha'");
+  v1::SearchCheckpoint empty = Parsed(bytes);
+  empty.clear_history();
+  EXPECT_EQ(Refusal(*job_, empty), "search checkpoint: no steps");
+}
 }  // namespace
 }  // namespace fenestra

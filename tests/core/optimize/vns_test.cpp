@@ -2,14 +2,18 @@
 
 #include <gtest/gtest.h>
 
+#include <any>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <numbers>
 #include <set>
+#include <string>
 #include <thread>
 #include <vector>
+
+#include "absl/strings/str_cat.h"
 
 namespace fenestra {
 namespace {
@@ -366,5 +370,258 @@ TEST(VnsTest, RejectsBadVariablesAndOptions) {
   EXPECT_FALSE(RunVns(ok, Bowl, bad_neighborhood).ok());
 }
 
+// Resuming: a noisy bowl over a continuous variable starting on its bound, a gridded one
+// (cache hits) and a fixed one; the payload is the design's first coordinate.
+absl::StatusOr<Evaluation> NoisyBowl(const std::vector<double>& x) {
+  Evaluation e =
+      Value(10 - 30 * (std::pow(x[0] - 0.7, 2) + std::pow(x[1] - 0.35, 2)) + 0.2 * Noise(x), 0.2);
+  e.payload = x[0];
+  return e;
+}
+
+std::vector<DesignVariable> ResumeVariables() {
+  std::vector<DesignVariable> vars = {Var("a", 0, 1, 0), Var("b", 0, 1, 0.5), Var("c", 2, 3, 2.5)};
+  vars[1].step = 0.05;
+  vars[2].fixed = true;
+  return vars;
+}
+
+struct ResumeCase {
+  std::string name;
+  VnsOptions options;
+  StopReason stop;  // how the uninterrupted search ends
+  std::vector<DesignVariable> variables = ResumeVariables();
+};
+
+// Every stopping rule a resumed search must meet where the uninterrupted one did.
+std::vector<ResumeCase> ResumeCases() {
+  std::vector<ResumeCase> cases;
+  VnsOptions budget;
+  budget.max_evaluations = 60;
+  budget.failed_cycles_to_stop = 0;
+  budget.min_improvement_standard_errors = 0.5;
+  budget.seed = 5;
+  cases.push_back({"budget", budget, StopReason::kEvaluationBudget});
+  VnsOptions failed;
+  failed.failed_cycles_to_stop = 2;
+  cases.push_back({"failed cycles", failed, StopReason::kAllNeighborhoodsFailed});
+  VnsOptions target;
+  target.objective = {ObjectiveSense::kTarget, 7, 0.05};
+  target.boundary = BoundaryRule::kReflect;
+  cases.push_back({"target", target, StopReason::kTargetReached});
+  VnsOptions exhausted;
+  exhausted.failed_cycles_to_stop = 0;
+  exhausted.max_consecutive_cache_hits = 6;
+  std::vector<DesignVariable> gridded = ResumeVariables();
+  gridded[0].step = 0.1;
+  cases.push_back({"space exhausted", exhausted, StopReason::kSpaceExhausted, gridded});
+  return cases;
+}
+
+void ExpectSameSearch(const VnsResult& a, const VnsResult& b) {
+  ASSERT_EQ(a.history.size(), b.history.size());
+  for (size_t i = 0; i < a.history.size(); ++i) {
+    const VnsRecord &x = a.history[i], &y = b.history[i];
+    EXPECT_EQ(x.index, y.index);
+    EXPECT_EQ(x.x, y.x) << "step " << i;
+    EXPECT_EQ(x.evaluation.value, y.evaluation.value) << "step " << i;
+    EXPECT_EQ(x.evaluation.standard_error, y.evaluation.standard_error);
+    EXPECT_EQ(x.score, y.score);
+    EXPECT_EQ(x.cached, y.cached) << "step " << i;
+    EXPECT_EQ(x.improved, y.improved) << "step " << i;
+    EXPECT_EQ(x.neighborhood, y.neighborhood) << "step " << i;
+  }
+  EXPECT_EQ(a.best_x, b.best_x);
+  EXPECT_EQ(a.best.value, b.best.value);
+  EXPECT_EQ(a.best.standard_error, b.best.standard_error);
+  EXPECT_EQ(a.best_score, b.best_score);
+  EXPECT_EQ(a.best_index, b.best_index);
+  EXPECT_EQ(a.evaluations, b.evaluations);
+  EXPECT_EQ(a.cache_hits, b.cache_hits);
+  EXPECT_EQ(a.improvements, b.improvements);
+  EXPECT_EQ(a.stop_reason, b.stop_reason);
+}
+
+// Resumed from the checkpoint of every step, the search ends as the uninterrupted one: the
+// same steps, incumbent, counts and stopping rule, and no design evaluated twice.
+TEST(VnsTest, ResumedFromAnyStepTheSearchEndsAsTheUninterruptedOne) {
+  for (const ResumeCase& c : ResumeCases()) {
+    SCOPED_TRACE(c.name);
+    const std::vector<DesignVariable>& vars = c.variables;
+    std::vector<VnsResult> checkpoints;
+    VnsCallbacks callbacks;
+    callbacks.checkpoint = [&](const VnsResult& so_far) { checkpoints.push_back(so_far); };
+    absl::StatusOr<VnsResult> full = RunVns(vars, NoisyBowl, c.options, callbacks);
+    ASSERT_TRUE(full.ok()) << full.status();
+    ASSERT_EQ(full->stop_reason, c.stop) << StopReasonName(full->stop_reason);
+    ASSERT_EQ(checkpoints.size(), full->history.size());
+    EXPECT_GT(full->cache_hits, 0);
+    EXPECT_GT(full->improvements, 1);
+
+    for (const VnsResult& checkpoint : checkpoints) {
+      const size_t done = checkpoint.history.size();
+      SCOPED_TRACE(done);
+      EXPECT_EQ(checkpoint.best_x, checkpoint.history[checkpoint.best_index].x);
+      std::set<std::vector<double>> evaluated;
+      for (const VnsRecord& record : checkpoint.history) evaluated.insert(record.x);
+      int calls = 0;
+      auto counted = [&](const std::vector<double>& x) {
+        ++calls;
+        EXPECT_TRUE(evaluated.insert(x).second) << "evaluated again";
+        return NoisyBowl(x);
+      };
+      size_t handed_out = done;
+      VnsCallbacks resumed_callbacks;
+      resumed_callbacks.checkpoint = [&](const VnsResult& so_far) {
+        EXPECT_EQ(so_far.history.size(), ++handed_out);
+      };
+      absl::StatusOr<VnsResult> resumed =
+          RunVns(vars, counted, c.options, resumed_callbacks, &checkpoint);
+      ASSERT_TRUE(resumed.ok()) << resumed.status();
+      ExpectSameSearch(*resumed, *full);
+      EXPECT_EQ(calls, full->evaluations - checkpoint.evaluations);
+      EXPECT_EQ(std::any_cast<double>(resumed->best.payload), resumed->best_x[0]);
+    }
+  }
+}
+
+// Cancelled right after a checkpoint, resumed, cancelled and resumed again: the search of
+// an uninterrupted run.
+TEST(VnsTest, CancelledSearchGoesOnFromItsLastCheckpoint) {
+  const std::vector<DesignVariable> vars = ResumeVariables();
+  const VnsOptions options = ResumeCases()[0].options;
+  absl::StatusOr<VnsResult> full = RunVns(vars, NoisyBowl, options);
+  ASSERT_TRUE(full.ok()) << full.status();
+
+  // Stopped once the search has made `stop_at` steps
+  VnsResult last;
+  size_t stop_at = 7;
+  VnsCallbacks callbacks;
+  callbacks.checkpoint = [&](const VnsResult& so_far) { last = so_far; };
+  callbacks.cancelled = [&] { return last.history.size() >= stop_at; };
+  absl::StatusOr<VnsResult> first = RunVns(vars, NoisyBowl, options, callbacks);
+  ASSERT_TRUE(first.ok()) << first.status();
+  EXPECT_EQ(first->stop_reason, StopReason::kCancelled);
+  ASSERT_EQ(last.history.size(), 7u);
+  EXPECT_EQ(first->history.size(), 7u);
+
+  const VnsResult after_first = last;
+  stop_at = 30;
+  absl::StatusOr<VnsResult> second = RunVns(vars, NoisyBowl, options, callbacks, &after_first);
+  ASSERT_TRUE(second.ok()) << second.status();
+  EXPECT_EQ(second->stop_reason, StopReason::kCancelled);
+  ASSERT_EQ(last.history.size(), 30u);
+
+  const VnsResult after_second = last;
+  stop_at = full->history.size() + 1;
+  absl::StatusOr<VnsResult> third = RunVns(vars, NoisyBowl, options, callbacks, &after_second);
+  ASSERT_TRUE(third.ok()) << third.status();
+  ExpectSameSearch(*third, *full);
+}
+
+// The clock goes on from the checkpoint's, and so does the time budget.
+TEST(VnsTest, ResumedClockGoesOnFromTheCheckpoint) {
+  const std::vector<DesignVariable> vars = ResumeVariables();
+  VnsOptions options = ResumeCases()[0].options;
+  VnsResult so_far;
+  VnsCallbacks callbacks;
+  callbacks.checkpoint = [&](const VnsResult& s) { so_far = s; };
+  callbacks.cancelled = [&] { return so_far.history.size() >= 5; };
+  ASSERT_TRUE(RunVns(vars, NoisyBowl, options, callbacks).ok());
+  so_far.elapsed_seconds = 1000;
+
+  absl::StatusOr<VnsResult> resumed = RunVns(vars, NoisyBowl, options, {}, &so_far);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  EXPECT_EQ(resumed->stop_reason, StopReason::kEvaluationBudget);
+  for (size_t i = 5; i < resumed->history.size(); ++i) {
+    EXPECT_GE(resumed->history[i].elapsed_seconds, 1000);
+  }
+  EXPECT_GE(resumed->elapsed_seconds, 1000);
+
+  // Spent at the checkpoint: nothing more is evaluated
+  options.max_seconds = 1000;
+  int calls = 0;
+  auto counted = [&](const std::vector<double>& x) {
+    ++calls;
+    return NoisyBowl(x);
+  };
+  absl::StatusOr<VnsResult> spent = RunVns(vars, counted, options, {}, &so_far);
+  ASSERT_TRUE(spent.ok()) << spent.status();
+  EXPECT_EQ(spent->stop_reason, StopReason::kTimeBudget);
+  EXPECT_EQ(calls, 0);
+  EXPECT_EQ(spent->history.size(), 5u);
+}
+
+// A history that the search does not make is refused, naming the step and what differs.
+TEST(VnsTest, ResumeRefusesAHistoryOfAnotherSearch) {
+  const std::vector<DesignVariable> vars = ResumeVariables();
+  const VnsOptions options = ResumeCases()[0].options;
+  VnsResult so_far;
+  VnsCallbacks callbacks;
+  callbacks.checkpoint = [&](const VnsResult& s) { so_far = s; };
+  absl::StatusOr<VnsResult> full = RunVns(vars, NoisyBowl, options, callbacks);
+  ASSERT_TRUE(full.ok()) << full.status();
+  int first_hit = -1, first_failure = -1;
+  for (const VnsRecord& r : so_far.history) {
+    if (r.cached && first_hit < 0) first_hit = r.index;
+    if (!r.improved && !r.cached && first_failure < 0) first_failure = r.index;
+  }
+  ASSERT_GT(first_hit, 0);
+  ASSERT_GT(first_failure, 0);
+
+  auto refused = [&](const VnsResult& bad, const VnsOptions& o, const std::string& says) {
+    int calls = 0;
+    auto counted = [&](const std::vector<double>& x) {
+      ++calls;
+      return NoisyBowl(x);
+    };
+    absl::StatusOr<VnsResult> r = RunVns(vars, counted, o, {}, &bad);
+    EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << says;
+    EXPECT_NE(r.status().message().find(says), std::string::npos) << r.status();
+    EXPECT_EQ(CheckVnsResume(vars, o, bad).message(), r.status().message());
+    EXPECT_EQ(calls, 0);
+  };
+  EXPECT_TRUE(CheckVnsResume(vars, options, so_far).ok());
+
+  VnsOptions other_seed = options;
+  other_seed.seed = 6;
+  refused(so_far, other_seed, "step 1 differs from this search's (design (");
+  VnsOptions other_neighborhoods = options;
+  other_neighborhoods.neighborhoods.pop_back();
+  refused(so_far, other_neighborhoods, "differs from this search's");
+  VnsOptions minimizing = options;
+  minimizing.objective.sense = ObjectiveSense::kMinimize;
+  refused(so_far, minimizing, "(improvement)");
+
+  VnsResult bad = so_far;
+  bad.history[first_failure].improved = true;
+  refused(bad, options, absl::StrCat("step ", first_failure, " differs"));
+  bad = so_far;
+  bad.history[first_hit].evaluation.value += 1;
+  refused(bad, options, "a cache hit with another value");
+  bad = so_far;
+  bad.history[first_hit].cached = false;
+  refused(bad, options,
+          absl::StrCat("step ", first_hit, " differs from this search's (cache hit)"));
+  bad = so_far;
+  bad.history[3].neighborhood = (bad.history[3].neighborhood + 1) % 5;
+  refused(bad, options, "step 3 differs from this search's (neighborhood");
+  bad = so_far;
+  bad.history[0].x[1] = 0.55;
+  refused(bad, options, "step 0 differs from this search's (design (0, 0.55, 2.5))");
+  bad = so_far;
+  bad.history[2].x.pop_back();
+  refused(bad, options, "step 2 differs");
+  bad = so_far;
+  bad.history[4].evaluation.standard_error = std::nan("");
+  refused(bad, options, "not finite");
+  bad = so_far;
+  bad.history[4].index = 5;
+  refused(bad, options, "step 4 differs from this search's (index 5)");
+  bad = so_far;
+  bad.elapsed_seconds = -1;
+  refused(bad, options, "elapsed_seconds -1 is not a time");
+  refused(VnsResult(), options, "no steps");
+}
 }  // namespace
 }  // namespace fenestra

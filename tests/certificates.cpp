@@ -1,4 +1,4 @@
-#include "tests/client/certificates.h"
+#include "tests/certificates.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -60,8 +60,13 @@ absl::StatusOr<TestCertificates> MakeTestCertificates(const std::string& dir) {
        }) {
     if (!status.ok()) return status;
   }
-  return TestCertificates{dir + "/ca.crt",     dir + "/server.crt", dir + "/server.key",
-                          dir + "/client.crt", dir + "/client.key", dir + "/other_ca.crt"};
+  return TestCertificates{dir + "/ca.crt",
+                          dir + "/server.crt",
+                          dir + "/server.key",
+                          dir + "/client.crt",
+                          dir + "/client.key",
+                          dir + "/other_ca.crt",
+                          dir};
 }
 
 const absl::StatusOr<TestCertificates>& ProcessTestCertificates() {
@@ -76,6 +81,13 @@ const absl::StatusOr<TestCertificates>& ProcessTestCertificates() {
   } folder;
   static const absl::StatusOr<TestCertificates> certificates = MakeTestCertificates(folder.path);
   return certificates;
+}
+
+const TestCertificates& Certs() {
+  const absl::StatusOr<TestCertificates>& certificates = ProcessTestCertificates();
+  EXPECT_TRUE(certificates.ok()) << certificates.status();
+  static const TestCertificates none;
+  return certificates.ok() ? *certificates : none;
 }
 
 std::shared_ptr<grpc::ServerCredentials> ServerTlsCredentials(const TestCertificates& files,

@@ -1,0 +1,256 @@
+// Two-stage against one-stage across the blind's design space (bench/README.md, "Two-stage
+// across the design space"), bounces unlimited in both methods: a grid of 3^4 designs of
+// the city office (alpha, w, s, t at both ends and the middle of their ranges) and the
+// designs named in the notes; per design and sensor the two methods' sky sums with their
+// combined standard error, per design the scene's UDI of both with jackknife errors, and
+// the times; then the sensor sums of one design over independent seeds of both stages,
+// for the calibration of the errors (z-scores). Meant for the GPU:
+//   two_stage_grid_bench [cuda|cpu] [--quick] [--seeds N]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <numbers>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "bench/bench_util.h"
+#include "core/dc/dc_backend.h"
+#include "core/dc/one_stage.h"
+#include "core/dc/two_stage.h"
+#include "core/metrics/illuminance.h"
+#include "core/metrics/metric_errors.h"
+#include "core/metrics/occupancy.h"
+#include "core/sky/epw.h"
+#include "core/sky/sky_matrix.h"
+
+namespace fenestra {
+namespace {
+
+const std::string kRoot = FENESTRA_SOURCE_DIR;
+
+double Since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+struct Design {
+  std::string name;
+  double alpha, width, spacing, thickness;
+};
+
+std::vector<Design> Designs() {
+  std::vector<Design> designs = {{"optimum", 0.0, 0.13, 0.07, 0.014},
+                                 {"source_tilt", 0.58, 0.15, 0.0, 0.01},
+                                 {"source_tilt_open", 0.58, 0.15, 0.05, 0.02},
+                                 {"thin_wide_gaps", 0.0, 0.05, 0.10, 0.01},
+                                 {"shelves", std::numbers::pi / 2, 0.15, 0.0, 0.02}};
+  const double pi = std::numbers::pi;
+  for (double alpha : {0.0, pi / 4, pi / 2}) {
+    for (double width : {0.05, 0.10, 0.15}) {
+      for (double spacing : {0.0, 0.05, 0.10}) {
+        for (double thickness : {0.01, 0.015, 0.02}) {
+          designs.push_back({"grid", alpha, width, spacing, thickness});
+        }
+      }
+    }
+  }
+  return designs;
+}
+
+struct AnnualSky {
+  Matrix radiance;
+  std::vector<int> columns;
+  std::vector<bool> occupied;
+};
+
+AnnualSky CityOfficeSky() {
+  AnnualSky s;
+  const EpwData weather =
+      ValueOrExit(ReadEpw(kRoot + "/examples/weather/URY_Montevideo.865800_IWEC.epw"));
+  const SkyMatrix matrix = ValueOrExit(BuildSkyMatrix(weather));
+  std::vector<double> hours;
+  for (const SkyStep& step : matrix.steps) hours.push_back(step.hour);
+  s.occupied = ValueOrExit(OccupiedSteps(hours));
+  for (const int c : LitColumns(matrix.radiance)) {
+    if (s.occupied[c]) s.columns.push_back(c);
+  }
+  s.radiance = matrix.radiance;
+  return s;
+}
+
+// The scene's mean UDI [%] and its jackknife error from batches of D.
+std::pair<double, double> Udi(const AnnualSky& sky, const std::vector<Matrix>& batches) {
+  const AnnualMetricsEstimate m = ValueOrExit(AnnualMetricsWithErrors(
+      batches, std::span<const Matrix>(&sky.radiance, 1), sky.columns, sky.occupied));
+  return {m.value.scene.udi_mean_percent, m.standard_error.scene.udi_mean_percent};
+}
+
+}  // namespace
+}  // namespace fenestra
+
+int main(int argc, char** argv) {
+  using namespace fenestra;
+  std::string backend_name = "cuda";
+  bool quick = false;
+  int seeds = 40;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--quick") {
+      quick = true;
+    } else if (arg == "--seeds" && i + 1 < argc) {
+      seeds = std::atoi(argv[++i]);
+    } else {
+      backend_name = arg;
+    }
+  }
+  std::unique_ptr<DcBackend> backend = ValueOrExit(MakeBackend(backend_name));
+  const Scene scene = ValueOrExit(LoadScene(kRoot + "/examples/city_office/scene.json"));
+  const AnnualSky sky = CityOfficeSky();
+  const WindowParts parts = AutomaticWindowParts(scene.window);
+  const int64_t one_stage_paths = quick ? 200'000 : 10'000'000;
+  const int64_t outdoor_paths = quick ? 2'000'000 : 200'000'000;
+  const int64_t indoor_paths = quick ? 200'000 : 2'000'000;
+  std::printf(
+      "backend: %s\ncity office, bounces unlimited (roulette) in both methods; one-stage %lld "
+      "paths per sensor (plain roulette, threshold 0.25, 8 batches); two-stage: outdoor %lld "
+      "paths once for all designs, indoor %lld paths per sensor, %dx%d window parts x 288 "
+      "direction cells, 8 batches paired\n",
+      backend->Name().c_str(), static_cast<long long>(one_stage_paths),
+      static_cast<long long>(outdoor_paths), static_cast<long long>(indoor_paths), parts.columns,
+      parts.rows);
+
+  OutdoorOptions outdoor;
+  outdoor.paths = outdoor_paths;
+  outdoor.max_bounces = -1;
+  outdoor.parts = parts;
+  outdoor.seed = 2;
+  const OutdoorResult o = ValueOrExit(ComputeOutdoorStage(scene, outdoor, backend.get()));
+  std::printf("outdoor stage: %.3f s\n\n", o.wall_seconds);
+
+  // Per design and sensor
+  std::printf(
+      "%-17s %5s %5s %5s %6s | per sensor: (two-stage / one-stage - 1) in %% and in combined SE "
+      "| UDI one-stage, two-stage [%%] | s one, two\n",
+      "design", "alpha", "w", "s", "t");
+  std::vector<double> z_all, udi_differences;
+  double worst_z = 0, worst_relative = 0, worst_udi = 0, worst_udi_z = 0;
+  std::string worst_z_at, worst_udi_at;
+  int beyond_3 = 0, beyond_3_plus_1 = 0, beyond_udi = 0;
+  double one_seconds = 0, two_seconds = 0;
+  const std::vector<Design> designs = Designs();
+  for (const Design& d : designs) {
+    const BlindDesign design =
+        ValueOrExit(DesignWithOverrides(scene, {{"alpha", d.alpha},
+                                                {"width", d.width},
+                                                {"spacing", d.spacing},
+                                                {"thickness", d.thickness}}));
+    OneStageOptions one;
+    one.paths_per_sensor = one_stage_paths;
+    one.max_bounces = 0;
+    one.seed = 1;
+    one.batches = kDefaultBatches;
+    one.weight_windows = false;  // as the GPU runs it
+    const OneStageResult r = ValueOrExit(ComputeOneStage(scene, design, one, backend.get()));
+    IndoorOptions indoor;
+    indoor.paths_per_sensor = indoor_paths;
+    indoor.max_bounces = -1;
+    indoor.parts = parts;
+    indoor.seed = 3;
+    const auto start = std::chrono::steady_clock::now();
+    const IndoorResult i = ValueOrExit(ComputeIndoorStage(scene, design, indoor, backend.get()));
+    const TwoStageResult t = ValueOrExit(CombineStages(i, o));
+    const double two = Since(start);
+    one_seconds += r.wall_seconds, two_seconds += two;
+    std::printf("%-17s %5.3f %5.3f %5.3f %6.4f |", d.name.c_str(), d.alpha, d.width, d.spacing,
+                d.thickness);
+    for (Eigen::Index s = 0; s < r.sky_sum.size(); ++s) {
+      const double se = std::hypot(r.sky_sum_standard_error(s), t.sky_sum_standard_error(s));
+      const double z = (t.sky_sum(s) - r.sky_sum(s)) / se;
+      const double relative = t.sky_sum(s) / r.sky_sum(s) - 1;
+      z_all.push_back(z);
+      if (std::abs(z) > 3) ++beyond_3;
+      if (std::abs(t.sky_sum(s) - r.sky_sum(s)) > 3 * se + 0.01 * r.sky_sum(s)) ++beyond_3_plus_1;
+      if (std::abs(z) > std::abs(worst_z)) {
+        worst_z = z;
+        worst_z_at = d.name + " S" + std::to_string(s + 1);
+      }
+      worst_relative = std::max(worst_relative, std::abs(relative));
+      std::printf(" %+5.2f(%+4.1f)", 100 * relative, z);
+    }
+    const auto [udi_one, udi_one_se] = Udi(sky, r.batch_coefficients);
+    const auto [udi_two, udi_two_se] = Udi(sky, t.batches);
+    const double difference = udi_two - udi_one;
+    const double udi_z = difference / std::hypot(udi_one_se, udi_two_se);
+    udi_differences.push_back(difference);
+    if (std::abs(difference) > std::abs(worst_udi)) worst_udi = difference, worst_udi_at = d.name;
+    worst_udi_z = std::max(worst_udi_z, std::abs(udi_z));
+    if (std::abs(difference) > 0.5) ++beyond_udi;
+    std::printf(" | %6.2f±%.2f %6.2f±%.2f (%+.2f, %+.1f SE) | %.3f %.3f\n", udi_one, udi_one_se,
+                udi_two, udi_two_se, difference, udi_z, r.wall_seconds, two);
+  }
+  double squares = 0;
+  for (const double z : z_all) squares += z * z;
+  std::printf(
+      "\n%zu designs x 9 sensors: |two / one - 1| at most %.2f%%; largest |difference| %.2f "
+      "combined SE (%s); rms %.2f SE; beyond 3 SE: %d, beyond 3 SE + 1%%: %d\n",
+      designs.size(), 100 * worst_relative, std::abs(worst_z), worst_z_at.c_str(),
+      std::sqrt(squares / z_all.size()), beyond_3, beyond_3_plus_1);
+  std::printf(
+      "UDI: largest |two-stage - one-stage| %.2f points (%s), largest %.1f combined SE; beyond "
+      "0.5 points: %d of %zu; time per design: one-stage %.3f s, two-stage indoor %.3f s\n",
+      std::abs(worst_udi), worst_udi_at.c_str(), worst_udi_z, beyond_udi, designs.size(),
+      one_seconds / designs.size(), two_seconds / designs.size());
+
+  // Calibration: sky sums over independent seeds of both stages, at a job's sampling
+  std::printf(
+      "\nsky sums over %d seeds of both stages (outdoor 2e7 paths, indoor 2e5 paths per sensor, "
+      "unlimited bounces, 8 batches): z = (x_k - mean) / rms(SE_k) x sqrt(K / (K - 1)); and "
+      "with each seed's own SE\n",
+      seeds);
+  for (const Design& d : {designs[0], designs[1], designs[4]}) {
+    const BlindDesign design =
+        ValueOrExit(DesignWithOverrides(scene, {{"alpha", d.alpha},
+                                                {"width", d.width},
+                                                {"spacing", d.spacing},
+                                                {"thickness", d.thickness}}));
+    std::vector<Eigen::VectorXd> sums, errors;
+    for (int k = 0; k < seeds; ++k) {
+      OutdoorOptions out = outdoor;
+      out.paths = quick ? 1'000'000 : 20'000'000;
+      out.seed = 1000 + k;
+      IndoorOptions in;
+      in.paths_per_sensor = quick ? 20'000 : 200'000;
+      in.max_bounces = -1;
+      in.parts = parts;
+      in.seed = 2000 + k;
+      const OutdoorResult ok = ValueOrExit(ComputeOutdoorStage(scene, out, backend.get()));
+      const IndoorResult ik = ValueOrExit(ComputeIndoorStage(scene, design, in, backend.get()));
+      const TwoStageResult tk = ValueOrExit(CombineStages(ik, ok));
+      sums.push_back(tk.sky_sum);
+      errors.push_back(tk.sky_sum_standard_error);
+    }
+    double pooled = 0, own = 0;
+    int count = 0;
+    std::printf("%-17s per sensor z SD:", d.name.c_str());
+    for (Eigen::Index s = 0; s < sums[0].size(); ++s) {
+      double mean = 0, variance = 0, sensor = 0;
+      for (int k = 0; k < seeds; ++k) {
+        mean += sums[k](s) / seeds;
+        variance += errors[k](s) * errors[k](s) / seeds;
+      }
+      for (int k = 0; k < seeds; ++k) {
+        const double scale = std::sqrt(seeds / (seeds - 1.0));
+        const double z = (sums[k](s) - mean) / std::sqrt(variance) * scale;
+        const double z_own = (sums[k](s) - mean) / errors[k](s) * scale;
+        pooled += z * z, own += z_own * z_own, sensor += z * z;
+        ++count;
+      }
+      std::printf(" %.2f", std::sqrt(sensor / seeds));
+    }
+    std::printf("; all: %.3f (own SE: %.3f), %d z-scores\n", std::sqrt(pooled / count),
+                std::sqrt(own / count), count);
+  }
+  return 0;
+}
