@@ -328,7 +328,8 @@ absl::Status JobManager::Save(Record& r, std::optional<v1::JobEvent> event, bool
   }
   bool cancel_requested = false;
   const absl::Status stored =
-      store_.UpdateJob(r.lease(), r.wanted, event ? &*event : nullptr, durable, &cancel_requested);
+      store_.UpdateJob(r.lease(), r.wanted, event ? &*event : nullptr, durable, &cancel_requested,
+                       r.checkpoint ? &*r.checkpoint : nullptr);
   if (!stored.ok()) {
     r.wanted.set_last_sequence(r.info.last_sequence());
     if (stored.code() == absl::StatusCode::kAborted) r.held->lost = true;
@@ -336,6 +337,7 @@ absl::Status JobManager::Save(Record& r, std::optional<v1::JobEvent> event, bool
   }
   if (cancel_requested) r.held->cancel_requested = true;
   r.info = r.wanted;
+  r.checkpoint.reset();
   return absl::OkStatus();
 }
 
@@ -370,10 +372,14 @@ void JobManager::Run(std::shared_ptr<Scheduler::Held> held) {
   info->set_cancel_requested(false);
   r.info = r.wanted = *std::move(info);
   if (claim.taken_over) {
-    spdlog::warn("job {}: taken over from replica {}, whose lease expired (it stopped)", id,
-                 LogSafe(claim.previous_replica));
+    r.resume = LastCheckpoint(id);
+    spdlog::warn("job {}: taken over from replica {}, whose lease expired (it stopped); {}", id,
+                 LogSafe(claim.previous_replica),
+                 r.resume ? absl::StrCat("it goes on after its last checkpoint (",
+                                         r.resume->history_size(), " steps)")
+                          : std::string("it starts again (no checkpoint)"));
   }
-  if (Start(r, 0)) {
+  if (Start(r)) {
     try {
       RunStarted(r);
     } catch (const std::exception& e) {
@@ -390,7 +396,28 @@ void JobManager::Run(std::shared_ptr<Scheduler::Held> held) {
   ReleaseFreeMemory();  // the scene, its BVH and the tracer's buffers
 }
 
-bool JobManager::Start(Record& r, int resumed_evaluations) {
+std::optional<v1::SearchCheckpoint> JobManager::LastCheckpoint(const std::string& id) {
+  absl::StatusOr<std::optional<std::string>> bytes = store_.LoadCheckpoint(id);
+  if (!bytes.ok()) {
+    spdlog::warn("job {}: its checkpoint cannot be read ({}); it starts again", id,
+                 std::string(bytes.status().message()));
+    return std::nullopt;
+  }
+  if (!*bytes) return std::nullopt;
+  absl::StatusOr<v1::SearchCheckpoint> checkpoint = ParseSearchCheckpoint(**bytes);
+  if (!checkpoint.ok()) {
+    spdlog::warn("job {}: its checkpoint is not usable ({}); it starts again", id,
+                 std::string(checkpoint.status().message()));
+    return std::nullopt;
+  }
+  return *std::move(checkpoint);
+}
+
+bool JobManager::Start(Record& r) {
+  int resumed_evaluations = 0;
+  if (r.resume) {
+    for (const v1::Evaluation& step : r.resume->history()) resumed_evaluations += !step.cached();
+  }
   for (int attempt = 0;; ++attempt) {
     {
       std::lock_guard lock(r.mutex);
@@ -526,8 +553,20 @@ void JobManager::RunStarted(Record& r) {
     *r.wanted.mutable_progress() = event.progress();
     Report(r, event, /*durable=*/false);
   };
+  callbacks.checkpoint = [&](const v1::SearchCheckpoint& checkpoint) {
+    std::lock_guard lock(r.mutex);
+    r.checkpoint = checkpoint.SerializeAsString();
+  };
   callbacks.cancelled = cancelled;
-  absl::StatusOr<v1::JobResult> result = RunJob(*prepared, lookup->matrix.get(), callbacks);
+  absl::StatusOr<v1::JobResult> result =
+      RunJob(*prepared, lookup->matrix.get(), callbacks, r.resume ? &*r.resume : nullptr);
+  if (r.resume && result.status().code() == absl::StatusCode::kInvalidArgument) {
+    // A checkpoint this job's search does not make (another build's): from the start
+    spdlog::warn("job {}: its checkpoint cannot be resumed ({}); it starts again", r.info.id(),
+                 std::string(result.status().message()));
+    r.resume.reset();
+    result = RunJob(*prepared, lookup->matrix.get(), callbacks);
+  }
   if (!result.ok()) return fail(std::string(result.status().message()));
   if (result->stop_reason() == "cancelled" && hand_back()) return;
 

@@ -86,6 +86,10 @@ class JobManager {
     std::optional<v1::JobEvent> end;  // the final event, while its storing waits
     std::string weather;              // the job's weather file, released at its end
     bool store_failing = false;       // the last Report failed (logged once)
+    // The search's latest checkpoint, stored with the next progress
+    std::optional<std::string> checkpoint;
+    // A job taken over: the checkpoint it goes on from
+    std::optional<v1::SearchCheckpoint> resume;
   };
   // What Admit found: the job as it is stored (the default backend filled in, its weather
   // file not yet), the new job's info (owner, name, site, outdoor key, backend, upload
@@ -122,9 +126,11 @@ class JobManager {
   void Ended(Record& record);
   // The committer thread: stores the waiting final states every second until `stop`.
   void Commit();
+  // A job taken over: its last checkpoint, if it has one that parses.
+  std::optional<v1::SearchCheckpoint> LastCheckpoint(const std::string& id);
   // Stores a claimed job's running state; while the store fails, tries again every second
   // until the claim is lost or the daemon stops. True when the job may run.
-  bool Start(Record& record, int resumed_evaluations);
+  bool Start(Record& record);
   // Runs a started job to its end.
   void RunStarted(Record& record);
 

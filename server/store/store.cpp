@@ -649,7 +649,8 @@ absl::Status Store::Release(Claim::Kind kind, const Lease& lease) {
 // ---- A claimed job's writes
 
 absl::Status Store::UpdateJob(const Lease& lease, const v1::JobInfo& info,
-                              const v1::JobEvent* event, bool durable, bool* cancel_requested) {
+                              const v1::JobEvent* event, bool durable, bool* cancel_requested,
+                              const std::string* checkpoint) {
   const std::string info_bytes = info.SerializeAsString();
   const std::string event_bytes = event ? event->SerializeAsString() : "";
   return Transact(
@@ -660,6 +661,11 @@ absl::Status Store::UpdateJob(const Lease& lease, const v1::JobInfo& info,
             {Blob(info_bytes), int64_t{info.state()}, lease.id, lease.run, kRunning});
         FENESTRA_RETURN_IF_ERROR(Fenced(updated, lease));
         if (cancel_requested) *cancel_requested = updated->rows[0].Int(0) != 0;
+        if (checkpoint) {
+          FENESTRA_RETURN_IF_ERROR(
+              s.Run("UPDATE jobs SET checkpoint = ? WHERE id = ?", {Blob(*checkpoint), lease.id})
+                  .status());
+        }
         if (event) {
           FENESTRA_RETURN_IF_ERROR(
               s.Run("INSERT INTO job_events (job_id, sequence, event) VALUES (?, ?, ?)",

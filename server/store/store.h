@@ -167,10 +167,12 @@ class Store final : public UserStore {
 
   // ---- A claimed job's writes: Aborted ("lease lost") once another claim took it
 
-  // Replaces the job's info and appends `event` (numbered after the last stored one);
-  // `durable` = false for progress. `cancel_requested`, when given, is set from the store.
+  // Replaces the job's info and appends `event` (numbered after the last stored one), and
+  // its checkpoint when given (opaque bytes, replaced); `durable` = false for progress.
+  // `cancel_requested`, when given, is set from the store.
   absl::Status UpdateJob(const Lease& lease, const v1::JobInfo& info, const v1::JobEvent* event,
-                         bool durable = true, bool* cancel_requested = nullptr);
+                         bool durable = true, bool* cancel_requested = nullptr,
+                         const std::string* checkpoint = nullptr);
   // The job's end: its final info and event; its earlier events and checkpoint are dropped.
   absl::Status FinishJob(const Lease& lease, const v1::JobInfo& info, const v1::JobEvent& event);
   // Stores the job's checkpoint (opaque bytes, replaced).

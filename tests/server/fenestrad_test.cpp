@@ -142,19 +142,26 @@ TEST_F(FenestradTest, SigkillDuringAJobThenRestart) {
   const std::string queued = Submit(*d, tiny, {"--site", "site-1"});
   WaitJob(*d, running, Running);
   EXPECT_EQ(GetJob(*d, queued).state(), v1::JOB_STATE_QUEUED);
+  const int before = GetJob(*d, running).progress().evaluations();
   EXPECT_EQ(d->Kill(), 128 + SIGKILL);
 
-  // The job that was running is taken over at once (before the queued one); it keeps
-  // its progress so far until it reports again
+  // The job that was running is taken over at once (before the queued one), from its last
+  // checkpoint: no evaluation stored before the kill is done again
   d->Start();
   EXPECT_EQ(GetJob(*d, running).state(), v1::JOB_STATE_RUNNING);
-  EXPECT_GE(GetJob(*d, running).progress().evaluations(), 2);
+  EXPECT_GE(GetJob(*d, running).progress().evaluations(), before);
   WaitLog(*d, "job " + running + ": taken over from replica");
-  WaitJob(*d, running, Running);
+  EXPECT_THAT(d->Log(), HasSubstr("it goes on after its last checkpoint"));
+  WaitJob(*d, running, [&](const v1::JobInfo& j) { return j.progress().evaluations() > before; });
   EXPECT_EQ(GetJob(*d, queued).state(), v1::JOB_STATE_QUEUED);
   r = d->Cli({"job", "cancel", running});
   ASSERT_EQ(r.code, 0) << r.err;
-  WaitJob(*d, running, [](const v1::JobInfo& j) { return j.state() == v1::JOB_STATE_CANCELLED; });
+  const v1::JobInfo cancelled = WaitJob(
+      *d, running, [](const v1::JobInfo& j) { return j.state() == v1::JOB_STATE_CANCELLED; });
+  EXPECT_GT(cancelled.result().evaluations(), before);
+  for (int k = 0; k < cancelled.result().history_size(); ++k) {
+    EXPECT_EQ(cancelled.result().history(k).index(), k);
+  }
   // The queued job runs next; the site's matrix came from disk
   const v1::JobInfo resumed = WaitJob(
       *d, queued, [](const v1::JobInfo& j) { return j.state() == v1::JOB_STATE_SUCCEEDED; });
