@@ -195,6 +195,8 @@ void Scheduler::Renew() {
     if (failing) spdlog::info("this replica's leases are renewed again");
     failing = false;
     for (size_t i = 0; i < held.size(); ++i) {
+      // Ended meanwhile: its lease ended with it
+      if (held[i]->done) continue;
       if (!(*renewed)[i].held && !held[i]->lost.exchange(true)) {
         spdlog::warn(
             "{}: its lease was lost (taken over by another replica, or the record is "
