@@ -445,5 +445,72 @@ TEST_F(ClusterTest, TheSingleSqliteDaemonResumesAJobAfterSigkill) {
   EXPECT_EQ(Count(log, "job " + job.id() + " succeeded"), 1);
 }
 
+TEST_F(ClusterTest, MigrateCopiesADataDirectoryIntoPostgresql) {
+  // A single daemon's data directory: a user, a site, a job that ran on it
+  const std::string data = dir_ + "/data";
+  const CommandResult added = RunCommand({FENESTRAD, "user", "add", "ann", "--data-dir", data});
+  ASSERT_EQ(added.exit_code, 0) << added.output;
+  std::smatch token;
+  ASSERT_TRUE(std::regex_search(added.output, token, std::regex("\\b[0-9a-f]{64}\\b")));
+  const std::vector<std::string> flags = {"--auth", "token", "--backend", "cpu"};
+  auto daemon = std::make_unique<FenestradProcess>(FENESTRAD, data, flags);
+  ASSERT_FALSE(daemon->address().empty()) << daemon->Log();
+  Client before(daemon->address(), token.str());
+  const v1::Job job = ClusterJob(kQuickEvaluations, 3);
+  v1::SiteInfo site;
+  ASSERT_TRUE(before.Register(SiteRequest(job), &site).ok());
+  ASSERT_EQ(before.WaitSite(site.id()).state(), v1::SITE_STATE_READY);
+  v1::JobInfo ran;
+  ASSERT_TRUE(before.Submit(OnSite(job, site.id()), &ran).ok());
+  ran = before.Wait(ran.id(), Ended);
+  ASSERT_EQ(ran.state(), v1::JOB_STATE_SUCCEEDED) << ran.error();
+
+  PostgresServer postgres(dir_ + "/postgresql");
+  ASSERT_TRUE(postgres.ok()) << postgres.error();
+  const std::string store = postgres.Url();
+  const auto migrate = [&](std::vector<std::string> extra) {
+    std::vector<std::string> argv = {FENESTRAD,        "migrate", "--from",
+                                     "sqlite:" + data, "--to",    store};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    return RunCommand(argv);
+  };
+  // Not while a daemon uses the directory
+  CommandResult migrated = migrate({});
+  EXPECT_EQ(migrated.exit_code, 1);
+  EXPECT_THAT(migrated.output, HasSubstr("in use by another process"));
+  daemon.reset();
+  migrated = migrate({});
+  ASSERT_EQ(migrated.exit_code, 0) << migrated.output;
+  EXPECT_THAT(migrated.output, HasSubstr("users: 1 rows"));
+  EXPECT_THAT(migrated.output, HasSubstr("jobs: 1 rows"));
+  EXPECT_THAT(migrated.output, HasSubstr("sites: 1 rows"));
+  EXPECT_THAT(migrated.output, HasSubstr("outdoor matrices: 1 files"));
+  // A target that holds something only when told
+  migrated = migrate({});
+  EXPECT_EQ(migrated.exit_code, 1);
+  EXPECT_THAT(migrated.output, HasSubstr("--overwrite"));
+  migrated = migrate({"--overwrite"});
+  ASSERT_EQ(migrated.exit_code, 0) << migrated.output;
+
+  // A replica on the store serves them all: the user's token, the job's result, the site
+  // with its matrix, which a new job reuses
+  FenestradProcess replica(FENESTRAD, dir_ + "/replica",
+                           {"--auth", "token", "--backend", "cpu", "--store", store});
+  ASSERT_FALSE(replica.address().empty()) << replica.Log();
+  Client after(replica.address(), token.str());
+  v1::JobInfo copied;
+  ASSERT_TRUE(after.Get(ran.id(), &copied).ok());
+  EXPECT_EQ(copied.state(), v1::JOB_STATE_SUCCEEDED);
+  ExpectSameResult(copied.result(), ran.result(), ran.id());
+  EXPECT_EQ(after.WaitSite(site.id()).state(), v1::SITE_STATE_READY);
+  v1::JobInfo next;
+  ASSERT_TRUE(after.Submit(OnSite(job, site.id()), &next).ok());
+  EXPECT_NE(next.id(), ran.id());
+  next = after.Wait(next.id(), Ended);
+  EXPECT_EQ(next.state(), v1::JOB_STATE_SUCCEEDED) << next.error();
+  EXPECT_TRUE(next.outdoor_reused());
+  ExpectSameResult(next.result(), ran.result(), next.id());
+}
+
 }  // namespace
 }  // namespace fenestra
