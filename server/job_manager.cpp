@@ -361,7 +361,7 @@ void JobManager::Run(std::shared_ptr<Scheduler::Held> held) {
   r.held = std::move(held);
   const Claim& claim = r.held->claim;
   const std::string& id = claim.lease.id;
-  absl::StatusOr<v1::JobInfo> info = store_.GetJob(id);
+  absl::StatusOr<v1::JobInfo> info = store_.GetJob(id, /*position=*/false);
   if (!info.ok()) {
     spdlog::error("job {}: cannot be read to start ({})", id, std::string(info.status().message()));
     return;

@@ -1,11 +1,9 @@
-// A throwaway PostgreSQL server for tests: Debian's postgresql-15 (initdb, pg_ctl) on a
-// free loopback port, its data and unix socket in a folder of its own, trust
-// authentication, fsync off (nothing here must survive a power loss). initdb refuses to
-// run as root: as root, the server runs as the `postgres` user (runuser) in a folder that
-// user owns.
+// A throwaway PostgreSQL server for tests and benchmarks: Debian's postgresql-15 (initdb, pg_ctl)
+// on a free loopback port, its data and unix socket in a folder of its own, trust authentication,
+// fsync off (nothing here must survive a power loss). initdb refuses to run as root: as root, the
+// server runs as the `postgres` user (runuser) in a folder that user owns.
 #pragma once
 
-#include <gtest/gtest.h>
 #include <libpq-fe.h>
 #include <netinet/in.h>
 #include <pwd.h>
@@ -13,6 +11,8 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -72,13 +72,13 @@ class PostgresServer {
   std::string Url(const std::string& database = "postgres") const {
     return "postgresql://postgres@127.0.0.1:" + std::to_string(port_) + "/" + database;
   }
-  // Creates an empty database; its URL, or "" when it could not.
+  // Creates an empty database; its URL, or "" (and why in error()) when it could not.
   std::string NewDatabase(const std::string& name) {
     PGconn* conn = PQconnectdb(Url().c_str());
     const std::string sql = "CREATE DATABASE \"" + name + "\"";
     PGresult* res = PQstatus(conn) == CONNECTION_OK ? PQexec(conn, sql.c_str()) : nullptr;
     const bool created = res && PQresultStatus(res) == PGRES_COMMAND_OK;
-    if (!created) ADD_FAILURE() << "CREATE DATABASE " << name << ": " << PQerrorMessage(conn);
+    if (!created) error_ = "CREATE DATABASE " + name + ": " + PQerrorMessage(conn);
     PQclear(res);
     PQfinish(conn);
     return created ? Url(name) : "";

@@ -27,6 +27,8 @@ namespace {
 constexpr int64_t kAdmissionLock = 1;
 // Keys of matrices a replica holds that a claim prefers, at most.
 constexpr size_t kMaxPreferredKeys = 32;
+// Jobs a claim reads in order before it locks the first free one.
+constexpr int64_t kClaimCandidates = 16;
 // Rows read at once when a table is copied or scanned.
 constexpr int64_t kBatch = 64;
 
@@ -313,7 +315,7 @@ void FillFromRow(v1::JobInfo& info, const std::string& owner, bool cancel_reques
 
 }  // namespace
 
-absl::StatusOr<v1::JobInfo> Store::GetJob(const std::string& id) {
+absl::StatusOr<v1::JobInfo> Store::GetJob(const std::string& id, bool position) {
   v1::JobInfo info;
   int64_t bad = 0;
   FENESTRA_RETURN_IF_ERROR(Transact(
@@ -329,7 +331,7 @@ absl::StatusOr<v1::JobInfo> Store::GetJob(const std::string& id) {
           return absl::OkStatus();
         }
         FillFromRow(info, r.Bytes(2), r.Int(3) != 0, r.Bytes(4));
-        if (info.state() != v1::JOB_STATE_QUEUED) return absl::OkStatus();
+        if (!position || info.state() != v1::JOB_STATE_QUEUED) return absl::OkStatus();
         FENESTRA_ASSIGN_OR_RETURN(positions, QueuePositions(s));
         if (auto it = positions.find(id); it != positions.end())
           info.set_queue_position(it->second);
@@ -524,7 +526,11 @@ absl::StatusOr<std::optional<Claim>> Store::ClaimWork(const std::string& replica
                                                       std::string* candidate) {
   std::optional<Claim> claim;
   const size_t keys = std::min(preferred.size(), kMaxPreferredKeys);
-  const auto candidates = [&](SqlSession& s, bool jobs) -> absl::StatusOr<SqlResult> {
+  // The runnable jobs or sites in claiming order: `among` null, the first few, unlocked;
+  // else the first of `among` still runnable, locked (rows other transactions hold are
+  // skipped). Locking sorts every row it reads, so the deep queue is ordered without it.
+  const auto candidates = [&](SqlSession& s, bool jobs,
+                              const std::vector<std::string>* among) -> absl::StatusOr<SqlResult> {
     std::vector<SqlParam> params;
     std::string sql;
     if (jobs) {
@@ -548,15 +554,39 @@ absl::StatusOr<std::optional<Claim>> Store::ClaimWork(const std::string& replica
       absl::StrAppend(&sql, " AND c.id NOT IN ", Placeholders(excluded.size()));
       for (const std::string& id : excluded) params.push_back(id);
     }
-    absl::StrAppend(
-        &sql, " ORDER BY CASE WHEN c.state = ? THEN 0 ELSE 1 END, 5, 6, 7 LIMIT 1{claim_lock}");
+    if (among) {
+      absl::StrAppend(&sql, " AND c.id IN ", Placeholders(among->size()));
+      for (const std::string& id : *among) params.push_back(id);
+    }
+    absl::StrAppend(&sql, " ORDER BY CASE WHEN c.state = ? THEN 0 ELSE 1 END, 5, 6, 7 LIMIT ?",
+                    among ? "{claim_lock}" : "");
     params.push_back(jobs ? kRunning : int64_t{-1});
+    params.push_back(among ? int64_t{1} : kClaimCandidates);
     return s.Run(Sql(sql), params);
+  };
+  // The first runnable job, locked: the first few in order, then the first of them that
+  // no other claim holds (again while others took them all)
+  const auto first_job = [&](SqlSession& s) -> absl::StatusOr<SqlResult> {
+    for (int attempt = 0;; ++attempt) {
+      FENESTRA_ASSIGN_OR_RETURN(first, candidates(s, true, nullptr));
+      if (first.rows.empty()) return first;
+      std::vector<std::string> ids;
+      for (const SqlRow& row : first.rows) ids.push_back(row.Bytes(0));
+      FENESTRA_ASSIGN_OR_RETURN(locked, candidates(s, true, &ids));
+      if (!locked.rows.empty() || attempt == 4) return locked;
+    }
+  };
+  const auto first_site = [&](SqlSession& s) -> absl::StatusOr<SqlResult> {
+    FENESTRA_ASSIGN_OR_RETURN(first, candidates(s, false, nullptr));
+    if (first.rows.empty()) return first;
+    std::vector<std::string> ids;
+    for (const SqlRow& row : first.rows) ids.push_back(row.Bytes(0));
+    return candidates(s, false, &ids);
   };
   const absl::Status status = Transact([&](SqlSession& s) -> absl::Status {
     claim.reset();
-    FENESTRA_ASSIGN_OR_RETURN(job, candidates(s, true));
-    FENESTRA_ASSIGN_OR_RETURN(site, candidates(s, false));
+    FENESTRA_ASSIGN_OR_RETURN(job, first_job(s));
+    FENESTRA_ASSIGN_OR_RETURN(site, first_site(s));
     // The job or the site: taken-over jobs first, then the user's turn, then the order
     const auto rank = [](const SqlRow& r, bool is_job) {
       return std::tuple(is_job && r.Int(2) == kRunning ? 0 : 1, r.Int(4), r.Int(6));

@@ -113,10 +113,10 @@ class Store final : public UserStore {
   // max_upload_bytes_per_user: ResourceExhausted naming the limit) and its site (NotFound
   // when deleted meanwhile).
   absl::StatusOr<v1::JobInfo> InsertJob(NewJob job, const v1::Limits& limits);
-  // A job's stored info with cancel_requested, its queue position when queued, and the
-  // replica running it. NotFound when unknown; a record that no longer parses is
-  // quarantined (and NotFound).
-  absl::StatusOr<v1::JobInfo> GetJob(const std::string& id);
+  // A job's stored info with cancel_requested, the replica running it and, with
+  // `position`, its place in the queue when queued (which reads the whole queue). NotFound
+  // when unknown; a record that no longer parses is quarantined (and NotFound).
+  absl::StatusOr<v1::JobInfo> GetJob(const std::string& id, bool position = true);
   // `owner`'s jobs (empty: everyone's) in `state` (UNSPECIFIED: all), newest first, at
   // most `limit`, results left out.
   absl::StatusOr<std::vector<v1::JobInfo>> ListJobs(const std::string& owner, v1::JobState state,

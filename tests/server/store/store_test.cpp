@@ -69,6 +69,7 @@ struct PostgresBackend {
   absl::StatusOr<std::unique_ptr<Store>> Open(const std::string& name) {
     if (!Server().ok()) return absl::UnavailableError(Server().error());
     url = Server().NewDatabase(FreshDatabaseName());
+    if (url.empty()) return absl::InternalError(Server().error());
     return Again();
   }
   absl::StatusOr<std::unique_ptr<Store>> Again() { return OpenStoreUrl(url, 4); }
@@ -605,6 +606,7 @@ TYPED_TEST(StoreTest, CopyToAnotherStoreKeepsEverythingAndRunningJobsAreTakenOve
 
   ASSERT_TRUE(Server().ok()) << Server().error();
   const std::string url = Server().NewDatabase(FreshDatabaseName());
+  ASSERT_FALSE(url.empty()) << Server().error();
   absl::StatusOr<std::unique_ptr<Store>> target = OpenStoreUrl(url, 2);
   ASSERT_TRUE(target.ok()) << target.status();
   std::vector<std::string> lines;
