@@ -282,6 +282,7 @@ absl::StatusOr<std::shared_ptr<const OutdoorMatrix>> OutdoorCache::FindOrError(
       if (store_) {
         spdlog::warn("outdoor cache: discarded the stored matrix {}: {}", key.substr(0, 16),
                      std::string(matrix.status().message()));
+        (void)store_->DeleteMatrix(key);
       }
       return nullptr;
     }

@@ -1060,9 +1060,7 @@ absl::StatusOr<std::optional<std::string>> Store::GetMatrix(const std::string& k
       },
       /*durable=*/false, /*write=*/false));
   if (bytes && Sha256(*bytes) != sha) {
-    (void)Transact([&](SqlSession& s) {
-      return s.Run("DELETE FROM outdoor_matrices WHERE matrix_key = ?", {key}).status();
-    });
+    (void)DeleteMatrix(key);
     return absl::DataLossError("SHA-256 checksum mismatch (corrupted stored matrix); removed");
   }
   return bytes;
@@ -1079,6 +1077,12 @@ absl::StatusOr<bool> Store::HasMatrix(const std::string& key) {
       },
       /*durable=*/false, /*write=*/false));
   return found;
+}
+
+absl::Status Store::DeleteMatrix(const std::string& key) {
+  return Transact([&](SqlSession& s) {
+    return s.Run("DELETE FROM outdoor_matrices WHERE matrix_key = ?", {key}).status();
+  });
 }
 
 absl::StatusOr<std::vector<std::string>> Store::MatrixKeys() {

@@ -227,6 +227,8 @@ class Store final : public UserStore {
   // None when not stored; DataLoss (and removed) when its checksum does not match.
   absl::StatusOr<std::optional<std::string>> GetMatrix(const std::string& key);
   absl::StatusOr<bool> HasMatrix(const std::string& key);
+  // Removes a stored matrix (one whose bytes do not decode), so that it is traced again.
+  absl::Status DeleteMatrix(const std::string& key);
   absl::StatusOr<std::vector<std::string>> MatrixKeys();
 
   // ---- Records that no longer parse
