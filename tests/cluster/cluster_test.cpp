@@ -97,6 +97,13 @@ class Client {
     auto context = Context();
     return stub_->Submit(context.get(), request, info);
   }
+  grpc::Status Cancel(const std::string& id) {
+    auto context = Context();
+    v1::CancelJobRequest request;
+    request.set_id(id);
+    v1::JobInfo info;
+    return stub_->Cancel(context.get(), request, &info);
+  }
   grpc::Status Register(const v1::RegisterSiteRequest& request, v1::SiteInfo* info) {
     auto context = Context();
     return sites_->Register(context.get(), request, info);
@@ -413,6 +420,22 @@ TEST_F(ClusterTest, ReplicasRunEveryJobOnceThroughAKilledReplicaAndAStoreOutage)
   EXPECT_GE(resumed, before_takeover);
   EXPECT_THAT(logs,
               HasSubstr("job " + long_job.id() + ": taken over from replica " + running.replica()));
+
+  // A cancel through a replica that does not run the job reaches the one that does
+  v1::JobInfo cancelled;
+  ASSERT_TRUE(clients[1][0]->Submit(OnSite(ClusterJob(400, 1), sites[1][0]), &cancelled).ok());
+  const v1::JobInfo runs = clients[1][0]->Wait(cancelled.id(), [](const v1::JobInfo& j) {
+    return j.state() == v1::JOB_STATE_RUNNING && j.progress().evaluations() >= 1;
+  });
+  int other = 0;
+  while (ReplicaOf(replicas[other]->Log()) == runs.replica()) ++other;
+  const auto asked = Clock::now();
+  ASSERT_TRUE(clients[1][other]->Cancel(cancelled.id()).ok());
+  const v1::JobInfo stopped = clients[1][other]->Wait(cancelled.id(), Ended, 20);
+  EXPECT_EQ(stopped.state(), v1::JOB_STATE_CANCELLED);
+  EXPECT_LT(stopped.result().evaluations(), 400);
+  std::cout << "cancel through another replica: the job stopped after "
+            << std::chrono::duration<double>(Clock::now() - asked).count() << " s\n";
 }
 
 TEST_F(ClusterTest, TheSingleSqliteDaemonResumesAJobAfterSigkill) {
