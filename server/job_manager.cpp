@@ -302,7 +302,8 @@ absl::Status JobManager::Watch(const std::string& id, const Caller& caller,
         pending = {snapshot_of(*std::move(now))};
       }
     }
-    for (const v1::JobEvent& e : pending) {
+    for (v1::JobEvent& e : pending) {
+      if (!caller.admin && e.has_started()) e.mutable_started()->clear_replica();
       if (!write(e)) return absl::OkStatus();
       sent = e.sequence();
       if (EndsStream(e)) return absl::OkStatus();
