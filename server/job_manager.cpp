@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "absl/cleanup/cleanup.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "core/optimize/job.h"
@@ -454,6 +455,81 @@ bool JobManager::Start(Record& r) {
   }
 }
 
+absl::StatusOr<PreparedJob> JobManager::Prepare(Record& r) {
+  absl::StatusOr<v1::Job> job = store_.LoadJob(r.info.id());
+  if (!job.ok()) {
+    if (job.status().code() == absl::StatusCode::kDataLoss) return job.status();
+    return absl::Status(job.status().code(),
+                        absl::StrCat("cannot read the job: ", job.status().message()));
+  }
+  r.weather = job->weather_file();
+  absl::StatusOr<std::string> weather = store_.ReadWeather(r.weather);
+  if (!weather.ok()) return weather.status();
+  absl::StatusOr<PreparedJob> prepared = ValidateJob(*job, "");
+  if (!prepared.ok()) return prepared.status();
+  absl::StatusOr<EpwData> parsed = ParseEpw(*weather, "weather_epw");
+  if (!parsed.ok()) return parsed.status();
+  prepared->weather = *std::move(parsed);
+  prepared->job.clear_scene();  // needed only built
+  return prepared;
+}
+
+JobCallbacks JobManager::Callbacks(Record& r) {
+  JobCallbacks callbacks;
+  callbacks.stage = [this, &r](const std::string& stage) {
+    if (stage == "outdoor") return;
+    std::lock_guard lock(r.mutex);
+    r.wanted.set_stage(stage);
+    v1::JobEvent event;
+    event.mutable_stage()->set_name(stage);
+    Report(r, event);
+  };
+  // Each step's checkpoint is stored with the step's progress, which follows it
+  callbacks.checkpoint = [&r](const v1::SearchCheckpoint& checkpoint) {
+    std::lock_guard lock(r.mutex);
+    r.checkpoint = checkpoint.SerializeAsString();
+  };
+  callbacks.progress = [this, &r](const JobProgress& progress) {
+    std::lock_guard lock(r.mutex);
+    v1::JobEvent event;
+    *event.mutable_progress() = ToProto(progress);
+    *r.wanted.mutable_progress() = event.progress();
+    Report(r, event, /*durable=*/false);
+  };
+  return callbacks;
+}
+
+absl::StatusOr<OutdoorCache::Lookup> JobManager::Outdoor(Record& r, const PreparedJob& prepared,
+                                                         const std::function<bool()>& cancelled) {
+  const std::string key = OutdoorMatrixKey(prepared.scene, prepared.job.sampling());
+  {
+    std::lock_guard lock(r.mutex);
+    v1::JobEvent event;
+    event.mutable_stage()->set_name("outdoor");
+    event.mutable_stage()->set_cached(cache_.Contains(key));
+    Report(r, event);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  absl::StatusOr<OutdoorCache::Lookup> lookup = cache_.GetOrCompute(
+      key,
+      [&]() -> absl::StatusOr<OutdoorMatrix> {
+        return ComputeOutdoorMatrix(prepared.scene, prepared.job.sampling(), cancelled);
+      },
+      cancelled);
+  if (!lookup.ok()) return lookup;
+  const double seconds = SecondsSince(start);
+  {
+    std::lock_guard lock(r.mutex);
+    r.wanted.set_outdoor_reused(!lookup->computed);
+    r.wanted.set_outdoor_seconds(seconds);
+    Report(r, std::nullopt);
+    spdlog::info("job {}: outdoor matrix {} in {:.3f} s", r.info.id(),
+                 lookup->computed ? "traced" : "reused from the cache", seconds);
+  }
+  if (!lookup->computed && !r.info.site_id().empty()) sites_.NoteReuse(r.info.site_id());
+  return lookup;
+}
+
 void JobManager::RunStarted(Record& r) {
   const auto start = std::chrono::steady_clock::now();
   Scheduler::Held& held = *r.held;
@@ -480,84 +556,25 @@ void JobManager::RunStarted(Record& r) {
            cancelled() ? "" : error);
   };
 
-  // The job as submitted, read back from the store, with its weather file; its scene is
-  // needed only built
-  absl::StatusOr<PreparedJob> prepared = absl::InternalError("not prepared");
-  {
-    absl::StatusOr<v1::Job> job = store_.LoadJob(r.info.id());
-    if (job.status().code() == absl::StatusCode::kDataLoss) {
-      const absl::Status moved =
-          store_.Quarantine("jobs", r.info.id(), std::string(job.status().message()));
-      spdlog::error("job {}: {}; {}, the daemon goes on without it", r.info.id(),
-                    std::string(job.status().message()),
-                    moved.ok() ? "moved to the quarantine table"
-                               : absl::StrCat("not moved (", moved.message(), ")"));
-      held.done = true;
-      return;
-    }
-    if (!job.ok()) return fail(absl::StrCat("cannot read the job: ", job.status().message()));
-    r.weather = job->weather_file();
-    absl::StatusOr<std::string> weather = store_.ReadWeather(r.weather);
-    if (!weather.ok()) return fail(std::string(weather.status().message()));
-    prepared = ValidateJob(*job, "");
-    if (prepared.ok()) {
-      absl::StatusOr<EpwData> parsed = ParseEpw(*weather, "weather_epw");
-      if (!parsed.ok()) return fail(std::string(parsed.status().message()));
-      prepared->weather = *std::move(parsed);
-    }
+  // The job as submitted, read back from the store, with its weather file
+  absl::StatusOr<PreparedJob> prepared = Prepare(r);
+  if (prepared.status().code() == absl::StatusCode::kDataLoss &&
+      absl::StartsWith(prepared.status().message(), "the stored job")) {
+    const absl::Status moved =
+        store_.Quarantine("jobs", r.info.id(), std::string(prepared.status().message()));
+    spdlog::error("job {}: {}; {}, the daemon goes on without it", r.info.id(),
+                  std::string(prepared.status().message()),
+                  moved.ok() ? "moved to the quarantine table"
+                             : absl::StrCat("not moved (", moved.message(), ")"));
+    held.done = true;
+    return;
   }
   if (!prepared.ok()) return fail(std::string(prepared.status().message()));
-  prepared->job.clear_scene();
-  const std::string key = OutdoorMatrixKey(prepared->scene, prepared->job.sampling());
-
-  // The outdoor matrix: cached, being computed by another task, or traced here
-  {
-    std::lock_guard lock(r.mutex);
-    v1::JobEvent event;
-    event.mutable_stage()->set_name("outdoor");
-    event.mutable_stage()->set_cached(cache_.Contains(key));
-    Report(r, event);
-  }
-  const auto outdoor_start = std::chrono::steady_clock::now();
-  absl::StatusOr<OutdoorCache::Lookup> lookup = cache_.GetOrCompute(
-      key,
-      [&]() -> absl::StatusOr<OutdoorMatrix> {
-        return ComputeOutdoorMatrix(prepared->scene, prepared->job.sampling(), cancelled);
-      },
-      cancelled);
-  const double outdoor_seconds = SecondsSince(outdoor_start);
+  absl::StatusOr<OutdoorCache::Lookup> lookup = Outdoor(r, *prepared, cancelled);
   if (!lookup.ok()) return fail(absl::StrCat("outdoor stage: ", lookup.status().message()));
-  {
-    std::lock_guard lock(r.mutex);
-    r.wanted.set_outdoor_reused(!lookup->computed);
-    r.wanted.set_outdoor_seconds(outdoor_seconds);
-    Report(r, std::nullopt);
-    spdlog::info("job {}: outdoor matrix {} in {:.3f} s", r.info.id(),
-                 lookup->computed ? "traced" : "reused from the cache", outdoor_seconds);
-  }
-  if (!lookup->computed && !r.info.site_id().empty()) sites_.NoteReuse(r.info.site_id());
 
   // The search
-  JobCallbacks callbacks;
-  callbacks.stage = [&](const std::string& stage) {
-    if (stage == "outdoor") return;
-    std::lock_guard lock(r.mutex);
-    r.wanted.set_stage(stage);
-    v1::JobEvent event;
-    event.mutable_stage()->set_name(stage);
-    Report(r, event);
-  };
-  callbacks.progress = [&](const JobProgress& progress) {
-    std::lock_guard lock(r.mutex);
-    v1::JobEvent event;
-    *event.mutable_progress() = ToProto(progress);
-    *r.wanted.mutable_progress() = event.progress();
-    Report(r, event, /*durable=*/false);
-  };
-  callbacks.checkpoint = [&](const v1::SearchCheckpoint& checkpoint) {
-    std::lock_guard lock(r.mutex);
-    r.checkpoint = checkpoint.SerializeAsString();
-  };
+  JobCallbacks callbacks = Callbacks(r);
   callbacks.cancelled = cancelled;
   absl::StatusOr<v1::JobResult> result =
       RunJob(*prepared, lookup->matrix.get(), callbacks, r.resume ? &*r.resume : nullptr);

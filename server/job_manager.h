@@ -133,6 +133,16 @@ class JobManager {
   bool Start(Record& record);
   // Runs a started job to its end.
   void RunStarted(Record& record);
+  // The job as submitted, read back from the store, with its weather file parsed and its
+  // scene built (left out of the message). DataLoss "the stored job ..." when its record
+  // does not parse.
+  absl::StatusOr<PreparedJob> Prepare(Record& record);
+  // What RunJob reports, stored as the record's events (and checkpoints).
+  JobCallbacks Callbacks(Record& record);
+  // The job's outdoor matrix: cached, being computed by another task, or traced here;
+  // reported as the "outdoor" stage.
+  absl::StatusOr<OutdoorCache::Lookup> Outdoor(Record& record, const PreparedJob& prepared,
+                                               const std::function<bool()>& cancelled);
 
   const v1::DaemonConfig config_;
   const DataDir* const data_dir_;

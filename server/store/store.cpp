@@ -520,73 +520,85 @@ absl::Status Store::DeleteJob(const std::string& id) {
 
 // ---- Work
 
+namespace {
+
+// What a claim may take: not `excluded`, jobs whose outdoor key is in `preferred` first.
+struct ClaimFilter {
+  const std::vector<std::string>& preferred;  // at most kMaxPreferredKeys used
+  const std::vector<std::string>& excluded;
+};
+
+// The runnable jobs (`jobs`) or site computations in claiming order: `among` null, the
+// first few, unlocked; else the first of `among` still runnable, locked (rows other
+// transactions hold are skipped). Locking while ordering sorts every row read, so the deep
+// queue is ordered without locks. Columns: id, owner, state, lease_owner, the owner's turn,
+// 0 for a preferred key, queue_order.
+absl::StatusOr<SqlResult> ClaimCandidates(const Database& db, SqlSession& s, bool jobs,
+                                          const ClaimFilter& filter,
+                                          const std::vector<std::string>* among) {
+  const size_t keys = std::min(filter.preferred.size(), kMaxPreferredKeys);
+  std::vector<SqlParam> params;
+  std::string sql;
+  if (jobs) {
+    sql = absl::StrCat(
+        "SELECT c.id, c.owner, c.state, c.lease_owner, COALESCE(t.last_taken, 0), CASE WHEN "
+        "c.outdoor_key IN ",
+        keys ? Placeholders(keys) : "(NULL)",
+        " THEN 0 ELSE 1 END, c.queue_order FROM jobs c LEFT JOIN turns t ON t.owner = c.owner "
+        "WHERE (c.state = ? OR (c.state = ? AND c.lease_expires_unix_ms < {now}))");
+    for (size_t i = 0; i < keys; ++i) params.push_back(filter.preferred[i]);
+    params.push_back(kQueued);
+    params.push_back(kRunning);
+  } else {
+    sql =
+        "SELECT c.id, c.owner, 0, c.lease_owner, COALESCE(t.last_taken, 0), 1, c.queue_order "
+        "FROM sites c LEFT JOIN turns t ON t.owner = c.owner WHERE c.state = ? AND "
+        "c.lease_expires_unix_ms < {now}";
+    params.push_back(kComputing);
+  }
+  if (!filter.excluded.empty()) {
+    absl::StrAppend(&sql, " AND c.id NOT IN ", Placeholders(filter.excluded.size()));
+    for (const std::string& id : filter.excluded) params.push_back(id);
+  }
+  if (among) {
+    absl::StrAppend(&sql, " AND c.id IN ", Placeholders(among->size()));
+    for (const std::string& id : *among) params.push_back(id);
+  }
+  absl::StrAppend(&sql, " ORDER BY CASE WHEN c.state = ? THEN 0 ELSE 1 END, 5, 6, 7 LIMIT ?",
+                  among ? "{claim_lock}" : "");
+  params.push_back(jobs ? kRunning : int64_t{-1});
+  params.push_back(among ? int64_t{1} : kClaimCandidates);
+  return s.Run(db.Sql(sql), params);
+}
+
+// The first runnable job or site computation, locked (none: no row): the first few in
+// order, then the first of them no other claim holds (again, a few times, while other
+// claims took them all).
+absl::StatusOr<SqlResult> FirstRunnable(const Database& db, SqlSession& s, bool jobs,
+                                        const ClaimFilter& filter) {
+  constexpr int kAttempts = 5;
+  for (int attempt = 1;; ++attempt) {
+    FENESTRA_ASSIGN_OR_RETURN(first, ClaimCandidates(db, s, jobs, filter, nullptr));
+    if (first.rows.empty()) return first;
+    std::vector<std::string> ids;
+    for (const SqlRow& row : first.rows) ids.push_back(row.Bytes(0));
+    FENESTRA_ASSIGN_OR_RETURN(locked, ClaimCandidates(db, s, jobs, filter, &ids));
+    if (!locked.rows.empty() || attempt == kAttempts) return locked;
+  }
+}
+
+}  // namespace
+
 absl::StatusOr<std::optional<Claim>> Store::ClaimWork(const std::string& replica, int64_t lease_ms,
                                                       const std::vector<std::string>& preferred,
                                                       const std::vector<std::string>& excluded,
                                                       std::string* candidate) {
   std::optional<Claim> claim;
-  const size_t keys = std::min(preferred.size(), kMaxPreferredKeys);
-  // The runnable jobs or sites in claiming order: `among` null, the first few, unlocked;
-  // else the first of `among` still runnable, locked (rows other transactions hold are
-  // skipped). Locking sorts every row it reads, so the deep queue is ordered without it.
-  const auto candidates = [&](SqlSession& s, bool jobs,
-                              const std::vector<std::string>* among) -> absl::StatusOr<SqlResult> {
-    std::vector<SqlParam> params;
-    std::string sql;
-    if (jobs) {
-      sql = absl::StrCat(
-          "SELECT c.id, c.owner, c.state, c.lease_owner, COALESCE(t.last_taken, 0), CASE WHEN "
-          "c.outdoor_key IN ",
-          keys ? Placeholders(keys) : "(NULL)",
-          " THEN 0 ELSE 1 END, c.queue_order FROM jobs c LEFT JOIN turns t ON t.owner = c.owner "
-          "WHERE (c.state = ? OR (c.state = ? AND c.lease_expires_unix_ms < {now}))");
-      for (size_t i = 0; i < keys; ++i) params.push_back(preferred[i]);
-      params.push_back(kQueued);
-      params.push_back(kRunning);
-    } else {
-      sql =
-          "SELECT c.id, c.owner, 0, c.lease_owner, COALESCE(t.last_taken, 0), 1, c.queue_order "
-          "FROM sites c LEFT JOIN turns t ON t.owner = c.owner WHERE c.state = ? AND "
-          "c.lease_expires_unix_ms < {now}";
-      params.push_back(kComputing);
-    }
-    if (!excluded.empty()) {
-      absl::StrAppend(&sql, " AND c.id NOT IN ", Placeholders(excluded.size()));
-      for (const std::string& id : excluded) params.push_back(id);
-    }
-    if (among) {
-      absl::StrAppend(&sql, " AND c.id IN ", Placeholders(among->size()));
-      for (const std::string& id : *among) params.push_back(id);
-    }
-    absl::StrAppend(&sql, " ORDER BY CASE WHEN c.state = ? THEN 0 ELSE 1 END, 5, 6, 7 LIMIT ?",
-                    among ? "{claim_lock}" : "");
-    params.push_back(jobs ? kRunning : int64_t{-1});
-    params.push_back(among ? int64_t{1} : kClaimCandidates);
-    return s.Run(Sql(sql), params);
-  };
-  // The first runnable job, locked: the first few in order, then the first of them that
-  // no other claim holds (again while others took them all)
-  const auto first_job = [&](SqlSession& s) -> absl::StatusOr<SqlResult> {
-    for (int attempt = 0;; ++attempt) {
-      FENESTRA_ASSIGN_OR_RETURN(first, candidates(s, true, nullptr));
-      if (first.rows.empty()) return first;
-      std::vector<std::string> ids;
-      for (const SqlRow& row : first.rows) ids.push_back(row.Bytes(0));
-      FENESTRA_ASSIGN_OR_RETURN(locked, candidates(s, true, &ids));
-      if (!locked.rows.empty() || attempt == 4) return locked;
-    }
-  };
-  const auto first_site = [&](SqlSession& s) -> absl::StatusOr<SqlResult> {
-    FENESTRA_ASSIGN_OR_RETURN(first, candidates(s, false, nullptr));
-    if (first.rows.empty()) return first;
-    std::vector<std::string> ids;
-    for (const SqlRow& row : first.rows) ids.push_back(row.Bytes(0));
-    return candidates(s, false, &ids);
-  };
+  const ClaimFilter filter{preferred, excluded};
   const absl::Status status = Transact([&](SqlSession& s) -> absl::Status {
     claim.reset();
-    FENESTRA_ASSIGN_OR_RETURN(job, first_job(s));
-    FENESTRA_ASSIGN_OR_RETURN(site, first_site(s));
+    FENESTRA_ASSIGN_OR_RETURN(job, FirstRunnable(*db_, s, /*jobs=*/true, filter));
+    FENESTRA_ASSIGN_OR_RETURN(site, FirstRunnable(*db_, s, /*jobs=*/false, filter));
     // The job or the site: taken-over jobs first, then the user's turn, then the order
     const auto rank = [](const SqlRow& r, bool is_job) {
       return std::tuple(is_job && r.Int(2) == kRunning ? 0 : 1, r.Int(4), r.Int(6));
@@ -1330,8 +1342,91 @@ absl::StatusOr<bool> Store::Empty() {
   return empty;
 }
 
+namespace {
+
+// Reads rows of `db` with one statement, in a transaction of their own.
+absl::StatusOr<SqlResult> Read(Database& db, const std::string& sql,
+                               std::span<const SqlParam> params = {}) {
+  SqlResult rows;
+  FENESTRA_RETURN_IF_ERROR(
+      db.Transact({.write = false, .durable = false}, [&](SqlSession& s) -> absl::Status {
+        FENESTRA_ASSIGN_OR_RETURN(read, s.Run(sql, params));
+        rows = std::move(read);
+        return absl::OkStatus();
+      }));
+  return rows;
+}
+
+// Copies `table` of `from` into the transaction `to`, in key order, a batch at a time; the
+// rows copied.
+absl::StatusOr<int64_t> CopyRows(Database& from, SqlSession& to, const CopiedTable& table) {
+  std::vector<std::string> names;
+  for (const auto& [name, type] : table.columns) names.push_back(name);
+  const std::string columns = absl::StrJoin(names, ", ");
+  const std::string key = absl::StrJoin(names.begin(), names.begin() + table.key_columns, ", ");
+  const std::string insert = absl::StrCat("INSERT INTO ", table.name, " (", columns, ") VALUES ",
+                                          Placeholders(names.size()));
+  int64_t copied = 0;
+  std::optional<SqlRow> last;
+  while (true) {
+    // The next rows after the last one copied
+    std::vector<std::string> keep;
+    std::vector<SqlParam> params;
+    std::string select = absl::StrCat("SELECT ", columns, " FROM ", table.name);
+    if (last) {
+      absl::StrAppend(&select, " WHERE (", key, ") > ", Placeholders(table.key_columns));
+      for (size_t c = 0; c < table.key_columns; ++c) {
+        params.push_back(AsParam(*last, c, table.columns[c].second, keep));
+      }
+    }
+    absl::StrAppend(&select, " ORDER BY ", key, " LIMIT ?");
+    params.push_back(kBatch);
+    FENESTRA_ASSIGN_OR_RETURN(rows, Read(from, select, params));
+    if (rows.rows.empty()) return copied;
+    for (const SqlRow& row : rows.rows) {
+      std::vector<std::string> cells;
+      cells.reserve(table.columns.size());
+      std::vector<SqlParam> values;
+      for (size_t c = 0; c < table.columns.size(); ++c) {
+        values.push_back(AsParam(row, c, table.columns[c].second, cells));
+      }
+      FENESTRA_RETURN_IF_ERROR(to.Run(insert, values).status());
+      ++copied;
+    }
+    last = std::move(rows.rows.back());
+  }
+}
+
+// After the rows: the counters, PostgreSQL's sequences past the ids copied, and the leases
+// ended, so that what was running is taken over by the target's replicas at once.
+absl::Status FinishCopy(Database& from, const Database& to_db, SqlSession& to) {
+  FENESTRA_ASSIGN_OR_RETURN(counters, Read(from, "SELECT name, value FROM counters"));
+  for (const SqlRow& row : counters.rows) {
+    FENESTRA_RETURN_IF_ERROR(to.Run("INSERT INTO counters (name, value) VALUES (?, ?) ON CONFLICT "
+                                    "(name) DO UPDATE SET value = excluded.value",
+                                    {row.Bytes(0), row.Int(1)})
+                                 .status());
+  }
+  if (to_db.dialect() == Dialect::kPostgres) {
+    for (const char* table : {"users", "sites", "jobs", "quarantine"}) {
+      FENESTRA_RETURN_IF_ERROR(
+          to.Run(absl::StrCat("SELECT setval(pg_get_serial_sequence('", table,
+                              "', 'number'), (SELECT COALESCE(MAX(number), 0) + 1 FROM ", table,
+                              "), false)"))
+              .status());
+    }
+  }
+  FENESTRA_RETURN_IF_ERROR(to.Run("UPDATE jobs SET lease_expires_unix_ms = 0").status());
+  return to.Run("UPDATE sites SET lease_expires_unix_ms = 0").status();
+}
+
+}  // namespace
+
 absl::Status Store::CopyTo(Store& target, bool overwrite,
                            const std::function<void(const std::string&)>& progress) {
+  if (target.weather_files_) {
+    return absl::FailedPreconditionError("copies go into a PostgreSQL store, not into SQLite");
+  }
   FENESTRA_ASSIGN_OR_RETURN(empty, target.Empty());
   if (!empty && !overwrite) {
     return absl::FailedPreconditionError(
@@ -1339,19 +1434,10 @@ absl::Status Store::CopyTo(Store& target, bool overwrite,
         "give --overwrite to replace what it holds");
   }
   // The weather files sites and unfinished jobs use (terminal jobs' files are gone)
-  std::vector<std::string> weather;
-  FENESTRA_RETURN_IF_ERROR(Transact(
-      [&](SqlSession& s) -> absl::Status {
-        FENESTRA_ASSIGN_OR_RETURN(
-            rows, s.Run("SELECT weather FROM sites WHERE weather <> '' UNION SELECT weather FROM "
-                        "jobs WHERE weather <> '' AND state IN (?, ?)",
-                        {kQueued, kRunning}));
-        weather.clear();
-        for (const SqlRow& row : rows.rows) weather.push_back(row.Bytes(0));
-        return absl::OkStatus();
-      },
-      /*durable=*/false, /*write=*/false));
-
+  FENESTRA_ASSIGN_OR_RETURN(
+      weather, Read(*db_, absl::StrCat("SELECT weather FROM sites WHERE weather <> '' UNION SELECT "
+                                       "weather FROM jobs WHERE weather <> '' AND state IN (",
+                                       kQueued, ", ", kRunning, ")")));
   return target.Transact([&](SqlSession& t) -> absl::Status {
     if (overwrite) {
       for (const char* table : {"job_events", "jobs", "sites", "users", "quarantine", "turns",
@@ -1361,90 +1447,15 @@ absl::Status Store::CopyTo(Store& target, bool overwrite,
       FENESTRA_RETURN_IF_ERROR(t.Run("UPDATE counters SET value = 0").status());
     }
     for (const CopiedTable& table : CopiedTables()) {
-      std::vector<std::string> names;
-      for (const auto& [name, type] : table.columns) names.push_back(name);
-      const std::string columns = absl::StrJoin(names, ", ");
-      const std::string key = absl::StrJoin(names.begin(), names.begin() + table.key_columns, ", ");
-      const std::string insert = absl::StrCat("INSERT INTO ", table.name, " (", columns,
-                                              ") VALUES ", Placeholders(names.size()));
-      int64_t copied = 0;
-      std::optional<SqlRow> last;
-      while (true) {
-        // The next rows after the last one copied, in key order
-        std::vector<std::string> keep;
-        std::vector<SqlParam> params;
-        std::string select = absl::StrCat("SELECT ", columns, " FROM ", table.name);
-        if (last) {
-          absl::StrAppend(&select, " WHERE (", key, ") > ", Placeholders(table.key_columns));
-          for (size_t c = 0; c < table.key_columns; ++c) {
-            params.push_back(AsParam(*last, c, table.columns[c].second, keep));
-          }
-        }
-        absl::StrAppend(&select, " ORDER BY ", key, " LIMIT ?");
-        params.push_back(kBatch);
-        SqlResult rows;
-        FENESTRA_RETURN_IF_ERROR(Transact(
-            [&](SqlSession& s) -> absl::Status {
-              FENESTRA_ASSIGN_OR_RETURN(read, s.Run(select, params));
-              rows = std::move(read);
-              return absl::OkStatus();
-            },
-            /*durable=*/false, /*write=*/false));
-        if (rows.rows.empty()) break;
-        for (const SqlRow& row : rows.rows) {
-          std::vector<std::string> cells;
-          cells.reserve(table.columns.size());
-          std::vector<SqlParam> values;
-          for (size_t c = 0; c < table.columns.size(); ++c) {
-            values.push_back(AsParam(row, c, table.columns[c].second, cells));
-          }
-          FENESTRA_RETURN_IF_ERROR(t.Run(insert, values).status());
-          ++copied;
-        }
-        last = std::move(rows.rows.back());
-      }
+      FENESTRA_ASSIGN_OR_RETURN(copied, CopyRows(*db_, t, table));
       if (progress) progress(absl::StrCat(table.name, ": ", copied, " rows"));
     }
-    // Counters, and PostgreSQL's sequences past the ids copied
-    FENESTRA_ASSIGN_OR_RETURN(counters, [&]() -> absl::StatusOr<SqlResult> {
-      SqlResult read;
-      FENESTRA_RETURN_IF_ERROR(Transact(
-          [&](SqlSession& s) -> absl::Status {
-            FENESTRA_ASSIGN_OR_RETURN(rows, s.Run("SELECT name, value FROM counters"));
-            read = std::move(rows);
-            return absl::OkStatus();
-          },
-          /*durable=*/false, /*write=*/false));
-      return read;
-    }());
-    for (const SqlRow& row : counters.rows) {
-      FENESTRA_RETURN_IF_ERROR(t.Run("INSERT INTO counters (name, value) VALUES (?, ?) ON CONFLICT "
-                                     "(name) DO UPDATE SET value = excluded.value",
-                                     {row.Bytes(0), row.Int(1)})
-                                   .status());
-    }
-    if (target.db_->dialect() == Dialect::kPostgres) {
-      for (const char* table : {"users", "sites", "jobs", "quarantine"}) {
-        FENESTRA_RETURN_IF_ERROR(
-            t.Run(absl::StrCat("SELECT setval(pg_get_serial_sequence('", table,
-                               "', 'number'), (SELECT COALESCE(MAX(number), 0) + 1 FROM ", table,
-                               "), false)"))
-                .status());
-      }
-    }
-    // What was running is taken over by the target's replicas at once
-    FENESTRA_RETURN_IF_ERROR(t.Run("UPDATE jobs SET lease_expires_unix_ms = 0").status());
-    FENESTRA_RETURN_IF_ERROR(t.Run("UPDATE sites SET lease_expires_unix_ms = 0").status());
-
-    // The weather files, from this store's files or table into the target's table
-    for (const std::string& sha : weather) {
-      FENESTRA_ASSIGN_OR_RETURN(bytes, ReadWeather(sha));
-      if (target.weather_files_) {
-        return absl::FailedPreconditionError("a SQLite target store cannot take weather files");
-      }
+    FENESTRA_RETURN_IF_ERROR(FinishCopy(*db_, *target.db_, t));
+    for (const SqlRow& row : weather.rows) {
+      FENESTRA_ASSIGN_OR_RETURN(bytes, ReadWeather(row.Bytes(0)));
       FENESTRA_RETURN_IF_ERROR(target.PutWeather(t, bytes).status());
     }
-    if (progress) progress(absl::StrCat("weather: ", weather.size(), " files"));
+    if (progress) progress(absl::StrCat("weather: ", weather.rows.size(), " files"));
     return t.Notify();
   });
 }
