@@ -3,6 +3,7 @@
 #include <arpa/inet.h>
 
 #include <algorithm>
+#include <cmath>
 #include <string_view>
 
 #include "absl/strings/ascii.h"
@@ -11,6 +12,7 @@
 #include "absl/strings/strip.h"
 #include "core/common/json_proto.h"
 #include "core/dc/dc_backend.h"
+#include "server/store/store.h"
 
 namespace fenestra {
 namespace {
@@ -23,6 +25,11 @@ constexpr int kDefaultMaxSitesPerUser = 100;
 constexpr int64_t kDefaultMaxUploadBytesPerUser = int64_t{256} << 20;
 constexpr int64_t kDefaultMaxDataDirBytes = int64_t{10} << 30;
 constexpr int kDefaultMaxConcurrentHeavyRequests = 2;
+// Defaults of the settings added with replicas (daemon.proto documents them)
+constexpr double kDefaultLeaseSeconds = 10;
+constexpr int64_t kDefaultOutdoorMemoryBytes = int64_t{1} << 30;
+// A lease shorter than this would be renewed too often to be worth holding [s]
+constexpr double kMinLeaseSeconds = 0.3;
 
 // Checks auth and TLS against the listen address: what leaves this machine is encrypted
 // and authenticated unless the configuration says otherwise in so many words.
@@ -123,6 +130,22 @@ absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
   if (config.shutdown_grace_seconds() == 0) config.set_shutdown_grace_seconds(10);
   if (config.log_level().empty()) config.set_log_level("info");
   if (config.auth().empty()) config.set_auth(kDefaultAuth);
+  if (!config.store().empty() && !IsPostgresUrl(config.store())) {
+    return invalid("store",
+                   "must be empty (SQLite in data_dir) or a PostgreSQL URL "
+                   "postgresql://user@host:port/database");
+  }
+  if (config.lease_seconds() < 0 || !std::isfinite(config.lease_seconds())) {
+    return invalid("lease_seconds", "must be a finite number >= 0");
+  }
+  if (config.lease_seconds() == 0) config.set_lease_seconds(kDefaultLeaseSeconds);
+  if (config.lease_seconds() < kMinLeaseSeconds) {
+    return invalid("lease_seconds", absl::StrCat("must be at least ", kMinLeaseSeconds, " s"));
+  }
+  if (config.outdoor_memory_bytes() < 0) return invalid("outdoor_memory_bytes", "must be >= 0");
+  if (config.outdoor_memory_bytes() == 0) {
+    config.set_outdoor_memory_bytes(kDefaultOutdoorMemoryBytes);
+  }
   if (absl::Status s = CheckExposure(config); !s.ok()) return s;
   static const char* kLevels[] = {"trace", "debug", "info", "warn", "error", "critical", "off"};
   if (std::find(std::begin(kLevels), std::end(kLevels), config.log_level()) == std::end(kLevels)) {

@@ -4,10 +4,16 @@
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <spdlog/spdlog.h>
+#include <sys/random.h>
+#include <unistd.h>
 
 #include <chrono>
+#include <ctime>
 
 #include "absl/strings/str_cat.h"
+#include "server/log_safe.h"
+#include "server/store/postgres_database.h"
+#include "server/store/sqlite_database.h"
 #include "server/tls.h"
 
 namespace fenestra {
@@ -32,11 +38,74 @@ class ReflectionOption final : public grpc::ServerBuilderOption {
   const bool served_;
 };
 
+// The name this process's claims carry in the store: host, process id and a random tag
+// (process ids repeat across restarts and containers).
+std::string ReplicaName() {
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  uint16_t tag = 0;
+  if (getrandom(&tag, sizeof tag, 0) != sizeof tag) tag = static_cast<uint16_t>(time(nullptr));
+  return absl::StrCat(host, ":", getpid(), ":", absl::Hex(tag, absl::kZeroPad4));
+}
+
+// Pooled store connections: one per worker and a few for the RPCs and the renewer.
+constexpr int kExtraConnections = 4;
+// The longest an idle worker waits before it looks for work again [s]: how late a job
+// whose replica stopped is taken over after its lease expired.
+constexpr double kMaxPollSeconds = 1.0;
+
 }  // namespace
 
 Daemon::Daemon(const v1::DaemonConfig& config) : config_(config) {}
 
 Daemon::~Daemon() { Shutdown(); }
+
+absl::Status Daemon::OpenStore() {
+  const v1::Limits& limits = config_.limits();
+  if (!config_.store().empty()) {
+    absl::StatusOr<std::unique_ptr<PostgresDatabase>> db =
+        PostgresDatabase::Open(config_.store(), config_.worker_threads() + kExtraConnections);
+    if (!db.ok()) return db.status();
+    absl::StatusOr<std::unique_ptr<Store>> store = Store::Open(*std::move(db));
+    if (!store.ok()) return store.status();
+    store_ = *std::move(store);
+    cache_ = std::make_unique<OutdoorCache>(*store_, config_.outdoor_memory_bytes());
+    return absl::OkStatus();
+  }
+  absl::StatusOr<std::unique_ptr<DataDir>> data_dir =
+      DataDir::Open(config_.data_dir(), limits.max_data_dir_bytes());
+  if (!data_dir.ok()) return data_dir.status();
+  data_dir_ = *std::move(data_dir);
+  const DataDir& dir = *data_dir_;
+  if (dir.full_at_start()) {
+    spdlog::warn(
+        "the data directory {} is full: fenestrad serves reads and refuses new work "
+        "until space is freed there; `fenestrad user` can change its users only after a "
+        "start with room",
+        dir.root().string());
+  }
+  if (dir.temporaries_removed() > 0) {
+    spdlog::info("removed {} temporary file(s) of interrupted writes", dir.temporaries_removed());
+  }
+  weather_ = std::make_unique<UploadStore>(dir, dir.weather_dir(), "epw");
+  // Shared, so that `fenestrad user` changes the users of the running daemon; on a full
+  // disk, where no -shm file can be made, this process's alone until the next start
+  absl::StatusOr<std::unique_ptr<SqliteDatabase>> db = SqliteDatabase::Open(
+      dir.db_path().string(),
+      dir.full_at_start() ? SqliteDatabase::Sharing::kExclusive : SqliteDatabase::Sharing::kShared);
+  if (!db.ok()) return db.status();
+  absl::StatusOr<std::unique_ptr<Store>> store = Store::Open(*std::move(db), weather_.get());
+  if (!store.ok()) return store.status();
+  store_ = *std::move(store);
+  // This daemon alone uses the data directory: what ran when the last one stopped is
+  // taken over now, from its last checkpoint
+  if (absl::Status s = store_->ExpireLeases(); !s.ok()) {
+    spdlog::warn("cannot take over what was running ({}); it is taken over when its lease ends",
+                 std::string(s.message()));
+  }
+  cache_ = std::make_unique<OutdoorCache>(dir.outdoor_dir().string(), data_dir_.get());
+  return absl::OkStatus();
+}
 
 absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& config) {
   std::unique_ptr<Daemon> d(new Daemon(config));
@@ -53,61 +122,55 @@ absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& co
   absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials = PortCredentials(config);
   if (!credentials.ok()) return credentials.status();
 
-  // The data directory: store, cache and uploads
-  absl::StatusOr<std::unique_ptr<DataDir>> data_dir =
-      DataDir::Open(config.data_dir(), limits.max_data_dir_bytes());
-  if (!data_dir.ok()) return data_dir.status();
-  d->data_dir_ = *std::move(data_dir);
-  const DataDir& dir = *d->data_dir_;
-  if (dir.full_at_start()) {
-    spdlog::warn(
-        "the data directory {} is full: fenestrad serves reads and refuses new work "
-        "until space is freed there; `fenestrad user` can change its users only after a "
-        "start with room",
-        dir.root().string());
-  }
-  if (dir.temporaries_removed() > 0) {
-    spdlog::info("removed {} temporary file(s) of interrupted writes", dir.temporaries_removed());
-  }
-  // Shared, so that `fenestrad user` changes the users of the running daemon; on a full
-  // disk, where no -shm file can be made, this process's alone until the next start
-  absl::StatusOr<std::unique_ptr<JobStore>> store =
-      JobStore::Open(dir.db_path().string(), dir.full_at_start() ? JobStore::Sharing::kExclusive
-                                                                 : JobStore::Sharing::kShared);
-  if (!store.ok()) return store.status();
-  d->store_ = *std::move(store);
-  d->cache_ = std::make_unique<OutdoorCache>(dir.outdoor_dir().string(), d->data_dir_.get());
+  // The store and the cache
+  if (absl::Status s = d->OpenStore(); !s.ok()) return s;
   absl::StatusOr<OutdoorCache::LoadReport> loaded = d->cache_->Load();
   if (!loaded.ok()) return loaded.status();
   for (const std::string& discarded : loaded->discarded) {
     spdlog::warn("outdoor cache: discarded {}", discarded);
   }
-  spdlog::info("outdoor cache: {} matrices loaded from {}", loaded->loaded,
-               dir.outdoor_dir().string());
-  d->weather_ = std::make_unique<UploadStore>(dir, dir.weather_dir(), "epw");
+  spdlog::info(
+      "outdoor cache: {} matrices loaded from {}", loaded->loaded,
+      d->data_dir_ ? d->data_dir_->outdoor_dir().string() : d->store_->database().Describe());
 
   // Sites and jobs, and what they keep from being dropped
   d->heavy_ = std::make_unique<HeavyRequests>(limits.max_concurrent_heavy_requests());
-  d->queue_ = std::make_unique<WorkQueue>(config.worker_threads(), limits.max_queued_jobs(),
-                                          limits.max_queued_jobs_per_user());
-  d->uploads_ = std::make_unique<UploadQuota>(limits.max_upload_bytes_per_user());
   d->auth_ = std::make_unique<Authenticator>(config.auth(), *d->store_);
-  d->sites_ = std::make_unique<SiteManager>(config, dir, *d->store_, *d->cache_, *d->weather_,
-                                            *d->queue_, *d->heavy_, *d->uploads_);
-  d->jobs_ = std::make_unique<JobManager>(config, dir, *d->store_, *d->cache_, *d->weather_,
-                                          *d->queue_, *d->sites_, *d->heavy_, *d->uploads_);
-  Daemon* daemon = d.get();
-  d->cache_->SetInUse([daemon](const std::string& key) {
-    return daemon->sites_->UsesKey(key) || daemon->jobs_->UsesKey(key);
+  d->scheduler_ = std::make_unique<Scheduler>(
+      *d->store_, *d->cache_, ReplicaName(), config.worker_threads(), config.lease_seconds(),
+      std::min(kMaxPollSeconds, config.lease_seconds() / 4));
+  d->sites_ = std::make_unique<SiteManager>(config, d->data_dir_.get(), *d->store_, *d->cache_,
+                                            *d->heavy_, *d->scheduler_);
+  d->jobs_ = std::make_unique<JobManager>(config, d->data_dir_.get(), *d->store_, *d->cache_,
+                                          *d->sites_, *d->heavy_, *d->scheduler_);
+  Store* store = d->store_.get();
+  d->cache_->SetInUse([store](const std::string& key) {
+    absl::StatusOr<bool> used = store->KeyInUse(key);
+    return !used.ok() || *used;
   });
-  d->data_dir_->SetEvictor([daemon] { return daemon->cache_->EvictOne(); });
+  if (d->data_dir_)
+    d->data_dir_->SetEvictor([cache = d->cache_.get()] { return cache->EvictOne(); });
 
   // What the last run left
-  if (absl::Status s = d->sites_->Recover(); !s.ok()) return s;
-  if (absl::Status s = d->jobs_->Recover(); !s.ok()) return s;
-  if (const int removed = d->weather_->RemoveUnreferenced(); removed > 0) {
-    spdlog::info("removed {} weather file(s) no site or unfinished job uses", removed);
+  absl::StatusOr<std::vector<Store::Quarantined>> quarantined = store->QuarantineUnparsable();
+  if (!quarantined.ok()) return quarantined.status();
+  for (const Store::Quarantined& q : *quarantined) {
+    spdlog::error(
+        "{} {}: its stored record does not parse ({}); moved to the quarantine table, the "
+        "daemon goes on without it",
+        q.id.starts_with("job-") ? "job" : "site", LogSafe(q.id), q.reason);
   }
+  if (absl::Status s = d->sites_->Recover(); !s.ok()) return s;
+  absl::StatusOr<int> removed = store->CountWeatherReferences();
+  if (!removed.ok()) return removed.status();
+  if (*removed > 0) {
+    spdlog::info("removed {} weather file(s) no site or unfinished job uses", *removed);
+  }
+  JobManager* jobs = d->jobs_.get();
+  SiteManager* sites = d->sites_.get();
+  d->scheduler_->Start(
+      [jobs](std::shared_ptr<Scheduler::Held> held) { jobs->Run(std::move(held)); },
+      [sites](std::shared_ptr<Scheduler::Held> held) { sites->Compute(std::move(held)); });
 
   // The gRPC server. The standard health service answers without a token, so that load
   // balancers' and orchestrators' probes can use it: it tells only SERVING or NOT_SERVING.
@@ -132,14 +195,19 @@ absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& co
         absl::StrCat("cannot listen on ", config.listen_address(), " (address in use?)"));
   }
   spdlog::info(
-      "fenestrad listening on {} (port {}, {}, auth {}), data in {} ({} of {} bytes used), {} "
-      "worker thread(s), backend {}",
+      "fenestrad listening on {} (port {}, {}, auth {}), {}, {} worker thread(s), backend {}, "
+      "replica {}",
       config.listen_address(), d->port_,
       config.tls_cert_file().empty()        ? "plaintext"
       : config.tls_client_ca_file().empty() ? "TLS"
                                             : "TLS with client certificates",
-      config.auth(), dir.root().string(), dir.UsedBytes(), dir.max_bytes(), config.worker_threads(),
-      config.backend());
+      config.auth(),
+      d->data_dir_
+          ? absl::StrCat("data in ", d->data_dir_->root().string(), " (", d->data_dir_->UsedBytes(),
+                         " of ", d->data_dir_->max_bytes(), " bytes used)")
+          : absl::StrCat("store ", store->database().Describe(), " (lease ", config.lease_seconds(),
+                         " s)"),
+      config.worker_threads(), config.backend(), d->scheduler_->replica());
   d->server_->GetHealthCheckService()->SetServingStatus(kReadinessService, true);
   if (d->health_) d->health_->SetReady(true);
   return d;
@@ -150,7 +218,11 @@ void Daemon::Shutdown() {
   stopped_ = true;
   if (server_) server_->GetHealthCheckService()->SetServingStatus(false);
   if (health_) health_->SetReady(false);
-  if (jobs_) jobs_->Shutdown(config_.shutdown_grace_seconds());
+  if (jobs_) {
+    jobs_->Shutdown(config_.shutdown_grace_seconds());
+  } else if (scheduler_) {
+    scheduler_->Join();
+  }
   if (server_) {
     server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
     server_->Wait();

@@ -10,26 +10,30 @@
 #include "server/health.h"
 #include "server/heavy_requests.h"
 #include "server/job_manager.h"
-#include "server/job_store.h"
 #include "server/outdoor_cache.h"
+#include "server/scheduler.h"
 #include "server/services.h"
 #include "server/site_manager.h"
-#include "server/upload_quota.h"
+#include "server/store/store.h"
 #include "server/users.h"
-#include "server/work_queue.h"
 
 namespace fenestra {
 
-// fenestrad assembled: data directory, job store (with the users), outdoor cache, uploaded
-// weather files, work queue, sites, jobs and the gRPC server (SiteService, JobService,
-// health checking, and reflection with auth none), over TLS when configured; with
-// config.health_listen, the health port too (HealthServer).
+// fenestrad assembled: the store (SQLite in the data directory, with its outdoor matrix
+// files and uploaded weather files; or a PostgreSQL database shared with other replicas),
+// outdoor cache, scheduler (workers claiming jobs and site computations), sites, jobs and
+// the gRPC server (SiteService, JobService, health checking, and reflection with auth
+// none), over TLS when configured; with config.health_listen, the health port too
+// (HealthServer).
 class Daemon {
  public:
-  // Opens the data directory (FailedPrecondition naming it when it is not writable),
-  // recovers the stored sites and jobs, drops the uploaded files nothing refers to any
-  // more, and starts serving on config.listen_address; `config` resolved (ResolveConfig).
-  // On a full disk it starts too: it serves reads and refuses writes until space is freed.
+  // Opens the store (SQLite: the data directory, FailedPrecondition naming it when it is
+  // not writable; what was running when the last daemon stopped is taken over at once;
+  // PostgreSQL: Unavailable when it cannot be reached), brings its schema up to date,
+  // quarantines the records that no longer parse, drops the uploaded files nothing
+  // refers to any more, starts the workers and serves on config.listen_address; `config`
+  // resolved (ResolveConfig). On a full disk it starts too: it serves reads and refuses
+  // writes until space is freed.
   static absl::StatusOr<std::unique_ptr<Daemon>> Start(const v1::DaemonConfig& config);
   ~Daemon();
 
@@ -45,16 +49,18 @@ class Daemon {
  private:
   explicit Daemon(const v1::DaemonConfig& config);
 
+  // Opens the store and the cache: SQLite in the data directory, or PostgreSQL.
+  absl::Status OpenStore();
+
   v1::DaemonConfig config_;
   std::unique_ptr<HealthServer> health_;
-  std::unique_ptr<DataDir> data_dir_;
-  std::unique_ptr<JobStore> store_;
+  std::unique_ptr<DataDir> data_dir_;     // SQLite only
+  std::unique_ptr<UploadStore> weather_;  // SQLite only
+  std::unique_ptr<Store> store_;
   std::unique_ptr<OutdoorCache> cache_;
-  std::unique_ptr<UploadStore> weather_;
   std::unique_ptr<HeavyRequests> heavy_;
-  std::unique_ptr<WorkQueue> queue_;
-  std::unique_ptr<UploadQuota> uploads_;
   std::unique_ptr<Authenticator> auth_;
+  std::unique_ptr<Scheduler> scheduler_;
   std::unique_ptr<SiteManager> sites_;
   std::unique_ptr<JobManager> jobs_;
   std::unique_ptr<SiteServiceImpl> site_service_;

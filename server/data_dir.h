@@ -100,6 +100,8 @@ class UploadStore {
   int References(const std::string& path) const;
   // Removes the files of the folder nothing refers to [count removed].
   int RemoveUnreferenced();
+  // The folder.
+  const std::filesystem::path& dir() const { return dir_; }
 
  private:
   // The file name a path is counted under (<sha256>.<extension>).

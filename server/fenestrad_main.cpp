@@ -1,7 +1,9 @@
 // fenestrad: the Fenestra daemon. Serves SiteService and JobService (gRPC), runs jobs on
-// worker threads, caches outdoor matrices and keeps jobs in data_dir/fenestra.db.
+// worker threads, caches outdoor matrices and keeps jobs in data_dir/fenestra.db, or in a
+// PostgreSQL database shared by any number of replicas (--store).
 // Configuration: a JSON file (fenestra.v1.DaemonConfig, --config) and flags, which win.
 // `fenestrad user add|list|revoke` manage the users of a daemon with token auth;
+// `fenestrad migrate` copies a data directory into a PostgreSQL store.
 // `fenestrad --check-config` checks a configuration without starting.
 #include <google/protobuf/stubs/logging.h>
 #include <google/protobuf/util/json_util.h>
@@ -20,6 +22,9 @@
 #include "server/daemon.h"
 #include "server/heavy_requests.h"
 #include "server/log_safe.h"
+#include "server/store/migrate.h"
+#include "server/store/postgres_database.h"
+#include "server/store/store.h"
 #include "server/users.h"
 
 namespace {
@@ -29,14 +34,14 @@ namespace fs = std::filesystem;
 // The settings given as flags; 0, empty or false = not given.
 struct Flags {
   std::string config_file, port_file;
-  std::string listen, health_listen, data_dir, backend, log_level, auth;
+  std::string listen, health_listen, data_dir, backend, log_level, auth, store;
   std::string tls_cert, tls_key, tls_client_ca;
   bool allow_plaintext = false, check_config = false;
   int workers = 0, max_sensors = 0, max_evaluations = 0, max_message_bytes = 0, max_queued_jobs = 0,
       max_sites = 0, max_queued_jobs_per_user = 0, max_sites_per_user = 0, max_heavy_requests = 0;
   int64_t max_outdoor_paths = 0, max_indoor_paths = 0, max_triangles = 0,
-          max_upload_bytes_per_user = 0, max_data_dir_bytes = 0;
-  double grace = 0;
+          max_upload_bytes_per_user = 0, max_data_dir_bytes = 0, outdoor_memory_bytes = 0;
+  double grace = 0, lease_seconds = 0;
 };
 
 void AddDaemonFlags(CLI::App& app, Flags& f) {
@@ -47,6 +52,14 @@ void AddDaemonFlags(CLI::App& app, Flags& f) {
                  "(services liveness, fenestrad and \"\") [none]");
   app.add_option("--data-dir", f.data_dir,
                  "job store, users, outdoor cache and weather files [fenestra-data]");
+  app.add_option("--store", f.store,
+                 "PostgreSQL URL postgresql://user@host:port/db shared by any number of "
+                 "replicas [SQLite in --data-dir]");
+  app.add_option("--lease-seconds", f.lease_seconds,
+                 "how long a replica's claim on running work lasts unrenewed; another replica "
+                 "takes the work over after it [10]");
+  app.add_option("--outdoor-memory-bytes", f.outdoor_memory_bytes,
+                 "PostgreSQL store: outdoor matrices kept in memory after use [1 GiB]");
   app.add_option(
       "--workers", f.workers,
       "jobs and site computations run at once [one per GPU, at least 1; 1 with --backend cpu]");
@@ -97,6 +110,9 @@ void ApplyFlags(const Flags& f, fenestra::v1::DaemonConfig& config) {
   if (!f.listen.empty()) config.set_listen_address(f.listen);
   if (!f.health_listen.empty()) config.set_health_listen(f.health_listen);
   if (!f.data_dir.empty()) config.set_data_dir(f.data_dir);
+  if (!f.store.empty()) config.set_store(f.store);
+  if (f.lease_seconds) config.set_lease_seconds(f.lease_seconds);
+  if (f.outdoor_memory_bytes) config.set_outdoor_memory_bytes(f.outdoor_memory_bytes);
   if (f.workers) config.set_worker_threads(f.workers);
   if (!f.backend.empty()) config.set_backend(f.backend);
   if (!f.log_level.empty()) config.set_log_level(f.log_level);
@@ -121,9 +137,9 @@ void ApplyFlags(const Flags& f, fenestra::v1::DaemonConfig& config) {
   if (f.max_heavy_requests) l.set_max_concurrent_heavy_requests(f.max_heavy_requests);
 }
 
-// `fenestrad user ...`: what was asked, on the store in `data_dir`.
+// `fenestrad user ...`: what was asked, on the store in `data_dir` or `store`.
 struct UserCommand {
-  std::string name, data_dir;
+  std::string name, data_dir, store;
   bool admin = false;
   CLI::App *add = nullptr, *list = nullptr, *revoke = nullptr;
 };
@@ -131,8 +147,8 @@ struct UserCommand {
 void AddUserCommands(CLI::App& app, UserCommand& c) {
   CLI::App* user =
       app.add_subcommand("user",
-                         "manage the users of a daemon with token auth (kept in DIR/fenestra.db; a "
-                         "running daemon sees changes at once)");
+                         "manage the users of a daemon with token auth (kept in DIR/fenestra.db "
+                         "or the --store database; a running daemon sees changes at once)");
   user->require_subcommand(1);
   c.add = user->add_subcommand("add", "add a user; prints its new token, once, on stdout");
   c.add->add_option("name", c.name, "user name: letters, digits, '.', '_', '-'")->required();
@@ -141,8 +157,46 @@ void AddUserCommands(CLI::App& app, UserCommand& c) {
   c.revoke = user->add_subcommand("revoke", "revoke a user's token; its calls fail from now on");
   c.revoke->add_option("name", c.name, "user name")->required();
   for (CLI::App* command : {c.add, c.list, c.revoke}) {
-    command->add_option("--data-dir", c.data_dir, "the daemon's data directory")->required();
+    CLI::Option* dir = command->add_option("--data-dir", c.data_dir, "the daemon's data directory");
+    CLI::Option* store =
+        command->add_option("--store", c.store, "the replicas' PostgreSQL store (a URL)");
+    dir->excludes(store);
   }
+}
+
+// `fenestrad migrate`: what was asked.
+struct MigrateCommand {
+  std::string from, to;
+  bool overwrite = false;
+  CLI::App* command = nullptr;
+};
+
+void AddMigrateCommand(CLI::App& app, MigrateCommand& c) {
+  c.command = app.add_subcommand(
+      "migrate",
+      "copy a data directory (users, jobs, sites, weather files, outdoor matrices) into a "
+      "PostgreSQL store for replicas; no fenestrad may run on the directory meanwhile");
+  c.command->add_option("--from", c.from, "sqlite:DIR, the data directory")->required();
+  c.command->add_option("--to", c.to, "postgresql://user@host:port/database")->required();
+  c.command->add_flag("--overwrite", c.overwrite,
+                      "replace what the target store holds (by default it must be empty)");
+}
+
+int RunMigrateCommand(const MigrateCommand& c) {
+  if (!c.from.starts_with("sqlite:")) {
+    std::cerr << "fenestrad: --from must be sqlite:DIR (a fenestrad data directory)\n";
+    return 2;
+  }
+  const absl::Status migrated =
+      fenestra::MigrateDataDir(c.from.substr(7), c.to, c.overwrite,
+                               [](const std::string& line) { std::cerr << line << "\n"; });
+  if (!migrated.ok()) {
+    std::cerr << "fenestrad: " << migrated.message() << "\n";
+    return 1;
+  }
+  std::cerr << "copied " << c.from << " into " << fenestra::RedactPostgresUrl(c.to)
+            << "; start the replicas with --store on it\n";
+  return 0;
 }
 
 std::string FormatUnixMs(int64_t unix_ms) {
@@ -151,14 +205,23 @@ std::string FormatUnixMs(int64_t unix_ms) {
 }
 
 int RunUserCommand(const UserCommand& c) {
-  const fs::path db = fs::path(c.data_dir) / "fenestra.db";
-  if (!*c.add && !fs::exists(db)) {
-    std::cerr << "fenestrad: no " << db.string() << " (is --data-dir the daemon's?)\n";
-    return 1;
+  if (c.store.empty() == c.data_dir.empty()) {
+    std::cerr << "fenestrad: give the daemon's --data-dir, or its --store\n";
+    return 2;
   }
-  std::error_code error;
-  fs::create_directories(c.data_dir, error);
-  absl::StatusOr<std::unique_ptr<fenestra::JobStore>> store = fenestra::JobStore::Open(db.string());
+  absl::StatusOr<std::unique_ptr<fenestra::Store>> store = absl::InternalError("not opened");
+  if (!c.store.empty()) {
+    store = fenestra::OpenStoreUrl(c.store, 1);
+  } else {
+    const fs::path db = fs::path(c.data_dir) / "fenestra.db";
+    if (!*c.add && !fs::exists(db)) {
+      std::cerr << "fenestrad: no " << db.string() << " (is --data-dir the daemon's?)\n";
+      return 1;
+    }
+    std::error_code error;
+    fs::create_directories(c.data_dir, error);
+    store = fenestra::OpenStoreUrl("sqlite:" + c.data_dir, 1);
+  }
   if (!store.ok()) {
     std::cerr << "fenestrad: " << store.status().message() << "\n";
     return 1;
@@ -234,14 +297,21 @@ int main(int argc, char** argv) {
   CLI::App app{"fenestrad: the Fenestra daylight optimization service"};
   Flags flags;
   UserCommand user;
+  MigrateCommand migrate;
   AddDaemonFlags(app, flags);
   AddUserCommands(app, user);
+  AddMigrateCommand(app, migrate);
   CLI11_PARSE(app, argc, argv);
-  if (*user.add || *user.list || *user.revoke) return RunUserCommand(user);
-
+  // Logs go to stderr (stdout carries only what a command prints: a new token)
   auto logger = spdlog::stderr_color_mt("fenestrad");
   spdlog::set_default_logger(logger);
   spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
+  if (*user.add || *user.list || *user.revoke) {
+    spdlog::set_level(spdlog::level::warn);
+    return RunUserCommand(user);
+  }
+  if (*migrate.command) return RunMigrateCommand(migrate);
+
   // Protobuf's own complaints (a request whose strings are not UTF-8) in the same format
   google::protobuf::SetLogHandler(
       [](google::protobuf::LogLevel, const char*, int, const std::string& message) {

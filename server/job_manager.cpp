@@ -8,17 +8,16 @@
 #include <thread>
 
 #include "absl/cleanup/cleanup.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "core/optimize/job.h"
+#include "core/sky/epw.h"
 #include "server/limits.h"
 #include "server/log_safe.h"
 
 namespace fenestra {
 namespace {
-
-// Events kept in memory per job for watchers that fall behind; older ones are in the store.
-constexpr size_t kKeptEvents = 4096;
 
 v1::JobProgress ToProto(const JobProgress& p) {
   v1::JobProgress out;
@@ -48,6 +47,54 @@ absl::Status NoJob(const std::string& id) {
   return absl::NotFoundError(absl::StrCat("no job '", id, "' (fenestra job list shows them)"));
 }
 
+// Turns `info` into a job's end in `state` and returns its final event.
+v1::JobEvent EndOf(v1::JobInfo& info, v1::JobState state, const v1::JobResult* result,
+                   const std::string& error) {
+  info.set_state(state);
+  info.set_stage("done");
+  info.set_finished_unix_ms(NowUnixMs());
+  info.set_queue_position(0);
+  info.clear_replica();
+  if (result) *info.mutable_result() = *result;
+  info.set_error(error);
+  v1::JobEvent event;
+  switch (state) {
+    case v1::JOB_STATE_SUCCEEDED:
+      *event.mutable_finished() = *result;
+      break;
+    case v1::JOB_STATE_CANCELLED:
+      if (result)
+        *event.mutable_cancelled()->mutable_result() = *result;
+      else
+        event.mutable_cancelled();
+      break;
+    case v1::JOB_STATE_INTERRUPTED:
+      if (result)
+        *event.mutable_interrupted()->mutable_result() = *result;
+      else
+        event.mutable_interrupted();
+      break;
+    default:
+      event.set_failed(error);
+  }
+  event.set_sequence(info.last_sequence() + 1);
+  event.set_time_unix_ms(info.finished_unix_ms());
+  info.set_last_sequence(event.sequence());
+  return event;
+}
+
+// Whether an event ends its job's stream.
+bool EndsStream(const v1::JobEvent& e) {
+  return e.has_snapshot()
+             ? IsTerminal(e.snapshot().state())
+             : e.has_finished() || e.has_failed() || e.has_cancelled() || e.has_interrupted();
+}
+
+// How long a Watch waits for news before it looks at the store again; and how long it
+// waits after the store could not be reached.
+constexpr auto kWatchPoll = std::chrono::seconds(1);
+constexpr auto kWatchRetry = std::chrono::milliseconds(500);
+
 }  // namespace
 
 bool IsTerminal(v1::JobState state) {
@@ -55,18 +102,16 @@ bool IsTerminal(v1::JobState state) {
          state == v1::JOB_STATE_CANCELLED || state == v1::JOB_STATE_INTERRUPTED;
 }
 
-JobManager::JobManager(const v1::DaemonConfig& config, const DataDir& data_dir, JobStore& store,
-                       OutdoorCache& cache, UploadStore& weather, WorkQueue& queue,
-                       SiteManager& sites, HeavyRequests& heavy, UploadQuota& uploads)
+JobManager::JobManager(const v1::DaemonConfig& config, const DataDir* data_dir, Store& store,
+                       OutdoorCache& cache, SiteManager& sites, HeavyRequests& heavy,
+                       Scheduler& scheduler)
     : config_(config),
       data_dir_(data_dir),
       store_(store),
       cache_(cache),
-      weather_(weather),
-      queue_(queue),
       sites_(sites),
       heavy_(heavy),
-      uploads_(uploads),
+      scheduler_(scheduler),
       committer_([this] { Commit(); }) {}
 
 JobManager::~JobManager() {
@@ -78,82 +123,6 @@ JobManager::~JobManager() {
   if (committer_.joinable()) committer_.join();
 }
 
-absl::Status JobManager::Recover() {
-  absl::StatusOr<JobStore::StoredJobs> stored = store_.LoadJobs();
-  if (!stored.ok()) return stored.status();
-  for (const JobStore::Quarantined& q : stored->quarantined) {
-    spdlog::error(
-        "job {}: its stored record does not parse ({}); moved to the quarantine "
-        "table, the daemon goes on without it",
-        LogSafe(q.id), q.reason);
-  }
-  std::vector<std::shared_ptr<Record>> queued;
-  for (v1::JobInfo& info : stored->jobs) {
-    auto record = std::make_shared<Record>();
-    const std::string id = info.id();
-    record->info = std::move(info);
-    if (record->info.owner().empty()) record->info.set_owner(kLocalUser);  // stored before owners
-    record->owner = record->info.owner();
-    record->wanted = record->info;
-    const v1::JobState state = record->info.state();
-    if (state == v1::JOB_STATE_QUEUED) {
-      // A queued job runs from its stored form: check that it parses now
-      absl::StatusOr<v1::Job> job = store_.LoadJob(id);
-      if (!job.ok()) {
-        if (job.status().code() != absl::StatusCode::kDataLoss) return job.status();
-        const absl::Status moved =
-            store_.Quarantine("jobs", id, std::string(job.status().message()));
-        spdlog::error("job {}: {}; {}, the daemon goes on without it", id,
-                      std::string(job.status().message()),
-                      moved.ok() ? "moved to the quarantine table"
-                                 : absl::StrCat("not moved (", moved.message(), ")"));
-        continue;
-      }
-      record->weather_path = job->weather_file();
-      if (!record->weather_path.empty()) weather_.Ref(record->weather_path);
-      queued.push_back(record);
-    } else if (state == v1::JOB_STATE_RUNNING) {
-      // The latest progress is in the event log only
-      absl::StatusOr<std::vector<v1::JobEvent>> events = store_.LoadEvents(id);
-      if (events.ok()) {
-        for (const v1::JobEvent& e : *events) {
-          if (e.has_progress()) *record->wanted.mutable_progress() = e.progress();
-        }
-      }
-    }
-    // An unfinished job's upload counts against its owner until it ends (Ended)
-    if (!IsTerminal(state)) {
-      (void)uploads_.Reserve(record->owner, record->info.upload_bytes(), /*force=*/true);
-    }
-    {
-      std::lock_guard lock(mutex_);
-      if (state == v1::JOB_STATE_QUEUED) active_keys_.insert(record->info.outdoor_key());
-      order_.push_back(id);
-      jobs_[id] = record;
-    }
-    if (state == v1::JOB_STATE_RUNNING) {
-      std::lock_guard lock(record->mutex);
-      (void)Finish(*record, v1::JOB_STATE_FAILED, nullptr, "daemon stopped while running",
-                   /*retry=*/true);
-    }
-  }
-  for (const auto& record : queued) {
-    if (absl::Status s = Queue(record, /*force=*/true); !s.ok()) return s;
-    spdlog::info("job {} queued again after a restart", record->info.id());
-  }
-  return absl::OkStatus();
-}
-
-absl::Status JobManager::Queue(const std::shared_ptr<Record>& record, bool force) {
-  std::weak_ptr<Record> weak = record;
-  return queue_.Push(
-      record->info.id(), record->owner,
-      [this, weak] {
-        if (auto r = weak.lock()) Run(r);
-      },
-      /*is_job=*/true, force);
-}
-
 absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& request,
                                                const Caller& caller) {
   if (shutting_down_) {
@@ -163,36 +132,34 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
   if (!pass.ok()) return pass.status();
   absl::StatusOr<Admission> admitted = Admit(request, caller);
   if (!admitted.ok()) return admitted.status();
-
-  // Its upload counts against its owner until it ends; room for the job, then its weather
-  // file: the upload, or the site's
-  const int64_t upload_bytes = admitted->info.upload_bytes();
-  if (absl::Status s = uploads_.Reserve(caller.name, upload_bytes); !s.ok()) return s;
-  absl::Cleanup release_quota = [&] { uploads_.Release(caller.name, upload_bytes); };
-  if (absl::Status s = data_dir_.MakeRoom(static_cast<int64_t>(request.job().ByteSizeLong()));
-      !s.ok()) {
-    return s;
+  if (data_dir_) {
+    if (absl::Status s = data_dir_->MakeRoom(static_cast<int64_t>(request.job().ByteSizeLong()));
+        !s.ok()) {
+      return s;
+    }
   }
-  absl::StatusOr<std::string> weather_path = TakeWeather(request, admitted->site, caller);
-  if (!weather_path.ok()) return weather_path.status();
-  // Until the job is queued, the reference is this call's
-  absl::Cleanup release_weather = [&] { weather_.Unref(*weather_path); };
-  v1::Job& job = admitted->job;
-  job.set_weather_file(*weather_path);
-  job.mutable_scene()->mutable_site()->clear_weather_file();
-  absl::StatusOr<v1::JobInfo> queued = StoreAndQueue(job, admitted->info, *weather_path, caller);
+
+  Store::NewJob job;
+  job.info = std::move(admitted->info);
+  job.info.set_stage("queued");
+  job.info.set_created_unix_ms(NowUnixMs());
+  job.job = std::move(admitted->job);
+  job.job.clear_weather_file();
+  job.job.mutable_scene()->mutable_site()->clear_weather_file();
+  job.weather_epw = request.weather_epw();
+  absl::StatusOr<v1::JobInfo> queued = store_.InsertJob(std::move(job), config_.limits());
   if (!queued.ok()) return queued.status();
-  std::move(release_weather).Cancel();
-  std::move(release_quota).Cancel();
   spdlog::info("job {} queued by {} (\"{}\"): {} evaluations at most, {} indoor paths per sensor{}",
                queued->id(), caller.name, LogSafe(queued->name()), admitted->max_evaluations,
                admitted->indoor_paths_per_sensor,
                admitted->site ? absl::StrCat(", site ", request.site_id()) : "");
-  return queued;
+  // Its place in the queue, as it stands now
+  absl::StatusOr<v1::JobInfo> now = store_.GetJob(queued->id());
+  return ForCaller(now.ok() ? *now : *queued, caller);
 }
 
 absl::StatusOr<JobManager::Admission> JobManager::Admit(const v1::SubmitJobRequest& request,
-                                                        const Caller& caller) const {
+                                                        const Caller& caller) {
   // Everything checked before anything is stored
   absl::StatusOr<CheckedJob> checked = CheckJobRequest(request, config_);
   if (!checked.ok()) return checked.status();
@@ -211,7 +178,7 @@ absl::StatusOr<JobManager::Admission> JobManager::Admit(const v1::SubmitJobReque
   }
   const std::optional<SiteManager::ForJob>& site = admitted.site;
   const v1::Job& job = checked->job;
-  if (request.weather_epw().empty() && !(site && !site->weather_path.empty())) {
+  if (request.weather_epw().empty() && !(site && !site->weather.empty())) {
     if (!job.weather_file().empty() || !job.scene().site().weather_file().empty()) {
       return absl::InvalidArgumentError(absl::StrCat(
           "weather file '",
@@ -246,81 +213,139 @@ absl::StatusOr<JobManager::Admission> JobManager::Admit(const v1::SubmitJobReque
   return admitted;
 }
 
-absl::StatusOr<std::string> JobManager::TakeWeather(const v1::SubmitJobRequest& request,
-                                                    const std::optional<SiteManager::ForJob>& site,
-                                                    const Caller& caller) {
-  if (!request.weather_epw().empty()) return weather_.Add(request.weather_epw());
-  weather_.Ref(site->weather_path);
-  if (!sites_.Lookup(request.site_id(), caller).ok()) {  // deleted meanwhile
-    weather_.Unref(site->weather_path);
-    return absl::NotFoundError(absl::StrCat("no site '", request.site_id(), "' any more"));
+absl::StatusOr<v1::JobInfo> JobManager::Find(const std::string& id, const Caller& caller) {
+  absl::StatusOr<v1::JobInfo> info = store_.GetJob(id);
+  if (!info.ok()) {
+    return info.status().code() == absl::StatusCode::kNotFound ? NoJob(id) : info.status();
   }
-  return site->weather_path;
+  if (!caller.Owns(info->owner())) return NoJob(id);
+  return info;
 }
 
-absl::StatusOr<v1::JobInfo> JobManager::StoreAndQueue(const v1::Job& job, v1::JobInfo info,
-                                                      const std::string& weather_path,
-                                                      const Caller& caller) {
-  info.set_state(v1::JOB_STATE_QUEUED);
-  info.set_stage("queued");
-  info.set_created_unix_ms(NowUnixMs());
-  info.set_last_sequence(1);
-  v1::JobEvent queued;
-  queued.set_sequence(1);
-  queued.set_time_unix_ms(info.created_unix_ms());
-  queued.set_queued(queue_.QueuedJobs());
-  absl::StatusOr<std::string> id = store_.InsertJob(info, job, &queued);
-  if (!id.ok()) return id.status();
-  auto record = std::make_shared<Record>();
-  record->owner = info.owner();
-  record->info = info;
-  record->wanted = info;
-  record->weather_path = weather_path;
-  record->events.push_back(queued);
-  {
-    std::lock_guard lock(mutex_);
-    order_.push_back(*id);
-    jobs_[*id] = record;
-    active_keys_.insert(info.outdoor_key());
-  }
-  std::lock_guard lock(record->mutex);
-  if (absl::Status s = Queue(record, /*force=*/false); !s.ok()) {
-    {
-      std::lock_guard jobs_lock(mutex_);
-      order_.pop_back();
-      jobs_.erase(*id);
-      active_keys_.erase(active_keys_.find(info.outdoor_key()));
-    }
-    if (absl::Status d = store_.DeleteJob(*id); !d.ok()) {
-      spdlog::error("job {}: cannot remove it from the store: {}", *id, std::string(d.message()));
-    }
-    return s;
-  }
-  return InfoOf(*record, caller);
+absl::StatusOr<v1::JobInfo> JobManager::Get(const std::string& id, const Caller& caller) {
+  absl::StatusOr<v1::JobInfo> info = Find(id, caller);
+  if (!info.ok()) return info.status();
+  return ForCaller(*std::move(info), caller);
 }
 
-absl::Status JobManager::Store(Record& r, std::optional<v1::JobEvent> event, bool durable) {
+absl::StatusOr<std::vector<v1::JobInfo>> JobManager::List(v1::JobState state, int limit,
+                                                          const Caller& caller) {
+  absl::StatusOr<std::vector<v1::JobInfo>> jobs =
+      store_.ListJobs(caller.admin ? "" : caller.name, state, limit <= 0 ? 100 : limit);
+  if (!jobs.ok()) return jobs.status();
+  for (v1::JobInfo& info : *jobs) info = ForCaller(std::move(info), caller);
+  return jobs;
+}
+
+absl::StatusOr<v1::JobInfo> JobManager::Cancel(const std::string& id, const Caller& caller) {
+  absl::StatusOr<v1::JobInfo> found = Find(id, caller);
+  if (!found.ok()) return found.status();
+  if (IsTerminal(found->state())) return ForCaller(*std::move(found), caller);
+  // Run here: the runner hears it at once; the store tells the other replicas
+  std::shared_ptr<Scheduler::Held> local = scheduler_.Find(id);
+  if (local) local->cancel_requested = true;
+  absl::StatusOr<Store::Cancelled> cancelled = store_.CancelJob(
+      id, [](v1::JobInfo& info) { return EndOf(info, v1::JOB_STATE_CANCELLED, nullptr, ""); });
+  if (!cancelled.ok()) {
+    if (!local) return cancelled.status();
+    // The runner stops all the same; its end is stored when the store takes it
+    found->set_cancel_requested(true);
+    spdlog::info("job {}: cancel requested by {}; it stops at its next checkpoint", id,
+                 caller.name);
+    return ForCaller(*std::move(found), caller);
+  }
+  if (cancelled->ended) {
+    store_.ReleaseWeather(cancelled->weather);
+    spdlog::info("job {}: cancelled by {} while queued", id, caller.name);
+  } else if (cancelled->info.state() != v1::JOB_STATE_QUEUED ||
+             cancelled->info.cancel_requested()) {
+    spdlog::info("job {}: cancel requested by {}; it stops at its next checkpoint", id,
+                 caller.name);
+  }
+  return ForCaller(std::move(cancelled->info), caller);
+}
+
+absl::Status JobManager::Watch(const std::string& id, const Caller& caller,
+                               const std::function<bool(const v1::JobEvent&)>& write,
+                               const std::function<bool()>& client_gone) {
+  absl::StatusOr<v1::JobInfo> first = Find(id, caller);
+  if (!first.ok()) return first.status();
+  const auto snapshot_of = [&](v1::JobInfo info) {
+    v1::JobEvent snapshot;
+    snapshot.set_sequence(info.last_sequence());
+    snapshot.set_time_unix_ms(NowUnixMs());
+    *snapshot.mutable_snapshot() = ForCaller(std::move(info), caller);
+    return snapshot;
+  };
+  std::optional<v1::JobEvent> snapshot = snapshot_of(*std::move(first));
+  int64_t sent = 0;
+  Database& db = store_.database();
+  while (true) {
+    const uint64_t seen = db.ChangeCount();
+    std::vector<v1::JobEvent> pending;
+    if (snapshot) {
+      pending.push_back(*std::move(snapshot));
+      snapshot.reset();
+    } else {
+      absl::StatusOr<std::vector<v1::JobEvent>> events = store_.LoadEvents(id, sent);
+      if (!events.ok()) {
+        // The store is away: the stream waits for it
+        if (client_gone()) return absl::OkStatus();
+        if (closing_) return absl::UnavailableError("fenestrad is shutting down");
+        std::this_thread::sleep_for(kWatchRetry);
+        continue;
+      }
+      pending = *std::move(events);
+      // Fell behind events that were dropped (the job ended): start over from a snapshot
+      if (!pending.empty() && pending.front().sequence() > sent + 1) {
+        absl::StatusOr<v1::JobInfo> now = Find(id, caller);
+        if (!now.ok()) return now.status();
+        pending = {snapshot_of(*std::move(now))};
+      }
+    }
+    for (v1::JobEvent& e : pending) {
+      if (!caller.admin && e.has_started()) e.mutable_started()->clear_replica();
+      if (!write(e)) return absl::OkStatus();
+      sent = e.sequence();
+      if (EndsStream(e)) return absl::OkStatus();
+    }
+    if (!pending.empty()) continue;
+    if (client_gone()) return absl::OkStatus();
+    if (closing_) {
+      return absl::UnavailableError(
+          "fenestrad is shutting down; the job goes on (watch it again through another "
+          "replica, or once this one is back)");
+    }
+    db.WaitForChange(seen, kWatchPoll);
+  }
+}
+
+// ---- Running a claimed job
+
+absl::Status JobManager::Save(Record& r, std::optional<v1::JobEvent> event, bool durable) {
   if (event) {
     event->set_sequence(r.info.last_sequence() + 1);
     event->set_time_unix_ms(NowUnixMs());
     r.wanted.set_last_sequence(event->sequence());
   }
-  const absl::Status stored = store_.UpdateJob(r.wanted, event ? &*event : nullptr, durable);
+  bool cancel_requested = false;
+  const absl::Status stored =
+      store_.UpdateJob(r.lease(), r.wanted, event ? &*event : nullptr, durable, &cancel_requested,
+                       r.checkpoint ? &*r.checkpoint : nullptr);
   if (!stored.ok()) {
     r.wanted.set_last_sequence(r.info.last_sequence());
+    if (stored.code() == absl::StatusCode::kAborted) r.held->lost = true;
     return stored;
   }
+  if (cancel_requested) r.held->cancel_requested = true;
   r.info = r.wanted;
-  if (event) {
-    r.events.push_back(*std::move(event));
-    while (r.events.size() > kKeptEvents) r.events.pop_front();
-  }
-  r.changed.notify_all();
+  r.checkpoint.reset();
   return absl::OkStatus();
 }
 
 void JobManager::Report(Record& r, std::optional<v1::JobEvent> event, bool durable) {
-  const absl::Status stored = Store(r, std::move(event), durable);
+  const absl::Status stored = Save(r, std::move(event), durable);
+  if (stored.code() == absl::StatusCode::kAborted) return;  // lost: the runner stops
   if (!stored.ok() && !r.store_failing) {
     spdlog::error(
         "job {}: cannot store its progress ({}); it goes on, and what it reports "
@@ -332,41 +357,88 @@ void JobManager::Report(Record& r, std::optional<v1::JobEvent> event, bool durab
   r.store_failing = !stored.ok();
 }
 
-void JobManager::Run(const std::shared_ptr<Record>& shared) {
-  Record& r = *shared;
+void JobManager::Run(std::shared_ptr<Scheduler::Held> held) {
+  auto record = std::make_shared<Record>();
+  Record& r = *record;
+  r.held = std::move(held);
+  const Claim& claim = r.held->claim;
+  const std::string& id = claim.lease.id;
+  absl::StatusOr<v1::JobInfo> info = store_.GetJob(id, /*position=*/false);
+  if (!info.ok()) {
+    spdlog::error("job {}: cannot be read to start ({})", id, std::string(info.status().message()));
+    return;
+  }
+  // What the store adds for callers is not stored
+  info->set_queue_position(0);
+  info->clear_replica();
+  info->set_cancel_requested(false);
+  r.info = r.wanted = *std::move(info);
+  if (claim.taken_over) {
+    r.resume = LastCheckpoint(id);
+    spdlog::warn("job {}: taken over from replica {}, whose lease expired (it stopped); {}", id,
+                 LogSafe(claim.previous_replica),
+                 r.resume ? absl::StrCat("it goes on after its last checkpoint (",
+                                         r.resume->history_size(), " steps)")
+                          : std::string("it starts again (no checkpoint)"));
+  }
   if (Start(r)) {
     try {
       RunStarted(r);
     } catch (const std::exception& e) {
       std::lock_guard lock(r.mutex);
-      (void)Finish(r, v1::JOB_STATE_FAILED, nullptr, absl::StrCat("internal error: ", e.what()),
-                   /*retry=*/true);
+      Finish(r, v1::JOB_STATE_FAILED, nullptr, absl::StrCat("internal error: ", e.what()));
+    }
+    // An end waiting in the committer keeps the claim held until it is stored
+    std::lock_guard lock(r.mutex);
+    if (r.end) {
+      std::lock_guard waiting(waiting_mutex_);
+      waiting_.push_back(record);
     }
   }
   ReleaseFreeMemory();  // the scene, its BVH and the tracer's buffers
 }
 
+std::optional<v1::SearchCheckpoint> JobManager::LastCheckpoint(const std::string& id) {
+  absl::StatusOr<std::optional<std::string>> bytes = store_.LoadCheckpoint(id);
+  if (!bytes.ok()) {
+    spdlog::warn("job {}: its checkpoint cannot be read ({}); it starts again", id,
+                 std::string(bytes.status().message()));
+    return std::nullopt;
+  }
+  if (!*bytes) return std::nullopt;
+  absl::StatusOr<v1::SearchCheckpoint> checkpoint = ParseSearchCheckpoint(**bytes);
+  if (!checkpoint.ok()) {
+    spdlog::warn("job {}: its checkpoint is not usable ({}); it starts again", id,
+                 std::string(checkpoint.status().message()));
+    return std::nullopt;
+  }
+  return *std::move(checkpoint);
+}
+
 bool JobManager::Start(Record& r) {
+  int resumed_evaluations = 0;
+  if (r.resume) {
+    for (const v1::Evaluation& step : r.resume->history()) resumed_evaluations += !step.cached();
+  }
   for (int attempt = 0;; ++attempt) {
     {
       std::lock_guard lock(r.mutex);
-      if (r.info.state() != v1::JOB_STATE_QUEUED || r.end) return false;
-      if (r.cancel_requested) {
-        (void)Finish(r, v1::JOB_STATE_CANCELLED, nullptr, "", /*retry=*/true);
-        return false;
-      }
+      if (r.held->lost) return false;
       r.wanted.set_state(v1::JOB_STATE_RUNNING);
-      r.wanted.set_started_unix_ms(NowUnixMs());
+      if (r.wanted.started_unix_ms() == 0) r.wanted.set_started_unix_ms(NowUnixMs());
       r.wanted.set_stage("outdoor");
       v1::JobEvent event;
       event.mutable_started()->set_backend(r.info.backend());
-      const absl::Status stored = Store(r, event);
+      event.mutable_started()->set_replica(scheduler_.replica());
+      event.mutable_started()->set_resumed_evaluations(resumed_evaluations);
+      const absl::Status stored = Save(r, event);
       if (stored.ok()) {
         spdlog::info("job {} running (\"{}\")", r.info.id(), LogSafe(r.info.name()));
         return true;
       }
       // Not started: a job runs only once its running state is stored
       r.wanted = r.info;
+      if (stored.code() == absl::StatusCode::kAborted) return false;
       if (attempt == 0) {
         spdlog::error(
             "job {}: cannot start, its running state cannot be stored ({}); trying "
@@ -374,64 +446,37 @@ bool JobManager::Start(Record& r) {
             r.info.id(), std::string(stored.message()));
       }
     }
-    if (shutting_down_) return false;  // stays queued, and runs after the next start
+    if (shutting_down_) {
+      // Stays claimed until its lease ends: then it runs here after the next start, or on
+      // another replica
+      return false;
+    }
     std::this_thread::sleep_for(std::chrono::seconds(1));
   }
 }
 
-void JobManager::RunStarted(Record& r) {
-  const auto start = std::chrono::steady_clock::now();
-  const auto cancelled = [&] { return r.cancel_requested.load() || interrupted_.load(); };
-  const auto stopped_state = [&] {
-    return r.cancel_requested.load() ? v1::JOB_STATE_CANCELLED : v1::JOB_STATE_INTERRUPTED;
-  };
-  const auto fail = [&](const std::string& error) {
-    std::lock_guard lock(r.mutex);
-    (void)Finish(r, cancelled() ? stopped_state() : v1::JOB_STATE_FAILED, nullptr,
-                 cancelled() ? "" : error, /*retry=*/true);
-  };
-
-  // The job as submitted, read back from the store; its scene is needed only built
-  absl::StatusOr<PreparedJob> prepared = absl::InternalError("not prepared");
-  {
-    absl::StatusOr<v1::Job> job = store_.LoadJob(r.info.id());
-    if (!job.ok()) return fail(absl::StrCat("cannot read the job: ", job.status().message()));
-    prepared = PrepareJob(*job, "");
+absl::StatusOr<PreparedJob> JobManager::Prepare(Record& r) {
+  absl::StatusOr<v1::Job> job = store_.LoadJob(r.info.id());
+  if (!job.ok()) {
+    if (job.status().code() == absl::StatusCode::kDataLoss) return job.status();
+    return absl::Status(job.status().code(),
+                        absl::StrCat("cannot read the job: ", job.status().message()));
   }
-  if (!prepared.ok()) return fail(std::string(prepared.status().message()));
-  prepared->job.clear_scene();
-  const std::string key = OutdoorMatrixKey(prepared->scene, prepared->job.sampling());
+  r.weather = job->weather_file();
+  absl::StatusOr<std::string> weather = store_.ReadWeather(r.weather);
+  if (!weather.ok()) return weather.status();
+  absl::StatusOr<PreparedJob> prepared = ValidateJob(*job, "");
+  if (!prepared.ok()) return prepared.status();
+  absl::StatusOr<EpwData> parsed = ParseEpw(*weather, "weather_epw");
+  if (!parsed.ok()) return parsed.status();
+  prepared->weather = *std::move(parsed);
+  prepared->job.clear_scene();  // needed only built
+  return prepared;
+}
 
-  // The outdoor matrix: cached, being computed by another task, or traced here
-  {
-    std::lock_guard lock(r.mutex);
-    v1::JobEvent event;
-    event.mutable_stage()->set_name("outdoor");
-    event.mutable_stage()->set_cached(cache_.Contains(key));
-    Report(r, event);
-  }
-  const auto outdoor_start = std::chrono::steady_clock::now();
-  absl::StatusOr<OutdoorCache::Lookup> lookup = cache_.GetOrCompute(
-      key,
-      [&]() -> absl::StatusOr<OutdoorMatrix> {
-        return ComputeOutdoorMatrix(prepared->scene, prepared->job.sampling(), cancelled);
-      },
-      cancelled);
-  const double outdoor_seconds = SecondsSince(outdoor_start);
-  if (!lookup.ok()) return fail(absl::StrCat("outdoor stage: ", lookup.status().message()));
-  {
-    std::lock_guard lock(r.mutex);
-    r.wanted.set_outdoor_reused(!lookup->computed);
-    r.wanted.set_outdoor_seconds(outdoor_seconds);
-    Report(r, std::nullopt);
-    spdlog::info("job {}: outdoor matrix {} in {:.3f} s", r.info.id(),
-                 lookup->computed ? "traced" : "reused from the cache", outdoor_seconds);
-  }
-  if (!lookup->computed && !r.info.site_id().empty()) sites_.NoteReuse(r.info.site_id());
-
-  // The search
+JobCallbacks JobManager::Callbacks(Record& r) {
   JobCallbacks callbacks;
-  callbacks.stage = [&](const std::string& stage) {
+  callbacks.stage = [this, &r](const std::string& stage) {
     if (stage == "outdoor") return;
     std::lock_guard lock(r.mutex);
     r.wanted.set_stage(stage);
@@ -439,98 +484,151 @@ void JobManager::RunStarted(Record& r) {
     event.mutable_stage()->set_name(stage);
     Report(r, event);
   };
-  callbacks.progress = [&](const JobProgress& progress) {
+  // Each step's checkpoint is stored with the step's progress, which follows it
+  callbacks.checkpoint = [&r](const v1::SearchCheckpoint& checkpoint) {
+    std::lock_guard lock(r.mutex);
+    r.checkpoint = checkpoint.SerializeAsString();
+  };
+  callbacks.progress = [this, &r](const JobProgress& progress) {
     std::lock_guard lock(r.mutex);
     v1::JobEvent event;
     *event.mutable_progress() = ToProto(progress);
     *r.wanted.mutable_progress() = event.progress();
     Report(r, event, /*durable=*/false);
   };
+  return callbacks;
+}
+
+absl::StatusOr<OutdoorCache::Lookup> JobManager::Outdoor(Record& r, const PreparedJob& prepared,
+                                                         const std::function<bool()>& cancelled) {
+  const std::string key = OutdoorMatrixKey(prepared.scene, prepared.job.sampling());
+  {
+    std::lock_guard lock(r.mutex);
+    v1::JobEvent event;
+    event.mutable_stage()->set_name("outdoor");
+    event.mutable_stage()->set_cached(cache_.Contains(key));
+    Report(r, event);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  absl::StatusOr<OutdoorCache::Lookup> lookup = cache_.GetOrCompute(
+      key,
+      [&]() -> absl::StatusOr<OutdoorMatrix> {
+        return ComputeOutdoorMatrix(prepared.scene, prepared.job.sampling(), cancelled);
+      },
+      cancelled);
+  if (!lookup.ok()) return lookup;
+  const double seconds = SecondsSince(start);
+  {
+    std::lock_guard lock(r.mutex);
+    r.wanted.set_outdoor_reused(!lookup->computed);
+    r.wanted.set_outdoor_seconds(seconds);
+    Report(r, std::nullopt);
+    spdlog::info("job {}: outdoor matrix {} in {:.3f} s", r.info.id(),
+                 lookup->computed ? "traced" : "reused from the cache", seconds);
+  }
+  if (!lookup->computed && !r.info.site_id().empty()) sites_.NoteReuse(r.info.site_id());
+  return lookup;
+}
+
+void JobManager::RunStarted(Record& r) {
+  const auto start = std::chrono::steady_clock::now();
+  Scheduler::Held& held = *r.held;
+  const auto cancelled = [&] {
+    return held.cancel_requested.load() || interrupted_.load() || held.lost.load();
+  };
+  const auto stopped_state = [&] {
+    return held.cancel_requested.load() ? v1::JOB_STATE_CANCELLED : v1::JOB_STATE_INTERRUPTED;
+  };
+  // A run that stopped for the shutdown: a shared store hands the job to another replica
+  const auto hand_back = [&] {
+    if (held.lost) return true;
+    if (!(interrupted_ && store_.shared() && !held.cancel_requested)) return false;
+    const absl::Status released = store_.Release(Claim::Kind::kJob, r.lease());
+    spdlog::info(
+        "job {}: handed back for another replica to take over{}", r.info.id(),
+        released.ok() ? "" : absl::StrCat(" once its lease expires (", released.message(), ")"));
+    return true;
+  };
+  const auto fail = [&](const std::string& error) {
+    if (cancelled() && hand_back()) return;
+    std::lock_guard lock(r.mutex);
+    Finish(r, cancelled() ? stopped_state() : v1::JOB_STATE_FAILED, nullptr,
+           cancelled() ? "" : error);
+  };
+
+  // The job as submitted, read back from the store, with its weather file
+  absl::StatusOr<PreparedJob> prepared = Prepare(r);
+  if (prepared.status().code() == absl::StatusCode::kDataLoss &&
+      absl::StartsWith(prepared.status().message(), "the stored job")) {
+    const absl::Status moved =
+        store_.Quarantine("jobs", r.info.id(), std::string(prepared.status().message()));
+    spdlog::error("job {}: {}; {}, the daemon goes on without it", r.info.id(),
+                  std::string(prepared.status().message()),
+                  moved.ok() ? "moved to the quarantine table"
+                             : absl::StrCat("not moved (", moved.message(), ")"));
+    held.done = true;
+    return;
+  }
+  if (!prepared.ok()) return fail(std::string(prepared.status().message()));
+  absl::StatusOr<OutdoorCache::Lookup> lookup = Outdoor(r, *prepared, cancelled);
+  if (!lookup.ok()) return fail(absl::StrCat("outdoor stage: ", lookup.status().message()));
+
+  // The search
+  JobCallbacks callbacks = Callbacks(r);
   callbacks.cancelled = cancelled;
-  absl::StatusOr<v1::JobResult> result = RunJob(*prepared, lookup->matrix.get(), callbacks);
+  absl::StatusOr<v1::JobResult> result =
+      RunJob(*prepared, lookup->matrix.get(), callbacks, r.resume ? &*r.resume : nullptr);
+  if (r.resume && result.status().code() == absl::StatusCode::kInvalidArgument) {
+    // A checkpoint this job's search does not make (another build's): from the start
+    spdlog::warn("job {}: its checkpoint cannot be resumed ({}); it starts again", r.info.id(),
+                 std::string(result.status().message()));
+    r.resume.reset();
+    result = RunJob(*prepared, lookup->matrix.get(), callbacks);
+  }
   if (!result.ok()) return fail(std::string(result.status().message()));
+  if (result->stop_reason() == "cancelled" && hand_back()) return;
 
   v1::Timings& timings = *result->mutable_timings();
   timings.set_outdoor_seconds(lookup->computed ? lookup->matrix->wall_seconds : 0);
   timings.set_total_seconds(SecondsSince(start));
   std::lock_guard lock(r.mutex);
-  (void)Finish(r, result->stop_reason() == "cancelled" ? stopped_state() : v1::JOB_STATE_SUCCEEDED,
-               &*result, "", /*retry=*/true);
+  Finish(r, result->stop_reason() == "cancelled" ? stopped_state() : v1::JOB_STATE_SUCCEEDED,
+         &*result, "");
 }
 
-absl::Status JobManager::Finish(Record& r, v1::JobState state, const v1::JobResult* result,
-                                const std::string& error, bool retry) {
-  const v1::JobInfo before = r.wanted;
-  r.wanted.set_state(state);
-  r.wanted.set_stage("done");
-  r.wanted.set_finished_unix_ms(NowUnixMs());
-  r.wanted.set_queue_position(0);
-  if (result) *r.wanted.mutable_result() = *result;
-  r.wanted.set_error(error);
-  v1::JobEvent event;
-  switch (state) {
-    case v1::JOB_STATE_SUCCEEDED:
-      *event.mutable_finished() = *result;
-      break;
-    case v1::JOB_STATE_CANCELLED:
-      if (result)
-        *event.mutable_cancelled()->mutable_result() = *result;
-      else
-        event.mutable_cancelled();
-      break;
-    case v1::JOB_STATE_INTERRUPTED:
-      if (result)
-        *event.mutable_interrupted()->mutable_result() = *result;
-      else
-        event.mutable_interrupted();
-      break;
-    default:
-      event.set_failed(r.wanted.error());
-  }
-  event.set_sequence(r.info.last_sequence() + 1);
-  event.set_time_unix_ms(r.wanted.finished_unix_ms());
-  r.wanted.set_last_sequence(event.sequence());
-  r.end = std::move(event);
+void JobManager::Finish(Record& r, v1::JobState state, const v1::JobResult* result,
+                        const std::string& error) {
+  r.end = EndOf(r.wanted, state, result, error);
   const absl::Status stored = StoreEnd(r);
-  if (stored.ok()) return stored;
-  if (!retry) {
-    r.wanted = before;
+  if (stored.ok()) return;
+  if (stored.code() == absl::StatusCode::kAborted) {
+    spdlog::warn(
+        "job {}: it ended ({}) here, but another replica took it over meanwhile: its "
+        "end there counts",
+        r.info.id(), v1::JobState_Name(state));
     r.end.reset();
-    return stored;
+    return;
   }
   spdlog::error(
       "job {}: it ended ({}) but the store does not take its final state ({}); it "
       "shows as it was until stored, trying again every second",
       r.info.id(), v1::JobState_Name(state), std::string(stored.message()));
-  {
-    std::lock_guard lock(waiting_mutex_);
-    std::lock_guard jobs_lock(mutex_);
-    if (auto it = jobs_.find(r.info.id()); it != jobs_.end()) waiting_.push_back(it->second);
-  }
-  return stored;
 }
 
 absl::Status JobManager::StoreEnd(Record& r) {
-  if (absl::Status s = store_.FinishJob(r.wanted, *r.end); !s.ok()) return s;
+  if (absl::Status s = store_.FinishJob(r.lease(), r.wanted, *r.end); !s.ok()) {
+    if (s.code() == absl::StatusCode::kAborted) r.held->lost = true;
+    return s;
+  }
+  r.held->done = true;
   Ended(r);
   return absl::OkStatus();
 }
 
 void JobManager::Ended(Record& r) {
   r.info = r.wanted;
-  r.events.push_back(*std::move(r.end));
   r.end.reset();
-  TrimEvents(r);
-  r.changed.notify_all();
-  if (!r.weather_path.empty()) weather_.Unref(r.weather_path);
-  r.weather_path.clear();
-  uploads_.Release(r.owner, r.info.upload_bytes());
-  {
-    std::lock_guard lock(mutex_);
-    if (auto it = active_keys_.find(r.info.outdoor_key()); it != active_keys_.end()) {
-      active_keys_.erase(it);
-    }
-  }
+  store_.ReleaseWeather(r.weather);
   const v1::JobResult* result = r.info.has_result() ? &r.info.result() : nullptr;
   const std::string& id = r.info.id();
   const std::string best =
@@ -569,171 +667,43 @@ void JobManager::Ended(Record& r) {
   }
 }
 
-void JobManager::TrimEvents(Record& r) {
-  if (!IsTerminal(r.info.state()) || r.watchers > 0) return;
-  while (r.events.size() > 1) r.events.pop_front();
-}
-
 void JobManager::Commit() {
   std::unique_lock lock(waiting_mutex_);
   while (!stop_committer_) {
     waiting_changed_.wait_for(lock, std::chrono::seconds(1));
     std::vector<std::shared_ptr<Record>> waiting = waiting_;
     lock.unlock();
-    std::vector<std::shared_ptr<Record>> stored;
+    std::vector<std::shared_ptr<Record>> settled;
     for (const auto& r : waiting) {
       std::lock_guard record_lock(r->mutex);
-      if (!r->end || StoreEnd(*r).ok()) stored.push_back(r);
+      if (!r->end || r->held->lost) {
+        settled.push_back(r);
+        continue;
+      }
+      const absl::Status s = StoreEnd(*r);
+      if (s.ok() || s.code() == absl::StatusCode::kAborted) settled.push_back(r);
     }
     lock.lock();
     std::erase_if(waiting_, [&](const auto& r) {
-      return std::find(stored.begin(), stored.end(), r) != stored.end();
+      return std::find(settled.begin(), settled.end(), r) != settled.end();
     });
-  }
-}
-
-v1::JobInfo JobManager::InfoOf(const Record& r, const Caller& caller) const {
-  v1::JobInfo info = ForCaller(r.info, caller);
-  if (info.state() == v1::JOB_STATE_QUEUED) {
-    info.set_queue_position(std::max(0, queue_.Position(info.id())));
-  }
-  info.set_cancel_requested(r.cancel_requested.load());
-  return info;
-}
-
-std::shared_ptr<JobManager::Record> JobManager::Find(const std::string& id,
-                                                     const Caller& caller) const {
-  std::lock_guard lock(mutex_);
-  auto it = jobs_.find(id);
-  if (it == jobs_.end() || !caller.Owns(it->second->owner)) return nullptr;
-  return it->second;
-}
-
-absl::StatusOr<v1::JobInfo> JobManager::Get(const std::string& id, const Caller& caller) const {
-  std::shared_ptr<Record> r = Find(id, caller);
-  if (!r) return NoJob(id);
-  std::lock_guard lock(r->mutex);
-  return InfoOf(*r, caller);
-}
-
-std::vector<v1::JobInfo> JobManager::List(v1::JobState state, int limit,
-                                          const Caller& caller) const {
-  if (limit <= 0) limit = 100;
-  std::vector<std::shared_ptr<Record>> records;
-  {
-    std::lock_guard lock(mutex_);
-    for (auto it = order_.rbegin(); it != order_.rend(); ++it) {
-      const std::shared_ptr<Record>& r = jobs_.at(*it);
-      if (caller.Owns(r->owner)) records.push_back(r);
-    }
-  }
-  std::vector<v1::JobInfo> jobs;
-  for (const auto& r : records) {
-    if (static_cast<int>(jobs.size()) >= limit) break;
-    std::lock_guard lock(r->mutex);
-    if (state != v1::JOB_STATE_UNSPECIFIED && r->info.state() != state) continue;
-    jobs.push_back(InfoOf(*r, caller));
-    jobs.back().clear_result();
-  }
-  return jobs;
-}
-
-absl::StatusOr<v1::JobInfo> JobManager::Cancel(const std::string& id, const Caller& caller) {
-  std::shared_ptr<Record> r = Find(id, caller);
-  if (!r) return NoJob(id);
-  std::lock_guard lock(r->mutex);
-  if (IsTerminal(r->wanted.state())) return InfoOf(*r, caller);  // ended, or its end stored
-  if (r->info.state() == v1::JOB_STATE_QUEUED && queue_.Position(id) >= 0) {
-    // A waiting job is cancelled at once, once that is stored
-    if (absl::Status s = Finish(*r, v1::JOB_STATE_CANCELLED, nullptr, "", /*retry=*/false);
-        !s.ok()) {
-      return s;
-    }
-    queue_.Remove(id);
-    spdlog::info("job {}: cancelled by {} while queued", id, caller.name);
-    return InfoOf(*r, caller);
-  }
-  r->cancel_requested = true;
-  spdlog::info("job {}: cancel requested by {}; it stops at its next checkpoint", id, caller.name);
-  return InfoOf(*r, caller);
-}
-
-bool JobManager::UsesKey(const std::string& key) const {
-  std::lock_guard lock(mutex_);
-  return active_keys_.contains(key);
-}
-
-absl::Status JobManager::Watch(const std::string& id, const Caller& caller,
-                               const std::function<bool(const v1::JobEvent&)>& write,
-                               const std::function<bool()>& client_gone) {
-  std::shared_ptr<Record> r = Find(id, caller);
-  if (!r) return NoJob(id);
-  {
-    std::lock_guard lock(r->mutex);
-    ++r->watchers;
-  }
-  absl::Cleanup unwatch = [&] {
-    std::lock_guard lock(r->mutex);
-    --r->watchers;
-    TrimEvents(*r);
-  };
-  bool resend_snapshot = true;
-  int64_t sent = 0;
-  while (true) {
-    std::vector<v1::JobEvent> pending;
-    {
-      std::unique_lock lock(r->mutex);
-      if (!resend_snapshot) {
-        r->changed.wait_for(lock, std::chrono::milliseconds(250),
-                            [&] { return r->info.last_sequence() > sent || closing_.load(); });
-        // Fell behind the kept events: start over from a snapshot
-        if (!r->events.empty() && r->events.front().sequence() > sent + 1 &&
-            r->info.last_sequence() > sent) {
-          resend_snapshot = true;
-        }
-      }
-      if (resend_snapshot) {
-        v1::JobEvent snapshot;
-        *snapshot.mutable_snapshot() = InfoOf(*r, caller);
-        snapshot.set_sequence(r->info.last_sequence());
-        snapshot.set_time_unix_ms(NowUnixMs());
-        pending.push_back(std::move(snapshot));
-        resend_snapshot = false;
-      } else {
-        for (const v1::JobEvent& e : r->events) {
-          if (e.sequence() > sent) pending.push_back(e);
-        }
-      }
-    }
-    for (const v1::JobEvent& e : pending) {
-      if (!write(e)) return absl::OkStatus();
-      sent = e.sequence();
-      const bool ended = e.has_snapshot() ? IsTerminal(e.snapshot().state())
-                                          : e.has_finished() || e.has_failed() ||
-                                                e.has_cancelled() || e.has_interrupted();
-      if (ended) return absl::OkStatus();
-    }
-    if (pending.empty() && client_gone()) return absl::OkStatus();
-    if (pending.empty() && closing_) {
-      return absl::UnavailableError("fenestrad is shutting down; the job stays queued");
-    }
   }
 }
 
 void JobManager::Shutdown(double grace_seconds) {
   shutting_down_ = true;
   sites_.BeginShutdown();
-  queue_.Stop();
-  if (queue_.Running() > 0) {
+  scheduler_.Stop();
+  if (scheduler_.Running() > 0) {
     spdlog::info("waiting up to {:.0f} s for {} running task(s) to finish", grace_seconds,
-                 queue_.Running());
+                 scheduler_.Running());
   }
-  if (!queue_.WaitIdle(grace_seconds)) {
+  if (!scheduler_.WaitIdle(grace_seconds)) {
     spdlog::info("stopping the running tasks at their next checkpoint");
     interrupted_ = true;
     sites_.Interrupt();
   }
-  queue_.Join();
+  scheduler_.Join();
 
   // The final states still waiting to be stored: one last try each
   {
@@ -744,19 +714,18 @@ void JobManager::Shutdown(double grace_seconds) {
   if (committer_.joinable()) committer_.join();
   for (const auto& r : waiting_) {
     std::lock_guard lock(r->mutex);
-    if (!r->end) continue;
+    if (!r->end || r->held->lost) continue;
     if (absl::Status s = StoreEnd(*r); !s.ok()) {
-      spdlog::error("job {}: its final state ({}) could not be stored ({}); the store keeps it {}",
-                    r->info.id(), v1::JobState_Name(r->wanted.state()), std::string(s.message()),
-                    r->info.state() == v1::JOB_STATE_RUNNING
-                        ? "running, so the next start marks it failed and it does not run again"
-                        : "queued");
+      spdlog::error(
+          "job {}: its final state ({}) could not be stored ({}); the store keeps it running, "
+          "so it is taken over at the next start (or by another replica) from its last "
+          "checkpoint",
+          r->info.id(), v1::JobState_Name(r->wanted.state()), std::string(s.message()));
     }
   }
   waiting_.clear();
   closing_ = true;
-  std::lock_guard lock(mutex_);
-  for (auto& [id, r] : jobs_) r->changed.notify_all();
+  store_.database().WakeWaiters();
 }
 
 }  // namespace fenestra

@@ -12,6 +12,7 @@
 #include "absl/strings/str_cat.h"
 #include "fenestra/v1/daemon.pb.h"
 #include "server/checksum.h"
+#include "server/store/store.h"
 
 namespace fenestra {
 namespace {
@@ -122,6 +123,9 @@ absl::StatusOr<OutdoorMatrix> DecodeOutdoorMatrix(std::string_view bytes) {
 OutdoorCache::OutdoorCache(std::string dir, const DataDir* data_dir)
     : dir_(std::move(dir)), data_dir_(data_dir) {}
 
+OutdoorCache::OutdoorCache(Store& store, int64_t memory_bytes)
+    : store_(&store), memory_bytes_(memory_bytes) {}
+
 std::string OutdoorCache::PathFor(const std::string& key) const {
   return (std::filesystem::path(dir_) / (Sha256Hex(key) + ".omx")).string();
 }
@@ -145,9 +149,28 @@ absl::StatusOr<OutdoorMatrix> ReadMatrixFile(const std::string& path, const std:
   return matrix;
 }
 
+int64_t MatrixBytes(const OutdoorMatrix& m) {
+  int64_t values = m.coefficients.size() + m.standard_error.size();
+  for (const Matrix& batch : m.batches) values += batch.size();
+  return static_cast<int64_t>(sizeof(double)) * values;
+}
+
 }  // namespace
 
 absl::StatusOr<OutdoorCache::LoadReport> OutdoorCache::Load() {
+  LoadReport report;
+  if (store_) {
+    absl::StatusOr<std::vector<std::string>> keys = store_->MatrixKeys();
+    if (!keys.ok()) return keys.status();
+    std::lock_guard lock(mutex_);
+    for (const std::string& key : *keys) {
+      Entry& entry = entries_[key];
+      entry.from_disk = true;
+      entry.last_used = ++uses_;
+      ++report.loaded;
+    }
+    return report;
+  }
   std::error_code error;
   std::filesystem::create_directories(dir_, error);
   if (error) {
@@ -164,7 +187,6 @@ absl::StatusOr<OutdoorCache::LoadReport> OutdoorCache::Load() {
     return absl::InternalError(absl::StrCat("cannot list ", dir_, ": ", error.message()));
   }
   std::sort(files.begin(), files.end());
-  LoadReport report;
   std::lock_guard lock(mutex_);
   for (const auto& [time, file] : files) {
     const std::string path = file.string();
@@ -185,52 +207,143 @@ absl::StatusOr<OutdoorCache::LoadReport> OutdoorCache::Load() {
   return report;
 }
 
-std::shared_ptr<const OutdoorMatrix> OutdoorCache::Find(const std::string& key) {
-  {
-    std::lock_guard lock(mutex_);
-    auto it = entries_.find(key);
-    if (it == entries_.end()) return nullptr;
-    it->second.last_used = ++uses_;
-    if (it->second.kept) return it->second.kept;
-    if (auto held = it->second.held.lock()) return held;
+absl::StatusOr<OutdoorMatrix> OutdoorCache::ReadBack(const std::string& key) {
+  if (store_) {
+    absl::StatusOr<std::optional<std::string>> bytes = store_->GetMatrix(key);
+    if (!bytes.ok()) return bytes.status();
+    if (!*bytes) return absl::NotFoundError("not stored");
+    absl::StatusOr<OutdoorMatrix> matrix = DecodeOutdoorMatrix(**bytes);
+    if (matrix.ok() && matrix->key != key) {
+      return absl::DataLossError("the stored matrix holds another key");
+    }
+    return matrix;
   }
-  // Read it back from its file, outside the lock (megabytes)
   const std::string path = PathFor(key);
   absl::StatusOr<OutdoorMatrix> matrix = ReadMatrixFile(path, key);
-  std::lock_guard lock(mutex_);
-  auto it = entries_.find(key);
-  if (it == entries_.end()) return nullptr;  // evicted meanwhile
-  if (it->second.kept) return it->second.kept;
-  if (auto held = it->second.held.lock()) return held;  // read by another caller meanwhile
   if (!matrix.ok()) {
     spdlog::warn("outdoor cache: discarded {}: {}", path, std::string(matrix.status().message()));
     std::error_code error;
     std::filesystem::remove(path, error);
-    entries_.erase(it);
-    return nullptr;
+  }
+  return matrix;
+}
+
+absl::Status OutdoorCache::WriteOut(const OutdoorMatrix& matrix) {
+  const std::string bytes = EncodeOutdoorMatrix(matrix);
+  if (store_) return store_->PutMatrix(matrix.key, bytes);
+  // Room is made outside the lock: evicting asks the sites and jobs what they use
+  absl::Status written =
+      data_dir_ ? data_dir_->MakeRoom(static_cast<int64_t>(bytes.size())) : absl::OkStatus();
+  if (written.ok()) written = WriteFileDurably(PathFor(matrix.key), bytes);
+  return written;
+}
+
+void OutdoorCache::KeepRecent(const std::string& key, std::shared_ptr<const OutdoorMatrix> matrix) {
+  for (auto it = recent_.begin(); it != recent_.end(); ++it) {
+    if (it->first != key) continue;
+    recent_bytes_ -= MatrixBytes(*it->second);
+    recent_.erase(it);
+    break;
+  }
+  recent_bytes_ += MatrixBytes(*matrix);
+  recent_.emplace_front(key, std::move(matrix));
+  while (!recent_.empty() && recent_bytes_ > memory_bytes_) {
+    recent_bytes_ -= MatrixBytes(*recent_.back().second);
+    recent_.pop_back();
+  }
+}
+
+absl::StatusOr<std::shared_ptr<const OutdoorMatrix>> OutdoorCache::FindOrError(
+    const std::string& key) {
+  {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(key);
+    if (it == entries_.end() && !store_) return nullptr;
+    if (it != entries_.end()) {
+      it->second.last_used = ++uses_;
+      if (it->second.kept) return it->second.kept;
+      if (auto held = it->second.held.lock()) return held;
+    }
+  }
+  // Read it back, outside the lock (megabytes)
+  absl::StatusOr<OutdoorMatrix> matrix = ReadBack(key);
+  std::lock_guard lock(mutex_);
+  auto it = entries_.find(key);
+  if (it == entries_.end() && !store_) return nullptr;  // evicted meanwhile
+  if (it != entries_.end()) {
+    if (it->second.kept) return it->second.kept;
+    if (auto held = it->second.held.lock()) return held;  // read by another caller meanwhile
+  }
+  if (!matrix.ok()) {
+    if (it != entries_.end()) entries_.erase(it);
+    const absl::StatusCode code = matrix.status().code();
+    if (code == absl::StatusCode::kNotFound) return nullptr;
+    if (code == absl::StatusCode::kDataLoss) {
+      if (store_) {
+        spdlog::warn("outdoor cache: discarded the stored matrix {}: {}", key.substr(0, 16),
+                     std::string(matrix.status().message()));
+        (void)store_->DeleteMatrix(key);
+      }
+      return nullptr;
+    }
+    return matrix.status();
   }
   auto shared = std::make_shared<const OutdoorMatrix>(*std::move(matrix));
-  it->second.held = shared;
+  const bool known = it != entries_.end();
+  Entry& entry = entries_[key];
+  if (!known) entry.from_disk = true;  // another replica's
+  entry.held = shared;
+  entry.last_used = ++uses_;
+  if (store_) KeepRecent(key, shared);
   return shared;
 }
 
+std::shared_ptr<const OutdoorMatrix> OutdoorCache::Find(const std::string& key) {
+  absl::StatusOr<std::shared_ptr<const OutdoorMatrix>> found = FindOrError(key);
+  if (!found.ok()) {
+    spdlog::warn("outdoor cache: matrix {} cannot be read: {}", key.substr(0, 16),
+                 std::string(found.status().message()));
+    return nullptr;
+  }
+  return *found;
+}
+
 bool OutdoorCache::Contains(const std::string& key) const {
-  std::lock_guard lock(mutex_);
-  return entries_.contains(key);
+  {
+    std::lock_guard lock(mutex_);
+    if (entries_.contains(key)) return true;
+  }
+  if (!store_) return false;
+  absl::StatusOr<bool> stored = store_->HasMatrix(key);
+  return stored.ok() && *stored;
 }
 
 bool OutdoorCache::LoadedFromDisk(const std::string& key) const {
   std::lock_guard lock(mutex_);
   auto it = entries_.find(key);
-  return it != entries_.end() && it->second.from_disk;
+  return it != entries_.end() ? it->second.from_disk : store_ != nullptr;
+}
+
+std::vector<std::string> OutdoorCache::KeysInMemory() const {
+  std::lock_guard lock(mutex_);
+  std::vector<std::pair<int64_t, std::string>> used;
+  for (const auto& [key, entry] : entries_) {
+    if (entry.kept || !entry.held.expired()) used.push_back({entry.last_used, key});
+  }
+  for (const auto& [key, matrix] : recent_) {
+    auto it = entries_.find(key);
+    if (it != entries_.end() && !it->second.kept && it->second.held.expired()) {
+      used.push_back({it->second.last_used, key});
+    }
+  }
+  std::sort(used.rbegin(), used.rend());
+  std::vector<std::string> keys;
+  for (auto& [last_used, key] : used) keys.push_back(std::move(key));
+  return keys;
 }
 
 absl::Status OutdoorCache::Put(std::shared_ptr<const OutdoorMatrix> matrix) {
-  const std::string bytes = EncodeOutdoorMatrix(*matrix);
-  // Room is made outside the lock: evicting asks the sites and jobs what they use
-  absl::Status written =
-      data_dir_ ? data_dir_->MakeRoom(static_cast<int64_t>(bytes.size())) : absl::OkStatus();
-  if (written.ok()) written = WriteFileDurably(PathFor(matrix->key), bytes);
+  const absl::Status written = WriteOut(*matrix);
   {
     std::lock_guard lock(mutex_);
     Entry& entry = entries_[matrix->key];
@@ -238,6 +351,7 @@ absl::Status OutdoorCache::Put(std::shared_ptr<const OutdoorMatrix> matrix) {
     entry.kept = written.ok() ? nullptr : matrix;
     entry.from_disk = false;
     entry.last_used = ++uses_;
+    if (store_) KeepRecent(matrix->key, matrix);
   }
   changed_.notify_all();
   return written;
@@ -249,6 +363,7 @@ void OutdoorCache::SetInUse(std::function<bool(const std::string& key)> in_use) 
 }
 
 bool OutdoorCache::EvictOne() {
+  if (store_) return false;  // the store keeps every matrix
   std::vector<std::pair<int64_t, std::string>> candidates;
   std::function<bool(const std::string&)> in_use;
   {
@@ -288,7 +403,9 @@ absl::StatusOr<OutdoorCache::Lookup> OutdoorCache::GetOrCompute(
     const std::string& key, const std::function<absl::StatusOr<OutdoorMatrix>()>& compute,
     const std::function<bool()>& cancelled) {
   while (true) {
-    if (std::shared_ptr<const OutdoorMatrix> found = Find(key)) return Lookup{found, false};
+    absl::StatusOr<std::shared_ptr<const OutdoorMatrix>> found = FindOrError(key);
+    if (!found.ok()) return found.status();
+    if (*found) return Lookup{*found, false};
     std::unique_lock lock(mutex_);
     if (entries_.contains(key)) continue;  // cached meanwhile
     if (!computing_.contains(key)) {

@@ -2,6 +2,7 @@
 
 #include <condition_variable>
 #include <functional>
+#include <list>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -25,15 +26,24 @@ std::string EncodeOutdoorMatrix(const OutdoorMatrix& matrix);
 // Parses a cache file's bytes. DataLoss when the header, size or checksum is wrong.
 absl::StatusOr<OutdoorMatrix> DecodeOutdoorMatrix(std::string_view bytes);
 
-// Outdoor matrices by OutdoorMatrixKey, as files <sha256(key)>.omx in one folder, written
-// atomically (synced temporary file + rename). Matrices live in memory only while someone
-// holds them (a job or a site computation); otherwise they are read back from their file.
-// Files stay while the data directory has room: when it needs room, the least recently
-// used matrix that no site or unfinished job uses is evicted first. Thread-safe.
+class Store;
+
+// Outdoor matrices by OutdoorMatrixKey, persisted one of two ways:
+// - files <sha256(key)>.omx in one folder (the SQLite store's data directory), written
+//   atomically (synced temporary file + rename). Matrices live in memory only while
+//   someone holds them (a job or a site computation); otherwise they are read back from
+//   their file. Files stay while the data directory has room: when it needs room, the
+//   least recently used matrix that no site or unfinished job uses is evicted first.
+// - in a shared store (PostgreSQL), as the bytes EncodeOutdoorMatrix makes; each process
+//   also keeps the matrices it used last in memory, up to a bound, so that a replica
+//   reads a site's matrix from the database once.
+// Thread-safe.
 class OutdoorCache {
  public:
-  // `data_dir`, when given, is asked for room before each file is written.
+  // Files in `dir`. `data_dir`, when given, is asked for room before each file is written.
   explicit OutdoorCache(std::string dir, const DataDir* data_dir = nullptr);
+  // Matrices in `store`, up to `memory_bytes` of them kept in memory once used.
+  OutdoorCache(Store& store, int64_t memory_bytes);
 
   // What Load found: files loaded, and files discarded (corrupt or unreadable) with why.
   struct LoadReport {
@@ -42,7 +52,7 @@ class OutdoorCache {
   };
   // Checks every cache file of the folder (created when missing) and indexes the sound
   // ones. A file whose checksum or format is wrong is deleted, so its matrix is recomputed
-  // when needed.
+  // when needed. In a store: counts the matrices stored (each is checked when read).
   absl::StatusOr<LoadReport> Load();
 
   // The matrix with `key` (read from its file when no one holds it), or null. A file found
@@ -50,9 +60,11 @@ class OutdoorCache {
   std::shared_ptr<const OutdoorMatrix> Find(const std::string& key);
   // Whether a matrix with `key` is cached, without reading it.
   bool Contains(const std::string& key) const;
-  // Whether `key`'s matrix came from a file at Load (rather than being computed by this
-  // process).
+  // Whether `key`'s matrix came from a file at Load, or from the store (rather than being
+  // computed by this process).
   bool LoadedFromDisk(const std::string& key) const;
+  // The keys of the matrices in this process's memory, most recently used first.
+  std::vector<std::string> KeysInMemory() const;
   // Adds `matrix` under matrix.key, in memory and on disk; the status is the disk write's
   // (when it fails, or the data directory has no room, the matrix is kept in memory).
   absl::Status Put(std::shared_ptr<const OutdoorMatrix> matrix);
@@ -86,8 +98,24 @@ class OutdoorCache {
     int64_t last_used = 0;                      // use counter: larger = more recent
   };
 
+  // Keeps `matrix` among the recently used ones (store mode; mutex_ held).
+  void KeepRecent(const std::string& key, std::shared_ptr<const OutdoorMatrix> matrix);
+  // Reads a matrix back from its file or the store; DataLoss when it is corrupt (and
+  // removed), NotFound when it is not there.
+  absl::StatusOr<OutdoorMatrix> ReadBack(const std::string& key);
+  // Writes a matrix's bytes to its file or the store.
+  absl::Status WriteOut(const OutdoorMatrix& matrix);
+  // Find, with the store's failures (Unavailable) told apart from a matrix not there
+  // (null).
+  absl::StatusOr<std::shared_ptr<const OutdoorMatrix>> FindOrError(const std::string& key);
+
   const std::string dir_;
-  const DataDir* const data_dir_;
+  const DataDir* const data_dir_ = nullptr;
+  Store* const store_ = nullptr;
+  const int64_t memory_bytes_ = 0;
+  // Store mode: the matrices used last, most recent first, and their size [bytes]
+  std::list<std::pair<std::string, std::shared_ptr<const OutdoorMatrix>>> recent_;
+  int64_t recent_bytes_ = 0;
   mutable std::mutex mutex_;
   std::condition_variable changed_;
   std::map<std::string, Entry> entries_;

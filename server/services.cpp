@@ -115,10 +115,10 @@ grpc::Status SiteServiceImpl::StreamedList(
   return Unary(auth_, "SiteService.List", context, stream,
                [&](const Caller& caller,
                    const v1::ListSitesRequest&) -> absl::StatusOr<v1::ListSitesResponse> {
+                 absl::StatusOr<std::vector<v1::SiteInfo>> sites = sites_.List(caller);
+                 if (!sites.ok()) return sites.status();
                  v1::ListSitesResponse response;
-                 for (v1::SiteInfo& site : sites_.List(caller)) {
-                   *response.add_sites() = std::move(site);
-                 }
+                 for (v1::SiteInfo& site : *sites) *response.add_sites() = std::move(site);
                  return response;
                });
 }
@@ -158,10 +158,11 @@ grpc::Status JobServiceImpl::StreamedList(
   return Unary(auth_, "JobService.List", context, stream,
                [&](const Caller& caller,
                    const v1::ListJobsRequest& request) -> absl::StatusOr<v1::ListJobsResponse> {
+                 absl::StatusOr<std::vector<v1::JobInfo>> jobs =
+                     jobs_.List(request.state(), request.limit(), caller);
+                 if (!jobs.ok()) return jobs.status();
                  v1::ListJobsResponse response;
-                 for (v1::JobInfo& job : jobs_.List(request.state(), request.limit(), caller)) {
-                   *response.add_jobs() = std::move(job);
-                 }
+                 for (v1::JobInfo& job : *jobs) *response.add_jobs() = std::move(job);
                  return response;
                });
 }

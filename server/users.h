@@ -6,7 +6,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "server/job_store.h"
+#include "server/store/store.h"
 
 namespace fenestra {
 
@@ -19,11 +19,13 @@ struct Caller {
   bool Owns(const std::string& owner) const { return admin || owner == name; }
 };
 
-// `info` (a JobInfo or SiteInfo) as `caller` may see it: the owner only for
-// administrators.
+// `info` (a JobInfo or SiteInfo) as `caller` may see it: the owner, and the replica that
+// runs a job, only for administrators.
 template <typename Info>
 Info ForCaller(Info info, const Caller& caller) {
-  if (!caller.admin) info.clear_owner();
+  if (caller.admin) return info;
+  info.clear_owner();
+  if constexpr (requires { info.clear_replica(); }) info.clear_replica();
   return info;
 }
 

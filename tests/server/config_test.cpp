@@ -35,6 +35,29 @@ TEST(ConfigTest, EmptyConfigGetsTheDocumentedDefaults) {
   EXPECT_EQ(config->auth(), "token");
   EXPECT_TRUE(config->tls_cert_file().empty());
   EXPECT_FALSE(config->allow_plaintext());
+  EXPECT_TRUE(config->store().empty());  // SQLite in data_dir
+  EXPECT_EQ(config->lease_seconds(), 10);
+  EXPECT_EQ(config->outdoor_memory_bytes(), int64_t{1} << 30);
+}
+
+TEST(ConfigTest, TheStoreIsSqliteOrAPostgresqlUrlAndLeasesAreNotTooShort) {
+  v1::DaemonConfig config;
+  config.set_store("postgresql://fenestra@db.example.org:5432/fenestra");
+  EXPECT_TRUE(ResolveConfig(config).ok());
+  config.set_store("postgres://fenestra@db/fenestra");
+  EXPECT_TRUE(ResolveConfig(config).ok());
+  config.set_store("mysql://fenestra@db/fenestra");
+  EXPECT_THAT(ResolveConfig(config).status().message(),
+              HasSubstr("store must be empty (SQLite in data_dir) or a PostgreSQL URL"));
+  config = v1::DaemonConfig();
+  config.set_lease_seconds(0.1);
+  EXPECT_THAT(ResolveConfig(config).status().message(),
+              HasSubstr("lease_seconds must be at least 0.3 s"));
+  config.set_lease_seconds(-1);
+  EXPECT_THAT(ResolveConfig(config).status().message(), HasSubstr("lease_seconds"));
+  config = v1::DaemonConfig();
+  config.set_outdoor_memory_bytes(-1);
+  EXPECT_THAT(ResolveConfig(config).status().message(), HasSubstr("outdoor_memory_bytes"));
 }
 
 TEST(ConfigTest, LoopbackAddresses) {

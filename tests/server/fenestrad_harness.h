@@ -348,6 +348,14 @@ class FenestradTest : public testing::Test {
     EXPECT_EQ(info.state(), v1::SITE_STATE_READY) << info.error();
     return info;
   }
+  // Polls until the daemon's log holds `text`, or 60 s.
+  static void WaitLog(Daemon& d, const std::string& text) {
+    const auto deadline = Clock::now() + std::chrono::seconds(60);
+    while (d.Log().find(text) == std::string::npos && Clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    EXPECT_THAT(d.Log(), testing::HasSubstr(text));
+  }
   static bool Running(const v1::JobInfo& j) {
     return j.state() == v1::JOB_STATE_RUNNING && j.progress().evaluations() >= 2;
   }

@@ -142,16 +142,27 @@ TEST_F(FenestradTest, SigkillDuringAJobThenRestart) {
   const std::string queued = Submit(*d, tiny, {"--site", "site-1"});
   WaitJob(*d, running, Running);
   EXPECT_EQ(GetJob(*d, queued).state(), v1::JOB_STATE_QUEUED);
+  const int before = GetJob(*d, running).progress().evaluations();
   EXPECT_EQ(d->Kill(), 128 + SIGKILL);
 
+  // The job that was running is taken over at once (before the queued one), from its last
+  // checkpoint: no evaluation stored before the kill is done again
   d->Start();
-  const v1::JobInfo failed = GetJob(*d, running);
-  EXPECT_EQ(failed.state(), v1::JOB_STATE_FAILED);
-  EXPECT_EQ(failed.error(), "daemon stopped while running");
-  EXPECT_GE(failed.progress().evaluations(), 2);
-  r = d->Cli({"job", "show", running});
-  EXPECT_THAT(r.out, HasSubstr("daemon stopped while running"));
-  // The queued job was queued again and runs; the site's matrix came from disk
+  EXPECT_EQ(GetJob(*d, running).state(), v1::JOB_STATE_RUNNING);
+  EXPECT_GE(GetJob(*d, running).progress().evaluations(), before);
+  WaitLog(*d, "job " + running + ": taken over from replica");
+  EXPECT_THAT(d->Log(), HasSubstr("it goes on after its last checkpoint"));
+  WaitJob(*d, running, [&](const v1::JobInfo& j) { return j.progress().evaluations() > before; });
+  EXPECT_EQ(GetJob(*d, queued).state(), v1::JOB_STATE_QUEUED);
+  r = d->Cli({"job", "cancel", running});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const v1::JobInfo cancelled = WaitJob(
+      *d, running, [](const v1::JobInfo& j) { return j.state() == v1::JOB_STATE_CANCELLED; });
+  EXPECT_GT(cancelled.result().evaluations(), before);
+  for (int k = 0; k < cancelled.result().history_size(); ++k) {
+    EXPECT_EQ(cancelled.result().history(k).index(), k);
+  }
+  // The queued job runs next; the site's matrix came from disk
   const v1::JobInfo resumed = WaitJob(
       *d, queued, [](const v1::JobInfo& j) { return j.state() == v1::JOB_STATE_SUCCEEDED; });
   EXPECT_TRUE(resumed.outdoor_reused());
@@ -763,14 +774,6 @@ class FenestradStorageTest : public FenestradTest {
     mounts_.push_back(path);
   }
 
-  // Polls until the daemon's log holds `text`, or 60 s.
-  static void WaitLog(Daemon& d, const std::string& text) {
-    const auto deadline = Clock::now() + std::chrono::seconds(60);
-    while (d.Log().find(text) == std::string::npos && Clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-    EXPECT_THAT(d.Log(), HasSubstr(text));
-  }
   static grpc::Status SubmitRequest(Daemon& d, const v1::SubmitJobRequest& request,
                                     v1::JobInfo* info = nullptr) {
     v1::JobInfo ignored;
@@ -796,6 +799,15 @@ class FenestradStorageTest : public FenestradTest {
     return request;
   }
 
+  // Polls until `dir` holds `count` files, or 10 s; the count then.
+  static size_t WaitFileCount(const std::string& dir, size_t count) {
+    const auto deadline = Clock::now() + std::chrono::seconds(10);
+    while (FileNames(dir).size() != count && Clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return FileNames(dir).size();
+  }
+
   std::vector<std::string> mounts_;
 };
 
@@ -808,7 +820,7 @@ TEST_F(FenestradStorageTest, UploadsAreKeptOnlyWhileASiteOrUnfinishedJobUsesThem
     request.set_weather_epw(std::string(4 << 20, static_cast<char>('a' + k)));
     v1::JobInfo job;
     if (SubmitRequest(*d, request, &job).ok()) WaitJob(*d, job.id(), Ended);
-    EXPECT_THAT(FileNames(weather_dir), testing::IsEmpty());
+    EXPECT_EQ(WaitFileCount(weather_dir, 0), 0u);
   }
 
   // A site's weather file stays while the site does; jobs on it share it, a job's own upload
@@ -829,7 +841,8 @@ TEST_F(FenestradStorageTest, UploadsAreKeptOnlyWhileASiteOrUnfinishedJobUsesThem
   for (const v1::JobInfo& job : {first, second}) {
     EXPECT_EQ(WaitJob(*d, job.id(), Ended).state(), v1::JOB_STATE_SUCCEEDED);
   }
-  EXPECT_EQ(FileNames(weather_dir).size(), 1u);
+  // The upload goes right after the end is stored (its reference is dropped then)
+  EXPECT_EQ(WaitFileCount(weather_dir, 1), 1u);
   ASSERT_TRUE(DeleteSite(*d, site.id()).ok());
   EXPECT_THAT(FileNames(weather_dir), testing::IsEmpty());
 

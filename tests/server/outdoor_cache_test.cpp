@@ -9,6 +9,8 @@
 #include <sstream>
 #include <thread>
 
+#include "server/store/store.h"
+
 namespace fenestra {
 namespace {
 
@@ -214,6 +216,56 @@ TEST(OutdoorCacheTest, WithoutRoomAMatrixIsKeptInMemory) {
   EXPECT_FALSE(fs::exists(cache.PathFor("k")));
   ASSERT_NE(cache.Find("k"), nullptr);
   EXPECT_FALSE(cache.EvictOne());  // nothing on disk to evict
+}
+
+// Two processes' caches on one store (the matrices table works on SQLite as on PostgreSQL).
+TEST(OutdoorCacheTest, InAStoreMatricesAreSharedCheckedAndTheLatestKeptInMemory) {
+  const std::string dir = FreshDir("store");
+  fs::create_directories(dir);
+  absl::StatusOr<std::unique_ptr<Store>> store = OpenStoreUrl("sqlite:" + dir);
+  ASSERT_TRUE(store.ok()) << store.status();
+  const OutdoorMatrix a = TestMatrix("a"), b = TestMatrix("b");
+  int64_t values = a.coefficients.size() + a.standard_error.size();
+  for (const Matrix& batch : a.batches) values += batch.size();
+  const int64_t one = static_cast<int64_t>(sizeof(double)) * values;
+  OutdoorCache cache(**store, /*memory_bytes=*/one * 3 / 2);  // room for one
+  ASSERT_TRUE(cache.Load().ok());
+  ASSERT_TRUE(cache.Put(std::make_shared<const OutdoorMatrix>(a)).ok());
+  ASSERT_TRUE(cache.Put(std::make_shared<const OutdoorMatrix>(b)).ok());
+  EXPECT_THAT(cache.KeysInMemory(), testing::ElementsAre("b"));  // a dropped: no room
+  EXPECT_FALSE(cache.LoadedFromDisk("a"));
+  std::shared_ptr<const OutdoorMatrix> read = cache.Find("a");  // read back from the store
+  ASSERT_NE(read, nullptr);
+  EXPECT_TRUE(read->coefficients == a.coefficients);
+  EXPECT_THAT(cache.KeysInMemory(), testing::ElementsAre("a"));
+
+  // Another process's cache finds them in the store, and tells so
+  OutdoorCache other(**store, one * 3);
+  absl::StatusOr<OutdoorCache::LoadReport> loaded = other.Load();
+  ASSERT_TRUE(loaded.ok()) << loaded.status();
+  EXPECT_EQ(loaded->loaded, 2);
+  EXPECT_TRUE(other.Contains("b"));
+  ASSERT_NE(other.Find("b"), nullptr);
+  EXPECT_TRUE(other.LoadedFromDisk("b"));
+  EXPECT_TRUE(
+      other
+          .GetOrCompute(
+              "b",
+              [] { return absl::StatusOr<OutdoorMatrix>(absl::InternalError("computed again")); })
+          ->matrix != nullptr);
+  EXPECT_FALSE(other.EvictOne());  // the store keeps every matrix
+
+  // A stored matrix that does not decode (another build's format) is dropped, then traced
+  // again
+  ASSERT_TRUE((*store)->PutMatrix("c", "not a matrix").ok());
+  OutdoorCache third(**store, one);
+  EXPECT_EQ(third.Find("c"), nullptr);
+  EXPECT_FALSE(third.Contains("c"));
+  absl::StatusOr<OutdoorCache::Lookup> traced =
+      third.GetOrCompute("c", [] { return absl::StatusOr<OutdoorMatrix>(TestMatrix("c")); });
+  ASSERT_TRUE(traced.ok()) << traced.status();
+  EXPECT_TRUE(traced->computed);
+  EXPECT_TRUE(*(*store)->HasMatrix("c"));
 }
 
 }  // namespace

@@ -13,10 +13,11 @@ namespace {
 
 using ::testing::HasSubstr;
 
-std::unique_ptr<JobStore> FreshStore(const std::string& name) {
-  const std::string path = testing::TempDir() + "/users_test_" + name + ".db";
-  for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(path + suffix);
-  auto store = JobStore::Open(path);
+std::unique_ptr<Store> FreshStore(const std::string& name) {
+  const std::string dir = testing::TempDir() + "/users_test_" + name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  auto store = OpenStoreUrl("sqlite:" + dir);
   EXPECT_TRUE(store.ok()) << store.status();
   return *std::move(store);
 }
@@ -46,7 +47,7 @@ TEST(UsersTest, UserNamesAreCheckedAndLocalIsReserved) {
 }
 
 TEST(UsersTest, OnlyTheTokensHashIsStoredAndNamesAreUnique) {
-  std::unique_ptr<JobStore> store = FreshStore("stored");
+  std::unique_ptr<Store> store = FreshStore("stored");
   absl::StatusOr<std::string> token = AddUser(*store, "ann", /*admin=*/false);
   ASSERT_TRUE(token.ok()) << token.status();
   ASSERT_TRUE(AddUser(*store, "root", /*admin=*/true).ok());
@@ -63,7 +64,7 @@ TEST(UsersTest, OnlyTheTokensHashIsStoredAndNamesAreUnique) {
 }
 
 TEST(UsersTest, AuthenticatorKnowsTokensAndNothingElse) {
-  std::unique_ptr<JobStore> store = FreshStore("auth");
+  std::unique_ptr<Store> store = FreshStore("auth");
   const std::string ann = *AddUser(*store, "ann", false);
   const std::string root = *AddUser(*store, "root", true);
   const Authenticator auth("token", *store);
@@ -103,7 +104,7 @@ TEST(UsersTest, AuthenticatorKnowsTokensAndNothingElse) {
 }
 
 TEST(UsersTest, AuthNoneMakesEveryCallerTheLocalAdministrator) {
-  std::unique_ptr<JobStore> store = FreshStore("none");
+  std::unique_ptr<Store> store = FreshStore("none");
   absl::StatusOr<Caller> caller = Authenticator("none", *store).Authenticate(std::nullopt);
   ASSERT_TRUE(caller.ok());
   EXPECT_EQ(caller->name, kLocalUser);
