@@ -259,8 +259,11 @@ std::string ToJson(const google::protobuf::Message& m) {
 class FenestradTest : public testing::Test {
  protected:
   void SetUp() override {
+    // Named by the test and the process, so that concurrent runs (other builds on the
+    // machine) never share a folder, a data directory or a mount
     const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = testing::TempDir() + "/" + info->test_suite_name() + "_" + info->name();
+    dir_ = testing::TempDir() + "/" + info->test_suite_name() + "_" + info->name() + "_" +
+           std::to_string(getpid());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }

@@ -2,10 +2,12 @@
 // directory, driven through the fenestra client (and, for status codes, a gRPC stub).
 // Jobs use tiny sampling (40000 outdoor paths, 2000 indoor paths per sensor).
 #include <arpa/inet.h>
+#include <linux/magic.h>
 #include <netinet/in.h>
 #include <sqlite3.h>
 #include <sys/mount.h>
 #include <sys/socket.h>
+#include <sys/vfs.h>
 
 #include <algorithm>
 #include <cmath>
@@ -727,6 +729,10 @@ std::vector<std::string> FileNames(const std::string& dir) {
 
 // Fills the filesystem holding `path` with that one file, until not a byte more fits.
 void FillDisk(const std::string& path) {
+  // Only a test's own tmpfs, never the machine's disk
+  struct statfs filesystem;
+  ASSERT_EQ(statfs(fs::path(path).parent_path().c_str(), &filesystem), 0) << std::strerror(errno);
+  ASSERT_EQ(filesystem.f_type, TMPFS_MAGIC) << path << " is not on a tmpfs mounted by the test";
   const int fd = open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   ASSERT_GE(fd, 0) << std::strerror(errno);
   const std::string block(1 << 20, 'x');
@@ -753,12 +759,6 @@ bool Ended(const v1::JobInfo& job) { return job.state() >= v1::JOB_STATE_SUCCEED
 // damaged records, large registrations. Stub calls go as the local user (auth none).
 class FenestradStorageTest : public FenestradTest {
  protected:
-  void SetUp() override {
-    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-    const std::string dir = testing::TempDir() + "/" + info->test_suite_name() + "_" + info->name();
-    umount2((dir + "/data").c_str(), MNT_DETACH);  // left by a crashed run
-    FenestradTest::SetUp();
-  }
   void TearDown() override {
     for (const std::string& path : mounts_) umount2(path.c_str(), MNT_DETACH);
     FenestradTest::TearDown();
