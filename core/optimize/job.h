@@ -19,8 +19,8 @@
 
 namespace fenestra {
 
-// The outdoor matrix O of a site: window direction cells x 146 sky bins [-], with its
-// standard error and how it was made.
+// The outdoor matrix O of a site: (window cells, then one identity row per sky bin) x 146 sky
+// bins [-], with its standard error, its batches and how it was made.
 struct OutdoorMatrix {
   Matrix coefficients;  // O (core/dc/two_stage.h): window cells + 146 rows
   Matrix standard_error;

@@ -24,14 +24,16 @@ std::vector<std::string> Split(const std::string& line) {
   return fields;
 }
 
-// The quick tilt job with 6 evaluations: it keeps the published reflection limits, which the
-// check (without a limit) finds at this seed.
+// The quick tilt job with 6 evaluations and the source publication's reflection limits (30
+// outdoor, 5 indoor), which the check (without a limit) finds at this seed.
 TEST_F(OptimizeCliTest, PrintsTheFinalCheckAndWritesTheBestValueAgainstTime) {
   v1::Job job;
   ASSERT_TRUE(ReadJsonProtoFile(kExamples + "/city_office/alpha_max_quick.json", "job", &job).ok());
   job.set_scene_file(kExamples + "/city_office/scene.json");
   job.mutable_budget()->set_max_evaluations(6);
   job.mutable_sampling()->set_backend("cpu");
+  job.mutable_sampling()->set_outdoor_bounces(30);
+  job.mutable_sampling()->set_indoor_bounces(5);
   ASSERT_TRUE(WriteJsonFile((dir_ / "job.json").string(), job).ok());
 
   const CliRun run = Fenestra("optimize --local " + (dir_ / "job.json").string() + " -o " +

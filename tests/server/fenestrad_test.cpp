@@ -484,12 +484,14 @@ TEST_F(FenestradTest, PythonClientRegistersASiteAndRunsAJob) {
 
 // The final check travels with the job: the last progress event and the result carry it,
 // the stored job keeps it across a restart, the client prints it, and the daemon logs a
-// warning when it disagrees. The job keeps the quick job's reflection limits (5 indoor),
-// which leave out light the check counts: it disagrees at this seed.
+// warning when it disagrees. The job takes the source publication's reflection limits (5
+// indoor), which leave out light the check counts: it disagrees at this seed.
 TEST_F(FenestradTest, FinalCheckIsInTheLastProgressEventTheResultAndTheLog) {
   auto d = StartDaemon();
   v1::Job job = TinyJob(4);
   job.mutable_sampling()->set_indoor_paths_per_sensor(10000);
+  job.mutable_sampling()->set_outdoor_bounces(30);
+  job.mutable_sampling()->set_indoor_bounces(5);
   CliResult r = d->Cli({"job", "submit", WriteJob("checked", job), "--watch", "--json"});
   ASSERT_EQ(r.code, 0) << r.err;
   std::vector<v1::JobEvent> events;

@@ -18,17 +18,18 @@ namespace fenestra {
 namespace {
 
 // The quick tilt job (examples/city_office/alpha_max_quick.json: 10^4 indoor paths per
-// sensor) with `evaluations`, on the CPU; `unlimited`: both stages without a reflection
-// limit, as the final check traces.
-PreparedJob PrepareQuickJob(int evaluations, bool unlimited) {
+// sensor) with `evaluations`, on the CPU, with the jobs' reflection limits (none, as the
+// final check traces); `source_limits`: at most 30 outdoor and 5 indoor reflections, the
+// source publication's.
+PreparedJob PrepareQuickJob(int evaluations, bool source_limits = false) {
   absl::StatusOr<v1::Job> job =
       ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json");
   EXPECT_TRUE(job.ok()) << job.status();
   job->mutable_budget()->set_max_evaluations(evaluations);
   job->mutable_sampling()->set_backend("cpu");
-  if (unlimited) {
-    job->mutable_sampling()->set_indoor_bounces(-1);
-    job->mutable_sampling()->set_outdoor_bounces(-1);
+  if (source_limits) {
+    job->mutable_sampling()->set_outdoor_bounces(30);
+    job->mutable_sampling()->set_indoor_bounces(5);
   }
   absl::StatusOr<PreparedJob> prepared =
       PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
@@ -135,7 +136,7 @@ TEST(JobTest, FinalCheckIsOnUnlessTheSamplingSaysNo) {
 // Where both methods count the same light (no reflection limits), the one-stage check of the
 // best design agrees with the two-stage value within the errors (seed 1).
 TEST(JobTest, FinalCheckAgreesWhereBothMethodsCountTheSameLight) {
-  const PreparedJob job = PrepareQuickJob(8, /*unlimited=*/true);
+  const PreparedJob job = PrepareQuickJob(8);
   const Reported r = RunReporting(job);
   ASSERT_TRUE(r.result.has_final_check());
   const v1::FinalCheck& c = r.result.final_check();
@@ -178,10 +179,10 @@ TEST(JobTest, FinalCheckAgreesWhereBothMethodsCountTheSameLight) {
   EXPECT_EQ(again->SerializeAsString(), timeless.SerializeAsString());
 }
 
-// The quick job as published, with at most 5 indoor and 10 outdoor reflections: the check,
-// which traces without a limit, finds the light the limits leave out (seed 1).
+// The quick job with the source publication's limits (at most 5 indoor reflections): the
+// check, which traces without a limit, finds the light the limits leave out (seed 1).
 TEST(JobTest, FinalCheckFindsTheLightTheReflectionLimitsLeaveOut) {
-  const Reported r = RunReporting(PrepareQuickJob(8, /*unlimited=*/false));
+  const Reported r = RunReporting(PrepareQuickJob(8, /*source_limits=*/true));
   ASSERT_TRUE(r.result.has_final_check());
   const v1::FinalCheck& c = r.result.final_check();
   Print(c);
@@ -192,7 +193,7 @@ TEST(JobTest, FinalCheckFindsTheLightTheReflectionLimitsLeaveOut) {
 // Error against time: each evaluation's value, error and time, and the best value's as the
 // search went, one entry per move of the incumbent.
 TEST(JobTest, BestOverTimeFollowsTheIncumbent) {
-  PreparedJob job = PrepareQuickJob(12, /*unlimited=*/false);
+  PreparedJob job = PrepareQuickJob(12);
   job.job.mutable_sampling()->set_final_check(false);
   const Reported r = RunReporting(job);
   EXPECT_FALSE(r.result.has_final_check());
@@ -240,7 +241,7 @@ TEST(JobTest, BestOverTimeFollowsTheIncumbent) {
 // A cancelled job stops without its check.
 TEST(JobTest, CancelledJobLeavesTheCheckOut) {
   int reports = 0;
-  PreparedJob job = PrepareQuickJob(12, /*unlimited=*/false);
+  PreparedJob job = PrepareQuickJob(12);
   JobCallbacks callbacks;
   std::vector<std::string> stages;
   callbacks.stage = [&](const std::string& stage) { stages.push_back(stage); };
