@@ -160,7 +160,7 @@ OutdoorSums TraceOutdoor(const EmbreeIntersector& scene, const TraceGeometry& ge
 // where the score arrives and whether its view reaches the sky.
 struct WatchingOutdoor {
   OutdoorView<EmbreeIntersector> view;
-  mutable Vec3f point, omega;
+  mutable Vec3f point{}, omega{};
   mutable bool escapes = false;
   template <class Sink>
   void Score(const TraceWindow& window, const HemisphereBasis&, Vec3f p, Vec3f o, int cell,

@@ -295,9 +295,9 @@ absl::Status CheckCheckpointFormat(const v1::SearchCheckpoint& checkpoint) {
                                                  kSearchCheckpointFormat, " only"));
 }
 
-// The search so far that `checkpoint` holds, once it is known to be of this format, of `job`
-// (whose content hash is `job_hash`) and a history its search makes (CheckVnsResume).
-absl::StatusOr<VnsResult> ResumedSearch(const PreparedJob& job, const std::string& job_hash,
+// The search so far that `checkpoint` holds, once it is known to be of this format, of the
+// job whose content hash is `job_hash` and a history its search makes (CheckVnsResume).
+absl::StatusOr<VnsResult> ResumedSearch(const std::string& job_hash,
                                         const SearchSettings& search,
                                         const v1::SearchCheckpoint& checkpoint) {
   FENESTRA_RETURN_IF_ERROR(CheckCheckpointFormat(checkpoint));
@@ -364,7 +364,7 @@ absl::StatusOr<SearchStart> StartOfSearch(const PreparedJob& job, const SearchSe
     start.checkpoint.set_job_hash(JobContentHash(job));
     return start;
   }
-  FENESTRA_ASSIGN_OR_RETURN(so_far, ResumedSearch(job, JobContentHash(job), settings, *resume));
+  FENESTRA_ASSIGN_OR_RETURN(so_far, ResumedSearch(JobContentHash(job), settings, *resume));
   start.so_far = std::move(so_far);
   start.checkpoint = *resume;
   start.resumed_seconds = resume->history(resume->history_size() - 1).elapsed_seconds();

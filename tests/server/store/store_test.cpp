@@ -66,7 +66,7 @@ std::string FreshDatabaseName() {
 struct PostgresBackend {
   static constexpr char kName[] = "Postgres";
   std::string url;
-  absl::StatusOr<std::unique_ptr<Store>> Open(const std::string& name) {
+  absl::StatusOr<std::unique_ptr<Store>> Open(const std::string& /*name*/) {
     if (!Server().ok()) return absl::UnavailableError(Server().error());
     url = Server().NewDatabase(FreshDatabaseName());
     if (url.empty()) return absl::InternalError(Server().error());
