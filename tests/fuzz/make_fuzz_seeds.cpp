@@ -29,6 +29,7 @@ OutdoorMatrix ExampleMatrix(int rows, int cols, bool with_errors) {
     m.coefficients.data()[i] = 0.5 + 0.5 * std::sin(0.37 * static_cast<double>(i));
   }
   if (with_errors) m.standard_error = 0.01 * m.coefficients;
+  m.batches = {0.9 * m.coefficients, 1.1 * m.coefficients};
   m.basis_cells = 288;
   m.parts = {1, 1};
   m.paths = 576000;
