@@ -17,8 +17,6 @@
 namespace fenestra {
 namespace {
 
-constexpr int kMaxPartsPerSide = 16;
-
 double Seconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -45,11 +43,11 @@ absl::Status CheckPaths(int max_bounces, bool russian_roulette, double roulette_
 }
 
 absl::Status CheckParts(WindowParts parts) {
-  if (parts.columns < 1 || parts.rows < 1 || parts.columns > kMaxPartsPerSide ||
-      parts.rows > kMaxPartsPerSide) {
-    return absl::InvalidArgumentError(absl::StrCat("window parts must be 1 to ", kMaxPartsPerSide,
-                                                   " in each direction, got ", parts.columns, "x",
-                                                   parts.rows));
+  if (parts.columns < 1 || parts.rows < 1 || parts.columns > kMaxWindowPartsPerSide ||
+      parts.rows > kMaxWindowPartsPerSide) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("window parts must be 1 to ", kMaxWindowPartsPerSide,
+                     " in each direction, got ", parts.columns, "x", parts.rows));
   }
   return absl::OkStatus();
 }

@@ -67,6 +67,12 @@ inline constexpr int kDefaultIndoorBounces = -1;
 // Independent batches of each stage, by default, and at most.
 inline constexpr int kDefaultBatches = 8;
 inline constexpr int kMaxBatches = 64;
+// Window parts per side, at most.
+inline constexpr int kMaxWindowPartsPerSide = 16;
+// The outdoor matrix in memory with its batches, its mean and its standard error, at most:
+// (window cells + 146) x 146 entries of 8 bytes each, batches + 2 times [bytes]. The default
+// sampling (288 direction cells, 4 x 3 parts, 8 batches) needs 41 MB.
+inline constexpr int64_t kMaxOutdoorMatrixBytes = int64_t{4} << 30;
 
 struct OutdoorOptions {
   // In total, evenly over the window cells; >= cells x batches

@@ -16,6 +16,7 @@
 #include "core/optimize/design_variables.h"
 #include "core/optimize/job.h"
 #include "core/optimize/vns.h"
+#include "core/trace/path.h"
 #include "core/trace/room_check.h"
 
 namespace fenestra {
@@ -231,12 +232,29 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   if (s.basis_cells() != 288 && s.basis_cells() != 1152) {
     return Invalid("sampling.basis_cells", "must be 288 or 1152");
   }
-  if (s.window_columns() < 0 || s.window_columns() > 16 || s.window_rows() < 0 ||
-      s.window_rows() > 16) {
-    return Invalid("sampling.window_columns/window_rows", "must be in [0, 16] (0 = automatic)");
+  if (s.window_columns() < 0 || s.window_columns() > kMaxWindowPartsPerSide ||
+      s.window_rows() < 0 || s.window_rows() > kMaxWindowPartsPerSide) {
+    return Invalid("sampling.window_columns/window_rows",
+                   absl::StrCat("must be in [0, ", kMaxWindowPartsPerSide, "] (0 = automatic)"));
   }
   if (s.batches() < 2 || s.batches() > kMaxBatches) {
     return Invalid("sampling.batches", absl::StrCat("must be in [2, ", kMaxBatches, "]"));
+  }
+  // The outdoor matrix's memory, with automatic parts at their most
+  const auto side = [](int parts) { return parts > 0 ? parts : kMaxWindowPartsPerSide; };
+  const int64_t most_cells =
+      int64_t{s.basis_cells()} * side(s.window_columns()) * side(s.window_rows());
+  const int64_t matrix_bytes =
+      (most_cells + kTregenzaBinCount) * kTregenzaBinCount * 8 * (int64_t{s.batches()} + 2);
+  if (matrix_bytes > kMaxOutdoorMatrixBytes) {
+    return Invalid(
+        "sampling",
+        absl::StrCat("the outdoor matrix with its batches could take ", matrix_bytes >> 20,
+                     " MiB (", s.basis_cells(), " direction cells x ", side(s.window_columns()),
+                     "x", side(s.window_rows()), " window parts",
+                     s.window_columns() == 0 || s.window_rows() == 0 ? " at most, automatic" : "",
+                     " x ", s.batches(), " batches), more than the ", kMaxOutdoorMatrixBytes >> 20,
+                     " MiB allowed: fewer batches, direction cells or window parts"));
   }
   const int64_t window_cells =
       int64_t{s.basis_cells()} * std::max(1, s.window_columns()) * std::max(1, s.window_rows());

@@ -47,7 +47,7 @@ std::vector<Polygon> Polygons(const TraceGeometry& geometry) {
     if (used[t] || !HasArea(geometry, t)) continue;
     used[t] = true;
     const Vec3d n = Normal(vertex(t, 0), vertex(t, 1), vertex(t, 2));
-    Polygon polygon{{vertex(t, 0), vertex(t, 1), vertex(t, 2)}, n};
+    Polygon polygon{{vertex(t, 0), vertex(t, 1), vertex(t, 2)}, n, {}};
     for (size_t u = t + 1; u < count && polygon.vertices.size() == 3; ++u) {
       if (used[u] || !HasArea(geometry, u)) continue;
       const Vec3d m = Normal(vertex(u, 0), vertex(u, 1), vertex(u, 2));

@@ -172,6 +172,17 @@ TEST(JobValidationTest, BudgetObjectiveAndSampling) {
   job = QuickJob();
   job.mutable_sampling()->set_indoor_bounces(1'000'000);
   EXPECT_THAT(ErrorOf(job), HasSubstr("bounces must be in [1, 1000], or -1 for unlimited"));
+  job = QuickJob();  // an outdoor matrix of 22 GB
+  job.mutable_sampling()->set_basis_cells(1152);
+  job.mutable_sampling()->set_batches(64);
+  job.mutable_sampling()->set_outdoor_paths(100'000'000);
+  EXPECT_THAT(ErrorOf(job),
+              HasSubstr("job sampling: the outdoor matrix with its batches could take "
+                        "21691 MiB (1152 direction cells x 16x16 window parts at "
+                        "most, automatic x 64 batches), more than the 4096 MiB"));
+  job.mutable_sampling()->set_window_columns(4);
+  job.mutable_sampling()->set_window_rows(3);
+  EXPECT_TRUE(ValidateJob(job, kOffice).ok()) << ErrorOf(job);
   job = QuickJob();
   job.add_neighborhoods()->set_radius(kNaN);
   EXPECT_THAT(ErrorOf(job), HasSubstr("job neighborhoods[0]: needs variables >= 0"));
