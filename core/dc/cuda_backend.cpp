@@ -13,6 +13,8 @@
 #include "core/trace/one_stage_cpu.h"
 
 #if FENESTRA_WITH_CUDA
+#include "absl/strings/match.h"
+#include "core/dc/indoor_replay.h"
 #include "core/trace/bvh.h"
 #include "core/trace/cuda/cuda_tracer.h"
 #include "core/trace/window_cells.h"
@@ -26,6 +28,10 @@ namespace {
 absl::Status Check(const std::string& error) {
   return error.empty() ? absl::OkStatus() : absl::InternalError(error);
 }
+
+// Device memory the indoor replay's records may take; a job whose records would take more
+// traces every design in full.
+constexpr size_t kMaxReplayBytes = size_t{4} << 30;
 
 // Builds the geometry's BVH and hands it to the tracer to trace next.
 absl::Status UploadScene(CudaTracer& tracer, const TraceGeometry& geometry, BvhQuality quality) {
@@ -190,37 +196,188 @@ class OutdoorHolder {
   std::vector<uint8_t> met_;
 };
 
+// The tracer's indoor records, shared like its outdoor scene.
+struct ReplaySlot {
+  int current = 0;  // the replay whose records the tracer holds
+  int made = 0;     // replays made
+};
+
+// The indoor replay on the GPU (core/dc/indoor_replay.h): the room without the blind is
+// traced once up to the blind's envelope; per design, the tracer replays the records
+// against the room with the design's blind and the blind alone, all in the room's frame.
+class CudaReplay {
+ public:
+  // Records `scene`'s indoor paths; Unavailable where the records would take more than
+  // kMaxReplayBytes, InvalidArgument for a scene without a blind.
+  static absl::StatusOr<std::unique_ptr<CudaReplay>> Make(CudaTracer* tracer, ReplaySlot* slot,
+                                                          const Scene& scene,
+                                                          const IndoorOptions& options,
+                                                          const HemisphereBasis& basis,
+                                                          OutdoorHolder* outdoor) {
+    if (!scene.blind) return absl::InvalidArgumentError("the scene has no blind to vary");
+    FENESTRA_ASSIGN_OR_RETURN(
+        room, PrepareTraceGeometry(SelectSide(scene.fixed, Side::kIndoor), scene.materials));
+    auto replay = std::unique_ptr<CudaReplay>(
+        new CudaReplay(tracer, slot, scene, options, basis, outdoor, std::move(room)));
+    FENESTRA_RETURN_IF_ERROR(replay->Record());
+    return replay;
+  }
+
+  // Makes the tracer hold the records and the room with `design`'s blind; `blind` gets the
+  // blind alone. InvalidArgument for a design outside the recorded ranges.
+  absl::Status Prepare(const BlindDesign& design, BvhLayout* blind) {
+    FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(*scene_.blind, design));
+    if (slot_->current != generation_) FENESTRA_RETURN_IF_ERROR(Record());
+    TriangleMesh blind_mesh;
+    GenerateBlind(scene_.window, *scene_.blind, design, 0, blind_mesh);
+    FENESTRA_ASSIGN_OR_RETURN(blind_geometry,
+                              PrepareTraceGeometry(blind_mesh, scene_.materials, &room_.origin));
+    FENESTRA_ASSIGN_OR_RETURN(blind_bvh, BuildBvh(blind_geometry, BvhQuality::kMedium));
+    *blind = std::move(blind_bvh);
+    FENESTRA_ASSIGN_OR_RETURN(
+        geometry, PrepareTraceGeometry(SelectSide(AssembleMesh(scene_, design), Side::kIndoor),
+                                       scene_.materials, &room_.origin));
+    triangles_ = geometry.TriangleCount();
+    FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, geometry, BvhQuality::kMedium));
+    return outdoor_->Hold();
+  }
+
+  size_t triangles() const { return triangles_; }
+  int sensors() const { return static_cast<int>(scene_.sensors.size()); }
+  int columns() const {
+    return IndoorColumnCount(LocalWindow(room_, scene_.window, options_.parts), basis_);
+  }
+  const CudaReplayStats& stats() const { return stats_; }
+
+ private:
+  CudaReplay(CudaTracer* tracer, ReplaySlot* slot, const Scene& scene, const IndoorOptions& options,
+             const HemisphereBasis& basis, OutdoorHolder* outdoor, TraceGeometry room)
+      : tracer_(tracer),
+        slot_(slot),
+        generation_(++slot->made),
+        scene_(scene),
+        options_(options),
+        basis_(basis),
+        outdoor_(outdoor),
+        room_(std::move(room)) {}
+
+  absl::Status Record() {
+    FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, room_, BvhQuality::kHigh));
+    FENESTRA_RETURN_IF_ERROR(outdoor_->Hold());
+    const std::vector<TraceSensor> sensors = LocalSensors(room_, scene_.sensors);
+    PathSettings path = IndoorPathSettings(options_);
+    path.importance = nullptr;
+    const std::string error = tracer_->RecordIndoor(
+        LocalEnvelopeOfBlind(room_, scene_), sensors.data(), static_cast<int>(sensors.size()),
+        LocalWindow(room_, scene_.window, options_.parts),
+        OutdoorOffset(room_, outdoor_->geometry()), basis_,
+        static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, options_.seed, path,
+        kMaxReplayBytes, &stats_);
+    if (absl::StartsWith(error, kReplayTooLarge)) return absl::UnavailableError(error);
+    FENESTRA_RETURN_IF_ERROR(Check(error));
+    slot_->current = generation_;
+    return absl::OkStatus();
+  }
+
+  CudaTracer* tracer_;
+  ReplaySlot* slot_;
+  int generation_;
+  Scene scene_;
+  IndoorOptions options_;
+  HemisphereBasis basis_;
+  OutdoorHolder* outdoor_;
+  TraceGeometry room_;  // the room without the blind; its frame is every design's
+  CudaReplayStats stats_;
+  size_t triangles_ = 0;
+};
+
+// IndoorStages by the GPU's replay.
+class CudaReplayStages : public IndoorStages {
+ public:
+  CudaReplayStages(CudaTracer* tracer, std::string backend, const IndoorOptions& options,
+                   std::unique_ptr<OutdoorHolder> outdoor, std::unique_ptr<CudaReplay> replay)
+      : tracer_(tracer),
+        backend_(std::move(backend)),
+        options_(options),
+        outdoor_(std::move(outdoor)),
+        replay_(std::move(replay)) {}
+
+  absl::StatusOr<IndoorResult> Compute(const BlindDesign& design) const override {
+    const auto start = std::chrono::steady_clock::now();
+    BvhLayout blind;
+    FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind));
+    IndoorTally tally;
+    tally.sensors = replay_->sensors();
+    tally.columns = replay_->columns();
+    tally.batches = options_.batches;
+    tally.paths_per_sensor = static_cast<uint64_t>(options_.paths_per_sensor);
+    tally.batch_paths = BatchSizes(tally.paths_per_sensor, tally.batches);
+    tally.sum.resize(static_cast<size_t>(tally.batches) * tally.sensors * tally.columns);
+    CudaCounters counters;
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->ReplayIndoor(blind, tally.sum.data(), &counters)));
+    tally.counters.rays = counters.rays;
+    for (int e = 0; e < 6; ++e) tally.counters.ends[e] = counters.ends[e];
+    tally.counters.max_weight = 1.0f;
+    tally.trace_seconds = counters.kernel_seconds;
+    tally.wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    IndoorResult result = IndoorResultFromTally(tally, options_);
+    result.triangles = replay_->triangles();
+    result.backend = backend_ + " (replay)";
+    result.wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+  }
+
+ private:
+  CudaTracer* tracer_;
+  std::string backend_;
+  IndoorOptions options_;
+  std::unique_ptr<OutdoorHolder> outdoor_;
+  std::unique_ptr<CudaReplay> replay_;
+};
+
 // A search's objective on the GPU: per design the room and blind are uploaded, then the
 // indoor kernel's sums become I, E and E's tallies on the device.
 class CudaDesignTallies : public DesignTallies {
  public:
+  // `replay` may be null: every design is then traced in full.
   CudaDesignTallies(CudaTracer* tracer, Scene scene, const IndoorOptions& options,
-                    const HemisphereBasis& basis, OutdoorHolder outdoor,
-                    std::unique_ptr<CudaAnnualProduct> product)
+                    const HemisphereBasis& basis, std::unique_ptr<OutdoorHolder> outdoor,
+                    std::unique_ptr<CudaReplay> replay, std::unique_ptr<CudaAnnualProduct> product)
       : tracer_(tracer),
         scene_(std::move(scene)),
         options_(options),
         basis_(basis),
         outdoor_(std::move(outdoor)),
+        replay_(std::move(replay)),
         product_(std::move(product)) {}
 
   absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
                                                const MetricOptions& options) override {
+    DeviceTallies tallies(options_.batches, static_cast<int>(scene_.sensors.size()), options);
+    CudaCounters counters;
+    if (replay_ != nullptr) {
+      BvhLayout blind;
+      FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind));
+      FENESTRA_RETURN_IF_ERROR(product_->Hold());
+      FENESTRA_RETURN_IF_ERROR(
+          Check(tracer_->ReplayIndoorAnnualTally(blind, tallies.request, &counters)));
+      return tallies.Versions(product_->steps());
+    }
     FENESTRA_ASSIGN_OR_RETURN(
         geometry, PrepareTraceGeometry(SelectSide(AssembleMesh(scene_, design), Side::kIndoor),
                                        scene_.materials));
     FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, geometry, BvhQuality::kMedium));
-    FENESTRA_RETURN_IF_ERROR(outdoor_.Hold());
+    FENESTRA_RETURN_IF_ERROR(outdoor_->Hold());
     FENESTRA_RETURN_IF_ERROR(product_->Hold());
     const std::vector<TraceSensor> sensors = LocalSensors(geometry, scene_.sensors);
     PathSettings path = IndoorPathSettings(options_);
     path.importance = nullptr;
-    DeviceTallies tallies(options_.batches, static_cast<int>(sensors.size()), options);
-    CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(Check(tracer_->IndoorAnnualTally(
         sensors.data(), static_cast<int>(sensors.size()),
         LocalWindow(geometry, scene_.window, options_.parts),
-        OutdoorOffset(geometry, outdoor_.geometry()), basis_,
+        OutdoorOffset(geometry, outdoor_->geometry()), basis_,
         static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, options_.seed, path,
         tallies.request, &counters)));
     return tallies.Versions(product_->steps());
@@ -231,7 +388,8 @@ class CudaDesignTallies : public DesignTallies {
   Scene scene_;
   IndoorOptions options_;
   HemisphereBasis basis_;
-  OutdoorHolder outdoor_;
+  std::unique_ptr<OutdoorHolder> outdoor_;
+  std::unique_ptr<CudaReplay> replay_;
   std::unique_ptr<CudaAnnualProduct> product_;
 };
 
@@ -261,12 +419,24 @@ class CudaBackend : public DcBackend {
           "the outdoor matrix has ", outdoor_batches[0].rows(), " rows in ", outdoor_batches.size(),
           " batches, the indoor stage ", columns, " columns in ", options.batches));
     }
-    FENESTRA_ASSIGN_OR_RETURN(
-        outdoor, OutdoorHolder::Make(tracer_.get(), &outdoor_slot_, scene, options.parts, basis));
+    FENESTRA_ASSIGN_OR_RETURN(outdoor, MakeOutdoor(scene, options.parts, basis));
+    FENESTRA_ASSIGN_OR_RETURN(replay, MaybeReplay(scene, options, basis, outdoor.get()));
     auto product = std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_current_,
                                                        ++annual_generation_, outdoor_batches, sky);
     return std::make_unique<CudaDesignTallies>(tracer_.get(), scene, options, basis,
-                                               std::move(outdoor), std::move(product));
+                                               std::move(outdoor), std::move(replay),
+                                               std::move(product));
+  }
+
+  // The replay where the scene has a blind and its records fit; else every design traced.
+  absl::StatusOr<std::unique_ptr<IndoorStages>> MakeIndoorStages(
+      const Scene& scene, const IndoorOptions& options) override {
+    FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
+    FENESTRA_ASSIGN_OR_RETURN(outdoor, MakeOutdoor(scene, options.parts, basis));
+    FENESTRA_ASSIGN_OR_RETURN(replay, MaybeReplay(scene, options, basis, outdoor.get()));
+    if (replay == nullptr) return DcBackend::MakeIndoorStages(scene, options);
+    return std::make_unique<CudaReplayStages>(tracer_.get(), Name(), options, std::move(outdoor),
+                                              std::move(replay));
   }
 
   absl::StatusOr<OneStageResult> OneStage(const TriangleMesh& mesh,
@@ -372,6 +542,26 @@ class CudaBackend : public DcBackend {
   }
 
  private:
+  absl::StatusOr<std::unique_ptr<OutdoorHolder>> MakeOutdoor(const Scene& scene, WindowParts parts,
+                                                             const HemisphereBasis& basis) {
+    FENESTRA_ASSIGN_OR_RETURN(
+        outdoor, OutdoorHolder::Make(tracer_.get(), &outdoor_slot_, scene, parts, basis));
+    return std::make_unique<OutdoorHolder>(std::move(outdoor));
+  }
+
+  // The replay of `scene`'s indoor paths; null for a scene without a blind or records that
+  // would not fit.
+  absl::StatusOr<std::unique_ptr<CudaReplay>> MaybeReplay(const Scene& scene,
+                                                          const IndoorOptions& options,
+                                                          const HemisphereBasis& basis,
+                                                          OutdoorHolder* outdoor) {
+    if (!scene.blind) return nullptr;
+    absl::StatusOr<std::unique_ptr<CudaReplay>> replay =
+        CudaReplay::Make(tracer_.get(), &replay_slot_, scene, options, basis, outdoor);
+    if (replay.status().code() == absl::StatusCode::kUnavailable) return nullptr;
+    return replay;
+  }
+
   static PathSettings WithoutImportance(PathSettings path) {
     path.importance = nullptr;
     return path;
@@ -393,6 +583,7 @@ class CudaBackend : public DcBackend {
   int annual_generation_ = 0;  // products made
   int annual_current_ = 0;     // the product whose matrices the tracer holds
   OutdoorSlot outdoor_slot_;
+  ReplaySlot replay_slot_;
 };
 
 }  // namespace

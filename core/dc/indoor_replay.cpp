@@ -20,140 +20,27 @@ namespace {
 // Room to spare around the blind's envelope: far above float rounding at room scale [m]
 constexpr double kEnvelopeMargin = 1e-3;
 
-// The envelope in the trace frame.
-struct LocalEnvelope {
-  Vec3f center;
-  Vec3f axis[3];
-  float half[3];
-
-  // Whether origin + t direction, t in [0, extent], enters the box.
-  bool Touches(Vec3f origin, Vec3f direction, float extent) const {
-    float t0 = 0.0f, t1 = extent;
-    const Vec3f o = origin - center;
-    for (int k = 0; k < 3; ++k) {
-      const float ok = Dot(o, axis[k]), vk = Dot(direction, axis[k]);
-      if (vk == 0.0f) {
-        if (std::fabs(ok) > half[k]) return false;
-        continue;
-      }
-      float ta = (-half[k] - ok) / vk, tb = (half[k] - ok) / vk;
-      if (ta > tb) std::swap(ta, tb);
-      t0 = std::max(t0, ta);
-      t1 = std::min(t1, tb);
-      if (t0 > t1) return false;
-    }
-    return true;
-  }
-};
-
-// A next-event estimate whose shadow ray cleared the room: it counts unless the blind
-// blocks the ray.
-struct Connection {
-  Vec3f origin;
-  Vec3f direction;
-  float distance;
-  int32_t column;  // of I: a window cell or a direct column (decided when recorded)
-  double value;
-};
-
-// A path that reached the envelope: its state there and its index (random stream).
-struct Resume {
-  PathState state;
-  uint64_t path;
-};
-
 // The recorded paths of one sensor, one batch, one range of path indices.
 struct Chunk {
   uint32_t sensor = 0;
   int batch = 0;
   std::vector<double> fixed;  // per column of I: what no blind can change
-  std::vector<Connection> connections;
-  std::vector<Resume> resumes;
+  std::vector<ReplayConnection> connections;
+  std::vector<ReplayResume> resumes;
   uint64_t paths = 0;
-};
 
-// The room without the blind, stopping rays that touch the envelope and remembering the
-// shadow ray a next-event estimate is about to score.
-struct RecordingIntersector {
-  EmbreeIntersector room;
-  LocalEnvelope envelope;
-  mutable bool diverged = false;
-  mutable bool connection_pending = false;
-  mutable Connection pending{};
-
-  bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const {
-    const bool found = room.Intersect(origin, direction, hit);
-    const Vec3f to_hit = found ? hit->position - origin : Vec3f{0, 0, 0};
-    const float extent = found ? std::sqrt(Dot(to_hit, to_hit)) : INFINITY;
-    if (envelope.Touches(origin, direction, extent)) {
-      diverged = true;
-      return false;
-    }
-    return found;
-  }
-
-  bool Occluded(Vec3f origin, Vec3f direction, float distance) const {
-    const bool blocked = room.Occluded(origin, direction, distance);
-    connection_pending = !blocked;
-    pending = Connection{origin, direction, distance, 0, 0.0};
-    return blocked;
-  }
-};
-
-// IndoorMode's contributions: a scored shadow ray becomes a Connection, anything else
-// (a bounce ray leaving through the window without touching the envelope) is fixed. The
-// column (direct or window cell) depends on the outdoor surfaces only, so it is decided
-// here, once for every design.
-struct RecordingSink {
-  Chunk* chunk;
-  const RecordingIntersector* scene;
-  void Add(int column, double value) {
-    if (scene->connection_pending) {
-      Connection c = scene->pending;
-      c.column = column;
-      c.value = value;
-      chunk->connections.push_back(c);
-      scene->connection_pending = false;
-    } else {
-      chunk->fixed[column] += value;
-    }
-  }
+  void AddFixed(int column, double value) { fixed[column] += value; }
+  void AddConnection(const ReplayConnection& c) { connections.push_back(c); }
+  void AddResume(const PathState& state, uint64_t path) { resumes.push_back({state, path}); }
 };
 
 using OutdoorEmbreeView = OutdoorView<EmbreeIntersector>;
-
-// IndoorMode through the recording intersector; a ray stopped at the envelope is kept to
-// be resumed, not scored.
-struct RecordingMode {
-  IndoorMode<RecordingSink, OutdoorEmbreeView> inner;
-  const RecordingIntersector* scene;
-  Chunk* chunk;
-  uint64_t path;
-
-  template <class Intersector>
-  PathState Start(const Intersector& s, const PathRandom& random) {
-    return inner.Start(s, random);
-  }
-  template <class Intersector>
-  void AtReflection(const Intersector& s, const PathState& state, const ReflectionVertex& vertex,
-                    const PathRandom& random) {
-    inner.AtReflection(s, state, vertex, random);
-  }
-  void Escape(const PathState& state) {
-    if (scene->diverged) {
-      scene->diverged = false;
-      chunk->resumes.push_back({state, path});
-    } else {
-      inner.Escape(state);
-    }
-  }
-  void Finish(const PathStats& stats) { inner.Finish(stats); }
-};
+using Recording = RecordingIntersector<EmbreeIntersector>;
 
 // Adds the value of every connection the blind leaves clear to its column of `sum`; the
 // shadow rays go in packets (the answers are Occluded's, ray by ray).
-void TestConnections(const EmbreeIntersector& blind, const std::vector<Connection>& connections,
-                     std::vector<double>& sum) {
+void TestConnections(const EmbreeIntersector& blind,
+                     const std::vector<ReplayConnection>& connections, std::vector<double>& sum) {
   constexpr int kPacket = EmbreeIntersector::kPacketRays;
   Vec3f origins[kPacket], directions[kPacket];
   float distances[kPacket];
@@ -161,7 +48,7 @@ void TestConnections(const EmbreeIntersector& blind, const std::vector<Connectio
   for (size_t first = 0; first < connections.size(); first += kPacket) {
     const int count = static_cast<int>(std::min<size_t>(kPacket, connections.size() - first));
     for (int i = 0; i < count; ++i) {
-      const Connection& k = connections[first + i];
+      const ReplayConnection& k = connections[first + i];
       origins[i] = k.origin;
       directions[i] = k.direction;
       distances[i] = k.distance;
@@ -182,6 +69,29 @@ bool WithinRange(double value, const ParameterRange& range) {
 }
 
 }  // namespace
+
+LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& scene) {
+  const BlindEnvelope envelope = EnvelopeOfBlind(scene.window, *scene.blind, kEnvelopeMargin);
+  LocalEnvelope local;
+  local.center = geometry.ToLocal(envelope.center);
+  for (int k = 0; k < 3; ++k) {
+    const Vec3d a = envelope.axis[k];
+    local.axis[k] = {static_cast<float>(a.x), static_cast<float>(a.y), static_cast<float>(a.z)};
+    local.half[k] = static_cast<float>(envelope.half_extent[k]);
+  }
+  return local;
+}
+
+absl::Status CheckReplayDesign(const BlindSpec& spec, const BlindDesign& design) {
+  if (!design.has_blind || !WithinRange(design.tilt_rad, spec.tilt_rad) ||
+      !WithinRange(design.slat_width_m, spec.slat_width_m) ||
+      !WithinRange(design.slat_spacing_m, spec.slat_spacing_m) ||
+      !WithinRange(design.slat_thickness_m, spec.slat_thickness_m)) {
+    return absl::InvalidArgumentError(
+        "the design lies outside the ranges the indoor paths were recorded for");
+  }
+  return absl::OkStatus();
+}
 
 struct IndoorReplay::Data {
   Scene scene;
@@ -228,14 +138,7 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
   data->met = OutdoorMetCells(geometry, outdoor, data->window, basis);
   data->outdoor_view = {data->outdoor->Intersector(), OutdoorOffset(geometry, outdoor),
                         data->met.data()};
-  const BlindEnvelope envelope = EnvelopeOfBlind(scene.window, *scene.blind, kEnvelopeMargin);
-  LocalEnvelope local;
-  local.center = geometry.ToLocal(envelope.center);
-  for (int k = 0; k < 3; ++k) {
-    const Vec3d a = envelope.axis[k];
-    local.axis[k] = {static_cast<float>(a.x), static_cast<float>(a.y), static_cast<float>(a.z)};
-    local.half[k] = static_cast<float>(envelope.half_extent[k]);
-  }
+  const LocalEnvelope local = LocalEnvelopeOfBlind(geometry, scene);
 
   // Chunks: (sensor, batch, part of the batch), as TraceIndoorCpu
   const int batches = options.batches;
@@ -255,17 +158,17 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
     const uint64_t last = first_in_batch + (part + 1) * size / parts;
     chunk.fixed.assign(data->columns, 0.0);
     chunk.paths = last - first;
-    RecordingIntersector scene_view{embree->Intersector(), local};
+    Recording scene_view{embree->Intersector(), local};
     const TraceSensor& sensor = data->sensors[chunk.sensor];
-    RecordingSink sink{&chunk, &scene_view};
+    RecordingSink<EmbreeIntersector, Chunk> sink{&scene_view, &chunk};
+    using Mode = RecordingMode<EmbreeIntersector, Chunk, OutdoorEmbreeView>;
     for (uint64_t p = first; p < last; ++p) {
-      RecordingMode mode{IndoorMode<RecordingSink, OutdoorEmbreeView>{
-                             sensor.position, sensor.normal, data->window, &data->basis,
-                             settings.max_bounces, &data->outdoor_view, &sink},
-                         &scene_view, &chunk, p};
-      TracePath<RecordingIntersector, RecordingMode, 0>(scene_view, geometry.Surfaces(), settings,
-                                                        PathRandom(options.seed, chunk.sensor, p),
-                                                        mode);
+      Mode mode{{sensor.position, sensor.normal, data->window, &data->basis, settings.max_bounces,
+                 &data->outdoor_view, &sink},
+                &scene_view,
+                &chunk};
+      TracePath<Recording, Mode, 0>(scene_view, geometry.Surfaces(), settings,
+                                    PathRandom(options.seed, chunk.sensor, p), mode);
     }
   });
   for (const Chunk& chunk : data->chunks) data->resumed += chunk.resumes.size();
@@ -277,13 +180,7 @@ absl::StatusOr<IndoorResult> IndoorReplay::Compute(const BlindDesign& design) co
   const auto start = std::chrono::steady_clock::now();
   const Data& d = *data_;
   const BlindSpec& spec = *d.scene.blind;
-  if (!design.has_blind || !WithinRange(design.tilt_rad, spec.tilt_rad) ||
-      !WithinRange(design.slat_width_m, spec.slat_width_m) ||
-      !WithinRange(design.slat_spacing_m, spec.slat_spacing_m) ||
-      !WithinRange(design.slat_thickness_m, spec.slat_thickness_m)) {
-    return absl::InvalidArgumentError(
-        "the design lies outside the ranges the indoor paths were recorded for");
-  }
+  FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(spec, design));
 
   // The room with this blind, and the blind alone, in the recorded frame
   const TriangleMesh full = SelectSide(AssembleMesh(d.scene, design), Side::kIndoor);
@@ -325,8 +222,8 @@ absl::StatusOr<IndoorResult> IndoorReplay::Compute(const BlindDesign& design) co
         IndoorMode<Slot, OutdoorEmbreeView> mode{
             sensor.position,      sensor.normal,   d.window, &d.basis,
             settings.max_bounces, &d.outdoor_view, &slot};
-        for (const Resume& r : chunk.resumes) {
-          PathStats stats{0, r.state.weight, PathEnd::kEscaped, 0, {0, 0, 0, 0, 0, 0}};
+        for (const ReplayResume& r : chunk.resumes) {
+          PathStats stats = ResumedStats(r.state);
           PathState pending[1];
           int pending_count = 0;
           uint32_t interactions = r.state.vertex;

@@ -15,8 +15,17 @@
 
 #include "absl/status/statusor.h"
 #include "core/dc/two_stage.h"
+#include "core/trace/indoor_replay_modes.h"
+#include "core/trace/trace_geometry.h"
 
 namespace fenestra {
+
+// The envelope of the blinds of `scene`'s ranges (with room to spare) in `geometry`'s frame.
+LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& scene);
+
+// InvalidArgument unless `design` has a blind within the ranges of `spec`: a replay is
+// only valid there.
+absl::Status CheckReplayDesign(const BlindSpec& spec, const BlindDesign& design);
 
 class IndoorReplay : public IndoorStages {
  public:

@@ -78,6 +78,11 @@ class PathRandom {
              UniformFloat(bits.v[3])}};
   }
 
+  // The path index the draws belong to.
+  FENESTRA_CPU_GPU uint64_t path() const {
+    return (static_cast<uint64_t>(path_hi_) << 32) | path_lo_;
+  }
+
  private:
   uint32_t key0_, key1_, path_lo_, path_hi_, stream_;
 };

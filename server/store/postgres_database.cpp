@@ -129,7 +129,8 @@ class PostgresSession final : public SqlSession {
       }
       result.rows.emplace_back(std::move(cells));
     }
-    absl::SimpleAtoi(PQcmdTuples(res), &result.changed);
+    // An empty count: a command that changes no rows
+    if (!absl::SimpleAtoi(PQcmdTuples(res), &result.changed)) result.changed = 0;
     return result;
   }
 

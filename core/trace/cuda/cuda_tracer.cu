@@ -11,6 +11,7 @@
 
 #include "core/trace/bvh_intersector.h"
 #include "core/trace/cuda/cuda_tracer.h"
+#include "core/trace/indoor_replay_modes.h"
 #include "core/trace/path.h"
 #include "core/trace/two_stage_modes.h"
 
@@ -149,27 +150,25 @@ __device__ uint64_t NextPath(unsigned long long* next_path) {
   return lanes.shfl(base, 0) + lanes.thread_rank();
 }
 
-// Traces paths first + i of random stream `stream`, for i = 0, 1, ... below last - first as
-// the row's lanes take them, one ray per turn of the loop: a lane whose path ends takes
-// the row's next path at once (path regeneration), so lanes and blocks stay busy until the
-// row runs out of paths rather than wait for the longest path of their warp or the
-// longest list of a thread. No splitting (no weight windows on the GPU): small per-lane
-// state.
-template <class Mode>
-__device__ void TracePaths(const BvhIntersector& scene, const SurfaceTable& surfaces,
-                           const PathSettings& settings, Mode& mode, uint64_t seed, uint32_t stream,
-                           uint64_t first, uint64_t last, unsigned long long* next_path,
-                           ThreadCounts& counts) {
-  PathRandom random(seed, stream, first);
+// Traces the row's items i = 0, 1, ... below `count` as its lanes take them, one ray per
+// turn of the loop: begin(i, &random, &path, &stats) sets up item i (a path from its start,
+// or one resumed); a lane whose path ends takes the row's next item at once (path
+// regeneration), so lanes and blocks stay busy until the row runs out of paths rather than
+// wait for the longest path of their warp or the longest list of a thread. No splitting
+// (no weight windows on the GPU): small per-lane state.
+template <class Scene, class Mode, class Begin>
+__device__ void TraceItems(const Scene& scene, const SurfaceTable& surfaces,
+                           const PathSettings& settings, Mode& mode, uint64_t count,
+                           unsigned long long* next_item, ThreadCounts& counts, Begin begin) {
+  PathRandom random(0, 0, 0);
   PathState path;
   PathStats stats;
   uint32_t interactions = 0;
   for (bool live = false;;) {
     if (!live) {
-      const uint64_t p = first + NextPath(next_path);
-      if (p >= last) return;
-      random = PathRandom(seed, stream, p);
-      path = path_internal::StartPath(scene, random, mode, &stats);
+      const uint64_t i = NextPath(next_item);
+      if (i >= count) return;
+      begin(i, &random, &path, &stats);
       interactions = path.vertex;
       live = true;
     }
@@ -183,6 +182,19 @@ __device__ void TracePaths(const BvhIntersector& scene, const SurfaceTable& surf
       live = false;
     }
   }
+}
+
+// Traces paths first + i of random stream `stream`, i below last - first (TraceItems).
+template <class Scene, class Mode>
+__device__ void TracePaths(const Scene& scene, const SurfaceTable& surfaces,
+                           const PathSettings& settings, Mode& mode, uint64_t seed, uint32_t stream,
+                           uint64_t first, uint64_t last, unsigned long long* next_path,
+                           ThreadCounts& counts) {
+  TraceItems(scene, surfaces, settings, mode, last - first, next_path, counts,
+             [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
+               *random = PathRandom(seed, stream, first + i);
+               *path = path_internal::StartPath(scene, *random, mode, stats);
+             });
 }
 
 // Rows are (sensor, batch): row s * batches + b holds the paths [b N / batches,
@@ -265,6 +277,132 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   counts.Flush(block_counters);
   EndRow(row, columns, sum + (static_cast<size_t>(b) * sensor_count + s) * columns, block_counters,
          counters);
+}
+
+// The records of the indoor replay on the device: per row (sensor, batch; the indoor
+// kernel's rows) a region of `connection_capacity` connections and `resume_capacity`
+// resumes, and how many of each the row made (more than the capacity: they did not fit).
+struct DeviceRecords {
+  ReplayConnection* connections;
+  ReplayResume* resumes;
+  unsigned long long* connection_count;  // per row
+  unsigned long long* resume_count;      // per row
+  uint64_t connection_capacity, resume_capacity;
+};
+
+__device__ uint64_t Smaller(uint64_t a, uint64_t b) { return a < b ? a : b; }
+
+// Takes the records of a path of row `row` (core/trace/indoor_replay_modes.h): fixed light
+// into the block's shared row, connections and resumes into the row's regions.
+struct DeviceRecorder {
+  double* fixed;
+  DeviceRecords records;
+  unsigned int row;
+  FENESTRA_CPU_GPU void AddFixed(int column, double value) {
+#if defined(__CUDA_ARCH__)
+    atomicAdd(&fixed[column], value);
+#endif
+  }
+  FENESTRA_CPU_GPU void AddConnection(const ReplayConnection& c) {
+#if defined(__CUDA_ARCH__)
+    const uint64_t i = atomicAdd(&records.connection_count[row], 1ull);
+    if (i < records.connection_capacity) {
+      records.connections[row * records.connection_capacity + i] = c;
+    }
+#endif
+  }
+  FENESTRA_CPU_GPU void AddResume(const PathState& state, uint64_t path) {
+#if defined(__CUDA_ARCH__)
+    const uint64_t i = atomicAdd(&records.resume_count[row], 1ull);
+    if (i < records.resume_capacity) {
+      records.resumes[row * records.resume_capacity + i] = ReplayResume{state, path};
+    }
+#endif
+  }
+};
+
+// The indoor kernel's paths through the room without the blind, recorded for the replay
+// (CudaTracer::RecordIndoor); the fixed light goes to `sum` in the indoor kernel's layout.
+__global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
+    RecordKernel(BvhIntersector room, LocalEnvelope envelope, SurfaceTable surfaces,
+                 PathSettings settings, OutdoorView<BvhIntersector> outdoor,
+                 const TraceSensor* sensors, int sensor_count, TraceWindow window,
+                 HemisphereBasis basis, uint64_t paths_per_sensor, int batches, uint64_t seed,
+                 DeviceRecords records, double* sum, unsigned long long* counters,
+                 unsigned long long* next_path) {
+  extern __shared__ double row[];  // columns of I
+  __shared__ unsigned long long block_counters[kCounters];
+  __shared__ HemisphereBasis shared_basis;
+  if (threadIdx.x == 0) shared_basis = basis;
+  const int columns = IndoorColumnCount(window, basis);
+  BeginRow(row, columns, block_counters);
+  const int s = static_cast<int>(blockIdx.y) / batches;
+  const int b = static_cast<int>(blockIdx.y) % batches;
+  RecordingIntersector<BvhIntersector> scene{room, envelope};
+  DeviceRecorder recorder{row, records, blockIdx.y};
+  RecordingSink<BvhIntersector, DeviceRecorder> sink{&scene, &recorder};
+  RecordingMode<BvhIntersector, DeviceRecorder, OutdoorView<BvhIntersector>> mode{
+      {sensors[s].position, sensors[s].normal, window, &shared_basis, settings.max_bounces,
+       &outdoor, &sink},
+      &scene,
+      &recorder};
+  ThreadCounts counts;
+  TracePaths(scene, surfaces, settings, mode, seed, s, BatchFirst(paths_per_sensor, batches, b),
+             BatchFirst(paths_per_sensor, batches, b + 1), next_path + blockIdx.y, counts);
+  counts.Flush(block_counters);
+  EndRow(row, columns, sum + (static_cast<size_t>(b) * sensor_count + s) * columns, block_counters,
+         counters);
+}
+
+// One design's indoor sums from the records (CudaTracer::ReplayIndoor): the row's fixed
+// light (first block of the row), its connections the blind leaves clear, and its resumed
+// paths traced on through the room with the blind.
+__global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
+    ReplayKernel(BvhIntersector scene, BvhIntersector blind, SurfaceTable surfaces,
+                 PathSettings settings, OutdoorView<BvhIntersector> outdoor,
+                 const TraceSensor* sensors, int sensor_count, TraceWindow window,
+                 HemisphereBasis basis, int batches, uint64_t seed, DeviceRecords records,
+                 const double* fixed, double* sum, unsigned long long* counters,
+                 unsigned long long* next_item) {
+  extern __shared__ double row[];  // columns of I
+  __shared__ unsigned long long block_counters[kCounters];
+  __shared__ HemisphereBasis shared_basis;
+  if (threadIdx.x == 0) shared_basis = basis;
+  const int columns = IndoorColumnCount(window, basis);
+  BeginRow(row, columns, block_counters);
+  const unsigned int r = blockIdx.y;
+  const int s = static_cast<int>(r) / batches;
+  const int b = static_cast<int>(r) % batches;
+  const size_t offset = (static_cast<size_t>(b) * sensor_count + s) * columns;
+  if (blockIdx.x == 0) {
+    for (int i = threadIdx.x; i < columns; i += blockDim.x) row[i] = fixed[offset + i];
+  }
+  __syncthreads();
+  ThreadCounts counts;
+  const uint64_t connection_count =
+      Smaller(records.connection_count[r], records.connection_capacity);
+  const ReplayConnection* connections = records.connections + r * records.connection_capacity;
+  for (uint64_t i = blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x;
+       i < connection_count; i += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
+    const ReplayConnection c = connections[i];
+    ++counts.values[0];
+    if (!blind.Occluded(c.origin, c.direction, c.distance)) atomicAdd(&row[c.column], c.value);
+  }
+  SharedSink sink{row, nullptr};
+  IndoorMode<SharedSink, OutdoorView<BvhIntersector>> mode{
+      sensors[s].position,  sensors[s].normal, window, &shared_basis,
+      settings.max_bounces, &outdoor,          &sink};
+  const ReplayResume* resumes = records.resumes + r * records.resume_capacity;
+  TraceItems(scene, surfaces, settings, mode,
+             Smaller(records.resume_count[r], records.resume_capacity), next_item + r, counts,
+             [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
+               const ReplayResume resume = resumes[i];
+               *random = PathRandom(seed, static_cast<uint32_t>(s), resume.path);
+               *path = resume.state;
+               *stats = ResumedStats(resume.state);
+             });
+  counts.Flush(block_counters);
+  EndRow(row, columns, sum + offset, block_counters, counters);
 }
 
 // One closest-hit query per thread (CudaTracer::IntersectRays).
@@ -455,6 +593,32 @@ constexpr char kNoAnnualProduct[] = "CUDA tracer: no annual product set";
 
 std::string Error(cudaError_t e) { return std::string("CUDA: ") + cudaGetErrorString(e); }
 
+// Lets `kernel` keep a row of `columns` doubles in shared memory (beside its basis and
+// counters), opting in to more than the default where needed. "" or the error.
+template <class Kernel>
+std::string AllowSharedRow(Kernel kernel, int columns) {
+  const size_t shared = static_cast<size_t>(columns) * sizeof(double);
+  if (shared <= kDefaultShared) return "";
+  int device = 0, limit = 0;
+  if (cudaError_t e = cudaGetDevice(&device); e != cudaSuccess) return Error(e);
+  if (cudaError_t e =
+          cudaDeviceGetAttribute(&limit, cudaDevAttrMaxSharedMemoryPerBlockOptin, device);
+      e != cudaSuccess) {
+    return Error(e);
+  }
+  const size_t available =
+      static_cast<size_t>(limit) - sizeof(HemisphereBasis) - kCounters * sizeof(unsigned long long);
+  if (shared > available) {
+    return "CUDA: " + std::to_string(columns) +
+           " columns of the indoor matrix do not fit the indoor kernel's shared memory (at most " +
+           std::to_string(available / sizeof(double)) +
+           " on this device): use fewer window parts or the 288-cell basis";
+  }
+  const cudaError_t e = cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize,
+                                             static_cast<int>(shared));
+  return e == cudaSuccess ? "" : Error(e);
+}
+
 }  // namespace
 
 struct CudaTracer::Impl {
@@ -479,6 +643,24 @@ struct CudaTracer::Impl {
   DeviceBuffer<unsigned long long> tally_counts, tally_hours;
   DeviceBuffer<double> tally_sums;
   int cells = 0, steps = 0, outdoor_batches = 0;  // cells: columns of I, rows of O_b
+  // The indoor replay: the records, their fixed light, and what they were recorded for;
+  // the blind of the design replayed
+  DeviceBuffer<ReplayConnection> connections;
+  DeviceBuffer<ReplayResume> resumes;
+  DeviceBuffer<unsigned long long> record_counts;  // per row: connections, then resumes
+  DeviceBuffer<double> fixed;
+  DeviceBuffer<TraceSensor> replay_sensors;
+  DeviceBuffer<BvhNode> blind_nodes;
+  DeviceBuffer<BvhTriangle> blind_triangles;
+  struct Recorded {
+    bool valid = false;
+    int sensor_count = 0, batches = 0;
+    uint64_t paths_per_sensor = 0, seed = 0, connection_capacity = 0, resume_capacity = 0;
+    TraceWindow window;
+    HemisphereBasis basis;
+    Vec3f outdoor_offset;
+    PathSettings path;
+  } recorded;
 
   // The indoor stage's paths (CudaTracer::Indoor); the sums stay on the device without
   // host_sum.
@@ -492,6 +674,23 @@ struct CudaTracer::Impl {
   cudaError_t UploadIndoor(const double* host_indoor, int rows);
   cudaError_t FormIlluminance(int rows);
   std::string Tally(int batches, int sensors, const TallyRequest& request);
+  // "" when the annual product pairs with indoor stages of these columns and batches.
+  std::string CheckProduct(const TraceWindow& window, const HemisphereBasis& basis,
+                           int batches) const;
+  // I from the indoor sums in `sum` (each batch's sums over its paths), then its tallies.
+  std::string TallyIndoorSums(int sensor_count, uint64_t paths_per_sensor, int batches,
+                              const TallyRequest& request);
+  // One design's indoor sums from the records (CudaTracer::ReplayIndoor).
+  std::string Replay(const BvhLayout& blind, double* host_sum, CudaCounters* out);
+  DeviceRecords Records() {
+    const size_t rows = static_cast<size_t>(recorded.sensor_count) * recorded.batches;
+    return {connections.get(),
+            resumes.get(),
+            record_counts.get(),
+            record_counts.get() + rows,
+            recorded.connection_capacity,
+            recorded.resume_capacity};
+  }
 
   BvhIntersector Scene() const { return {nodes.get(), triangles.get()}; }
   OutdoorView<BvhIntersector> Outdoor(Vec3f offset) const {
@@ -685,30 +884,7 @@ std::string CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int s
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
   const int cells = IndoorColumnCount(window, basis);
   const size_t shared = static_cast<size_t>(cells) * sizeof(double);
-  if (shared > kDefaultShared) {
-    // Opt in to more shared memory per block, as far as the device allows
-    int device = 0, limit = 0;
-    if (cudaError_t e = cudaGetDevice(&device); e != cudaSuccess) return Error(e);
-    if (cudaError_t e =
-            cudaDeviceGetAttribute(&limit, cudaDevAttrMaxSharedMemoryPerBlockOptin, device);
-        e != cudaSuccess) {
-      return Error(e);
-    }
-    const size_t available = static_cast<size_t>(limit) - sizeof(HemisphereBasis) -
-                             kCounters * sizeof(unsigned long long);
-    if (shared > available) {
-      return "CUDA: " + std::to_string(cells) +
-             " columns of the indoor matrix do not fit the indoor kernel's shared memory (at "
-             "most " +
-             std::to_string(available / sizeof(double)) +
-             " on this device): use fewer window parts or the 288-cell basis";
-    }
-    if (cudaError_t e = cudaFuncSetAttribute(
-            IndoorKernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(shared));
-        e != cudaSuccess) {
-      return Error(e);
-    }
-  }
+  if (std::string error = AllowSharedRow(IndoorKernel, cells); !error.empty()) return error;
   const dim3 grid(d.BlocksPerRow(IndoorKernel, shared, paths_per_sensor / batches + 1, rows), rows);
   return d.Run(
       rows, static_cast<size_t>(batches) * sensor_count * cells, false,
@@ -731,30 +907,163 @@ std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
                             batches, seed, path, sum, counters);
 }
 
+std::string CudaTracer::Impl::CheckProduct(const TraceWindow& window, const HemisphereBasis& basis,
+                                           int batches) const {
+  if (cells == 0) return kNoAnnualProduct;
+  if (cells != IndoorColumnCount(window, basis) || outdoor_batches != batches) {
+    return "CUDA tracer: the annual product has " + std::to_string(cells) + " rows in " +
+           std::to_string(outdoor_batches) + " batches, the indoor stage " +
+           std::to_string(IndoorColumnCount(window, basis)) + " columns in " +
+           std::to_string(batches);
+  }
+  return "";
+}
+
+std::string CudaTracer::Impl::TallyIndoorSums(int sensor_count, uint64_t paths_per_sensor,
+                                              int batches, const TallyRequest& request) {
+  const int rows = batches * sensor_count;
+  cudaError_t e = indoor.Reserve(static_cast<size_t>(rows) * cells);
+  if (e != cudaSuccess) return Error(e);
+  const int threads = 256;
+  const dim3 grid((cells + threads - 1) / threads, rows);
+  BatchMeanKernel<<<grid, threads>>>(sum.get(), sensor_count, cells, paths_per_sensor, batches,
+                                     indoor.get());
+  return Tally(batches, sensor_count, request);
+}
+
 std::string CudaTracer::IndoorAnnualTally(const TraceSensor* sensors, int sensor_count,
                                           const TraceWindow& window, Vec3f outdoor_offset,
                                           const HemisphereBasis& basis, uint64_t paths_per_sensor,
                                           int batches, uint64_t seed, const PathSettings& path,
                                           const TallyRequest& request, CudaCounters* counters) {
   Impl& d = *impl_;
-  if (d.cells == 0) return kNoAnnualProduct;
-  if (d.cells != IndoorColumnCount(window, basis) || d.outdoor_batches != batches) {
-    return "CUDA tracer: the annual product has " + std::to_string(d.cells) + " rows in " +
-           std::to_string(d.outdoor_batches) + " batches, the indoor stage " +
-           std::to_string(IndoorColumnCount(window, basis)) + " columns in " +
-           std::to_string(batches);
-  }
+  if (std::string error = d.CheckProduct(window, basis, batches); !error.empty()) return error;
   std::string error = d.TraceIndoor(sensors, sensor_count, window, outdoor_offset, basis,
                                     paths_per_sensor, batches, seed, path, nullptr, counters);
   if (!error.empty()) return error;
-  const int rows = batches * sensor_count;
-  cudaError_t e = d.indoor.Reserve(static_cast<size_t>(rows) * d.cells);
+  return d.TallyIndoorSums(sensor_count, paths_per_sensor, batches, request);
+}
+
+std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
+                                     int sensor_count, const TraceWindow& window,
+                                     Vec3f outdoor_offset, const HemisphereBasis& basis,
+                                     uint64_t paths_per_sensor, int batches, uint64_t seed,
+                                     const PathSettings& path, size_t max_bytes,
+                                     CudaReplayStats* stats) {
+  Impl& d = *impl_;
+  if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
+  d.recorded.valid = false;
+  cudaError_t e = cudaSetDevice(d.device);
+  if (e == cudaSuccess) e = d.replay_sensors.Upload(sensors, sensor_count);
   if (e != cudaSuccess) return Error(e);
-  const int threads = 256;
-  const dim3 grid((d.cells + threads - 1) / threads, rows);
-  BatchMeanKernel<<<grid, threads>>>(d.sum.get(), sensor_count, d.cells, paths_per_sensor, batches,
-                                     d.indoor.get());
-  return d.Tally(batches, sensor_count, request);
+  const int columns = IndoorColumnCount(window, basis);
+  for (std::string error :
+       {AllowSharedRow(RecordKernel, columns), AllowSharedRow(ReplayKernel, columns)}) {
+    if (!error.empty()) return error;
+  }
+  const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
+  const size_t shared = static_cast<size_t>(columns) * sizeof(double);
+  const uint64_t row_paths = paths_per_sensor / batches + 1;
+  Impl::Recorded& r = d.recorded;
+  r = {false,     sensor_count, batches, paths_per_sensor, seed, 3 * row_paths + 64,
+       row_paths, window,       basis,   outdoor_offset,   path};
+  std::vector<unsigned long long> counts(2 * static_cast<size_t>(rows));
+  CudaCounters counters;
+  // Connections per row are not known in advance: a row that made more than there was room
+  // for is traced again with room for all (the same paths make the same records)
+  for (int attempt = 0;; ++attempt) {
+    const size_t bytes =
+        rows * (r.connection_capacity * sizeof(ReplayConnection) +
+                r.resume_capacity * sizeof(ReplayResume) + 2 * columns * sizeof(double));
+    if (bytes > max_bytes) {
+      return std::string(kReplayTooLarge) + " (" + std::to_string(bytes >> 20) + " MiB, at most " +
+             std::to_string(max_bytes >> 20) + " MiB)";
+    }
+    e = d.connections.Reserve(rows * r.connection_capacity);
+    if (e == cudaSuccess) e = d.resumes.Reserve(rows * r.resume_capacity);
+    if (e == cudaSuccess) e = d.record_counts.Zero(2 * static_cast<size_t>(rows));
+    if (e != cudaSuccess) return Error(e);
+    const DeviceRecords records = d.Records();
+    const dim3 grid(d.BlocksPerRow(RecordKernel, shared, row_paths, rows), rows);
+    std::string error = d.Run(
+        rows, static_cast<size_t>(rows) * columns, false,
+        [&] {
+          RecordKernel<<<grid, kThreads, shared>>>(
+              d.Scene(), envelope, d.Surfaces(), path, d.Outdoor(outdoor_offset),
+              d.replay_sensors.get(), sensor_count, window, basis, paths_per_sensor, batches, seed,
+              records, d.sum.get(), d.counters.get(), d.next_path.get());
+        },
+        nullptr, nullptr, &counters);
+    if (!error.empty()) return error;
+    if (e = d.record_counts.Download(counts.data(), counts.size()); e != cudaSuccess) {
+      return Error(e);
+    }
+    const unsigned long long most = *std::max_element(counts.begin(), counts.begin() + rows);
+    if (most <= r.connection_capacity) break;
+    if (attempt > 0) return "CUDA tracer: the indoor paths' records changed between two traces";
+    r.connection_capacity = most;
+  }
+  e = d.fixed.Reserve(static_cast<size_t>(rows) * columns);
+  if (e == cudaSuccess) {
+    e = cudaMemcpy(d.fixed.get(), d.sum.get(), static_cast<size_t>(rows) * columns * sizeof(double),
+                   cudaMemcpyDeviceToDevice);
+  }
+  if (e != cudaSuccess) return Error(e);
+  r.valid = true;
+  stats->paths = paths_per_sensor * sensor_count;
+  stats->connections = stats->resumes = 0;
+  for (unsigned int i = 0; i < rows; ++i) {
+    stats->connections += counts[i];
+    stats->resumes += counts[rows + i];
+  }
+  stats->rays = counters.rays;
+  stats->kernel_seconds = counters.kernel_seconds;
+  return "";
+}
+
+std::string CudaTracer::Impl::Replay(const BvhLayout& blind, double* host_sum, CudaCounters* out) {
+  Impl& d = *this;
+  if (!d.recorded.valid) return "CUDA tracer: no indoor paths recorded";
+  if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
+  const Recorded& r = d.recorded;
+  cudaError_t e = cudaSetDevice(d.device);
+  if (e == cudaSuccess) e = d.blind_nodes.Upload(blind.nodes.data(), blind.nodes.size());
+  if (e == cudaSuccess) {
+    e = d.blind_triangles.Upload(blind.triangles.data(), blind.triangles.size());
+  }
+  if (e != cudaSuccess) return Error(e);
+  const unsigned int rows = static_cast<unsigned int>(r.sensor_count * r.batches);
+  const int columns = IndoorColumnCount(r.window, r.basis);
+  const size_t shared = static_cast<size_t>(columns) * sizeof(double);
+  const dim3 grid(d.BlocksPerRow(ReplayKernel, shared, r.resume_capacity, rows), rows);
+  const DeviceRecords records = d.Records();
+  const BvhIntersector blind_scene{d.blind_nodes.get(), d.blind_triangles.get()};
+  return d.Run(
+      rows, static_cast<size_t>(rows) * columns, false,
+      [&] {
+        ReplayKernel<<<grid, kThreads, shared>>>(
+            d.Scene(), blind_scene, d.Surfaces(), r.path, d.Outdoor(r.outdoor_offset),
+            d.replay_sensors.get(), r.sensor_count, r.window, r.basis, r.batches, r.seed, records,
+            d.fixed.get(), d.sum.get(), d.counters.get(), d.next_path.get());
+      },
+      host_sum, nullptr, out);
+}
+
+std::string CudaTracer::ReplayIndoor(const BvhLayout& blind, double* sum, CudaCounters* counters) {
+  if (sum == nullptr) return "CUDA tracer: no buffer for the indoor sums";
+  return impl_->Replay(blind, sum, counters);
+}
+
+std::string CudaTracer::ReplayIndoorAnnualTally(const BvhLayout& blind, const TallyRequest& request,
+                                                CudaCounters* counters) {
+  Impl& d = *impl_;
+  const Impl::Recorded& r = d.recorded;
+  if (!r.valid) return "CUDA tracer: no indoor paths recorded";
+  if (std::string error = d.CheckProduct(r.window, r.basis, r.batches); !error.empty()) {
+    return error;
+  }
+  if (std::string error = d.Replay(blind, nullptr, counters); !error.empty()) return error;
+  return d.TallyIndoorSums(r.sensor_count, r.paths_per_sensor, r.batches, request);
 }
 
 std::string CudaTracer::SetAnnualProduct(const double* outdoor, int batches, int cells,

@@ -12,6 +12,7 @@
 
 #include "core/geometry/hemisphere_basis.h"
 #include "core/trace/bvh_layout.h"
+#include "core/trace/indoor_replay_modes.h"
 #include "core/trace/path.h"
 #include "core/trace/two_stage_modes.h"
 
@@ -23,6 +24,19 @@ struct CudaCounters {
   uint64_t ends[6] = {};  // paths by PathEnd
   double kernel_seconds = 0;
 };
+
+// What CudaTracer::RecordIndoor recorded.
+struct CudaReplayStats {
+  uint64_t paths = 0;        // indoor paths traced
+  uint64_t resumes = 0;      // of them, those that reached the envelope
+  uint64_t connections = 0;  // next-event connections that passed the room
+  uint64_t rays = 0;         // closest-hit queries
+  double kernel_seconds = 0;
+};
+
+// How RecordIndoor's error begins where the records would take more than allowed.
+inline constexpr char kReplayTooLarge[] =
+    "CUDA tracer: the indoor paths' records would take more device memory than allowed";
 
 // Name of CUDA device `device`, or "" when there is none.
 std::string CudaDeviceName(int device = 0);
@@ -111,6 +125,24 @@ class CudaTracer {
                                 const HemisphereBasis& basis, uint64_t paths_per_sensor,
                                 int batches, uint64_t seed, const PathSettings& path,
                                 const TallyRequest& request, CudaCounters* counters);
+
+  // The indoor replay (core/dc/indoor_replay.h) on the device. RecordIndoor traces the
+  // indoor paths, as Indoor, through the uploaded scene (the room without the blind) up to
+  // where they could first meet a blind inside `envelope`, and keeps on the device what no
+  // blind changes, the next-event connections that cleared the room and the paths that
+  // reached the envelope (an error, and nothing recorded, where that would take more than
+  // `max_bytes`). ReplayIndoor then gives Indoor's sums for the uploaded scene, a room with
+  // a blind inside the envelope in the recorded frame, from the records: the connections
+  // tested against `blind` (the blind alone), the paths that reached the envelope traced
+  // on. ReplayIndoorAnnualTally is IndoorAnnualTally from the records. "" or the error.
+  std::string RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
+                           int sensor_count, const TraceWindow& window, Vec3f outdoor_offset,
+                           const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
+                           uint64_t seed, const PathSettings& path, size_t max_bytes,
+                           CudaReplayStats* stats);
+  std::string ReplayIndoor(const BvhLayout& blind, double* sum, CudaCounters* counters);
+  std::string ReplayIndoorAnnualTally(const BvhLayout& blind, const TallyRequest& request,
+                                      CudaCounters* counters);
 
   std::string device_name() const;
 

@@ -6,7 +6,10 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "core/dc/dc_backend.h"
 #include "core/dc/one_stage.h"
@@ -276,6 +279,50 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
       EXPECT_GT((*a)[0].any_above, 0);
     }
   }
+}
+
+// The GPU's replay is the full trace: for designs across the ranges, I equals the indoor
+// stage traced in full on the GPU with the same seed, up to the order of the sums (and the
+// rare path whose float rounding differs between the two scenes' BVHs).
+TEST(CudaBackendTest, ReplayEqualsTheIndoorStage) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const Scene scene = LoadExample("city_office");
+  IndoorOptions options;
+  options.paths_per_sensor = 20'000;
+  options.parts = {2, 2};
+  absl::StatusOr<std::unique_ptr<IndoorStages>> stages = gpu->MakeIndoorStages(scene, options);
+  ASSERT_TRUE(stages.ok()) << stages.status();
+  for (const auto& values :
+       std::vector<std::map<std::string, double>>{{{"alpha", 0.0}, {"spacing", 0.0}},
+                                                  {{"alpha", 0.8}, {"width", 0.05}},
+                                                  {{"alpha", 1.5707963}, {"spacing", 0.1}},
+                                                  {{"alpha", 0.3}, {"thickness", 0.02}}}) {
+    absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, values);
+    ASSERT_TRUE(design.ok()) << design.status();
+    absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(scene, *design, options, gpu.get());
+    absl::StatusOr<IndoorResult> replayed = (*stages)->Compute(*design);
+    ASSERT_TRUE(traced.ok() && replayed.ok()) << traced.status() << replayed.status();
+    EXPECT_NE(replayed->backend.find("replay"), std::string::npos) << replayed->backend;
+    ASSERT_EQ(traced->coefficients.cols(), replayed->coefficients.cols());
+    for (Eigen::Index s = 0; s < traced->coefficients.rows(); ++s) {
+      const double a = traced->coefficients.row(s).sum(), b = replayed->coefficients.row(s).sum();
+      EXPECT_NEAR(b, a, 1e-6 * a) << "sensor " << s + 1;
+    }
+    const double difference = (traced->coefficients - replayed->coefficients).cwiseAbs().sum();
+    EXPECT_LT(difference, 1e-6 * traced->coefficients.sum());
+    std::printf(
+        "replay against full trace: %.3g relative L1 difference; replay %.2f ms, full %.2f ms\n",
+        difference / traced->coefficients.sum(), 1e3 * replayed->wall_seconds,
+        1e3 * traced->wall_seconds);
+    EXPECT_GT(replayed->coefficients.rightCols(kDaylightBins).sum(), 0);
+    EXPECT_GT(replayed->coefficients.leftCols(replayed->coefficients.cols() - kDaylightBins).sum(),
+              0);
+  }
+  // Outside the recorded ranges the replay would be wrong, so it refuses
+  BlindDesign wide = DefaultDesign(scene);
+  wide.slat_width_m = 0.3;
+  EXPECT_EQ((*stages)->Compute(wide).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
 // The stiff scenes of the one-stage tests, on the GPU: finite, and matching the CPU.

@@ -1,0 +1,154 @@
+#pragma once
+
+// What the indoor replay (core/dc/indoor_replay.h) shares between the CPU and the GPU:
+// the blind's envelope in the trace frame, the records of the design-independent part of a
+// path, and the intersector, sink and mode that make them while IndoorMode traces.
+//
+// A Recorder takes the records:
+//   void AddFixed(int column, double value);        light no blind can change
+//   void AddConnection(const ReplayConnection& c);   counts unless the blind blocks c
+//   void AddResume(const PathState& state, uint64_t path);  traced on per design
+#include <cmath>
+#include <cstdint>
+
+#include "core/common/cpu_gpu.h"
+#include "core/trace/path.h"
+#include "core/trace/two_stage_modes.h"
+
+namespace fenestra {
+
+// The envelope of every blind of a design space (EnvelopeOfBlind), in the trace frame.
+struct LocalEnvelope {
+  Vec3f center;
+  Vec3f axis[3];  // unit
+  float half[3];
+
+  // Whether origin + t direction, t in [0, extent], enters the box.
+  FENESTRA_CPU_GPU bool Touches(Vec3f origin, Vec3f direction, float extent) const {
+    float t0 = 0.0f, t1 = extent;
+    const Vec3f o = origin - center;
+    for (int k = 0; k < 3; ++k) {
+      const float ok = Dot(o, axis[k]), vk = Dot(direction, axis[k]);
+      if (vk == 0.0f) {
+        if (fabsf(ok) > half[k]) return false;
+        continue;
+      }
+      float ta = (-half[k] - ok) / vk, tb = (half[k] - ok) / vk;
+      if (ta > tb) {
+        const float t = ta;
+        ta = tb;
+        tb = t;
+      }
+      t0 = t0 < ta ? ta : t0;
+      t1 = tb < t1 ? tb : t1;
+      if (t0 > t1) return false;
+    }
+    return true;
+  }
+};
+
+// A next-event estimate whose shadow ray cleared the room: it counts unless the blind
+// blocks the ray.
+struct ReplayConnection {
+  Vec3f origin;
+  Vec3f direction;
+  float distance;
+  int32_t column;  // of I: a window cell or a direct column (decided when recorded)
+  double value;
+};
+
+// A path that reached the envelope: its state there and its index (random stream).
+struct ReplayResume {
+  PathState state;
+  uint64_t path;
+};
+
+// The room without the blind, stopping rays that touch the envelope and remembering the
+// shadow ray a next-event estimate is about to score. One per thread: it holds the state
+// of the path being traced.
+template <class Room>
+struct RecordingIntersector {
+  Room room;
+  LocalEnvelope envelope;
+  mutable bool diverged = false;
+  mutable bool connection_pending = false;
+  mutable ReplayConnection pending{};
+
+  FENESTRA_CPU_GPU bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const {
+    connection_pending = false;
+    const bool found = room.Intersect(origin, direction, hit);
+    const Vec3f to_hit = found ? hit->position - origin : Vec3f{0, 0, 0};
+    const float extent = found ? sqrtf(Dot(to_hit, to_hit)) : INFINITY;
+    if (envelope.Touches(origin, direction, extent)) {
+      diverged = true;
+      return false;
+    }
+    return found;
+  }
+
+  FENESTRA_CPU_GPU bool Occluded(Vec3f origin, Vec3f direction, float distance) const {
+    const bool blocked = room.Occluded(origin, direction, distance);
+    connection_pending = !blocked;
+    pending = ReplayConnection{origin, direction, distance, 0, 0.0};
+    return blocked;
+  }
+};
+
+// IndoorMode's contributions: a scored shadow ray becomes a connection, anything else (a
+// bounce ray leaving through the window without touching the envelope) is fixed. The
+// column (direct or window cell) depends on the outdoor surfaces only, so it is decided
+// here, once for every design.
+template <class Room, class Recorder>
+struct RecordingSink {
+  const RecordingIntersector<Room>* scene;
+  Recorder* recorder;
+
+  FENESTRA_CPU_GPU void Add(int column, double value) {
+    if (scene->connection_pending) {
+      ReplayConnection c = scene->pending;
+      c.column = column;
+      c.value = value;
+      recorder->AddConnection(c);
+      scene->connection_pending = false;
+    } else {
+      recorder->AddFixed(column, value);
+    }
+  }
+};
+
+// IndoorMode through the recording intersector; a ray stopped at the envelope is kept to
+// be resumed, not scored.
+template <class Room, class Recorder, class Outdoor>
+struct RecordingMode {
+  IndoorMode<RecordingSink<Room, Recorder>, Outdoor> inner;
+  const RecordingIntersector<Room>* scene;
+  Recorder* recorder;
+  uint64_t path = 0;
+
+  template <class Intersector>
+  FENESTRA_CPU_GPU PathState Start(const Intersector& s, const PathRandom& random) {
+    path = random.path();
+    return inner.Start(s, random);
+  }
+  template <class Intersector>
+  FENESTRA_CPU_GPU void AtReflection(const Intersector& s, const PathState& state,
+                                     const ReflectionVertex& vertex, const PathRandom& random) {
+    inner.AtReflection(s, state, vertex, random);
+  }
+  FENESTRA_CPU_GPU void Escape(const PathState& state) {
+    if (scene->diverged) {
+      scene->diverged = false;
+      recorder->AddResume(state, path);
+    } else {
+      inner.Escape(state);
+    }
+  }
+  FENESTRA_CPU_GPU void Finish(const PathStats& stats) { inner.Finish(stats); }
+};
+
+// A resumed path's stats before its first step.
+FENESTRA_CPU_GPU inline PathStats ResumedStats(const PathState& state) {
+  return PathStats{0, state.weight, PathEnd::kEscaped, 0, {0, 0, 0, 0, 0, 0}};
+}
+
+}  // namespace fenestra
