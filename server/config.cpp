@@ -116,9 +116,15 @@ absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
   }
   if (config.worker_threads() < 0) return invalid("worker_threads", "must be >= 0");
   if (config.backend().empty()) config.set_backend("auto");
-  // By default one worker per visible GPU (jobs spread over the GPUs), else one
+  if (config.gpus().empty()) config.set_gpus("all");
+  absl::StatusOr<std::vector<int>> gpus = ParseGpuList(config.gpus(), CudaDevices());
+  if (!gpus.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("configuration: ", gpus.status().message()));
+  }
+  // By default one worker per GPU (jobs spread over the GPUs), else one
   if (config.worker_threads() == 0) {
-    config.set_worker_threads(config.backend() == "cpu" ? 1 : std::max(1, CudaDevices()));
+    config.set_worker_threads(
+        config.backend() == "cpu" ? 1 : std::max(1, static_cast<int>(gpus->size())));
   }
   if (config.backend() != "cpu" && config.backend() != "cuda" && config.backend() != "auto") {
     return invalid("backend",

@@ -11,6 +11,7 @@
 #include <ctime>
 
 #include "absl/strings/str_cat.h"
+#include "core/dc/dc_backend.h"
 #include "server/log_safe.h"
 #include "server/store/postgres_database.h"
 #include "server/store/sqlite_database.h"
@@ -133,6 +134,11 @@ absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& co
       "outdoor cache: {} matrices loaded from {}", loaded->loaded,
       d->data_dir_ ? d->data_dir_->outdoor_dir().string() : d->store_->database().Describe());
 
+  // The GPUs jobs take in turn (ResolveConfig checked the list)
+  absl::StatusOr<std::vector<int>> gpus = ParseGpuList(config.gpus(), CudaDevices());
+  if (!gpus.ok()) return gpus.status();
+  UseCudaDevices(*gpus);
+
   // Sites and jobs, and what they keep from being dropped
   d->heavy_ = std::make_unique<HeavyRequests>(limits.max_concurrent_heavy_requests());
   d->auth_ = std::make_unique<Authenticator>(config.auth(), *d->store_);
@@ -195,8 +201,8 @@ absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& co
         absl::StrCat("cannot listen on ", config.listen_address(), " (address in use?)"));
   }
   spdlog::info(
-      "fenestrad listening on {} (port {}, {}, auth {}), {}, {} worker thread(s), backend {}, "
-      "replica {}",
+      "fenestrad listening on {} (port {}, {}, auth {}), {}, {} worker thread(s), backend {} "
+      "(gpus {}), replica {}",
       config.listen_address(), d->port_,
       config.tls_cert_file().empty()        ? "plaintext"
       : config.tls_client_ca_file().empty() ? "TLS"
@@ -207,7 +213,7 @@ absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& co
                          " of ", d->data_dir_->max_bytes(), " bytes used)")
           : absl::StrCat("store ", store->database().Describe(), " (lease ", config.lease_seconds(),
                          " s)"),
-      config.worker_threads(), config.backend(), d->scheduler_->replica());
+      config.worker_threads(), config.backend(), config.gpus(), d->scheduler_->replica());
   d->server_->GetHealthCheckService()->SetServingStatus(kReadinessService, true);
   if (d->health_) d->health_->SetReady(true);
   return d;

@@ -34,7 +34,7 @@ namespace fs = std::filesystem;
 // The settings given as flags; 0, empty or false = not given.
 struct Flags {
   std::string config_file, port_file;
-  std::string listen, health_listen, data_dir, backend, log_level, auth, store;
+  std::string listen, health_listen, data_dir, backend, gpus, log_level, auth, store;
   std::string tls_cert, tls_key, tls_client_ca;
   bool allow_plaintext = false, check_config = false;
   int workers = 0, max_sensors = 0, max_evaluations = 0, max_message_bytes = 0, max_queued_jobs = 0,
@@ -64,6 +64,8 @@ void AddDaemonFlags(CLI::App& app, Flags& f) {
       "--workers", f.workers,
       "jobs and site computations run at once [one per GPU, at least 1; 1 with --backend cpu]");
   app.add_option("--backend", f.backend, "tracer for jobs that name none: cpu, cuda, auto [auto]");
+  app.add_option("--gpus", f.gpus,
+                 "GPUs jobs take in turn: all, or device indices such as 0,2 [all]");
   app.add_option("--tls-cert", f.tls_cert, "TLS certificate chain (PEM) [none: plaintext]");
   app.add_option("--tls-key", f.tls_key, "TLS private key (PEM) of --tls-cert");
   app.add_option("--tls-client-ca", f.tls_client_ca,
@@ -115,6 +117,7 @@ void ApplyFlags(const Flags& f, fenestra::v1::DaemonConfig& config) {
   if (f.outdoor_memory_bytes) config.set_outdoor_memory_bytes(f.outdoor_memory_bytes);
   if (f.workers) config.set_worker_threads(f.workers);
   if (!f.backend.empty()) config.set_backend(f.backend);
+  if (!f.gpus.empty()) config.set_gpus(f.gpus);
   if (!f.log_level.empty()) config.set_log_level(f.log_level);
   if (f.grace) config.set_shutdown_grace_seconds(f.grace);
   if (!f.tls_cert.empty()) config.set_tls_cert_file(f.tls_cert);

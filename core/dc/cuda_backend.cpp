@@ -1,7 +1,6 @@
 // The CUDA backend: the same path code and random streams as the Embree backend, traced
 // on a GPU over a BVH built on the host (core/trace/bvh.h). Weight windows (the one-stage
 // importance map) are CPU-only: on the GPU the one-stage method uses plain roulette.
-#include <atomic>
 #include <chrono>
 #include <memory>
 
@@ -590,12 +589,6 @@ class CudaBackend : public DcBackend {
 
 int CudaDevices() { return CudaDeviceCount(); }
 
-int NextCudaDevice() {
-  static std::atomic<int> next{0};
-  const int count = CudaDeviceCount();
-  return count > 0 ? next.fetch_add(1) % count : 0;
-}
-
 absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int device) {
   std::string error;
   std::unique_ptr<CudaTracer> tracer = CudaTracer::Create(device, &error);
@@ -606,8 +599,6 @@ absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int device) {
 #else
 
 int CudaDevices() { return 0; }
-
-int NextCudaDevice() { return 0; }
 
 absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int) {
   return absl::UnavailableError(

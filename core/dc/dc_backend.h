@@ -171,7 +171,15 @@ absl::StatusOr<std::unique_ptr<DcBackend>> MakeBackend(const std::string& name);
 // Number of CUDA devices this build and host can use (0 without CUDA).
 int CudaDevices();
 
-// The GPU the next backend should use: the visible GPUs in turn.
+// The GPU the next backend should use: the GPUs of UseCudaDevices (by default every visible
+// one) in turn.
 int NextCudaDevice();
+
+// The GPUs of a "gpus" setting: "all" (every one of the `visible`) or comma-separated device
+// indices, each below `visible` and listed once. InvalidArgument otherwise.
+absl::StatusOr<std::vector<int>> ParseGpuList(const std::string& gpus, int visible);
+
+// Makes NextCudaDevice take `devices` in turn (process-wide); empty: every visible GPU.
+void UseCudaDevices(std::vector<int> devices);
 
 }  // namespace fenestra

@@ -1184,7 +1184,9 @@ absl::StatusOr<std::vector<Store::Quarantined>> Store::QuarantineUnparsable() {
           return absl::OkStatus();
         },
         /*durable=*/false, /*write=*/false));
-    for (auto& [number, record] : bad) {
+    for (auto& entry : bad) {
+      const auto& number = entry.first;
+      auto& record = entry.second;
       if (absl::Status s = Transact([&](SqlSession& session) {
             return QuarantineRow(session, table, number, record.reason);
           });

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "core/dc/dc_backend.h"
+
 namespace fenestra {
 namespace {
 
@@ -18,6 +20,7 @@ TEST(ConfigTest, EmptyConfigGetsTheDocumentedDefaults) {
   EXPECT_EQ(config->data_dir(), "fenestra-data");
   EXPECT_EQ(config->worker_threads(), 1);
   EXPECT_EQ(config->backend(), "auto");
+  EXPECT_EQ(config->gpus(), "all");
   EXPECT_EQ(config->shutdown_grace_seconds(), 10);
   EXPECT_EQ(config->limits().max_outdoor_paths(), 1'000'000'000);
   EXPECT_EQ(config->limits().max_indoor_paths_per_sensor(), 10'000'000);
@@ -38,6 +41,25 @@ TEST(ConfigTest, EmptyConfigGetsTheDocumentedDefaults) {
   EXPECT_TRUE(config->store().empty());  // SQLite in data_dir
   EXPECT_EQ(config->lease_seconds(), 10);
   EXPECT_EQ(config->outdoor_memory_bytes(), int64_t{1} << 30);
+}
+
+TEST(ConfigTest, GpusAreAllOrDistinctVisibleDeviceIndices) {
+  EXPECT_THAT(*ParseGpuList("all", 4), ::testing::ElementsAre(0, 1, 2, 3));
+  EXPECT_TRUE(ParseGpuList("all", 0)->empty());
+  EXPECT_THAT(*ParseGpuList("2,0", 4), ::testing::ElementsAre(2, 0));
+  EXPECT_THAT(*ParseGpuList(" 1", 4), ::testing::ElementsAre(1));
+  EXPECT_THAT(ParseGpuList("4", 4).status().message(), HasSubstr("there is no GPU 4 (4 visible"));
+  EXPECT_THAT(ParseGpuList("0", 0).status().message(), HasSubstr("none visible"));
+  EXPECT_THAT(ParseGpuList("1,1", 4).status().message(), HasSubstr("GPU 1 is listed twice"));
+  EXPECT_THAT(ParseGpuList("-1", 4).status().message(), HasSubstr("there is no GPU -1"));
+  for (const char* bad : {"", "0,", "one", "0;1", "1.5", "all,0"}) {
+    EXPECT_THAT(ParseGpuList(bad, 4).status().message(), HasSubstr("gpus must be")) << bad;
+  }
+  // Through the configuration: a device this host lacks is refused at start
+  v1::DaemonConfig config;
+  config.set_gpus("99");
+  EXPECT_THAT(ResolveConfig(config).status().message(),
+              HasSubstr("configuration: gpus: there is no GPU 99"));
 }
 
 TEST(ConfigTest, TheStoreIsSqliteOrAPostgresqlUrlAndLeasesAreNotTooShort) {
