@@ -82,15 +82,23 @@ struct DeviceTallies {
   CudaTracer::TallyRequest request;
 };
 
+// What the tracer holds one of at a time (an annual product's matrices, an outdoor scene,
+// indoor records), shared by the objects of one backend that use it: each object takes a
+// generation when made, and uploads its own again when another one replaced it.
+struct TracerSlot {
+  int current = 0;  // the generation the tracer holds
+  int made = 0;     // generations handed out
+};
+
 // The annual product on the GPU. The tracer holds one product's O_b and S at a time; a
 // product whose matrices were replaced by a later one uploads its own again.
 class CudaAnnualProduct : public AnnualProduct {
  public:
-  CudaAnnualProduct(CudaTracer* tracer, int* current, int generation,
-                    const std::vector<Matrix>& outdoor, Matrix sky)
+  CudaAnnualProduct(CudaTracer* tracer, TracerSlot* slot, const std::vector<Matrix>& outdoor,
+                    Matrix sky)
       : tracer_(tracer),
-        current_(current),
-        generation_(generation),
+        slot_(slot),
+        generation_(++slot->made),
         batches_(static_cast<int>(outdoor.size())),
         rows_(outdoor[0].rows()),
         sky_(std::move(sky)) {
@@ -131,11 +139,11 @@ class CudaAnnualProduct : public AnnualProduct {
 
   // Makes the tracer hold this product's O_b and S (a later product may have replaced them).
   absl::Status Hold() {
-    if (*current_ == generation_) return absl::OkStatus();
+    if (slot_->current == generation_) return absl::OkStatus();
     FENESTRA_RETURN_IF_ERROR(
         Check(tracer_->SetAnnualProduct(outdoor_.data(), batches_, static_cast<int>(rows_),
                                         sky_.data(), static_cast<int>(sky_.cols()))));
-    *current_ = generation_;
+    slot_->current = generation_;
     return absl::OkStatus();
   }
 
@@ -143,7 +151,7 @@ class CudaAnnualProduct : public AnnualProduct {
 
  private:
   CudaTracer* tracer_;
-  int* current_;
+  TracerSlot* slot_;
   int generation_;
   int batches_;
   Eigen::Index rows_;  // of each O_b
@@ -151,16 +159,10 @@ class CudaAnnualProduct : public AnnualProduct {
   Matrix sky_;
 };
 
-// The tracer's outdoor scene, shared by the indoor stages of one backend: each holder
-// uploads its own when another one replaced it.
-struct OutdoorSlot {
-  int current = 0;  // the holder whose scene the tracer holds
-  int made = 0;     // holders made
-};
-
+// The tracer's outdoor scene (TracerSlot), shared by the indoor stages of one backend.
 class OutdoorHolder {
  public:
-  static absl::StatusOr<OutdoorHolder> Make(CudaTracer* tracer, OutdoorSlot* slot,
+  static absl::StatusOr<OutdoorHolder> Make(CudaTracer* tracer, TracerSlot* slot,
                                             const Scene& scene, WindowParts parts,
                                             const HemisphereBasis& basis) {
     FENESTRA_ASSIGN_OR_RETURN(geometry, OutdoorViewGeometry(scene));
@@ -179,7 +181,7 @@ class OutdoorHolder {
   const TraceGeometry& geometry() const { return geometry_; }
 
  private:
-  OutdoorHolder(CudaTracer* tracer, OutdoorSlot* slot, TraceGeometry geometry, BvhLayout bvh,
+  OutdoorHolder(CudaTracer* tracer, TracerSlot* slot, TraceGeometry geometry, BvhLayout bvh,
                 std::vector<uint8_t> met)
       : tracer_(tracer),
         slot_(slot),
@@ -188,17 +190,11 @@ class OutdoorHolder {
         bvh_(std::move(bvh)),
         met_(std::move(met)) {}
   CudaTracer* tracer_;
-  OutdoorSlot* slot_;
+  TracerSlot* slot_;
   int generation_;
   TraceGeometry geometry_;
   BvhLayout bvh_;
   std::vector<uint8_t> met_;
-};
-
-// The tracer's indoor records, shared like its outdoor scene.
-struct ReplaySlot {
-  int current = 0;  // the replay whose records the tracer holds
-  int made = 0;     // replays made
 };
 
 // The indoor replay on the GPU (core/dc/indoor_replay.h): the room without the blind is
@@ -208,7 +204,7 @@ class CudaReplay {
  public:
   // Records `scene`'s indoor paths; Unavailable where the records would take more than
   // kMaxReplayBytes, InvalidArgument for a scene without a blind.
-  static absl::StatusOr<std::unique_ptr<CudaReplay>> Make(CudaTracer* tracer, ReplaySlot* slot,
+  static absl::StatusOr<std::unique_ptr<CudaReplay>> Make(CudaTracer* tracer, TracerSlot* slot,
                                                           const Scene& scene,
                                                           const IndoorOptions& options,
                                                           const HemisphereBasis& basis,
@@ -249,7 +245,7 @@ class CudaReplay {
   const CudaReplayStats& stats() const { return stats_; }
 
  private:
-  CudaReplay(CudaTracer* tracer, ReplaySlot* slot, const Scene& scene, const IndoorOptions& options,
+  CudaReplay(CudaTracer* tracer, TracerSlot* slot, const Scene& scene, const IndoorOptions& options,
              const HemisphereBasis& basis, OutdoorHolder* outdoor, TraceGeometry room)
       : tracer_(tracer),
         slot_(slot),
@@ -279,7 +275,7 @@ class CudaReplay {
   }
 
   CudaTracer* tracer_;
-  ReplaySlot* slot_;
+  TracerSlot* slot_;
   int generation_;
   Scene scene_;
   IndoorOptions options_;
@@ -401,8 +397,7 @@ class CudaBackend : public DcBackend {
   absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(
       const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
     FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor_batches, sky));
-    return std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_current_,
-                                               ++annual_generation_, outdoor_batches, sky);
+    return std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_slot_, outdoor_batches, sky);
   }
 
   absl::StatusOr<std::unique_ptr<DesignTallies>> MakeDesignTallies(
@@ -420,8 +415,8 @@ class CudaBackend : public DcBackend {
     }
     FENESTRA_ASSIGN_OR_RETURN(outdoor, MakeOutdoor(scene, options.parts, basis));
     FENESTRA_ASSIGN_OR_RETURN(replay, MaybeReplay(scene, options, basis, outdoor.get()));
-    auto product = std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_current_,
-                                                       ++annual_generation_, outdoor_batches, sky);
+    auto product =
+        std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_slot_, outdoor_batches, sky);
     return std::make_unique<CudaDesignTallies>(tracer_.get(), scene, options, basis,
                                                std::move(outdoor), std::move(replay),
                                                std::move(product));
@@ -579,10 +574,9 @@ class CudaBackend : public DcBackend {
   }
 
   std::unique_ptr<CudaTracer> tracer_;
-  int annual_generation_ = 0;  // products made
-  int annual_current_ = 0;     // the product whose matrices the tracer holds
-  OutdoorSlot outdoor_slot_;
-  ReplaySlot replay_slot_;
+  TracerSlot annual_slot_;   // annual products' O_b and S
+  TracerSlot outdoor_slot_;  // outdoor scenes
+  TracerSlot replay_slot_;   // indoor records
 };
 
 }  // namespace

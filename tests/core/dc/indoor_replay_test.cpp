@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/core/dc/replay_checks.h"
 #include "tests/example_scene.h"
 
 namespace fenestra {
@@ -25,28 +26,14 @@ TEST(IndoorReplayTest, EqualsTheIndoorStage) {
   std::printf("paths resumed per design: %.1f%%\n", 100 * (*replay)->ResumedFraction());
   EXPECT_GT((*replay)->ResumedFraction(), 0.0);
   EXPECT_LT((*replay)->ResumedFraction(), 0.5);
-  for (const auto& values :
-       std::vector<std::map<std::string, double>>{{{"alpha", 0.0}, {"spacing", 0.0}},
-                                                  {{"alpha", 0.8}, {"width", 0.05}},
-                                                  {{"alpha", 1.5707963}, {"spacing", 0.1}},
-                                                  {{"alpha", 0.3}, {"thickness", 0.02}}}) {
+  for (const auto& values : ReplayCheckDesigns()) {
     absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, values);
     ASSERT_TRUE(design.ok()) << design.status();
     absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(scene, *design, options);
     absl::StatusOr<IndoorResult> replayed = (*replay)->Compute(*design);
     ASSERT_TRUE(traced.ok() && replayed.ok()) << replayed.status();
     ASSERT_EQ(traced->coefficients.cols(), replayed->coefficients.cols());
-    for (Eigen::Index s = 0; s < traced->coefficients.rows(); ++s) {
-      const double a = traced->coefficients.row(s).sum(), b = replayed->coefficients.row(s).sum();
-      EXPECT_NEAR(b, a, 1e-6 * a) << "sensor " << s + 1;
-    }
-    const double difference = (traced->coefficients - replayed->coefficients).cwiseAbs().sum();
-    EXPECT_LT(difference, 1e-6 * traced->coefficients.sum());
-    // Both kinds of column carry light: the direct ones (the view reaches the sky) and the
-    // window cells (it meets the street's buildings)
-    EXPECT_GT(replayed->coefficients.rightCols(kDaylightBins).sum(), 0);
-    EXPECT_GT(replayed->coefficients.leftCols(replayed->coefficients.cols() - kDaylightBins).sum(),
-              0);
+    ExpectReplayEqualsTrace(*traced, *replayed);
   }
   // Outside the recorded ranges the replay would be wrong, so it refuses
   BlindDesign wide = DefaultDesign(scene);
