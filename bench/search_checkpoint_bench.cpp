@@ -97,7 +97,7 @@ int Main() {
       const double u = (x[i] - variables[i].lower) / (variables[i].upper - variables[i].lower);
       sum += (u - 0.4) * (u - 0.4);
     }
-    return Evaluation{-sum, 0.01, {}};
+    return Evaluation{-sum, 0.01, false, {}};
   };
   const VnsResult search = ValueOrExit(RunVns(variables, bowl, options));
   t0 = Clock::now();

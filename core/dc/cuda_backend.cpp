@@ -266,8 +266,8 @@ class CudaReplay {
         LocalEnvelopeOfBlind(room_, scene_), sensors.data(), static_cast<int>(sensors.size()),
         LocalWindow(room_, scene_.window, options_.parts),
         OutdoorOffset(room_, outdoor_->geometry()), basis_,
-        static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, options_.seed, path,
-        kMaxReplayBytes, &stats_);
+        static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, kDesignParts,
+        options_.seed, path, kMaxReplayBytes, &stats_);
     if (absl::StartsWith(error, kReplayTooLarge)) return absl::UnavailableError(error);
     FENESTRA_RETURN_IF_ERROR(Check(error));
     slot_->current = generation_;
@@ -349,16 +349,29 @@ class CudaDesignTallies : public DesignTallies {
         product_(std::move(product)) {}
 
   absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
-                                               const MetricOptions& options) override {
+                                               const MetricOptions& options, int parts) override {
+    FENESTRA_RETURN_IF_ERROR(CheckDesignParts(0, parts));
     DeviceTallies tallies(options_.batches, static_cast<int>(scene_.sensors.size()), options);
     CudaCounters counters;
     if (replay_ != nullptr) {
-      BvhLayout blind;
-      FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind));
+      // The parts not traced yet: all of them for another design, or where the sums of the
+      // earlier ones are gone
+      const bool goes_on = held_parts_ > 0 && design == held_design_ && parts > held_parts_ &&
+                           tracer_->ReplayedParts() == held_parts_;
+      if (!goes_on) {
+        held_parts_ = 0;
+        FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind_));
+      }
       FENESTRA_RETURN_IF_ERROR(product_->Hold());
-      FENESTRA_RETURN_IF_ERROR(
-          Check(tracer_->ReplayIndoorAnnualTally(blind, tallies.request, &counters)));
+      FENESTRA_RETURN_IF_ERROR(Check(
+          tracer_->ReplayIndoorAnnualTally(blind_, held_parts_, parts, tallies.request, &counters)));
+      rays_ += counters.rays;
+      held_design_ = design;
+      held_parts_ = parts;
       return tallies.Versions(product_->steps());
+    }
+    if (parts != kDesignParts) {
+      return absl::UnimplementedError("designs traced in full are traced in one round");
     }
     FENESTRA_ASSIGN_OR_RETURN(
         geometry, PrepareTraceGeometry(SelectSide(AssembleMesh(scene_, design), Side::kIndoor),
@@ -375,8 +388,12 @@ class CudaDesignTallies : public DesignTallies {
         OutdoorOffset(geometry, outdoor_->geometry()), basis_,
         static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, options_.seed, path,
         tallies.request, &counters)));
+    rays_ += counters.rays;
     return tallies.Versions(product_->steps());
   }
+  bool TracesInParts() const override { return replay_ != nullptr; }
+  bool RoundsPay() const override { return false; }
+  uint64_t RaysTraced() const override { return rays_; }
 
  private:
   CudaTracer* tracer_;
@@ -386,6 +403,11 @@ class CudaDesignTallies : public DesignTallies {
   std::unique_ptr<OutdoorHolder> outdoor_;
   std::unique_ptr<CudaReplay> replay_;
   std::unique_ptr<CudaAnnualProduct> product_;
+  // The replay's last design, its blind, and how many parts of it the tracer holds
+  BlindDesign held_design_;
+  BvhLayout blind_;
+  int held_parts_ = 0;
+  uint64_t rays_ = 0;
 };
 
 class CudaBackend : public DcBackend {

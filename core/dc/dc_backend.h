@@ -93,15 +93,33 @@ class AnnualProduct {
                                                        const MetricOptions& options);
 };
 
+// A design's indoor paths in rounds (racing, core/optimize/racing.h): each batch's paths
+// split into this many parts of consecutive path indices, and a round traces more parts of
+// every batch, so that the batches stay equal, independent and paired with the outdoor ones.
+inline constexpr int kDesignParts = 8;
+
 // A search's objective per design (core/optimize/job.cpp): the design's indoor stage, then
 // the tallies of its E = (I O) S for the annual metrics (AnnualProduct::Tally). Made by
 // DcBackend::MakeDesignTallies.
 class DesignTallies {
  public:
   virtual ~DesignTallies() = default;
-  // InvalidArgument for a design the stage refuses (IndoorStages::Compute).
+  // The tallies of `design`'s paths in parts [0, parts) of every batch (kDesignParts: all of
+  // them). A call for the design of the call before, with more parts, traces only the parts
+  // it adds. InvalidArgument for a design the stage refuses (IndoorStages::Compute), or
+  // parts outside [1, kDesignParts]; Unimplemented for fewer than kDesignParts where
+  // !TracesInParts().
   virtual absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
-                                                       const MetricOptions& options) = 0;
+                                                       const MetricOptions& options,
+                                                       int parts = kDesignParts) = 0;
+  // Whether Tally takes fewer than kDesignParts (the replays do; full traces do not).
+  virtual bool TracesInParts() const { return false; }
+  // Whether tracing in rounds pays: a round's annual product and tallies cost little beside
+  // the paths it may save (on the CPU). On the GPU they cost more than the paths racing
+  // saves on the reference jobs (bench/results/racing_h100.txt).
+  virtual bool RoundsPay() const { return TracesInParts(); }
+  // Closest-hit queries of every Tally so far.
+  virtual uint64_t RaysTraced() const = 0;
 };
 
 // A tracer backend for daylight coefficients (Embree on the CPU, CUDA on a GPU), chosen at

@@ -144,7 +144,7 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
   const int batches = options.batches;
   const uint64_t paths = static_cast<uint64_t>(options.paths_per_sensor);
   data->batch_paths = BatchSizes(paths, batches);
-  const uint64_t parts = 8;
+  const uint64_t parts = kDesignParts;
   data->chunks.resize(data->sensors.size() * batches * parts);
   const PathSettings settings = IndoorPathSettings(options);
   ParallelFor(data->chunks.size(), ResolveThreadCount(options.threads), [&](uint64_t c) {
@@ -178,9 +178,21 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
 
 absl::StatusOr<IndoorResult> IndoorReplay::Compute(const BlindDesign& design) const {
   const auto start = std::chrono::steady_clock::now();
+  FENESTRA_ASSIGN_OR_RETURN(tally, TraceParts(design, 0, kDesignParts));
+  IndoorResult result = IndoorResultFromTally(tally, data_->options);
+  result.triangles = SelectSide(AssembleMesh(data_->scene, design), Side::kIndoor).TriangleCount();
+  result.backend = "embree-cpu (replay)";
+  result.wall_seconds = Seconds(start);
+  return result;
+}
+
+absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, int first,
+                                                     int last) const {
+  const auto start = std::chrono::steady_clock::now();
   const Data& d = *data_;
   const BlindSpec& spec = *d.scene.blind;
   FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(spec, design));
+  FENESTRA_RETURN_IF_ERROR(CheckDesignParts(first, last));
 
   // The room with this blind, and the blind alone, in the recorded frame
   const TriangleMesh full = SelectSide(AssembleMesh(d.scene, design), Side::kIndoor);
@@ -208,13 +220,21 @@ absl::StatusOr<IndoorResult> IndoorReplay::Compute(const BlindDesign& design) co
   tally.columns = d.columns;
   tally.batches = d.options.batches;
   tally.paths_per_sensor = static_cast<uint64_t>(d.options.paths_per_sensor);
-  tally.batch_paths = d.batch_paths;
+  tally.batch_paths.assign(tally.batches, 0);
   tally.threads = ResolveThreadCount(d.options.threads);
   tally.sum.assign(static_cast<size_t>(tally.batches) * tally.sensors * tally.columns, 0.0);
+  // The chunks of parts [first, last) of every (sensor, batch), in the order Record made them
+  const uint64_t span = static_cast<uint64_t>(last - first);
+  const auto chunk_of = [&](uint64_t i) -> const Chunk& {
+    return d.chunks[(i / span) * kDesignParts + first + i % span];
+  };
+  for (uint64_t i = 0; i < span * tally.batches; ++i) {
+    tally.batch_paths[chunk_of(i).batch] += chunk_of(i).paths;  // sensor 0's chunks
+  }
   TraceChunksCpu<Slot>(
-      d.chunks.size(), tally.threads,
-      [&](uint64_t c, Slot& slot) {
-        const Chunk& chunk = d.chunks[c];
+      span * tally.batches * tally.sensors, tally.threads,
+      [&](uint64_t i, Slot& slot) {
+        const Chunk& chunk = chunk_of(i);
         slot.sum = chunk.fixed;
         TestConnections(blind_view, chunk.connections, slot.sum);
         slot.counters.rays += chunk.connections.size();
@@ -233,19 +253,16 @@ absl::StatusOr<IndoorResult> IndoorReplay::Compute(const BlindDesign& design) co
           slot.counters.Add(stats);
         }
       },
-      [&](uint64_t c, const Slot& slot) {
-        const Chunk& chunk = d.chunks[c];
+      [&](uint64_t i, const Slot& slot) {
+        const Chunk& chunk = chunk_of(i);
         double* row = &tally.sum[(static_cast<size_t>(chunk.batch) * tally.sensors + chunk.sensor) *
                                  tally.columns];
         for (int k = 0; k < tally.columns; ++k) row[k] += slot.sum[k];
         tally.counters.Add(slot.counters);
       });
-  tally.trace_seconds = tally.wall_seconds = Seconds(traced);
-  IndoorResult result = IndoorResultFromTally(tally, d.options);
-  result.triangles = full.TriangleCount();
-  result.backend = "embree-cpu (replay)";
-  result.wall_seconds = Seconds(start);
-  return result;
+  tally.trace_seconds = Seconds(traced);
+  tally.wall_seconds = Seconds(start);
+  return tally;
 }
 
 double IndoorReplay::ResumedFraction() const {

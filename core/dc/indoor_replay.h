@@ -42,6 +42,9 @@ class IndoorReplay : public IndoorStages {
   // I for `design`, whose values must lie within the scene's ranges (InvalidArgument
   // otherwise). rays_traced counts the rays traced for this design.
   absl::StatusOr<IndoorResult> Compute(const BlindDesign& design) const override;
+  absl::StatusOr<IndoorTally> TraceParts(const BlindDesign& design, int first,
+                                         int last) const override;
+  bool TracesInParts() const override { return true; }
 
   // Of all paths, the fraction that reached the envelope and is traced per design.
   double ResumedFraction() const;

@@ -310,6 +310,30 @@ absl::StatusOr<TwoStageResult> CombineStages(const IndoorResult& indoor,
   return result;
 }
 
+absl::StatusOr<IndoorTally> IndoorStages::TraceParts(const BlindDesign&, int, int) const {
+  return absl::UnimplementedError("these indoor stages trace every design in full");
+}
+
+absl::Status CheckDesignParts(int first, int last) {
+  if (0 <= first && first < last && last <= kDesignParts) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrCat("parts [", first, ", ", last,
+                                                 ") of a design's paths, of ", kDesignParts));
+}
+
+absl::Status AddIndoorTally(const IndoorTally& more, IndoorTally& into) {
+  if (more.sensors != into.sensors || more.columns != into.columns ||
+      more.batches != into.batches || more.sum.size() != into.sum.size() ||
+      more.batch_paths.size() != into.batch_paths.size()) {
+    return absl::InvalidArgumentError("indoor sums of different sensors, columns or batches");
+  }
+  for (size_t i = 0; i < into.sum.size(); ++i) into.sum[i] += more.sum[i];
+  for (size_t b = 0; b < into.batch_paths.size(); ++b) into.batch_paths[b] += more.batch_paths[b];
+  into.counters.Add(more.counters);
+  into.wall_seconds += more.wall_seconds;
+  into.trace_seconds += more.trace_seconds;
+  return absl::OkStatus();
+}
+
 namespace {
 
 // Every design traced in full by the backend.
@@ -327,20 +351,48 @@ class TracedIndoorStages : public IndoorStages {
   DcBackend* backend_;
 };
 
-// The indoor stage, then the annual product's tallies.
+// The indoor stage, then the annual product's tallies; in parts where the stages trace so.
 class StagedDesignTallies : public DesignTallies {
  public:
-  StagedDesignTallies(std::unique_ptr<IndoorStages> stages, std::unique_ptr<AnnualProduct> product)
-      : stages_(std::move(stages)), product_(std::move(product)) {}
+  StagedDesignTallies(std::unique_ptr<IndoorStages> stages, std::unique_ptr<AnnualProduct> product,
+                      const IndoorOptions& options)
+      : stages_(std::move(stages)), product_(std::move(product)), options_(options) {}
+
   absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
-                                               const MetricOptions& options) override {
-    FENESTRA_ASSIGN_OR_RETURN(indoor, stages_->Compute(design));
-    return product_->Tally(indoor.batches, options);
+                                               const MetricOptions& options, int parts) override {
+    FENESTRA_RETURN_IF_ERROR(CheckDesignParts(0, parts));
+    if (!stages_->TracesInParts()) {
+      if (parts != kDesignParts) return stages_->TraceParts(design, 0, parts).status();
+      FENESTRA_ASSIGN_OR_RETURN(indoor, stages_->Compute(design));
+      rays_ += indoor.rays_traced;
+      return product_->Tally(indoor.batches, options);
+    }
+    // The parts not traced yet: all of them for another design
+    const bool goes_on = held_parts_ > 0 && design == held_design_ && parts > held_parts_;
+    held_parts_ = goes_on ? held_parts_ : 0;
+    FENESTRA_ASSIGN_OR_RETURN(more, stages_->TraceParts(design, held_parts_, parts));
+    rays_ += more.counters.rays;
+    if (goes_on) {
+      FENESTRA_RETURN_IF_ERROR(AddIndoorTally(more, held_));
+    } else {
+      held_ = std::move(more);
+    }
+    held_design_ = design;
+    held_parts_ = parts;
+    return product_->Tally(IndoorResultFromTally(held_, options_).batches, options);
   }
+  bool TracesInParts() const override { return stages_->TracesInParts(); }
+  uint64_t RaysTraced() const override { return rays_; }
 
  private:
   std::unique_ptr<IndoorStages> stages_;
   std::unique_ptr<AnnualProduct> product_;
+  IndoorOptions options_;
+  // The sums of the design of the last call, over its first held_parts_ parts
+  IndoorTally held_;
+  BlindDesign held_design_;
+  int held_parts_ = 0;
+  uint64_t rays_ = 0;
 };
 
 }  // namespace
@@ -350,7 +402,7 @@ absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::MakeDesignTallies(
     const Matrix& sky) {
   FENESTRA_ASSIGN_OR_RETURN(stages, MakeIndoorStages(scene, options));
   FENESTRA_ASSIGN_OR_RETURN(product, MakeAnnualProduct(outdoor_batches, sky));
-  return std::make_unique<StagedDesignTallies>(std::move(stages), std::move(product));
+  return std::make_unique<StagedDesignTallies>(std::move(stages), std::move(product), options);
 }
 
 absl::StatusOr<std::unique_ptr<IndoorStages>> DcBackend::MakeIndoorStages(

@@ -172,7 +172,21 @@ class IndoorStages {
   // I for `design`. A design outside the blind's ranges may be refused (InvalidArgument):
   // the replay is only valid within them.
   virtual absl::StatusOr<IndoorResult> Compute(const BlindDesign& design) const = 0;
+  // The sums of `design`'s paths in parts [first, last) of every batch (kDesignParts in
+  // dc_backend.h), batch_paths the paths they hold; with those of the other parts added
+  // (AddIndoorTally), IndoorResultFromTally gives Compute's I. InvalidArgument as Compute or
+  // for parts outside 0 <= first < last <= kDesignParts; Unimplemented unless TracesInParts().
+  virtual absl::StatusOr<IndoorTally> TraceParts(const BlindDesign& design, int first,
+                                                 int last) const;
+  virtual bool TracesInParts() const { return false; }
 };
+
+// Adds the sums, path counts and counters of `more` (other parts of the same batches) to
+// `into`. InvalidArgument where their sensors, columns or batches differ.
+absl::Status AddIndoorTally(const IndoorTally& more, IndoorTally& into);
+
+// InvalidArgument unless 0 <= first < last <= kDesignParts.
+absl::Status CheckDesignParts(int first, int last);
 
 // For the indoor stage's tracers: the basis `options` ask for, or InvalidArgument for bad
 // options; their per-path settings; I from the sums of a trace.

@@ -46,6 +46,7 @@ struct BlindSpec {
 struct BlindDesign {
   bool has_blind = false;
   double tilt_rad = 0, slat_width_m = 0, slat_spacing_m = 0, slat_thickness_m = 0;
+  bool operator==(const BlindDesign&) const = default;
 };
 
 // How the generator laid out the slats.

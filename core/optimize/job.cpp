@@ -25,6 +25,7 @@
 #include "core/optimize/final_check.h"
 #include "core/optimize/hourly_illuminance.h"
 #include "core/optimize/metric_objective.h"
+#include "core/optimize/racing.h"
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
 #include "core/sky/sky_matrix.h"
@@ -89,6 +90,7 @@ v1::Evaluation ToProto(const PreparedJob& job, const VnsRecord& record,
   e.set_improved(record.improved);
   e.set_neighborhood(record.neighborhood);
   e.set_elapsed_seconds(search_start_seconds + record.elapsed_seconds);
+  e.set_raced_out(record.evaluation.partial);
   return e;
 }
 
@@ -334,6 +336,7 @@ absl::StatusOr<VnsResult> ResumedSearch(const std::string& job_hash,
     }
     record.evaluation.value = e.value().value();
     record.evaluation.standard_error = e.value().standard_error();
+    record.evaluation.partial = e.raced_out();
     record.evaluation_seconds = e.seconds();
     record.elapsed_seconds = e.elapsed_seconds() - search_start;
     record.cached = e.cached();
@@ -384,6 +387,32 @@ IndoorOptions JobIndoorOptions(const PreparedJob& job) {
   return options;
 }
 
+// What racing did, into `result`.
+void AddRacing(const Racer& racer, v1::JobResult& result) {
+  const RacingStats& stats = racer.stats();
+  const RacingSettings& settings = racer.settings();
+  v1::Racing& out = *result.mutable_racing();
+  for (const int parts : settings.rounds) {
+    out.add_round_fractions(static_cast<double>(parts) / kDesignParts);
+  }
+  out.set_standard_errors(settings.standard_errors);
+  out.set_candidates(stats.candidates);
+  for (const int n : stats.rejected) out.add_raced_out(n);
+  if (stats.parts_in_full > 0) {
+    out.set_paths_fraction(static_cast<double>(stats.parts_traced) /
+                           static_cast<double>(stats.parts_in_full));
+  }
+  out.set_rays_traced(stats.rays_traced);
+  if (stats.parts_traced > 0) {
+    out.set_rays_saved(static_cast<uint64_t>(
+        static_cast<double>(stats.rays_traced) / static_cast<double>(stats.parts_traced) *
+        static_cast<double>(std::max<int64_t>(0, stats.parts_in_full - stats.parts_traced))));
+  }
+  out.set_audited(stats.rejected_audited);
+  out.set_audited_would_improve(stats.rejected_would_improve);
+  out.set_audited_better_beyond_error(stats.rejected_better_beyond_error);
+}
+
 // The search into `result`: the best design and its value and metrics, every step (moved
 // from `checkpoint`, which holds them in the job's terms), the counts and why it stopped.
 void AddSearch(const SearchSettings& settings, const VnsResult& search,
@@ -401,18 +430,31 @@ void AddSearch(const SearchSettings& settings, const VnsResult& search,
 }
 
 // The job's search from the start or from `so_far`, keeping `checkpoint` (that of `so_far`,
-// else new) up to date after each step and handing it out with the progress.
+// else new) up to date after each step and handing it out with the progress; `racer`
+// evaluates the designs and learns of each new incumbent.
 absl::StatusOr<VnsResult> RunJobSearch(const PreparedJob& job, const SearchSettings& search,
-                                       const ObjectiveFunction& objective,
-                                       const JobCallbacks& callbacks, const JobClock& clock,
-                                       const VnsResult* so_far, v1::SearchCheckpoint& checkpoint) {
+                                       Racer& racer, const JobCallbacks& callbacks,
+                                       const JobClock& clock, const VnsResult* so_far,
+                                       v1::SearchCheckpoint& checkpoint) {
   // When the search started, on the job's clock
   const double search_start = clock.Seconds() - (so_far ? so_far->elapsed_seconds : 0);
+  if (so_far != nullptr) {
+    for (auto step = so_far->history.rbegin(); step != so_far->history.rend(); ++step) {
+      if (!step->improved) continue;
+      racer.SetIncumbent(DesignAt(job, step->x), step->evaluation, false);
+      break;
+    }
+  }
+  const ObjectiveFunction objective = [&](const std::vector<double>& x) {
+    return racer.Evaluate(DesignAt(job, x));
+  };
   VnsCallbacks vns_callbacks;
   vns_callbacks.cancelled = callbacks.cancelled;
   vns_callbacks.checkpoint = [&](const VnsResult& state) {
     const VnsRecord& step = state.history.back();
-    *checkpoint.add_history() = ToProto(job, step, search_start);
+    v1::Evaluation& e = *checkpoint.add_history() = ToProto(job, step, search_start);
+    if (!step.cached) e.set_paths_fraction(racer.LastPathsFraction());
+    if (step.improved) racer.SetIncumbent(DesignAt(job, step.x), step.evaluation, !step.cached);
     if (step.improved) {
       if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&step.evaluation.payload)) {
         *checkpoint.mutable_best_metrics() = ToProto(*metrics);
@@ -610,7 +652,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
     result.mutable_timings()->set_outdoor_seconds(computed.wall_seconds);
   }
 
-  // The objective: indoor stage with the same random streams for every design
+  // The designs' indoor stage, with the same random streams for every design
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
   const IndoorOptions indoor_options = JobIndoorOptions(job);
   if (!(outdoor->parts == indoor_options.parts)) {
@@ -631,19 +673,24 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   const Scene ranged = WithJobRanges(job.scene, spec);
   FENESTRA_ASSIGN_OR_RETURN(design_tallies, backend->MakeDesignTallies(ranged, indoor_options,
                                                                        outdoor->batches, lit_sky));
-  const ObjectiveFunction objective =
-      [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
-    FENESTRA_ASSIGN_OR_RETURN(tallies, design_tallies->Tally(DesignAt(job, x), metric_options));
-    FENESTRA_ASSIGN_OR_RETURN(
-        metrics, AnnualMetricsFromTallies(tallies, setting.analysed_hours, metric_options));
-    return MetricEvaluation(std::move(metrics), setting.metric);
-  };
+  Racer racer({.tallies = design_tallies.get(),
+               .options = metric_options,
+               .analysed_hours = setting.analysed_hours,
+               .metric = setting.metric,
+               .objective = search_settings.options.objective,
+               .racing = {.rounds = {spec.sampling().racing_rounds().begin(),
+                                     spec.sampling().racing_rounds().end()},
+                          .standard_errors = spec.sampling().racing_standard_errors()},
+               .enabled = spec.sampling().has_racing() ? spec.sampling().racing()
+                                                       : design_tallies->RoundsPay(),
+               .audit = spec.sampling().racing_audit()});
 
   // The search
   if (callbacks.stage) callbacks.stage("search");
   FENESTRA_ASSIGN_OR_RETURN(search,
-                            RunJobSearch(job, search_settings, objective, callbacks, clock,
+                            RunJobSearch(job, search_settings, racer, callbacks, clock,
                                          from.so_far ? &*from.so_far : nullptr, checkpoint));
+  if (racer.Races()) AddRacing(racer, result);
 
   // The best design's hourly illuminance, for reports and other tools
   design_tallies.reset();  // the search's paths are no longer needed

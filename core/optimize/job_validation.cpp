@@ -15,6 +15,7 @@
 #include "core/metrics/occupancy.h"
 #include "core/optimize/design_variables.h"
 #include "core/optimize/job.h"
+#include "core/optimize/racing.h"
 #include "core/optimize/vns.h"
 #include "core/trace/path.h"
 #include "core/trace/room_check.h"
@@ -216,6 +217,29 @@ absl::Status CheckRoomAtEveryDesign(const PreparedJob& prepared) {
   return CheckRoom(ranged);
 }
 
+// Racing's settings in `s`, their defaults filled in (RacingSettings).
+absl::Status ResolveRacing(v1::Sampling& s) {
+  const RacingSettings defaults;
+  if (s.racing_standard_errors() == 0) s.set_racing_standard_errors(defaults.standard_errors);
+  if (!(s.racing_standard_errors() >= kMinRacingStandardErrors &&
+        s.racing_standard_errors() <= kMaxRacingStandardErrors)) {
+    return Invalid("sampling.racing_standard_errors",
+                   absl::StrCat("must be in [", kMinRacingStandardErrors, ", ",
+                                kMaxRacingStandardErrors, "] (0 = the default)"));
+  }
+  if (s.racing_rounds().empty()) {
+    for (const int parts : defaults.rounds) s.add_racing_rounds(parts);
+  }
+  for (int r = 0; r < s.racing_rounds_size(); ++r) {
+    const int parts = s.racing_rounds(r);
+    if (parts < 1 || parts >= kDesignParts || (r > 0 && parts <= s.racing_rounds(r - 1))) {
+      return Invalid("sampling.racing_rounds",
+                     absl::StrCat("must increase, each from 1 to ", kDesignParts - 1));
+    }
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
@@ -229,6 +253,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   if (s.backend().empty()) s.set_backend("auto");
   if (s.batches() == 0) s.set_batches(kDefaultBatches);
   if (!s.has_final_check()) s.set_final_check(kFinalCheckByDefault);
+  FENESTRA_RETURN_IF_ERROR(ResolveRacing(s));
   if (s.basis_cells() != 288 && s.basis_cells() != 1152) {
     return Invalid("sampling.basis_cells", "must be 288 or 1152");
   }

@@ -76,18 +76,6 @@ absl::Status CheckInputs(std::span<const DesignVariable> variables, const VnsOpt
   return absl::OkStatus();
 }
 
-double Score(const Objective& objective, double value) {
-  switch (objective.sense) {
-    case ObjectiveSense::kMaximize:
-      return value;
-    case ObjectiveSense::kMinimize:
-      return -value;
-    case ObjectiveSense::kTarget:
-      return -std::abs(value - objective.target);
-  }
-  return value;
-}
-
 // Brings a moved coordinate back into the box, then onto the variable's grid.
 double Constrain(const DesignVariable& v, double x, BoundaryRule rule) {
   const double width = v.upper - v.lower;
@@ -226,7 +214,7 @@ void Search::Record(VnsRecord record) {
         std::max(options_.min_improvement,
                  options_.min_improvement_standard_errors *
                      std::hypot(record.evaluation.standard_error, best.evaluation.standard_error));
-    record.improved = record.score > best.score + margin;
+    record.improved = !record.evaluation.partial && record.score > best.score + margin;
     consecutive_hits_ = record.cached ? consecutive_hits_ + 1 : 0;
     if (record.improved) {
       ++state_.improvements;
@@ -306,7 +294,8 @@ absl::Status Search::Replay(const VnsResult& so_far) {
     if (done.cached) {
       const Evaluation& earlier = state_.history[hit->second].evaluation;
       if (done.evaluation.value != earlier.value ||
-          done.evaluation.standard_error != earlier.standard_error) {
+          done.evaluation.standard_error != earlier.standard_error ||
+          done.evaluation.partial != earlier.partial) {
         return differs("a cache hit with another value than its design's evaluation");
       }
     }
@@ -352,6 +341,18 @@ absl::StatusOr<VnsResult> Search::Run() {
 }
 
 }  // namespace
+
+double Score(const Objective& objective, double value) {
+  switch (objective.sense) {
+    case ObjectiveSense::kMaximize:
+      return value;
+    case ObjectiveSense::kMinimize:
+      return -value;
+    case ObjectiveSense::kTarget:
+      return -std::abs(value - objective.target);
+  }
+  return value;
+}
 
 std::vector<Neighborhood> DefaultNeighborhoods() {
   return {{1, 0.02}, {1, 0.1}, {2, 0.1}, {2, 0.3}, {Neighborhood::kAllVariables, 0.5}};

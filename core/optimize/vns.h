@@ -101,7 +101,10 @@ struct VnsOptions {
 struct Evaluation {
   double value = 0;           // the metric, e.g. UDI [%]
   double standard_error = 0;  // its Monte Carlo standard error, same units
-  std::any payload;           // anything the caller wants back (e.g. all metrics)
+  // Evaluated only far enough to know the design is worse than the incumbent (racing,
+  // core/optimize/racing.h): such an evaluation never becomes the incumbent.
+  bool partial = false;
+  std::any payload;  // anything the caller wants back (e.g. all metrics)
 };
 
 // Evaluates one design (one coordinate per variable, fixed ones included). An error status
@@ -141,6 +144,9 @@ enum class StopReason {
   kNoFreeVariables,
   kSpaceExhausted,
 };
+
+// What the search maximizes for `value`: value, -value or -|value - target|.
+double Score(const Objective& objective, double value);
 
 // Stable snake_case names: "evaluation_budget", "time_budget", "all_neighborhoods_failed",
 // "target_reached", "cancelled", "no_free_variables", "space_exhausted".

@@ -354,14 +354,21 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
          counters);
 }
 
-// One design's indoor sums from the records (CudaTracer::ReplayIndoor): the row's fixed
-// light (first block of the row), its connections the blind leaves clear, and its resumed
-// paths traced on through the room with the blind.
+// The parts of the batches a replay traces (CudaTracer::ReplayIndoor): the records hold
+// each batch's paths in `parts` parts; a replay traces parts [first, last).
+struct ReplayParts {
+  int batches, parts, first, last;
+};
+
+// One design's indoor sums from the records (CudaTracer::ReplayIndoor), one row per (sensor,
+// batch) over the parts traced: their fixed light (first block of the row), their
+// connections the blind leaves clear, and their resumed paths traced on through the room
+// with the blind.
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     ReplayKernel(BvhIntersector scene, BvhIntersector blind, SurfaceTable surfaces,
                  PathSettings settings, OutdoorView<BvhIntersector> outdoor,
                  const TraceSensor* sensors, int sensor_count, TraceWindow window,
-                 HemisphereBasis basis, int batches, uint64_t seed, DeviceRecords records,
+                 HemisphereBasis basis, ReplayParts parts, uint64_t seed, DeviceRecords records,
                  const double* fixed, double* sum, unsigned long long* counters,
                  unsigned long long* next_item) {
   extern __shared__ double row[];  // columns of I
@@ -370,33 +377,53 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   if (threadIdx.x == 0) shared_basis = basis;
   const int columns = IndoorColumnCount(window, basis);
   BeginRow(row, columns, block_counters);
-  const unsigned int r = blockIdx.y;
-  const int s = static_cast<int>(r) / batches;
-  const int b = static_cast<int>(r) % batches;
+  const int s = static_cast<int>(blockIdx.y) / parts.batches;
+  const int b = static_cast<int>(blockIdx.y) % parts.batches;
   const size_t offset = (static_cast<size_t>(b) * sensor_count + s) * columns;
+  // The record rows of the parts, as RecordIndoor made them: (sensor, batch x parts + part)
+  const unsigned int first_row =
+      static_cast<unsigned int>((s * parts.batches + b) * parts.parts + parts.first);
+  const int count = parts.last - parts.first;
   if (blockIdx.x == 0) {
-    for (int i = threadIdx.x; i < columns; i += blockDim.x) row[i] = fixed[offset + i];
+    for (int i = threadIdx.x; i < columns; i += blockDim.x) {
+      double light = 0;
+      for (int p = 0; p < count; ++p) {
+        const int sub_batch = b * parts.parts + parts.first + p;
+        light += fixed[(static_cast<size_t>(sub_batch) * sensor_count + s) * columns + i];
+      }
+      row[i] = light;
+    }
   }
   __syncthreads();
   ThreadCounts counts;
-  const uint64_t connection_count =
-      Smaller(records.connection_count[r], records.connection_capacity);
-  const ReplayConnection* connections = records.connections + r * records.connection_capacity;
-  for (uint64_t i = blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x;
-       i < connection_count; i += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
-    const ReplayConnection c = connections[i];
-    ++counts.values[0];
-    if (!blind.Occluded(c.origin, c.direction, c.distance)) atomicAdd(&row[c.column], c.value);
+  uint64_t resume_count = 0;
+  for (int p = 0; p < count; ++p) {
+    const unsigned int r = first_row + p;
+    const uint64_t connection_count =
+        Smaller(records.connection_count[r], records.connection_capacity);
+    const ReplayConnection* connections = records.connections + r * records.connection_capacity;
+    for (uint64_t i = blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x;
+         i < connection_count; i += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
+      const ReplayConnection c = connections[i];
+      ++counts.values[0];
+      if (!blind.Occluded(c.origin, c.direction, c.distance)) atomicAdd(&row[c.column], c.value);
+    }
+    resume_count += Smaller(records.resume_count[r], records.resume_capacity);
   }
   SharedSink sink{row, nullptr};
   IndoorMode<SharedSink, OutdoorView<BvhIntersector>> mode{
       sensors[s].position,  sensors[s].normal, window, &shared_basis,
       settings.max_bounces, &outdoor,          &sink};
-  const ReplayResume* resumes = records.resumes + r * records.resume_capacity;
-  TraceItems(scene, surfaces, settings, mode,
-             Smaller(records.resume_count[r], records.resume_capacity), next_item + r, counts,
+  TraceItems(scene, surfaces, settings, mode, resume_count, next_item + blockIdx.y, counts,
              [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
-               const ReplayResume resume = resumes[i];
+               // Item i of the parts' resumes, one part after the other
+               unsigned int r = first_row;
+               for (uint64_t n; i >= (n = Smaller(records.resume_count[r],
+                                                  records.resume_capacity));
+                    ++r) {
+                 i -= n;
+               }
+               const ReplayResume resume = records.resumes[r * records.resume_capacity + i];
                *random = PathRandom(seed, static_cast<uint32_t>(s), resume.path);
                *path = resume.state;
                *stats = ResumedStats(resume.state);
@@ -467,16 +494,18 @@ void Multiply(const double* a, const double* b, double* c, int m, int k, int n) 
   MultiplyKernel<<<grid, block>>>(a, b, c, m, k, n);
 }
 
-// I from the indoor kernel's sums: row (b, s) divided by batch b's paths, as the host
-// divides them (IndoorResultFromTally).
+// I from the indoor kernel's sums: row (b, s) divided by the paths of batch b's first
+// `traced` of `parts` parts, as the host divides them (IndoorResultFromTally).
 __global__ void BatchMeanKernel(const double* sum, int sensors, int cells,
-                                uint64_t paths_per_sensor, int batches, double* indoor) {
+                                uint64_t paths_per_sensor, int batches, int parts, int traced,
+                                double* indoor) {
   const int cell = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
   if (cell >= cells) return;
   const int row = static_cast<int>(blockIdx.y);
-  const uint64_t b = static_cast<uint64_t>(row / sensors);
-  const uint64_t paths =
-      BatchFirst(paths_per_sensor, batches, b + 1) - BatchFirst(paths_per_sensor, batches, b);
+  const uint64_t first_part = static_cast<uint64_t>(row / sensors) * parts;
+  const int all_parts = batches * parts;
+  const uint64_t paths = BatchFirst(paths_per_sensor, all_parts, first_part + traced) -
+                         BatchFirst(paths_per_sensor, all_parts, first_part);
   const size_t k = static_cast<size_t>(row) * cells + cell;
   indoor[k] = __ddiv_rn(sum[k], static_cast<double>(paths));
 }
@@ -654,7 +683,7 @@ struct CudaTracer::Impl {
   DeviceBuffer<BvhTriangle> blind_triangles;
   struct Recorded {
     bool valid = false;
-    int sensor_count = 0, batches = 0;
+    int sensor_count = 0, batches = 0, parts = 0;  // rows: sensors x batches x parts
     uint64_t paths_per_sensor = 0, seed = 0, connection_capacity = 0, resume_capacity = 0;
     TraceWindow window;
     HemisphereBasis basis;
@@ -678,12 +707,18 @@ struct CudaTracer::Impl {
   std::string CheckProduct(const TraceWindow& window, const HemisphereBasis& basis,
                            int batches) const;
   // I from the indoor sums in `sum` (each batch's sums over its paths), then its tallies.
+  // Over the first `traced` of each batch's `parts` parts.
   std::string TallyIndoorSums(int sensor_count, uint64_t paths_per_sensor, int batches,
-                              const TallyRequest& request);
-  // One design's indoor sums from the records (CudaTracer::ReplayIndoor).
-  std::string Replay(const BvhLayout& blind, double* host_sum, CudaCounters* out);
+                              const TallyRequest& request, int parts = 1, int traced = 1);
+  // One design's indoor sums of parts [first, last) from the records
+  // (CudaTracer::ReplayIndoor), added to those of parts [0, first) already in `sum`.
+  std::string Replay(const BvhLayout& blind, int first, int last, double* host_sum,
+                     CudaCounters* out);
+  // Parts [0, replayed_parts) of the last replay are in `sum`; 0 once `sum` holds other sums.
+  int replayed_parts = 0;
   DeviceRecords Records() {
-    const size_t rows = static_cast<size_t>(recorded.sensor_count) * recorded.batches;
+    const size_t rows =
+        static_cast<size_t>(recorded.sensor_count) * recorded.batches * recorded.parts;
     return {connections.get(),
             resumes.get(),
             record_counts.get(),
@@ -714,14 +749,17 @@ struct CudaTracer::Impl {
     return static_cast<unsigned int>(std::max<uint64_t>(1, std::min(wanted, fill)));
   }
 
-  // Zeroes the outputs, runs `launch`, times it, downloads (the sums only where host_sum is
-  // given: else they stay in `sum`).
+  // Zeroes the outputs (the sums unless adding to them), runs `launch`, times it, downloads
+  // (the sums only where host_sum is given: else they stay in `sum`).
   template <class Launch>
   std::string Run(size_t rows, size_t sum_size, bool squares, Launch launch, double* host_sum,
-                  double* host_sum_squares, CudaCounters* out) {
+                  double* host_sum_squares, CudaCounters* out, bool add_to_sums = false) {
     if (!has_scene) return "CUDA tracer: no scene uploaded";
     cudaError_t e = cudaSetDevice(device);
-    if (e == cudaSuccess) e = sum.Zero(sum_size);
+    if (e == cudaSuccess && !add_to_sums) {
+      replayed_parts = 0;
+      e = sum.Zero(sum_size);
+    }
     if (e == cudaSuccess && squares) e = sum_squares.Zero(sum_size);
     if (e == cudaSuccess) e = counters.Zero(kCounters);
     if (e == cudaSuccess) e = next_path.Zero(rows);
@@ -788,6 +826,7 @@ std::string CudaTracer::device_name() const { return impl_->name; }
 std::string CudaTracer::SetScene(const BvhLayout& bvh, const uint32_t* triangle_material,
                                  size_t triangle_count, const TraceMaterial* materials,
                                  size_t material_count) {
+  impl_->replayed_parts = 0;  // the sums were another scene's
   cudaError_t e = cudaSetDevice(impl_->device);
   if (e == cudaSuccess) e = impl_->nodes.Upload(bvh.nodes.data(), bvh.nodes.size());
   if (e == cudaSuccess) e = impl_->triangles.Upload(bvh.triangles.data(), bvh.triangles.size());
@@ -862,6 +901,7 @@ std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis
 }
 
 std::string CudaTracer::SetOutdoorScene(const BvhLayout& bvh, const std::vector<uint8_t>& met) {
+  impl_->replayed_parts = 0;
   cudaError_t e = cudaSetDevice(impl_->device);
   if (e == cudaSuccess) e = impl_->outdoor_nodes.Upload(bvh.nodes.data(), bvh.nodes.size());
   if (e == cudaSuccess) {
@@ -920,14 +960,15 @@ std::string CudaTracer::Impl::CheckProduct(const TraceWindow& window, const Hemi
 }
 
 std::string CudaTracer::Impl::TallyIndoorSums(int sensor_count, uint64_t paths_per_sensor,
-                                              int batches, const TallyRequest& request) {
+                                              int batches, const TallyRequest& request, int parts,
+                                              int traced) {
   const int rows = batches * sensor_count;
   cudaError_t e = indoor.Reserve(static_cast<size_t>(rows) * cells);
   if (e != cudaSuccess) return Error(e);
   const int threads = 256;
   const dim3 grid((cells + threads - 1) / threads, rows);
   BatchMeanKernel<<<grid, threads>>>(sum.get(), sensor_count, cells, paths_per_sensor, batches,
-                                     indoor.get());
+                                     parts, traced, indoor.get());
   return Tally(batches, sensor_count, request);
 }
 
@@ -947,8 +988,8 @@ std::string CudaTracer::IndoorAnnualTally(const TraceSensor* sensors, int sensor
 std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
                                      int sensor_count, const TraceWindow& window,
                                      Vec3f outdoor_offset, const HemisphereBasis& basis,
-                                     uint64_t paths_per_sensor, int batches, uint64_t seed,
-                                     const PathSettings& path, size_t max_bytes,
+                                     uint64_t paths_per_sensor, int batches, int parts,
+                                     uint64_t seed, const PathSettings& path, size_t max_bytes,
                                      CudaReplayStats* stats) {
   Impl& d = *impl_;
   if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
@@ -961,12 +1002,15 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
        {AllowSharedRow(RecordKernel, columns), AllowSharedRow(ReplayKernel, columns)}) {
     if (!error.empty()) return error;
   }
-  const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
+  if (parts < 1) return "CUDA tracer: no parts of the batches to record";
+  // Rows (sensor, part of a batch): the indoor kernel's rows of batches x parts batches
+  const int row_batches = batches * parts;
+  const unsigned int rows = static_cast<unsigned int>(sensor_count * row_batches);
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
-  const uint64_t row_paths = paths_per_sensor / batches + 1;
+  const uint64_t row_paths = paths_per_sensor / row_batches + 1;
   Impl::Recorded& r = d.recorded;
-  r = {false,     sensor_count, batches, paths_per_sensor, seed, 3 * row_paths + 64,
-       row_paths, window,       basis,   outdoor_offset,   path};
+  r = {false,     sensor_count,       batches, parts,          paths_per_sensor, seed,
+       3 * row_paths + 64, row_paths, window,  basis,          outdoor_offset,   path};
   std::vector<unsigned long long> counts(2 * static_cast<size_t>(rows));
   CudaCounters counters;
   // Connections per row are not known in advance: a row that made more than there was room
@@ -990,8 +1034,8 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
         [&] {
           RecordKernel<<<grid, kThreads, shared>>>(
               d.Scene(), envelope, d.Surfaces(), path, d.Outdoor(outdoor_offset),
-              d.replay_sensors.get(), sensor_count, window, basis, paths_per_sensor, batches, seed,
-              records, d.sum.get(), d.counters.get(), d.next_path.get());
+              d.replay_sensors.get(), sensor_count, window, basis, paths_per_sensor, row_batches,
+              seed, records, d.sum.get(), d.counters.get(), d.next_path.get());
         },
         nullptr, nullptr, &counters);
     if (!error.empty()) return error;
@@ -1021,40 +1065,56 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   return "";
 }
 
-std::string CudaTracer::Impl::Replay(const BvhLayout& blind, double* host_sum, CudaCounters* out) {
+std::string CudaTracer::Impl::Replay(const BvhLayout& blind, int first, int last,
+                                     double* host_sum, CudaCounters* out) {
   Impl& d = *this;
   if (!d.recorded.valid) return "CUDA tracer: no indoor paths recorded";
   if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
   const Recorded& r = d.recorded;
+  if (first < 0 || first >= last || last > r.parts) {
+    return "CUDA tracer: parts [" + std::to_string(first) + ", " + std::to_string(last) +
+           ") of " + std::to_string(r.parts) + " recorded";
+  }
+  if (first > 0 && d.replayed_parts != first) {
+    return "CUDA tracer: the sums of the parts before " + std::to_string(first) +
+           " are no longer on the device";
+  }
   cudaError_t e = cudaSetDevice(d.device);
   if (e == cudaSuccess) e = d.blind_nodes.Upload(blind.nodes.data(), blind.nodes.size());
   if (e == cudaSuccess) {
     e = d.blind_triangles.Upload(blind.triangles.data(), blind.triangles.size());
   }
   if (e != cudaSuccess) return Error(e);
+  const ReplayParts parts{r.batches, r.parts, first, last};
   const unsigned int rows = static_cast<unsigned int>(r.sensor_count * r.batches);
   const int columns = IndoorColumnCount(r.window, r.basis);
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
-  const dim3 grid(d.BlocksPerRow(ReplayKernel, shared, r.resume_capacity, rows), rows);
+  const dim3 grid(
+      d.BlocksPerRow(ReplayKernel, shared, r.resume_capacity * (last - first), rows), rows);
   const DeviceRecords records = d.Records();
   const BvhIntersector blind_scene{d.blind_nodes.get(), d.blind_triangles.get()};
-  return d.Run(
-      rows, static_cast<size_t>(rows) * columns, false,
+  std::string error = d.Run(
+      rows, static_cast<size_t>(r.sensor_count) * r.batches * columns, false,
       [&] {
         ReplayKernel<<<grid, kThreads, shared>>>(
             d.Scene(), blind_scene, d.Surfaces(), r.path, d.Outdoor(r.outdoor_offset),
-            d.replay_sensors.get(), r.sensor_count, r.window, r.basis, r.batches, r.seed, records,
+            d.replay_sensors.get(), r.sensor_count, r.window, r.basis, parts, r.seed, records,
             d.fixed.get(), d.sum.get(), d.counters.get(), d.next_path.get());
       },
-      host_sum, nullptr, out);
+      host_sum, nullptr, out, first > 0);
+  d.replayed_parts = error.empty() ? last : 0;
+  return error;
 }
+
+int CudaTracer::ReplayedParts() const { return impl_->replayed_parts; }
 
 std::string CudaTracer::ReplayIndoor(const BvhLayout& blind, double* sum, CudaCounters* counters) {
   if (sum == nullptr) return "CUDA tracer: no buffer for the indoor sums";
-  return impl_->Replay(blind, sum, counters);
+  return impl_->Replay(blind, 0, impl_->recorded.parts, sum, counters);
 }
 
-std::string CudaTracer::ReplayIndoorAnnualTally(const BvhLayout& blind, const TallyRequest& request,
+std::string CudaTracer::ReplayIndoorAnnualTally(const BvhLayout& blind, int first, int last,
+                                                const TallyRequest& request,
                                                 CudaCounters* counters) {
   Impl& d = *impl_;
   const Impl::Recorded& r = d.recorded;
@@ -1062,8 +1122,10 @@ std::string CudaTracer::ReplayIndoorAnnualTally(const BvhLayout& blind, const Ta
   if (std::string error = d.CheckProduct(r.window, r.basis, r.batches); !error.empty()) {
     return error;
   }
-  if (std::string error = d.Replay(blind, nullptr, counters); !error.empty()) return error;
-  return d.TallyIndoorSums(r.sensor_count, r.paths_per_sensor, r.batches, request);
+  if (std::string error = d.Replay(blind, first, last, nullptr, counters); !error.empty()) {
+    return error;
+  }
+  return d.TallyIndoorSums(r.sensor_count, r.paths_per_sensor, r.batches, request, r.parts, last);
 }
 
 std::string CudaTracer::SetAnnualProduct(const double* outdoor, int batches, int cells,

@@ -134,15 +134,22 @@ class CudaTracer {
   // `max_bytes`). ReplayIndoor then gives Indoor's sums for the uploaded scene, a room with
   // a blind inside the envelope in the recorded frame, from the records: the connections
   // tested against `blind` (the blind alone), the paths that reached the envelope traced
-  // on. ReplayIndoorAnnualTally is IndoorAnnualTally from the records. "" or the error.
+  // on. Each batch's paths are recorded in `parts` parts of consecutive paths.
+  // ReplayIndoorAnnualTally is IndoorAnnualTally from the records of parts [first, last) of
+  // every batch, added to the sums of parts [0, first) that the replay before it left on
+  // the device (an error where they are no longer there). "" or the error.
   std::string RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
                            int sensor_count, const TraceWindow& window, Vec3f outdoor_offset,
                            const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
-                           uint64_t seed, const PathSettings& path, size_t max_bytes,
+                           int parts, uint64_t seed, const PathSettings& path, size_t max_bytes,
                            CudaReplayStats* stats);
   std::string ReplayIndoor(const BvhLayout& blind, double* sum, CudaCounters* counters);
-  std::string ReplayIndoorAnnualTally(const BvhLayout& blind, const TallyRequest& request,
-                                      CudaCounters* counters);
+  std::string ReplayIndoorAnnualTally(const BvhLayout& blind, int first, int last,
+                                      const TallyRequest& request, CudaCounters* counters);
+
+  // How many parts of a replay's sums the device holds (ReplayIndoorAnnualTally's `first`
+  // may be this); 0 when it holds none.
+  int ReplayedParts() const;
 
   std::string device_name() const;
 

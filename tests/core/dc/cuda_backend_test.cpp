@@ -142,16 +142,6 @@ RandomInputs RandomProduct(int steps) {
 
 // UDI limits and DA threshold at the quartiles and median of `illuminance`, so that every
 // count lies far from none and from all.
-MetricOptions QuartileLimits(const Matrix& illuminance) {
-  std::vector<double> values(illuminance.data(), illuminance.data() + illuminance.size());
-  std::sort(values.begin(), values.end());
-  MetricOptions options;
-  options.udi_lower_lux = values[values.size() / 4];
-  options.da_threshold_lux = values[values.size() / 2];
-  options.udi_upper_lux = values[3 * values.size() / 4];
-  return options;
-}
-
 // The annual product (I_b O_b) S on the GPU equals the CPU's, and a second product on the
 // same backend does not disturb the first.
 TEST(CudaBackendTest, AnnualProductMatchesCpu) {
@@ -280,6 +270,13 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
       EXPECT_GT((*a)[0].any_above, 0);
     }
   }
+  // In rounds (racing), each round replays only the parts it adds
+  ExpectRoundsEndAsOneCall(**on_device, *DesignWithOverrides(scene, {{"alpha", 0.2}}),
+                           *DesignWithOverrides(scene, {{"alpha", 1.0}, {"width", 0.05}}),
+                           options);
+  EXPECT_FALSE((*in_turn)->TracesInParts());
+  EXPECT_EQ((*in_turn)->Tally(DefaultDesign(scene), options, 2).status().code(),
+            absl::StatusCode::kUnimplemented);
 }
 
 // The GPU's replay is the full trace: for designs across the ranges, I equals the indoor

@@ -41,5 +41,34 @@ TEST(IndoorReplayTest, EqualsTheIndoorStage) {
   EXPECT_EQ((*replay)->Compute(wide).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
+// A search's designs in rounds on the CPU (racing): each round traces only the parts it
+// adds, and the last ends where one full trace does.
+TEST(IndoorReplayTest, RoundsEndAsOneTrace) {
+  const Scene scene = LoadExample("city_office");
+  IndoorOptions options;
+  options.paths_per_sensor = 16'000;
+  options.parts = {2, 2};
+  options.batches = 4;
+  const int columns = 4 * 288 + kDaylightBins;
+  std::vector<Matrix> outdoor;
+  for (int b = 0; b < options.batches; ++b) {
+    outdoor.push_back(Matrix::Random(columns, kDaylightBins).cwiseAbs());
+  }
+  const Matrix sky = 100 * Matrix::Random(kDaylightBins, 300).cwiseAbs();
+  std::unique_ptr<DcBackend> cpu = MakeEmbreeBackend();
+  absl::StatusOr<std::unique_ptr<DesignTallies>> tallies =
+      cpu->MakeDesignTallies(scene, options, outdoor, sky);
+  ASSERT_TRUE(tallies.ok()) << tallies.status();
+  const BlindDesign a = *DesignWithOverrides(scene, {{"alpha", 0.2}});
+  absl::StatusOr<IndoorResult> i = ComputeIndoorStage(scene, a, options);
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> product = cpu->MakeAnnualProduct(outdoor, sky);
+  ASSERT_TRUE(i.ok() && product.ok());
+  absl::StatusOr<std::vector<Matrix>> e = (*product)->Apply(i->batches);
+  ASSERT_TRUE(e.ok()) << e.status();
+  ExpectRoundsEndAsOneCall(**tallies, a,
+                           *DesignWithOverrides(scene, {{"alpha", 1.0}, {"width", 0.05}}),
+                           QuartileLimits((*e)[0]));
+}
+
 }  // namespace
 }  // namespace fenestra

@@ -4,12 +4,16 @@
 // ranges, and the check that a replay's I is the full trace's.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "core/dc/dc_backend.h"
 #include "core/dc/indoor_replay.h"
 #include "core/dc/two_stage.h"
+#include "core/metrics/annual_metrics.h"
 
 namespace fenestra {
 
@@ -37,6 +41,75 @@ inline double ExpectReplayEqualsTrace(const IndoorResult& traced, const IndoorRe
   EXPECT_GT(replayed.coefficients.rightCols(kDaylightBins).sum(), 0);
   EXPECT_GT(replayed.coefficients.leftCols(replayed.coefficients.cols() - kDaylightBins).sum(), 0);
   return difference / traced.coefficients.sum();
+}
+
+// Metric limits at the quartiles of `illuminance`, so that sensors fall on either side.
+inline MetricOptions QuartileLimits(const Matrix& illuminance) {
+  std::vector<double> values(illuminance.data(), illuminance.data() + illuminance.size());
+  std::sort(values.begin(), values.end());
+  MetricOptions options;
+  options.udi_lower_lux = values[values.size() / 4];
+  options.da_threshold_lux = values[values.size() / 2];
+  options.udi_upper_lux = values[3 * values.size() / 4];
+  return options;
+}
+
+// Expects the tallies `a` and `b` equal but for the order of their sums: a few hours may
+// change side of a limit in the last bit. Returns the relative difference of sensor 0's
+// illuminance sums in version 0.
+inline double ExpectTalliesEqual(const std::vector<HourTally>& a, const std::vector<HourTally>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  if (a.size() != b.size()) return 1.0;
+  for (size_t v = 0; v < a.size(); ++v) {
+    EXPECT_EQ(a[v].hours, b[v].hours);
+    EXPECT_NEAR(a[v].all_in, b[v].all_in, 1) << "version " << v;
+    EXPECT_NEAR(a[v].any_below, b[v].any_below, 1) << "version " << v;
+    EXPECT_NEAR(a[v].any_above, b[v].any_above, 1) << "version " << v;
+    EXPECT_EQ(a[v].sensors.size(), b[v].sensors.size());
+    for (size_t i = 0; i < a[v].sensors.size() && i < b[v].sensors.size(); ++i) {
+      const SensorHourTally &x = a[v].sensors[i], &y = b[v].sensors[i];
+      EXPECT_NEAR(x.below, y.below, 1) << "version " << v << " sensor " << i;
+      EXPECT_NEAR(x.above, y.above, 1) << "version " << v << " sensor " << i;
+      EXPECT_NEAR(x.da, y.da, 1) << "version " << v << " sensor " << i;
+      EXPECT_NEAR(x.sum, y.sum, 1e-9 * y.sum) << "version " << v << " sensor " << i;
+      EXPECT_NEAR(x.credit, y.credit, 1e-9 * y.credit) << "version " << v << " sensor " << i;
+    }
+  }
+  return std::abs(a[0].sensors[0].sum - b[0].sensors[0].sum) / b[0].sensors[0].sum;
+}
+
+// A design traced in rounds (1 part, 3, then all) ends where one call for all parts does,
+// also when another design's round came between (its parts are traced anew); a round's
+// tallies are those of fewer paths, not the full ones.
+inline void ExpectRoundsEndAsOneCall(DesignTallies& tallies, const BlindDesign& a,
+                                     const BlindDesign& b, const MetricOptions& options) {
+  ASSERT_TRUE(tallies.TracesInParts());
+  absl::StatusOr<std::vector<HourTally>> full_a = tallies.Tally(a, options);
+  absl::StatusOr<std::vector<HourTally>> full_b = tallies.Tally(b, options);
+  ASSERT_TRUE(full_a.ok() && full_b.ok()) << full_a.status() << full_b.status();
+
+  const uint64_t rays = tallies.RaysTraced();
+  absl::StatusOr<std::vector<HourTally>> first = tallies.Tally(a, options, 1);
+  const uint64_t first_rays = tallies.RaysTraced() - rays;
+  ASSERT_TRUE(first.ok()) << first.status();
+  ASSERT_TRUE(tallies.Tally(a, options, 3).ok());
+  absl::StatusOr<std::vector<HourTally>> rounds_a = tallies.Tally(a, options, kDesignParts);
+  ASSERT_TRUE(rounds_a.ok()) << rounds_a.status();
+  const uint64_t all_rays = tallies.RaysTraced() - rays;
+  ExpectTalliesEqual(*rounds_a, *full_a);
+  // One part of eight traced an eighth of the rays, and its tallies are another estimate
+  EXPECT_NEAR(static_cast<double>(first_rays) / static_cast<double>(all_rays), 1.0 / kDesignParts,
+              0.02);
+  EXPECT_GT(std::abs((*first)[0].sensors[0].sum / (*full_a)[0].sensors[0].sum - 1), 1e-6);
+
+  ASSERT_TRUE(tallies.Tally(a, options, 2).ok());
+  ASSERT_TRUE(tallies.Tally(b, options, 2).ok());
+  absl::StatusOr<std::vector<HourTally>> rounds_b = tallies.Tally(b, options, kDesignParts);
+  ASSERT_TRUE(rounds_b.ok()) << rounds_b.status();
+  ExpectTalliesEqual(*rounds_b, *full_b);
+  EXPECT_EQ(tallies.Tally(b, options, 0).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(tallies.Tally(b, options, kDesignParts + 1).status().code(),
+            absl::StatusCode::kInvalidArgument);
 }
 
 }  // namespace fenestra

@@ -71,6 +71,47 @@ TEST(VnsTest, FindsTheTopOfASmoothBowl) {
   EXPECT_EQ(r->history.front().x, (std::vector<double>{0, 0}));
 }
 
+// A partial evaluation (a candidate racing stopped) never becomes the incumbent, however
+// high its value, and a resume replays that.
+TEST(VnsTest, PartialEvaluationsNeverBecomeTheIncumbent) {
+  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0.5)};
+  VnsOptions options;
+  options.max_evaluations = 30;
+  options.failed_cycles_to_stop = 0;
+  const ObjectiveFunction objective = [](const std::vector<double>& x) {
+    // Right of the start: partial and high; left: full, with its top at 0.45
+    Evaluation e = Value(x[0] > 0.5 ? 100 + x[0] : 50 - std::abs(x[0] - 0.45));
+    e.partial = x[0] > 0.5;
+    return absl::StatusOr<Evaluation>(e);
+  };
+  absl::StatusOr<VnsResult> r = RunVns(vars, objective, options);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_NEAR(r->best_x[0], 0.45, 0.05);
+  EXPECT_LT(r->best.value, 51);
+  EXPECT_FALSE(r->best.partial);
+  int partial = 0;
+  for (const VnsRecord& step : r->history) {
+    partial += step.evaluation.partial ? 1 : 0;
+    if (step.evaluation.partial) {
+      EXPECT_FALSE(step.improved);
+    }
+  }
+  EXPECT_GT(partial, 3);
+  VnsResult so_far = *r;
+  so_far.history.resize(20);
+  options.max_evaluations = 40;
+  absl::StatusOr<VnsResult> resumed = RunVns(vars, objective, options, {}, &so_far);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  // A history whose partial step is called full is not this search's
+  for (VnsRecord& step : so_far.history) {
+    if (step.evaluation.partial && !step.cached) {
+      step.evaluation.partial = false;
+      break;
+    }
+  }
+  EXPECT_FALSE(RunVns(vars, objective, options, {}, &so_far).ok());
+}
+
 // 50 +- 1 on [0.2, 0.8]^2, falling steeply outside.
 absl::StatusOr<Evaluation> Plateau(const std::vector<double>& x) {
   double outside = 0;

@@ -1,0 +1,130 @@
+// Racing (after Maron & Moore, "Hoeffding races", NIPS 1993): a candidate design is traced
+// in rounds, and after each round but the last its paired difference to the incumbent is
+// tested; a candidate clearly worse is rejected there, with only part of its paths traced.
+//
+// Round r traces the first rounds[r] of kDesignParts parts of every batch's paths (dc_backend.h),
+// so every round keeps the B paired, independent batches, and the jackknife over them
+// (metric_errors.h) gives the standard error of the difference: version 0 of each design is
+// the mean of its batches, version 1 + b the mean without batch b; the difference of the
+// designs' scores per version is a jackknife sample of the difference. All designs use the
+// same random numbers (common random numbers), so most of the noise cancels in the
+// difference and a small share of the paths decides most candidates. A candidate that is not
+// rejected is traced to the end: every value the search may accept has full precision.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/dc/dc_backend.h"
+#include "core/metrics/annual_metrics.h"
+#include "core/optimize/vns.h"
+
+namespace fenestra {
+
+// The rounds and the test (bench/README.md, "Racing", for how they were chosen).
+struct RacingSettings {
+  // Parts of kDesignParts traced by the end of each round but the last (increasing, each
+  // below kDesignParts); the last round traces all.
+  std::vector<int> rounds = {1, 2};
+  // A candidate is rejected after a round when its paired difference to the incumbent is
+  // below -standard_errors times the difference's standard error.
+  double standard_errors = 4;
+};
+
+// The limits of RacingSettings::standard_errors.
+inline constexpr double kMinRacingStandardErrors = 2;
+inline constexpr double kMaxRacingStandardErrors = 100;
+
+// The paired difference of a candidate's and the incumbent's scores after one round: the
+// difference of version 0, and the jackknife standard error of the versions' differences.
+struct PairedDifference {
+  double difference = 0;
+  double standard_error = 0;
+};
+
+// From the scores of each version of two designs (equal sizes, >= 3).
+PairedDifference Paired(std::span<const double> candidate, std::span<const double> incumbent);
+
+// Whether `difference` (candidate - incumbent, in scores) rejects the candidate.
+bool Rejects(const PairedDifference& difference, const RacingSettings& settings);
+
+// A design's scores per version after each round but the last: rounds[r][v].
+using RoundScores = std::vector<std::vector<double>>;
+
+// What racing did over a search.
+struct RacingStats {
+  int candidates = 0;                // designs evaluated in rounds against an incumbent
+  std::vector<int> rejected;         // per round but the last: candidates rejected there
+  // Over every evaluation, an incumbent's rounds traced again after a resume included, the
+  // audit's tracing not
+  int64_t parts_traced = 0;
+  int64_t parts_in_full = 0;  // what tracing each evaluation in full would have cost
+  uint64_t rays_traced = 0;   // closest-hit queries, as parts_traced
+  int rejected_audited = 0;        // rejected candidates also traced in full (audit)
+  int rejected_would_improve = 0;  // of them, those a full evaluation would have accepted
+  // Of them, those a full evaluation finds better than the incumbent by more than the
+  // standard error of the paired difference
+  int rejected_better_beyond_error = 0;
+};
+
+// The objective of a search in rounds over one DesignTallies. Evaluate traces a design in
+// rounds, rejecting it after a round where it is clearly worse than the incumbent (set by
+// SetIncumbent from the search's steps); without an incumbent, or with racing off, it is
+// traced in full (its round scores still kept, so it can serve as the incumbent).
+class Racer {
+ public:
+  struct Setting {
+    DesignTallies* tallies = nullptr;
+    MetricOptions options;
+    int analysed_hours = 0;
+    SceneMetric metric = SceneMetric::kUdiMean;
+    Objective objective;
+    RacingSettings racing;
+    bool enabled = true;  // false: every design in one round
+    // Trace rejected candidates to the end too, and count those a full evaluation would
+    // have accepted (RacingStats::rejected_would_improve); their result stays the rejection.
+    bool audit = false;
+  };
+  explicit Racer(Setting setting);
+
+  // The evaluation of `design` (payload: AnnualMetricsEstimate); `partial` when rejected.
+  absl::StatusOr<Evaluation> Evaluate(const BlindDesign& design);
+  // The search's incumbent changed to `design`, whose evaluation was Evaluate's last (its
+  // round scores are kept) or, after a resume, is unknown here (then traced again when the
+  // next candidate needs them).
+  void SetIncumbent(const BlindDesign& design, const Evaluation& evaluation, bool last_evaluated);
+
+  // Whether candidates are traced in rounds (enabled, and the tallies trace in parts).
+  bool Races() const {
+    return s_.enabled && !s_.racing.rounds.empty() && s_.tallies->TracesInParts();
+  }
+  // Share of its paths the last evaluation traced.
+  double LastPathsFraction() const { return last_paths_fraction_; }
+  const RacingStats& stats() const { return stats_; }
+  const RacingSettings& settings() const { return s_.racing; }
+
+ private:
+  absl::StatusOr<std::vector<double>> VersionScores(const std::vector<HourTally>& versions) const;
+  absl::StatusOr<Evaluation> MetricEvaluationOf(const std::vector<HourTally>& versions,
+                                                bool partial) const;
+  absl::StatusOr<RoundScores> IncumbentRounds();
+  absl::StatusOr<std::vector<double>> FullScores(const BlindDesign& design);
+  absl::Status Audit(const BlindDesign& design);
+
+  Setting s_;
+  RacingStats stats_;
+  RoundScores last_rounds_;  // of the design Evaluate evaluated last
+  double last_paths_fraction_ = 0;
+  BlindDesign incumbent_;
+  double incumbent_score_ = 0;
+  bool incumbent_score_set_ = false;
+  std::optional<RoundScores> incumbent_rounds_;
+  // Full version scores (audit): of the last design Evaluate traced in full, the incumbent's
+  std::vector<double> last_full_;
+  std::optional<std::vector<double>> incumbent_full_;
+};
+
+}  // namespace fenestra
