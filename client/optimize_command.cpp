@@ -25,15 +25,16 @@ absl::Status WriteHistoryCsv(const std::string& path, const v1::JobResult& resul
     std::sort(names.begin(), names.end());
     out << "index";
     for (const std::string& n : names) out << ',' << n;
-    out << ",value,standard_error,seconds,cached,improved,neighborhood,elapsed_seconds,"
-           "best_value,best_standard_error\n";
+    out << ",value,standard_error,seconds,cached,raced_out,paths_fraction,improved,neighborhood,"
+           "elapsed_seconds,best_value,best_standard_error\n";
     v1::Estimate best;
     for (const v1::Evaluation& e : result.history()) {
       if (e.improved()) best = e.value();
       out << e.index();
       for (const std::string& n : names) out << ',' << fmt::format("{:.9g}", e.design().at(n));
-      out << fmt::format(",{:.9g},{:.9g},{:.6f},{},{},{},{:.6f},{:.9g},{:.9g}\n", e.value().value(),
-                         e.value().standard_error(), e.seconds(), e.cached() ? 1 : 0,
+      out << fmt::format(",{:.9g},{:.9g},{:.6f},{},{},{:.6g},{},{},{:.6f},{:.9g},{:.9g}\n",
+                         e.value().value(), e.value().standard_error(), e.seconds(),
+                         e.cached() ? 1 : 0, e.raced_out() ? 1 : 0, e.paths_fraction(),
                          e.improved() ? 1 : 0, e.neighborhood(), e.elapsed_seconds(), best.value(),
                          best.standard_error());
     }

@@ -58,7 +58,10 @@ std::string FormatProgress(const JobProgress& p) {
   return fmt::format("[{}/{}] best {} % ({}) | current {} %{} ({}) | {} elapsed, ~{} left",
                      p.evaluations, p.max_evaluations, Value(p.best.value()),
                      FormatDesign(p.best.design()), Value(p.current.value()),
-                     p.current.cached() ? " cached" : "", FormatDesign(p.current.design()),
+                     p.current.cached()      ? " cached"
+                     : p.current.raced_out() ? " raced out"
+                                             : "",
+                     FormatDesign(p.current.design()),
                      Clock(p.elapsed_seconds), Clock(p.remaining_seconds));
 }
 

@@ -15,6 +15,7 @@
 #include "absl/strings/match.h"
 #include "core/dc/indoor_replay.h"
 #include "core/trace/bvh.h"
+#include "core/dc/cuda/annual_tally.h"
 #include "core/trace/cuda/cuda_tracer.h"
 #include "core/trace/window_cells.h"
 #endif
@@ -40,7 +41,7 @@ absl::Status UploadScene(CudaTracer& tracer, const TraceGeometry& geometry, BvhQ
                                geometry.materials.size()));
 }
 
-// Host buffers for the tallies the tracer reduces E to (CudaTracer::TallyRequest).
+// Host buffers for the tallies the GPU reduces E to (CudaAnnualTally::TallyRequest).
 struct DeviceTallies {
   DeviceTallies(int batches, int sensors, const MetricOptions& options)
       : batches(batches),
@@ -79,7 +80,7 @@ struct DeviceTallies {
   int batches, sensors;
   std::vector<int64_t> counts, hours;
   std::vector<double> sums;
-  CudaTracer::TallyRequest request;
+  CudaAnnualTally::TallyRequest request;
 };
 
 // What the tracer holds one of at a time (an annual product's matrices, an outdoor scene,
@@ -90,13 +91,13 @@ struct TracerSlot {
   int made = 0;     // generations handed out
 };
 
-// The annual product on the GPU. The tracer holds one product's O_b and S at a time; a
+// The annual product on the GPU. The device holds one product's O_b and S at a time; a
 // product whose matrices were replaced by a later one uploads its own again.
 class CudaAnnualProduct : public AnnualProduct {
  public:
-  CudaAnnualProduct(CudaTracer* tracer, TracerSlot* slot, const std::vector<Matrix>& outdoor,
+  CudaAnnualProduct(CudaAnnualTally* annual, TracerSlot* slot, const std::vector<Matrix>& outdoor,
                     Matrix sky)
-      : tracer_(tracer),
+      : annual_(annual),
         slot_(slot),
         generation_(++slot->made),
         batches_(static_cast<int>(outdoor.size())),
@@ -115,7 +116,7 @@ class CudaAnnualProduct : public AnnualProduct {
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
     FENESTRA_RETURN_IF_ERROR(Hold());
     Matrix illuminance(stacked.rows(), sky_.cols());
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->AnnualProduct(
+    FENESTRA_RETURN_IF_ERROR(Check(annual_->Illuminance(
         stacked.data(), static_cast<int>(stacked.rows()), illuminance.data())));
     return SplitBatches(illuminance, indoor_batches.size());
   }
@@ -133,24 +134,36 @@ class CudaAnnualProduct : public AnnualProduct {
     const int sensors = static_cast<int>(indoor_batches[0].rows());
     DeviceTallies tallies(batches, sensors, options);
     FENESTRA_RETURN_IF_ERROR(
-        Check(tracer_->AnnualTally(stacked.data(), batches, sensors, tallies.request)));
+        Check(annual_->Tally(stacked.data(), batches, sensors, tallies.request)));
     return tallies.Versions(sky_.cols());
   }
 
-  // Makes the tracer hold this product's O_b and S (a later product may have replaced them).
+  // Makes the device hold this product's O_b and S (a later product may have replaced them).
   absl::Status Hold() {
     if (slot_->current == generation_) return absl::OkStatus();
     FENESTRA_RETURN_IF_ERROR(
-        Check(tracer_->SetAnnualProduct(outdoor_.data(), batches_, static_cast<int>(rows_),
-                                        sky_.data(), static_cast<int>(sky_.cols()))));
+        Check(annual_->SetProduct(outdoor_.data(), batches_, static_cast<int>(rows_), sky_.data(),
+                                  static_cast<int>(sky_.cols()))));
     slot_->current = generation_;
     return absl::OkStatus();
   }
 
   Eigen::Index steps() const { return sky_.cols(); }
 
+  // The tallies of indoor sums on the device (CudaTracer::DeviceSums), batch b's divided by
+  // batch_paths[b].
+  absl::StatusOr<std::vector<HourTally>> TallySums(const double* device_sums, int sensors,
+                                                   const std::vector<uint64_t>& batch_paths,
+                                                   const MetricOptions& options) {
+    FENESTRA_RETURN_IF_ERROR(Hold());
+    DeviceTallies tallies(batches_, sensors, options);
+    FENESTRA_RETURN_IF_ERROR(Check(annual_->TallySums(device_sums, batches_, sensors,
+                                                      batch_paths.data(), tallies.request)));
+    return tallies.Versions(steps());
+  }
+
  private:
-  CudaTracer* tracer_;
+  CudaAnnualTally* annual_;
   TracerSlot* slot_;
   int generation_;
   int batches_;
@@ -309,7 +322,8 @@ class CudaReplayStages : public IndoorStages {
     tally.batch_paths = BatchSizes(tally.paths_per_sensor, tally.batches);
     tally.sum.resize(static_cast<size_t>(tally.batches) * tally.sensors * tally.columns);
     CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->ReplayIndoor(blind, tally.sum.data(), &counters)));
+    FENESTRA_RETURN_IF_ERROR(
+        Check(tracer_->ReplayIndoor(blind, 0, kDesignParts, tally.sum.data(), &counters)));
     tally.counters.rays = counters.rays;
     for (int e = 0; e < 6; ++e) tally.counters.ends[e] = counters.ends[e];
     tally.counters.max_weight = 1.0f;
@@ -351,7 +365,8 @@ class CudaDesignTallies : public DesignTallies {
   absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
                                                const MetricOptions& options, int parts) override {
     FENESTRA_RETURN_IF_ERROR(CheckDesignParts(0, parts));
-    DeviceTallies tallies(options_.batches, static_cast<int>(scene_.sensors.size()), options);
+    const int sensor_count = static_cast<int>(scene_.sensors.size());
+    const std::vector<uint64_t> batch_paths = PartPaths(parts);
     CudaCounters counters;
     if (replay_ != nullptr) {
       // The parts not traced yet: all of them for another design, or where the sums of the
@@ -362,13 +377,12 @@ class CudaDesignTallies : public DesignTallies {
         held_parts_ = 0;
         FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind_));
       }
-      FENESTRA_RETURN_IF_ERROR(product_->Hold());
-      FENESTRA_RETURN_IF_ERROR(Check(
-          tracer_->ReplayIndoorAnnualTally(blind_, held_parts_, parts, tallies.request, &counters)));
+      FENESTRA_RETURN_IF_ERROR(
+          Check(tracer_->ReplayIndoor(blind_, held_parts_, parts, nullptr, &counters)));
       rays_ += counters.rays;
       held_design_ = design;
       held_parts_ = parts;
-      return tallies.Versions(product_->steps());
+      return product_->TallySums(tracer_->DeviceSums(), sensor_count, batch_paths, options);
     }
     if (parts != kDesignParts) {
       return absl::UnimplementedError("designs traced in full are traced in one round");
@@ -378,24 +392,34 @@ class CudaDesignTallies : public DesignTallies {
                                        scene_.materials));
     FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, geometry, BvhQuality::kMedium));
     FENESTRA_RETURN_IF_ERROR(outdoor_->Hold());
-    FENESTRA_RETURN_IF_ERROR(product_->Hold());
     const std::vector<TraceSensor> sensors = LocalSensors(geometry, scene_.sensors);
     PathSettings path = IndoorPathSettings(options_);
     path.importance = nullptr;
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->IndoorAnnualTally(
-        sensors.data(), static_cast<int>(sensors.size()),
-        LocalWindow(geometry, scene_.window, options_.parts),
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->Indoor(
+        sensors.data(), sensor_count, LocalWindow(geometry, scene_.window, options_.parts),
         OutdoorOffset(geometry, outdoor_->geometry()), basis_,
         static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, options_.seed, path,
-        tallies.request, &counters)));
+        nullptr, &counters)));
     rays_ += counters.rays;
-    return tallies.Versions(product_->steps());
+    return product_->TallySums(tracer_->DeviceSums(), sensor_count, batch_paths, options);
   }
   bool TracesInParts() const override { return replay_ != nullptr; }
   bool RoundsPay() const override { return false; }
   uint64_t RaysTraced() const override { return rays_; }
 
  private:
+  // The paths of parts [0, parts) of each batch (kDesignParts parts of consecutive paths).
+  std::vector<uint64_t> PartPaths(int parts) const {
+    const uint64_t paths = static_cast<uint64_t>(options_.paths_per_sensor);
+    const int all = options_.batches * kDesignParts;
+    std::vector<uint64_t> batch_paths(options_.batches);
+    for (int b = 0; b < options_.batches; ++b) {
+      batch_paths[b] = BatchStart(paths, all, b * kDesignParts + parts) -
+                       BatchStart(paths, all, b * kDesignParts);
+    }
+    return batch_paths;
+  }
+
   CudaTracer* tracer_;
   Scene scene_;
   IndoorOptions options_;
@@ -412,14 +436,15 @@ class CudaDesignTallies : public DesignTallies {
 
 class CudaBackend : public DcBackend {
  public:
-  explicit CudaBackend(std::unique_ptr<CudaTracer> tracer) : tracer_(std::move(tracer)) {}
+  CudaBackend(std::unique_ptr<CudaTracer> tracer, std::unique_ptr<CudaAnnualTally> annual)
+      : tracer_(std::move(tracer)), annual_(std::move(annual)) {}
 
   std::string Name() const override { return absl::StrCat("cuda (", tracer_->device_name(), ")"); }
 
   absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(
       const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
     FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor_batches, sky));
-    return std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_slot_, outdoor_batches, sky);
+    return std::make_unique<CudaAnnualProduct>(annual_.get(), &annual_slot_, outdoor_batches, sky);
   }
 
   absl::StatusOr<std::unique_ptr<DesignTallies>> MakeDesignTallies(
@@ -438,7 +463,7 @@ class CudaBackend : public DcBackend {
     FENESTRA_ASSIGN_OR_RETURN(outdoor, MakeOutdoor(scene, options.parts, basis));
     FENESTRA_ASSIGN_OR_RETURN(replay, MaybeReplay(scene, options, basis, outdoor.get()));
     auto product =
-        std::make_unique<CudaAnnualProduct>(tracer_.get(), &annual_slot_, outdoor_batches, sky);
+        std::make_unique<CudaAnnualProduct>(annual_.get(), &annual_slot_, outdoor_batches, sky);
     return std::make_unique<CudaDesignTallies>(tracer_.get(), scene, options, basis,
                                                std::move(outdoor), std::move(replay),
                                                std::move(product));
@@ -596,6 +621,7 @@ class CudaBackend : public DcBackend {
   }
 
   std::unique_ptr<CudaTracer> tracer_;
+  std::unique_ptr<CudaAnnualTally> annual_;
   TracerSlot annual_slot_;   // annual products' O_b and S
   TracerSlot outdoor_slot_;  // outdoor scenes
   TracerSlot replay_slot_;   // indoor records
@@ -609,7 +635,10 @@ absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int device) {
   std::string error;
   std::unique_ptr<CudaTracer> tracer = CudaTracer::Create(device, &error);
   if (!tracer) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
-  return std::unique_ptr<DcBackend>(std::make_unique<CudaBackend>(std::move(tracer)));
+  std::unique_ptr<CudaAnnualTally> annual = CudaAnnualTally::Create(device, &error);
+  if (!annual) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
+  return std::unique_ptr<DcBackend>(
+      std::make_unique<CudaBackend>(std::move(tracer), std::move(annual)));
 }
 
 #else

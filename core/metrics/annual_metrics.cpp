@@ -9,6 +9,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "core/metrics/hour_class.h"
 #include "core/metrics/illuminance.h"
 
 namespace fenestra {
@@ -123,13 +124,13 @@ HourTally TallyHours(const Matrix& illuminance_lux, const MetricOptions& options
     double credit = 0, sum = 0;
     for (Eigen::Index h = 0; h < hours; ++h) {
       const double v = row[h];
-      const uint8_t is_below = v<a, is_above = v> b;
-      below += is_below;
-      above += is_above;
-      any_below[h] |= is_below;
-      any_above[h] |= is_above;
-      da_hours += v >= da;
-      credit += std::min(v / da, 1.0);
+      const HourClass c = ClassifyHour(v, a, b, da);
+      below += c.below;
+      above += c.above;
+      any_below[h] |= c.below;
+      any_above[h] |= c.above;
+      da_hours += c.da;
+      credit += c.credit;
       sum += v;
     }
     tally.sensors[i] = {below, above, da_hours, credit, sum};

@@ -11,6 +11,7 @@
 
 #include "core/trace/bvh_intersector.h"
 #include "core/trace/cuda/cuda_tracer.h"
+#include "core/trace/cuda/device_buffer.cuh"
 #include "core/trace/indoor_replay_modes.h"
 #include "core/trace/path.h"
 #include "core/trace/two_stage_modes.h"
@@ -26,63 +27,6 @@ constexpr int kThreads = 256;
 constexpr int kCounters = 7;  // rays, then paths by PathEnd
 // Shared memory a block may use without opting in to more.
 constexpr size_t kDefaultShared = 48 * 1024;
-
-// Where an allocation lives: device memory, or page-locked host memory.
-struct DeviceMemory {
-  static cudaError_t Allocate(void** data, size_t bytes) { return cudaMalloc(data, bytes); }
-  static void Free(void* data) { cudaFree(data); }
-};
-struct PinnedMemory {
-  static cudaError_t Allocate(void** data, size_t bytes) { return cudaMallocHost(data, bytes); }
-  static void Free(void* data) { cudaFreeHost(data); }
-};
-
-// `T`s in `Memory`, freed on scope exit; grows on demand (without keeping its contents).
-template <typename T, class Memory>
-class Allocation {
- public:
-  Allocation() = default;
-  ~Allocation() {
-    if (data_ != nullptr) Memory::Free(data_);
-  }
-  Allocation(const Allocation&) = delete;
-  Allocation& operator=(const Allocation&) = delete;
-
-  cudaError_t Reserve(size_t count) {
-    count = std::max<size_t>(count, 1);
-    if (count <= capacity_) return cudaSuccess;
-    if (data_ != nullptr) Memory::Free(data_);
-    data_ = nullptr;
-    capacity_ = 0;
-    const cudaError_t e = Memory::Allocate(reinterpret_cast<void**>(&data_), count * sizeof(T));
-    if (e == cudaSuccess) capacity_ = count;
-    return e;
-  }
-  T* get() const { return data_; }
-
- private:
-  T* data_ = nullptr;
-  size_t capacity_ = 0;
-};
-
-// A device allocation with transfers from and to the host.
-template <typename T>
-class DeviceBuffer : public Allocation<T, DeviceMemory> {
- public:
-  cudaError_t Upload(const T* host, size_t count) {
-    const cudaError_t e = this->Reserve(count);
-    if (e != cudaSuccess || count == 0) return e;
-    return cudaMemcpy(this->get(), host, count * sizeof(T), cudaMemcpyHostToDevice);
-  }
-  cudaError_t Zero(size_t count) {
-    const cudaError_t e = this->Reserve(count);
-    if (e != cudaSuccess) return e;
-    return cudaMemset(this->get(), 0, count * sizeof(T));
-  }
-  cudaError_t Download(T* host, size_t count) const {
-    return cudaMemcpy(host, this->get(), count * sizeof(T), cudaMemcpyDeviceToHost);
-  }
-};
 
 // Adds into a block's shared-memory row. Squares are taken per Add: right while a path
 // scores once (no splitting on the GPU).
@@ -444,159 +388,6 @@ __global__ void IntersectKernel(BvhIntersector scene, const Vec3f* origins, cons
       scene.Intersect(origin, directions[ray], &hit) ? Length(hit.position - origin) : INFINITY;
 }
 
-// C = A B for row-major A (m x k) and B (k x n), in 16 x 16 tiles through shared memory.
-constexpr int kTile = 16;
-__global__ void MultiplyKernel(const double* a, const double* b, double* c, int m, int k, int n) {
-  __shared__ double a_tile[kTile][kTile];
-  __shared__ double b_tile[kTile][kTile + 1];
-  const int row = blockIdx.y * kTile + threadIdx.y, col = blockIdx.x * kTile + threadIdx.x;
-  double sum = 0;
-  for (int t = 0; t < k; t += kTile) {
-    a_tile[threadIdx.y][threadIdx.x] =
-        row < m && t + threadIdx.x < k ? a[static_cast<size_t>(row) * k + t + threadIdx.x] : 0.0;
-    b_tile[threadIdx.y][threadIdx.x] =
-        t + threadIdx.y < k && col < n ? b[static_cast<size_t>(t + threadIdx.y) * n + col] : 0.0;
-    __syncthreads();
-    for (int i = 0; i < kTile; ++i) sum += a_tile[threadIdx.y][i] * b_tile[i][threadIdx.x];
-    __syncthreads();
-  }
-  if (row < m && col < n) c[static_cast<size_t>(row) * n + col] = sum;
-}
-
-// C = A B_g^T for row-major A (m x k) and B_g (n x k), one warp per entry of C: for a long
-// k and a small C (indoor rows through the window cells), where tiles would leave the
-// device idle. The rows of A come in groups of group_rows, group g with its own B_g (the
-// batches of the annual product), one after the other from b.
-__global__ void MultiplyTransposedKernel(const double* a, const double* b, double* c, int m, int k,
-                                         int n, int group_rows) {
-  const int warp = static_cast<int>((blockIdx.x * blockDim.x + threadIdx.x) / 32);
-  const int lane = static_cast<int>(threadIdx.x % 32);
-  if (warp >= m * n) return;
-  const int row = warp / n;
-  const double* a_row = a + static_cast<size_t>(row) * k;
-  const double* b_row =
-      b + (static_cast<size_t>(row / group_rows) * n + static_cast<size_t>(warp % n)) * k;
-  double sum = 0;
-  for (int i = lane; i < k; i += 32) sum += a_row[i] * b_row[i];
-  for (int offset = 16; offset > 0; offset /= 2) sum += __shfl_down_sync(0xffffffffu, sum, offset);
-  if (lane == 0) c[warp] = sum;
-}
-
-void MultiplyTransposed(const double* a, const double* b, double* c, int m, int k, int n,
-                        int group_rows) {
-  const int threads = 256;
-  const int blocks = static_cast<int>((static_cast<int64_t>(m) * n * 32 + threads - 1) / threads);
-  MultiplyTransposedKernel<<<blocks, threads>>>(a, b, c, m, k, n, group_rows);
-}
-
-void Multiply(const double* a, const double* b, double* c, int m, int k, int n) {
-  const dim3 grid((n + kTile - 1) / kTile, (m + kTile - 1) / kTile), block(kTile, kTile);
-  MultiplyKernel<<<grid, block>>>(a, b, c, m, k, n);
-}
-
-// I from the indoor kernel's sums: row (b, s) divided by the paths of batch b's first
-// `traced` of `parts` parts, as the host divides them (IndoorResultFromTally).
-__global__ void BatchMeanKernel(const double* sum, int sensors, int cells,
-                                uint64_t paths_per_sensor, int batches, int parts, int traced,
-                                double* indoor) {
-  const int cell = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
-  if (cell >= cells) return;
-  const int row = static_cast<int>(blockIdx.y);
-  const uint64_t first_part = static_cast<uint64_t>(row / sensors) * parts;
-  const int all_parts = batches * parts;
-  const uint64_t paths = BatchFirst(paths_per_sensor, all_parts, first_part + traced) -
-                         BatchFirst(paths_per_sensor, all_parts, first_part);
-  const size_t k = static_cast<size_t>(row) * cells + cell;
-  indoor[k] = __ddiv_rn(sum[k], static_cast<double>(paths));
-}
-
-// The metric thresholds of AnnualTally.
-struct TallyLimits {
-  double lower, upper, da;
-  double batches, leave_one_out_scale;  // B and 1 / (B - 1)
-};
-
-// One thread per (hour, version): E of the version (formed as the CPU forms it, without
-// contracted multiply-adds, so both classify every hour alike), classified per sensor;
-// warps add their counts and sums to the version's totals.
-__global__ void TallyKernel(const double* e, int batches, int sensors, int steps,
-                            TallyLimits limits, unsigned long long* counts, double* sums,
-                            unsigned long long* hours) {
-  const int version = static_cast<int>(blockIdx.y);
-  const int t = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
-  const bool active = t < steps;
-  const unsigned all = 0xffffffffu;
-  const bool leader = threadIdx.x % 32 == 0;
-  bool any_below = false, any_above = false, non_finite = false;
-  for (int i = 0; i < sensors; ++i) {
-    double value = 0;
-    if (active) {
-      double total = 0;
-      for (int b = 0; b < batches; ++b) {
-        total = __dadd_rn(total, e[(static_cast<size_t>(b) * sensors + i) * steps + t]);
-      }
-      value = __ddiv_rn(total, limits.batches);
-      if (version > 0) {
-        const double left_out = e[(static_cast<size_t>(version - 1) * sensors + i) * steps + t];
-        value = __dmul_rn(__dsub_rn(__dmul_rn(limits.batches, value), left_out),
-                          limits.leave_one_out_scale);
-      }
-    }
-    const bool below = active && value < limits.lower, above = active && value > limits.upper;
-    any_below |= below;
-    any_above |= above;
-    non_finite |= active && !isfinite(value);
-    double credit = active ? fmin(value / limits.da, 1.0) : 0.0, sum = value;
-    for (int offset = 16; offset > 0; offset /= 2) {
-      credit += __shfl_down_sync(all, credit, offset);
-      sum += __shfl_down_sync(all, sum, offset);
-    }
-    const unsigned below_count = __popc(__ballot_sync(all, below));
-    const unsigned above_count = __popc(__ballot_sync(all, above));
-    const unsigned da_count = __popc(__ballot_sync(all, active && value >= limits.da));
-    if (leader) {
-      const size_t k = static_cast<size_t>(version) * sensors + i;
-      if (below_count) atomicAdd(&counts[3 * k], below_count);
-      if (above_count) atomicAdd(&counts[3 * k + 1], above_count);
-      if (da_count) atomicAdd(&counts[3 * k + 2], da_count);
-      atomicAdd(&sums[2 * k], credit);
-      atomicAdd(&sums[2 * k + 1], sum);
-    }
-  }
-  const unsigned in_range = __popc(__ballot_sync(all, active && !any_below && !any_above));
-  const unsigned below = __popc(__ballot_sync(all, any_below));
-  const unsigned above = __popc(__ballot_sync(all, any_above));
-  const unsigned bad = __popc(__ballot_sync(all, non_finite));
-  if (leader) {
-    unsigned long long* h = hours + 4 * version;
-    if (in_range) atomicAdd(&h[0], in_range);
-    if (below) atomicAdd(&h[1], below);
-    if (above) atomicAdd(&h[2], above);
-    if (bad) atomicAdd(&h[3], bad);
-  }
-}
-
-// Page-locked host memory for fast transfers of large results.
-class PinnedBuffer : public Allocation<double, PinnedMemory> {
- public:
-  // Device to host through this buffer.
-  cudaError_t Download(const double* device, double* host, size_t count) {
-    cudaError_t e = Reserve(count);
-    if (e == cudaSuccess) {
-      e = cudaMemcpy(get(), device, count * sizeof(double), cudaMemcpyDeviceToHost);
-    }
-    if (e == cudaSuccess) std::memcpy(host, get(), count * sizeof(double));
-    return e;
-  }
-  // Host to device through this buffer.
-  cudaError_t Upload(const double* host, double* device, size_t count) {
-    cudaError_t e = Reserve(count);
-    if (e != cudaSuccess) return e;
-    std::memcpy(get(), host, count * sizeof(double));
-    return cudaMemcpy(device, get(), count * sizeof(double), cudaMemcpyHostToDevice);
-  }
-};
-
 // Runs `launch` (kernel launches) and waits for it; *seconds gets its time on the device.
 template <class Launch>
 cudaError_t TimeKernels(Launch launch, double* seconds) {
@@ -618,10 +409,6 @@ cudaError_t TimeKernels(Launch launch, double* seconds) {
   return e;
 }
 
-constexpr char kNoAnnualProduct[] = "CUDA tracer: no annual product set";
-
-std::string Error(cudaError_t e) { return std::string("CUDA: ") + cudaGetErrorString(e); }
-
 // Lets `kernel` keep a row of `columns` doubles in shared memory (beside its basis and
 // counters), opting in to more than the default where needed. "" or the error.
 template <class Kernel>
@@ -629,12 +416,9 @@ std::string AllowSharedRow(Kernel kernel, int columns) {
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
   if (shared <= kDefaultShared) return "";
   int device = 0, limit = 0;
-  if (cudaError_t e = cudaGetDevice(&device); e != cudaSuccess) return Error(e);
-  if (cudaError_t e =
-          cudaDeviceGetAttribute(&limit, cudaDevAttrMaxSharedMemoryPerBlockOptin, device);
-      e != cudaSuccess) {
-    return Error(e);
-  }
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetDevice(&device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(
+      cudaDeviceGetAttribute(&limit, cudaDevAttrMaxSharedMemoryPerBlockOptin, device));
   const size_t available =
       static_cast<size_t>(limit) - sizeof(HemisphereBasis) - kCounters * sizeof(unsigned long long);
   if (shared > available) {
@@ -643,9 +427,9 @@ std::string AllowSharedRow(Kernel kernel, int columns) {
            std::to_string(available / sizeof(double)) +
            " on this device): use fewer window parts or the 288-cell basis";
   }
-  const cudaError_t e = cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize,
-                                             static_cast<int>(shared));
-  return e == cudaSuccess ? "" : Error(e);
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaFuncSetAttribute(
+      kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(shared)));
+  return "";
 }
 
 }  // namespace
@@ -667,11 +451,6 @@ struct CudaTracer::Impl {
   DeviceBuffer<unsigned long long> next_path;  // per row: paths taken so far
   PinnedBuffer staging;                        // large transfers
   bool has_scene = false, has_outdoor = false;
-  // The annual product: O_b transposed, S, the indoor rows, I_b O_b and E; E's tallies
-  DeviceBuffer<double> outdoor_transposed, sky, indoor, through_window, illuminance;
-  DeviceBuffer<unsigned long long> tally_counts, tally_hours;
-  DeviceBuffer<double> tally_sums;
-  int cells = 0, steps = 0, outdoor_batches = 0;  // cells: columns of I, rows of O_b
   // The indoor replay: the records, their fixed light, and what they were recorded for;
   // the blind of the design replayed
   DeviceBuffer<ReplayConnection> connections;
@@ -698,18 +477,6 @@ struct CudaTracer::Impl {
                           const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
                           uint64_t seed, const PathSettings& path, double* host_sum,
                           CudaCounters* out);
-  // The annual product and its tallies (after SetAnnualProduct): `rows` indoor rows from the
-  // host into `indoor`; E = (I O) S from `indoor` into `illuminance`; E's tallies.
-  cudaError_t UploadIndoor(const double* host_indoor, int rows);
-  cudaError_t FormIlluminance(int rows);
-  std::string Tally(int batches, int sensors, const TallyRequest& request);
-  // "" when the annual product pairs with indoor stages of these columns and batches.
-  std::string CheckProduct(const TraceWindow& window, const HemisphereBasis& basis,
-                           int batches) const;
-  // I from the indoor sums in `sum` (each batch's sums over its paths), then its tallies.
-  // Over the first `traced` of each batch's `parts` parts.
-  std::string TallyIndoorSums(int sensor_count, uint64_t paths_per_sensor, int batches,
-                              const TallyRequest& request, int parts = 1, int traced = 1);
   // One design's indoor sums of parts [first, last) from the records
   // (CudaTracer::ReplayIndoor), added to those of parts [0, first) already in `sum`.
   std::string Replay(const BvhLayout& blind, int first, int last, double* host_sum,
@@ -755,26 +522,21 @@ struct CudaTracer::Impl {
   std::string Run(size_t rows, size_t sum_size, bool squares, Launch launch, double* host_sum,
                   double* host_sum_squares, CudaCounters* out, bool add_to_sums = false) {
     if (!has_scene) return "CUDA tracer: no scene uploaded";
-    cudaError_t e = cudaSetDevice(device);
-    if (e == cudaSuccess && !add_to_sums) {
+    FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(device));
+    if (!add_to_sums) {
       replayed_parts = 0;
-      e = sum.Zero(sum_size);
+      FENESTRA_CUDA_RETURN_IF_ERROR(sum.Zero(sum_size));
     }
-    if (e == cudaSuccess && squares) e = sum_squares.Zero(sum_size);
-    if (e == cudaSuccess) e = counters.Zero(kCounters);
-    if (e == cudaSuccess) e = next_path.Zero(rows);
-    if (e != cudaSuccess) return Error(e);
+    if (squares) FENESTRA_CUDA_RETURN_IF_ERROR(sum_squares.Zero(sum_size));
+    FENESTRA_CUDA_RETURN_IF_ERROR(counters.Zero(kCounters));
+    FENESTRA_CUDA_RETURN_IF_ERROR(next_path.Zero(rows));
     double seconds = 0;
-    e = TimeKernels(launch, &seconds);
-    if (e == cudaSuccess) e = cudaDeviceSynchronize();
+    FENESTRA_CUDA_RETURN_IF_ERROR(TimeKernels(launch, &seconds));
+    FENESTRA_CUDA_RETURN_IF_ERROR(cudaDeviceSynchronize());
     unsigned long long host_counters[kCounters] = {};
-    if (e == cudaSuccess && host_sum != nullptr)
-      e = staging.Download(sum.get(), host_sum, sum_size);
-    if (e == cudaSuccess && squares) {
-      e = staging.Download(sum_squares.get(), host_sum_squares, sum_size);
-    }
-    if (e == cudaSuccess) e = counters.Download(host_counters, kCounters);
-    if (e != cudaSuccess) return Error(e);
+    if (host_sum != nullptr) FENESTRA_CUDA_RETURN_IF_ERROR(staging.Download(sum.get(), host_sum, sum_size));
+    if (squares) FENESTRA_CUDA_RETURN_IF_ERROR(staging.Download(sum_squares.get(), host_sum_squares, sum_size));
+    FENESTRA_CUDA_RETURN_IF_ERROR(counters.Download(host_counters, kCounters));
     out->rays = host_counters[0];
     for (int i = 0; i < 6; ++i) out->ends[i] = host_counters[1 + i];
     out->kernel_seconds = seconds;
@@ -813,7 +575,7 @@ std::unique_ptr<CudaTracer> CudaTracer::Create(int device, std::string* error) {
   cudaError_t e = cudaGetDeviceProperties(&properties, device);
   if (e == cudaSuccess) e = cudaSetDevice(device);
   if (e != cudaSuccess) {
-    *error = Error(e);
+    *error = CudaErrorText(e);
     return nullptr;
   }
   impl->multiprocessors = properties.multiProcessorCount;
@@ -826,18 +588,16 @@ std::string CudaTracer::device_name() const { return impl_->name; }
 std::string CudaTracer::SetScene(const BvhLayout& bvh, const uint32_t* triangle_material,
                                  size_t triangle_count, const TraceMaterial* materials,
                                  size_t material_count) {
-  impl_->replayed_parts = 0;  // the sums were another scene's
-  cudaError_t e = cudaSetDevice(impl_->device);
-  if (e == cudaSuccess) e = impl_->nodes.Upload(bvh.nodes.data(), bvh.nodes.size());
-  if (e == cudaSuccess) e = impl_->triangles.Upload(bvh.triangles.data(), bvh.triangles.size());
-  if (e == cudaSuccess) {
-    e = impl_->triangle_material.Upload(triangle_material, triangle_count);
-  }
-  if (e == cudaSuccess) {
-    e = impl_->materials.Upload(materials, material_count);
-  }
-  impl_->has_scene = e == cudaSuccess;
-  return e == cudaSuccess ? "" : Error(e);
+  Impl& d = *impl_;
+  d.replayed_parts = 0;  // the sums were another scene's
+  d.has_scene = false;
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.nodes.Upload(bvh.nodes.data(), bvh.nodes.size()));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.triangles.Upload(bvh.triangles.data(), bvh.triangles.size()));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.triangle_material.Upload(triangle_material, triangle_count));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.materials.Upload(materials, material_count));
+  d.has_scene = true;
+  return "";
 }
 
 std::string CudaTracer::IntersectRays(const Vec3f* origins, const Vec3f* directions, size_t count,
@@ -845,21 +605,20 @@ std::string CudaTracer::IntersectRays(const Vec3f* origins, const Vec3f* directi
                                       double* kernel_seconds) {
   Impl& d = *impl_;
   if (!d.has_scene) return "CUDA tracer: no scene uploaded";
-  cudaError_t e = cudaSetDevice(d.device);
-  if (e == cudaSuccess) e = d.ray_origins.Upload(origins, count);
-  if (e == cudaSuccess) e = d.ray_directions.Upload(directions, count);
-  if (e == cudaSuccess) e = d.ray_distances.Reserve(count);
-  if (e != cudaSuccess) return Error(e);
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.ray_origins.Upload(origins, count));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.ray_directions.Upload(directions, count));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.ray_distances.Reserve(count));
   const unsigned int blocks = static_cast<unsigned int>((count + kThreads - 1) / kThreads);
-  e = TimeKernels(
+  FENESTRA_CUDA_RETURN_IF_ERROR(TimeKernels(
       [&] {
         IntersectKernel<<<std::max(1u, blocks), kThreads>>>(
             d.Scene(), d.ray_origins.get(), d.ray_directions.get(), count, same_ray_per_warp,
             d.ray_distances.get());
       },
-      kernel_seconds);
-  if (e == cudaSuccess) e = d.ray_distances.Download(distance, count);
-  return e == cudaSuccess ? "" : Error(e);
+      kernel_seconds));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.ray_distances.Download(distance, count));
+  return "";
 }
 
 std::string CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
@@ -867,7 +626,7 @@ std::string CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
                                  const PathSettings& path, double* sum, double* sum_squares,
                                  CudaCounters* counters) {
   Impl& d = *impl_;
-  if (cudaError_t e = d.sensors.Upload(sensors, sensor_count); e != cudaSuccess) return Error(e);
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.sensors.Upload(sensors, sensor_count));
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
   const dim3 grid(d.BlocksPerRow(OneStageKernel, 0, paths_per_sensor / batches + 1, rows), rows);
   return d.Run(
@@ -901,15 +660,15 @@ std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis
 }
 
 std::string CudaTracer::SetOutdoorScene(const BvhLayout& bvh, const std::vector<uint8_t>& met) {
-  impl_->replayed_parts = 0;
-  cudaError_t e = cudaSetDevice(impl_->device);
-  if (e == cudaSuccess) e = impl_->outdoor_nodes.Upload(bvh.nodes.data(), bvh.nodes.size());
-  if (e == cudaSuccess) {
-    e = impl_->outdoor_triangles.Upload(bvh.triangles.data(), bvh.triangles.size());
-  }
-  if (e == cudaSuccess) e = impl_->outdoor_met.Upload(met.data(), met.size());
-  impl_->has_outdoor = e == cudaSuccess;
-  return e == cudaSuccess ? "" : Error(e);
+  Impl& d = *impl_;
+  d.replayed_parts = 0;
+  d.has_outdoor = false;
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_nodes.Upload(bvh.nodes.data(), bvh.nodes.size()));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_triangles.Upload(bvh.triangles.data(), bvh.triangles.size()));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_met.Upload(met.data(), met.size()));
+  d.has_outdoor = true;
+  return "";
 }
 
 std::string CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int sensor_count,
@@ -919,8 +678,7 @@ std::string CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int s
                                           double* host_sum, CudaCounters* out) {
   Impl& d = *this;
   if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
-  if (cudaError_t e = d.sensors.Upload(host_sensors, sensor_count); e != cudaSuccess)
-    return Error(e);
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.sensors.Upload(host_sensors, sensor_count));
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
   const int cells = IndoorColumnCount(window, basis);
   const size_t shared = static_cast<size_t>(cells) * sizeof(double);
@@ -942,47 +700,8 @@ std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
                                const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
                                uint64_t seed, const PathSettings& path, double* sum,
                                CudaCounters* counters) {
-  if (sum == nullptr) return "CUDA tracer: no buffer for the indoor sums";
   return impl_->TraceIndoor(sensors, sensor_count, window, outdoor_offset, basis, paths_per_sensor,
                             batches, seed, path, sum, counters);
-}
-
-std::string CudaTracer::Impl::CheckProduct(const TraceWindow& window, const HemisphereBasis& basis,
-                                           int batches) const {
-  if (cells == 0) return kNoAnnualProduct;
-  if (cells != IndoorColumnCount(window, basis) || outdoor_batches != batches) {
-    return "CUDA tracer: the annual product has " + std::to_string(cells) + " rows in " +
-           std::to_string(outdoor_batches) + " batches, the indoor stage " +
-           std::to_string(IndoorColumnCount(window, basis)) + " columns in " +
-           std::to_string(batches);
-  }
-  return "";
-}
-
-std::string CudaTracer::Impl::TallyIndoorSums(int sensor_count, uint64_t paths_per_sensor,
-                                              int batches, const TallyRequest& request, int parts,
-                                              int traced) {
-  const int rows = batches * sensor_count;
-  cudaError_t e = indoor.Reserve(static_cast<size_t>(rows) * cells);
-  if (e != cudaSuccess) return Error(e);
-  const int threads = 256;
-  const dim3 grid((cells + threads - 1) / threads, rows);
-  BatchMeanKernel<<<grid, threads>>>(sum.get(), sensor_count, cells, paths_per_sensor, batches,
-                                     parts, traced, indoor.get());
-  return Tally(batches, sensor_count, request);
-}
-
-std::string CudaTracer::IndoorAnnualTally(const TraceSensor* sensors, int sensor_count,
-                                          const TraceWindow& window, Vec3f outdoor_offset,
-                                          const HemisphereBasis& basis, uint64_t paths_per_sensor,
-                                          int batches, uint64_t seed, const PathSettings& path,
-                                          const TallyRequest& request, CudaCounters* counters) {
-  Impl& d = *impl_;
-  if (std::string error = d.CheckProduct(window, basis, batches); !error.empty()) return error;
-  std::string error = d.TraceIndoor(sensors, sensor_count, window, outdoor_offset, basis,
-                                    paths_per_sensor, batches, seed, path, nullptr, counters);
-  if (!error.empty()) return error;
-  return d.TallyIndoorSums(sensor_count, paths_per_sensor, batches, request);
 }
 
 std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
@@ -994,9 +713,8 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   Impl& d = *impl_;
   if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
   d.recorded.valid = false;
-  cudaError_t e = cudaSetDevice(d.device);
-  if (e == cudaSuccess) e = d.replay_sensors.Upload(sensors, sensor_count);
-  if (e != cudaSuccess) return Error(e);
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.replay_sensors.Upload(sensors, sensor_count));
   const int columns = IndoorColumnCount(window, basis);
   for (std::string error :
        {AllowSharedRow(RecordKernel, columns), AllowSharedRow(ReplayKernel, columns)}) {
@@ -1023,10 +741,9 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
       return std::string(kReplayTooLarge) + " (" + std::to_string(bytes >> 20) + " MiB, at most " +
              std::to_string(max_bytes >> 20) + " MiB)";
     }
-    e = d.connections.Reserve(rows * r.connection_capacity);
-    if (e == cudaSuccess) e = d.resumes.Reserve(rows * r.resume_capacity);
-    if (e == cudaSuccess) e = d.record_counts.Zero(2 * static_cast<size_t>(rows));
-    if (e != cudaSuccess) return Error(e);
+    FENESTRA_CUDA_RETURN_IF_ERROR(d.connections.Reserve(rows * r.connection_capacity));
+    FENESTRA_CUDA_RETURN_IF_ERROR(d.resumes.Reserve(rows * r.resume_capacity));
+    FENESTRA_CUDA_RETURN_IF_ERROR(d.record_counts.Zero(2 * static_cast<size_t>(rows)));
     const DeviceRecords records = d.Records();
     const dim3 grid(d.BlocksPerRow(RecordKernel, shared, row_paths, rows), rows);
     std::string error = d.Run(
@@ -1039,20 +756,15 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
         },
         nullptr, nullptr, &counters);
     if (!error.empty()) return error;
-    if (e = d.record_counts.Download(counts.data(), counts.size()); e != cudaSuccess) {
-      return Error(e);
-    }
+    FENESTRA_CUDA_RETURN_IF_ERROR(d.record_counts.Download(counts.data(), counts.size()));
     const unsigned long long most = *std::max_element(counts.begin(), counts.begin() + rows);
     if (most <= r.connection_capacity) break;
     if (attempt > 0) return "CUDA tracer: the indoor paths' records changed between two traces";
     r.connection_capacity = most;
   }
-  e = d.fixed.Reserve(static_cast<size_t>(rows) * columns);
-  if (e == cudaSuccess) {
-    e = cudaMemcpy(d.fixed.get(), d.sum.get(), static_cast<size_t>(rows) * columns * sizeof(double),
-                   cudaMemcpyDeviceToDevice);
-  }
-  if (e != cudaSuccess) return Error(e);
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.fixed.Reserve(static_cast<size_t>(rows) * columns));
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaMemcpy(d.fixed.get(), d.sum.get(),
+                 static_cast<size_t>(rows) * columns * sizeof(double), cudaMemcpyDeviceToDevice));
   r.valid = true;
   stats->paths = paths_per_sensor * sensor_count;
   stats->connections = stats->resumes = 0;
@@ -1079,12 +791,9 @@ std::string CudaTracer::Impl::Replay(const BvhLayout& blind, int first, int last
     return "CUDA tracer: the sums of the parts before " + std::to_string(first) +
            " are no longer on the device";
   }
-  cudaError_t e = cudaSetDevice(d.device);
-  if (e == cudaSuccess) e = d.blind_nodes.Upload(blind.nodes.data(), blind.nodes.size());
-  if (e == cudaSuccess) {
-    e = d.blind_triangles.Upload(blind.triangles.data(), blind.triangles.size());
-  }
-  if (e != cudaSuccess) return Error(e);
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.blind_nodes.Upload(blind.nodes.data(), blind.nodes.size()));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.blind_triangles.Upload(blind.triangles.data(), blind.triangles.size()));
   const ReplayParts parts{r.batches, r.parts, first, last};
   const unsigned int rows = static_cast<unsigned int>(r.sensor_count * r.batches);
   const int columns = IndoorColumnCount(r.window, r.basis);
@@ -1108,121 +817,11 @@ std::string CudaTracer::Impl::Replay(const BvhLayout& blind, int first, int last
 
 int CudaTracer::ReplayedParts() const { return impl_->replayed_parts; }
 
-std::string CudaTracer::ReplayIndoor(const BvhLayout& blind, double* sum, CudaCounters* counters) {
-  if (sum == nullptr) return "CUDA tracer: no buffer for the indoor sums";
-  return impl_->Replay(blind, 0, impl_->recorded.parts, sum, counters);
+std::string CudaTracer::ReplayIndoor(const BvhLayout& blind, int first, int last, double* sum,
+                                     CudaCounters* counters) {
+  return impl_->Replay(blind, first, last, sum, counters);
 }
 
-std::string CudaTracer::ReplayIndoorAnnualTally(const BvhLayout& blind, int first, int last,
-                                                const TallyRequest& request,
-                                                CudaCounters* counters) {
-  Impl& d = *impl_;
-  const Impl::Recorded& r = d.recorded;
-  if (!r.valid) return "CUDA tracer: no indoor paths recorded";
-  if (std::string error = d.CheckProduct(r.window, r.basis, r.batches); !error.empty()) {
-    return error;
-  }
-  if (std::string error = d.Replay(blind, first, last, nullptr, counters); !error.empty()) {
-    return error;
-  }
-  return d.TallyIndoorSums(r.sensor_count, r.paths_per_sensor, r.batches, request, r.parts, last);
-}
-
-std::string CudaTracer::SetAnnualProduct(const double* outdoor, int batches, int cells,
-                                         const double* sky, int steps) {
-  Impl& d = *impl_;
-  if (batches < 1) return "CUDA tracer: the annual product needs outdoor batches";
-  const size_t size = static_cast<size_t>(cells) * kTregenzaBinCount;
-  std::vector<double> transposed(size * batches);
-  for (size_t b = 0; b < static_cast<size_t>(batches); ++b) {
-    for (int c = 0; c < cells; ++c) {
-      for (int j = 0; j < kTregenzaBinCount; ++j) {
-        transposed[b * size + static_cast<size_t>(j) * cells + c] =
-            outdoor[b * size + static_cast<size_t>(c) * kTregenzaBinCount + j];
-      }
-    }
-  }
-  cudaError_t e = cudaSetDevice(d.device);
-  if (e == cudaSuccess) e = d.outdoor_transposed.Upload(transposed.data(), transposed.size());
-  if (e == cudaSuccess) e = d.sky.Upload(sky, static_cast<size_t>(kTregenzaBinCount) * steps);
-  if (e != cudaSuccess) return Error(e);
-  d.cells = cells;
-  d.steps = steps;
-  d.outdoor_batches = batches;
-  return "";
-}
-
-std::string CudaTracer::AnnualProduct(const double* indoor, int rows, double* illuminance) {
-  Impl& d = *impl_;
-  if (d.cells == 0) return kNoAnnualProduct;
-  if (rows % d.outdoor_batches != 0) {
-    return "CUDA tracer: " + std::to_string(rows) + " indoor rows do not split into " +
-           std::to_string(d.outdoor_batches) + " batches";
-  }
-  cudaError_t e = d.UploadIndoor(indoor, rows);
-  if (e == cudaSuccess) e = d.FormIlluminance(rows);
-  if (e == cudaSuccess) {
-    e = d.staging.Download(d.illuminance.get(), illuminance, static_cast<size_t>(rows) * d.steps);
-  }
-  return e == cudaSuccess ? "" : Error(e);
-}
-
-std::string CudaTracer::AnnualTally(const double* indoor, int batches, int sensors,
-                                    const TallyRequest& request) {
-  Impl& d = *impl_;
-  if (d.cells == 0) return kNoAnnualProduct;
-  if (batches != d.outdoor_batches) {
-    return "CUDA tracer: " + std::to_string(batches) + " indoor batches, " +
-           std::to_string(d.outdoor_batches) + " outdoor";
-  }
-  if (cudaError_t e = d.UploadIndoor(indoor, batches * sensors); e != cudaSuccess) return Error(e);
-  return d.Tally(batches, sensors, request);
-}
-
-cudaError_t CudaTracer::Impl::UploadIndoor(const double* host_indoor, int rows) {
-  cudaError_t e = cudaSetDevice(device);
-  if (e == cudaSuccess) e = indoor.Reserve(static_cast<size_t>(rows) * cells);
-  if (e == cudaSuccess) {
-    e = staging.Upload(host_indoor, indoor.get(), static_cast<size_t>(rows) * cells);
-  }
-  return e;
-}
-
-cudaError_t CudaTracer::Impl::FormIlluminance(int rows) {
-  cudaError_t e = through_window.Reserve(static_cast<size_t>(rows) * kTregenzaBinCount);
-  if (e == cudaSuccess) e = illuminance.Reserve(static_cast<size_t>(rows) * steps);
-  if (e != cudaSuccess) return e;
-  MultiplyTransposed(indoor.get(), outdoor_transposed.get(), through_window.get(), rows, cells,
-                     kTregenzaBinCount, rows / outdoor_batches);
-  Multiply(through_window.get(), sky.get(), illuminance.get(), rows, kTregenzaBinCount, steps);
-  return cudaGetLastError();
-}
-
-std::string CudaTracer::Impl::Tally(int batches, int sensors, const TallyRequest& request) {
-  const int versions = batches + 1;
-  const size_t per_sensor = static_cast<size_t>(versions) * sensors;
-  cudaError_t e = FormIlluminance(batches * sensors);
-  if (e == cudaSuccess) e = tally_counts.Zero(3 * per_sensor);
-  if (e == cudaSuccess) e = tally_sums.Zero(2 * per_sensor);
-  if (e == cudaSuccess) e = tally_hours.Zero(4 * static_cast<size_t>(versions));
-  if (e != cudaSuccess) return Error(e);
-  const int threads = 256;
-  const dim3 grid((steps + threads - 1) / threads, versions);
-  const TallyLimits limits{request.lower_lux, request.upper_lux, request.da_lux,
-                           static_cast<double>(batches), 1.0 / (batches - 1)};
-  TallyKernel<<<grid, threads>>>(illuminance.get(), batches, sensors, steps, limits,
-                                 tally_counts.get(), tally_sums.get(), tally_hours.get());
-  e = cudaGetLastError();
-  static_assert(sizeof(int64_t) == sizeof(unsigned long long));
-  if (e == cudaSuccess) {
-    e = tally_counts.Download(reinterpret_cast<unsigned long long*>(request.counts),
-                              3 * per_sensor);
-  }
-  if (e == cudaSuccess) e = tally_sums.Download(request.sums, 2 * per_sensor);
-  if (e == cudaSuccess) {
-    e = tally_hours.Download(reinterpret_cast<unsigned long long*>(request.hours), 4 * versions);
-  }
-  return e == cudaSuccess ? "" : Error(e);
-}
+const double* CudaTracer::DeviceSums() const { return impl_->sum.get(); }
 
 }  // namespace fenestra

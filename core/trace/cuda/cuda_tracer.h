@@ -86,45 +86,11 @@ class CudaTracer {
 
   // Indoor paths in `batches` contiguous batches per sensor, as TraceIndoorCpu, against the
   // uploaded scene and outdoor scene (`outdoor_offset`: OutdoorView::offset); sum gets
-  // [(batch * sensors + sensor) * columns + column].
+  // [(batch * sensors + sensor) * columns + column], or, null, leaves them on the device.
   std::string Indoor(const TraceSensor* sensors, int sensor_count, const TraceWindow& window,
                      Vec3f outdoor_offset, const HemisphereBasis& basis, uint64_t paths_per_sensor,
                      int batches, uint64_t seed, const PathSettings& path, double* sum,
                      CudaCounters* counters);
-
-  // The annual product of the two-stage method, E_b = (I_b O_b) S, on the device:
-  // SetAnnualProduct uploads the `batches` O_b (each cells x kTregenzaBinCount, one after
-  // the other; cells = the columns of I) and S (kTregenzaBinCount x steps), row-major;
-  // AnnualProduct multiplies `rows` stacked indoor rows (rows x cells, batch-major, rows / B
-  // per batch) through them into `illuminance` (rows x steps). "" or the error.
-  std::string SetAnnualProduct(const double* outdoor, int batches, int cells, const double* sky,
-                               int steps);
-  std::string AnnualProduct(const double* indoor, int rows, double* illuminance);
-
-  // What the annual metrics need of E (core/metrics/annual_metrics.h, HourTally), reduced on
-  // the device so that E never leaves it. Version 0 is E of the mean of the batches,
-  // version 1 + b the mean of the others (B E - E_b) / (B - 1). Per version v and sensor i,
-  // counts[(v * sensors + i) * 3 + k] gets the hours below `lower_lux`, above `upper_lux`
-  // and at or above `da_lux`, sums[(v * sensors + i) * 2 + k] the sums of min(E / da_lux, 1)
-  // and of E; hours[v * 4 + k] the hours with every sensor in range, some below, some above,
-  // and the entries that are not finite.
-  struct TallyRequest {
-    double lower_lux, upper_lux, da_lux;
-    int64_t* counts;
-    double* sums;
-    int64_t* hours;
-  };
-  // The tallies of E_b = (I_b O_b) S for `indoor`, batches x sensors stacked rows
-  // (batch-major), as many batches as the product's. "" or the error.
-  std::string AnnualTally(const double* indoor, int batches, int sensors,
-                          const TallyRequest& request);
-  // Indoor's paths, then the tallies of their I (each batch's sums over its paths), without
-  // I leaving the device. "" or the error.
-  std::string IndoorAnnualTally(const TraceSensor* sensors, int sensor_count,
-                                const TraceWindow& window, Vec3f outdoor_offset,
-                                const HemisphereBasis& basis, uint64_t paths_per_sensor,
-                                int batches, uint64_t seed, const PathSettings& path,
-                                const TallyRequest& request, CudaCounters* counters);
 
   // The indoor replay (core/dc/indoor_replay.h) on the device. RecordIndoor traces the
   // indoor paths, as Indoor, through the uploaded scene (the room without the blind) up to
@@ -134,20 +100,24 @@ class CudaTracer {
   // `max_bytes`). ReplayIndoor then gives Indoor's sums for the uploaded scene, a room with
   // a blind inside the envelope in the recorded frame, from the records: the connections
   // tested against `blind` (the blind alone), the paths that reached the envelope traced
-  // on. Each batch's paths are recorded in `parts` parts of consecutive paths.
-  // ReplayIndoorAnnualTally is IndoorAnnualTally from the records of parts [first, last) of
-  // every batch, added to the sums of parts [0, first) that the replay before it left on
-  // the device (an error where they are no longer there). "" or the error.
+  // on. Each batch's paths are recorded in `parts` parts of consecutive paths, and
+  // ReplayIndoor replays parts [first, last) of every batch, added to the sums of parts
+  // [0, first) that the replay before it left on the device (an error where they are no
+  // longer there). "" or the error.
   std::string RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
                            int sensor_count, const TraceWindow& window, Vec3f outdoor_offset,
                            const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
                            int parts, uint64_t seed, const PathSettings& path, size_t max_bytes,
                            CudaReplayStats* stats);
-  std::string ReplayIndoor(const BvhLayout& blind, double* sum, CudaCounters* counters);
-  std::string ReplayIndoorAnnualTally(const BvhLayout& blind, int first, int last,
-                                      const TallyRequest& request, CudaCounters* counters);
+  std::string ReplayIndoor(const BvhLayout& blind, int first, int last, double* sum,
+                           CudaCounters* counters);
 
-  // How many parts of a replay's sums the device holds (ReplayIndoorAnnualTally's `first`
+  // The sums of the last Indoor or ReplayIndoor on the device, in their layout (valid until
+  // the next trace): where `sum` was null, they stay there for the annual product
+  // (core/dc/cuda/annual_tally.h).
+  const double* DeviceSums() const;
+
+  // How many parts of a replay's sums the device holds (ReplayIndoor's `first`
   // may be this); 0 when it holds none.
   int ReplayedParts() const;
 

@@ -1,0 +1,295 @@
+// The annual product and its tallies on the GPU (annual_tally.h).
+#include <cuda_runtime.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "core/dc/cuda/annual_tally.h"
+#include "core/metrics/hour_class.h"
+#include "core/trace/path.h"
+#include "core/trace/cuda/device_buffer.cuh"
+
+namespace fenestra {
+namespace {
+
+// Batches the sums' normalization takes (kMaxBatches of the two-stage method).
+constexpr int kMaxTallyBatches = 64;
+
+// C = A B for row-major A (m x k) and B (k x n), in 16 x 16 tiles through shared memory.
+constexpr int kTile = 16;
+__global__ void MultiplyKernel(const double* a, const double* b, double* c, int m, int k, int n) {
+  __shared__ double a_tile[kTile][kTile];
+  __shared__ double b_tile[kTile][kTile + 1];
+  const int row = blockIdx.y * kTile + threadIdx.y, col = blockIdx.x * kTile + threadIdx.x;
+  double sum = 0;
+  for (int t = 0; t < k; t += kTile) {
+    a_tile[threadIdx.y][threadIdx.x] =
+        row < m && t + threadIdx.x < k ? a[static_cast<size_t>(row) * k + t + threadIdx.x] : 0.0;
+    b_tile[threadIdx.y][threadIdx.x] =
+        t + threadIdx.y < k && col < n ? b[static_cast<size_t>(t + threadIdx.y) * n + col] : 0.0;
+    __syncthreads();
+    for (int i = 0; i < kTile; ++i) sum += a_tile[threadIdx.y][i] * b_tile[i][threadIdx.x];
+    __syncthreads();
+  }
+  if (row < m && col < n) c[static_cast<size_t>(row) * n + col] = sum;
+}
+
+// C = A B_g^T for row-major A (m x k) and B_g (n x k), one warp per entry of C: for a long
+// k and a small C (indoor rows through the window cells), where tiles would leave the
+// device idle. The rows of A come in groups of group_rows, group g with its own B_g (the
+// batches of the annual product), one after the other from b.
+__global__ void MultiplyTransposedKernel(const double* a, const double* b, double* c, int m, int k,
+                                         int n, int group_rows) {
+  const int warp = static_cast<int>((blockIdx.x * blockDim.x + threadIdx.x) / 32);
+  const int lane = static_cast<int>(threadIdx.x % 32);
+  if (warp >= m * n) return;
+  const int row = warp / n;
+  const double* a_row = a + static_cast<size_t>(row) * k;
+  const double* b_row =
+      b + (static_cast<size_t>(row / group_rows) * n + static_cast<size_t>(warp % n)) * k;
+  double sum = 0;
+  for (int i = lane; i < k; i += 32) sum += a_row[i] * b_row[i];
+  for (int offset = 16; offset > 0; offset /= 2) sum += __shfl_down_sync(0xffffffffu, sum, offset);
+  if (lane == 0) c[warp] = sum;
+}
+
+void MultiplyTransposed(const double* a, const double* b, double* c, int m, int k, int n,
+                        int group_rows) {
+  const int threads = 256;
+  const int blocks = static_cast<int>((static_cast<int64_t>(m) * n * 32 + threads - 1) / threads);
+  MultiplyTransposedKernel<<<blocks, threads>>>(a, b, c, m, k, n, group_rows);
+}
+
+void Multiply(const double* a, const double* b, double* c, int m, int k, int n) {
+  const dim3 grid((n + kTile - 1) / kTile, (m + kTile - 1) / kTile), block(kTile, kTile);
+  MultiplyKernel<<<grid, block>>>(a, b, c, m, k, n);
+}
+
+// The paths summed into each batch.
+struct BatchPaths {
+  double paths[kMaxTallyBatches];
+};
+
+// I from indoor sums: row (b, s) divided by batch b's paths, as the host divides them
+// (IndoorResultFromTally).
+__global__ void BatchMeanKernel(const double* sum, int sensors, int cells, BatchPaths batch,
+                                double* indoor) {
+  const int cell = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  if (cell >= cells) return;
+  const int row = static_cast<int>(blockIdx.y);
+  const size_t k = static_cast<size_t>(row) * cells + cell;
+  indoor[k] = __ddiv_rn(sum[k], batch.paths[row / sensors]);
+}
+
+// The metric thresholds of the tallies.
+struct TallyLimits {
+  double lower, upper, da;
+  double batches, leave_one_out_scale;  // B and 1 / (B - 1)
+};
+
+// One thread per (hour, version): E of the version (formed as the CPU forms it, without
+// contracted multiply-adds), classified per sensor as the CPU classifies it (ClassifyHour);
+// warps add their counts and sums to the version's totals.
+__global__ void TallyKernel(const double* e, int batches, int sensors, int steps,
+                            TallyLimits limits, unsigned long long* counts, double* sums,
+                            unsigned long long* hours) {
+  const int version = static_cast<int>(blockIdx.y);
+  const int t = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  const bool active = t < steps;
+  const unsigned all = 0xffffffffu;
+  const bool leader = threadIdx.x % 32 == 0;
+  bool any_below = false, any_above = false, non_finite = false;
+  for (int i = 0; i < sensors; ++i) {
+    double value = 0;
+    if (active) {
+      double total = 0;
+      for (int b = 0; b < batches; ++b) {
+        total = __dadd_rn(total, e[(static_cast<size_t>(b) * sensors + i) * steps + t]);
+      }
+      value = __ddiv_rn(total, limits.batches);
+      if (version > 0) {
+        const double left_out = e[(static_cast<size_t>(version - 1) * sensors + i) * steps + t];
+        value = __dmul_rn(__dsub_rn(__dmul_rn(limits.batches, value), left_out),
+                          limits.leave_one_out_scale);
+      }
+    }
+    const HourClass c = ClassifyHour(value, limits.lower, limits.upper, limits.da);
+    const bool below = active && c.below, above = active && c.above;
+    any_below |= below;
+    any_above |= above;
+    non_finite |= active && !isfinite(value);
+    double credit = active ? c.credit : 0.0, sum = value;
+    for (int offset = 16; offset > 0; offset /= 2) {
+      credit += __shfl_down_sync(all, credit, offset);
+      sum += __shfl_down_sync(all, sum, offset);
+    }
+    const unsigned below_count = __popc(__ballot_sync(all, below));
+    const unsigned above_count = __popc(__ballot_sync(all, above));
+    const unsigned da_count = __popc(__ballot_sync(all, active && c.da));
+    if (leader) {
+      const size_t k = static_cast<size_t>(version) * sensors + i;
+      if (below_count) atomicAdd(&counts[3 * k], below_count);
+      if (above_count) atomicAdd(&counts[3 * k + 1], above_count);
+      if (da_count) atomicAdd(&counts[3 * k + 2], da_count);
+      atomicAdd(&sums[2 * k], credit);
+      atomicAdd(&sums[2 * k + 1], sum);
+    }
+  }
+  const unsigned in_range = __popc(__ballot_sync(all, active && !any_below && !any_above));
+  const unsigned below = __popc(__ballot_sync(all, any_below));
+  const unsigned above = __popc(__ballot_sync(all, any_above));
+  const unsigned bad = __popc(__ballot_sync(all, non_finite));
+  if (leader) {
+    unsigned long long* h = hours + 4 * version;
+    if (in_range) atomicAdd(&h[0], in_range);
+    if (below) atomicAdd(&h[1], below);
+    if (above) atomicAdd(&h[2], above);
+    if (bad) atomicAdd(&h[3], bad);
+  }
+}
+
+constexpr char kNoProduct[] = "CUDA annual product: no outdoor matrix and sky set";
+
+}  // namespace
+
+struct CudaAnnualTally::Impl {
+  int device = 0;
+  // O_b transposed, S, the indoor rows, I_b O_b and E; E's tallies
+  DeviceBuffer<double> outdoor_transposed, sky, indoor, through_window, illuminance;
+  DeviceBuffer<unsigned long long> tally_counts, tally_hours;
+  DeviceBuffer<double> tally_sums;
+  PinnedBuffer staging;
+  int cells = 0, steps = 0, batches = 0;  // cells: columns of I, rows of O_b
+
+  std::string UploadIndoor(const double* host_indoor, int rows) {
+    FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(device));
+    FENESTRA_CUDA_RETURN_IF_ERROR(indoor.Reserve(static_cast<size_t>(rows) * cells));
+    FENESTRA_CUDA_RETURN_IF_ERROR(
+        staging.Upload(host_indoor, indoor.get(), static_cast<size_t>(rows) * cells));
+    return "";
+  }
+  // E = (I O) S from `indoor` into `illuminance`.
+  std::string FormIlluminance(int rows) {
+    FENESTRA_CUDA_RETURN_IF_ERROR(
+        through_window.Reserve(static_cast<size_t>(rows) * kTregenzaBinCount));
+    FENESTRA_CUDA_RETURN_IF_ERROR(illuminance.Reserve(static_cast<size_t>(rows) * steps));
+    MultiplyTransposed(indoor.get(), outdoor_transposed.get(), through_window.get(), rows, cells,
+                       kTregenzaBinCount, rows / batches);
+    Multiply(through_window.get(), sky.get(), illuminance.get(), rows, kTregenzaBinCount, steps);
+    FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
+    return "";
+  }
+  // E's tallies from `indoor`.
+  std::string Tally(int sensors, const TallyRequest& request) {
+    const int versions = batches + 1;
+    const size_t per_sensor = static_cast<size_t>(versions) * sensors;
+    if (std::string error = FormIlluminance(batches * sensors); !error.empty()) return error;
+    FENESTRA_CUDA_RETURN_IF_ERROR(tally_counts.Zero(3 * per_sensor));
+    FENESTRA_CUDA_RETURN_IF_ERROR(tally_sums.Zero(2 * per_sensor));
+    FENESTRA_CUDA_RETURN_IF_ERROR(tally_hours.Zero(4 * static_cast<size_t>(versions)));
+    const int threads = 256;
+    const dim3 grid((steps + threads - 1) / threads, versions);
+    const TallyLimits limits{request.lower_lux, request.upper_lux, request.da_lux,
+                             static_cast<double>(batches), 1.0 / (batches - 1)};
+    TallyKernel<<<grid, threads>>>(illuminance.get(), batches, sensors, steps, limits,
+                                   tally_counts.get(), tally_sums.get(), tally_hours.get());
+    FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
+    static_assert(sizeof(int64_t) == sizeof(unsigned long long));
+    FENESTRA_CUDA_RETURN_IF_ERROR(tally_counts.Download(
+        reinterpret_cast<unsigned long long*>(request.counts), 3 * per_sensor));
+    FENESTRA_CUDA_RETURN_IF_ERROR(tally_sums.Download(request.sums, 2 * per_sensor));
+    FENESTRA_CUDA_RETURN_IF_ERROR(tally_hours.Download(
+        reinterpret_cast<unsigned long long*>(request.hours), 4 * versions));
+    return "";
+  }
+};
+
+CudaAnnualTally::CudaAnnualTally(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+CudaAnnualTally::~CudaAnnualTally() = default;
+
+std::unique_ptr<CudaAnnualTally> CudaAnnualTally::Create(int device, std::string* error) {
+  if (const cudaError_t e = cudaSetDevice(device); e != cudaSuccess) {
+    *error = CudaErrorText(e);
+    return nullptr;
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->device = device;
+  return std::unique_ptr<CudaAnnualTally>(new CudaAnnualTally(std::move(impl)));
+}
+
+std::string CudaAnnualTally::SetProduct(const double* outdoor, int batches, int cells,
+                                        const double* sky, int steps) {
+  Impl& d = *impl_;
+  if (batches < 1 || batches > kMaxTallyBatches) {
+    return "CUDA annual product: " + std::to_string(batches) + " outdoor batches, not 1 to " +
+           std::to_string(kMaxTallyBatches);
+  }
+  const size_t size = static_cast<size_t>(cells) * kTregenzaBinCount;
+  std::vector<double> transposed(size * batches);
+  for (size_t b = 0; b < static_cast<size_t>(batches); ++b) {
+    for (int c = 0; c < cells; ++c) {
+      for (int j = 0; j < kTregenzaBinCount; ++j) {
+        transposed[b * size + static_cast<size_t>(j) * cells + c] =
+            outdoor[b * size + static_cast<size_t>(c) * kTregenzaBinCount + j];
+      }
+    }
+  }
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_transposed.Upload(transposed.data(), transposed.size()));
+  FENESTRA_CUDA_RETURN_IF_ERROR(
+      d.sky.Upload(sky, static_cast<size_t>(kTregenzaBinCount) * steps));
+  d.cells = cells;
+  d.steps = steps;
+  d.batches = batches;
+  return "";
+}
+
+std::string CudaAnnualTally::Illuminance(const double* indoor, int rows, double* illuminance) {
+  Impl& d = *impl_;
+  if (d.cells == 0) return kNoProduct;
+  if (rows % d.batches != 0) {
+    return "CUDA annual product: " + std::to_string(rows) + " indoor rows do not split into " +
+           std::to_string(d.batches) + " batches";
+  }
+  if (std::string error = d.UploadIndoor(indoor, rows); !error.empty()) return error;
+  if (std::string error = d.FormIlluminance(rows); !error.empty()) return error;
+  FENESTRA_CUDA_RETURN_IF_ERROR(
+      d.staging.Download(d.illuminance.get(), illuminance, static_cast<size_t>(rows) * d.steps));
+  return "";
+}
+
+std::string CudaAnnualTally::Tally(const double* indoor, int batches, int sensors,
+                                   const TallyRequest& request) {
+  Impl& d = *impl_;
+  if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
+  if (std::string error = d.UploadIndoor(indoor, batches * sensors); !error.empty()) return error;
+  return d.Tally(sensors, request);
+}
+
+std::string CudaAnnualTally::TallySums(const double* device_sums, int batches, int sensors,
+                                       const uint64_t* batch_paths, const TallyRequest& request) {
+  Impl& d = *impl_;
+  if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
+  BatchPaths paths{};
+  for (int b = 0; b < batches; ++b) paths.paths[b] = static_cast<double>(batch_paths[b]);
+  const int rows = batches * sensors;
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.indoor.Reserve(static_cast<size_t>(rows) * d.cells));
+  const int threads = 256;
+  const dim3 grid((d.cells + threads - 1) / threads, rows);
+  BatchMeanKernel<<<grid, threads>>>(device_sums, sensors, d.cells, paths, d.indoor.get());
+  return d.Tally(sensors, request);
+}
+
+std::string CudaAnnualTally::CheckPairs(int columns, int batches) const {
+  const Impl& d = *impl_;
+  if (d.cells == 0) return kNoProduct;
+  if (columns != d.cells || batches != d.batches) {
+    return "CUDA annual product: " + std::to_string(d.cells) + " rows in " +
+           std::to_string(d.batches) + " batches, the indoor stage " + std::to_string(columns) +
+           " columns in " + std::to_string(batches);
+  }
+  return "";
+}
+
+}  // namespace fenestra

@@ -1,0 +1,59 @@
+#pragma once
+
+// The annual product of the two-stage method and its metric tallies on a GPU: E_b =
+// (I_b O_b) S, then what the annual metrics need of E (core/metrics/annual_metrics.h,
+// HourTally), reduced on the device so that E never leaves it. Host-only declarations (no
+// CUDA headers); errors come back as text ("" is success), as the tracer's.
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace fenestra {
+
+class CudaAnnualTally {
+ public:
+  // On CUDA device `device`; null with `error` set when it cannot be used.
+  static std::unique_ptr<CudaAnnualTally> Create(int device, std::string* error);
+  ~CudaAnnualTally();
+  CudaAnnualTally(const CudaAnnualTally&) = delete;
+  CudaAnnualTally& operator=(const CudaAnnualTally&) = delete;
+
+  // Uploads the `batches` O_b (each cells x kTregenzaBinCount, one after the other; cells =
+  // the columns of I) and S (kTregenzaBinCount x steps), row-major.
+  std::string SetProduct(const double* outdoor, int batches, int cells, const double* sky,
+                         int steps);
+  // `rows` stacked indoor rows (rows x cells, batch-major, rows / B per batch) through the
+  // product into `illuminance` (rows x steps).
+  std::string Illuminance(const double* indoor, int rows, double* illuminance);
+
+  // Version 0 is E of the mean of the batches, version 1 + b the mean of the others
+  // (B E - E_b) / (B - 1). Per version v and sensor i, counts[(v * sensors + i) * 3 + k] gets
+  // the hours below `lower_lux`, above `upper_lux` and at or above `da_lux`,
+  // sums[(v * sensors + i) * 2 + k] the sums of min(E / da_lux, 1) and of E; hours[v * 4 + k]
+  // the hours with every sensor in range, some below, some above, and the entries that are
+  // not finite.
+  struct TallyRequest {
+    double lower_lux, upper_lux, da_lux;
+    int64_t* counts;
+    double* sums;
+    int64_t* hours;
+  };
+  // The tallies of E_b = (I_b O_b) S for the host's `indoor`, batches x sensors stacked rows
+  // (batch-major), as many batches as the product's.
+  std::string Tally(const double* indoor, int batches, int sensors, const TallyRequest& request);
+  // The same from indoor sums on this device (a tracer's, CudaTracer::DeviceSums): row (b, s)
+  // of `device_sums`, batches x sensors rows of the product's cells, divided by
+  // batch_paths[b], the paths summed into batch b.
+  std::string TallySums(const double* device_sums, int batches, int sensors,
+                        const uint64_t* batch_paths, const TallyRequest& request);
+
+  // "" when the product pairs with indoor stages of `columns` columns in `batches` batches.
+  std::string CheckPairs(int columns, int batches) const;
+
+ private:
+  struct Impl;
+  explicit CudaAnnualTally(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace fenestra

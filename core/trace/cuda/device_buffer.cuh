@@ -1,0 +1,105 @@
+#pragma once
+
+// Device and page-locked host allocations for the CUDA code (the tracer, the annual
+// product), and how CUDA errors become the text those return. Compiled by nvcc only.
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+
+namespace fenestra {
+
+// A CUDA error as the text the CUDA code returns ("" is success).
+inline std::string CudaErrorText(cudaError_t e) {
+  return std::string("CUDA: ") + cudaGetErrorString(e);
+}
+
+// In a function returning the error text: returns it when `expr` (a cudaError_t) fails.
+#define FENESTRA_CUDA_RETURN_IF_ERROR(expr)                                     \
+  do {                                                                          \
+    if (const cudaError_t fenestra_cuda_error_ = (expr);                        \
+        fenestra_cuda_error_ != cudaSuccess) {                                  \
+      return ::fenestra::CudaErrorText(fenestra_cuda_error_);                   \
+    }                                                                           \
+  } while (0)
+
+// Where an allocation lives: device memory, or page-locked host memory.
+struct DeviceMemory {
+  static cudaError_t Allocate(void** data, size_t bytes) { return cudaMalloc(data, bytes); }
+  static void Free(void* data) { cudaFree(data); }
+};
+struct PinnedMemory {
+  static cudaError_t Allocate(void** data, size_t bytes) { return cudaMallocHost(data, bytes); }
+  static void Free(void* data) { cudaFreeHost(data); }
+};
+
+// `T`s in `Memory`, freed on scope exit; grows on demand (without keeping its contents).
+template <typename T, class Memory>
+class Allocation {
+ public:
+  Allocation() = default;
+  ~Allocation() {
+    if (data_ != nullptr) Memory::Free(data_);
+  }
+  Allocation(const Allocation&) = delete;
+  Allocation& operator=(const Allocation&) = delete;
+
+  cudaError_t Reserve(size_t count) {
+    count = std::max<size_t>(count, 1);
+    if (count <= capacity_) return cudaSuccess;
+    if (data_ != nullptr) Memory::Free(data_);
+    data_ = nullptr;
+    capacity_ = 0;
+    const cudaError_t e = Memory::Allocate(reinterpret_cast<void**>(&data_), count * sizeof(T));
+    if (e == cudaSuccess) capacity_ = count;
+    return e;
+  }
+  T* get() const { return data_; }
+
+ private:
+  T* data_ = nullptr;
+  size_t capacity_ = 0;
+};
+
+// A device allocation with transfers from and to the host.
+template <typename T>
+class DeviceBuffer : public Allocation<T, DeviceMemory> {
+ public:
+  cudaError_t Upload(const T* host, size_t count) {
+    const cudaError_t e = this->Reserve(count);
+    if (e != cudaSuccess || count == 0) return e;
+    return cudaMemcpy(this->get(), host, count * sizeof(T), cudaMemcpyHostToDevice);
+  }
+  cudaError_t Zero(size_t count) {
+    const cudaError_t e = this->Reserve(count);
+    if (e != cudaSuccess) return e;
+    return cudaMemset(this->get(), 0, count * sizeof(T));
+  }
+  cudaError_t Download(T* host, size_t count) const {
+    return cudaMemcpy(host, this->get(), count * sizeof(T), cudaMemcpyDeviceToHost);
+  }
+};
+
+// Page-locked host memory for fast transfers of large results.
+class PinnedBuffer : public Allocation<double, PinnedMemory> {
+ public:
+  // Device to host through this buffer.
+  cudaError_t Download(const double* device, double* host, size_t count) {
+    cudaError_t e = Reserve(count);
+    if (e == cudaSuccess) {
+      e = cudaMemcpy(get(), device, count * sizeof(double), cudaMemcpyDeviceToHost);
+    }
+    if (e == cudaSuccess) std::memcpy(host, get(), count * sizeof(double));
+    return e;
+  }
+  // Host to device through this buffer.
+  cudaError_t Upload(const double* host, double* device, size_t count) {
+    cudaError_t e = Reserve(count);
+    if (e != cudaSuccess) return e;
+    std::memcpy(get(), host, count * sizeof(double));
+    return cudaMemcpy(device, get(), count * sizeof(double), cudaMemcpyHostToDevice);
+  }
+};
+
+}  // namespace fenestra
