@@ -221,8 +221,8 @@ int main(int argc, char** argv) {
   std::printf(
       "candidate evaluation (9 sensors x 2e5 paths, %d bounces (-1: unlimited), D S over %zu "
       "hours, UDI): %.2f ms (the replay kernel %.2f ms, %.2f G queries/s: closest hits and "
-      "connection tests against the blind alone; the design's mesh and "
-      "BVH %.2f ms; the rest the blind's BVH, uploads, E = (I_b O_b) S, its tallies and the "
+      "connection tests against the slats alone; the design's mesh and "
+      "BVH %.2f ms; the rest uploads, E = (I_b O_b) S, its tallies and the "
       "metrics); last UDI %.2f ± %.2f %%\n"
       "  the room's paths recorded once per job: %.1f ms; traced in full, a candidate's kernel "
       "would take %.2f ms (%.2f G closest-hit rays/s)\n",

@@ -26,7 +26,7 @@ struct Variant {
   std::string name;
   bool racing = true;
   bool audit = false;
-  std::vector<int> rounds;  // empty: the default
+  std::vector<int> rounds;     // empty: the default
   double standard_errors = 0;  // 0: the default
 };
 
@@ -42,11 +42,14 @@ void Run(const PreparedJob& base, const OutdoorMatrix& outdoor, const Variant& v
   if (v.standard_errors > 0) s.set_racing_standard_errors(v.standard_errors);
   const auto start = std::chrono::steady_clock::now();
   const v1::JobResult r = ValueOrExit(RunJob(job, &outdoor));
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("  %-22s %3d evaluations, job %.2f s, evaluations %.3f s (mean %.2f ms); best %.2f ± %.2f %% at",
-              v.name.c_str(), r.evaluations(), wall, r.timings().evaluation_seconds(),
-              1e3 * r.timings().evaluation_seconds() / std::max(1, r.evaluations()),
-              r.best_value().value(), r.best_value().standard_error());
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf(
+      "  %-22s %3d evaluations, job %.2f s, evaluations %.3f s (mean %.2f ms); best %.2f ± %.2f %% "
+      "at",
+      v.name.c_str(), r.evaluations(), wall, r.timings().evaluation_seconds(),
+      1e3 * r.timings().evaluation_seconds() / std::max(1, r.evaluations()), r.best_value().value(),
+      r.best_value().standard_error());
   for (const v1::DesignVariable& variable : job.job.variables()) {
     std::printf(" %s=%.4f", variable.name().c_str(), r.best_design().at(variable.name()));
   }

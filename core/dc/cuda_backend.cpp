@@ -13,9 +13,9 @@
 
 #if FENESTRA_WITH_CUDA
 #include "absl/strings/match.h"
+#include "core/dc/cuda/annual_tally.h"
 #include "core/dc/indoor_replay.h"
 #include "core/trace/bvh.h"
-#include "core/dc/cuda/annual_tally.h"
 #include "core/trace/cuda/cuda_tracer.h"
 #include "core/trace/window_cells.h"
 #endif
@@ -157,8 +157,8 @@ class CudaAnnualProduct : public AnnualProduct {
                                                    const MetricOptions& options) {
     FENESTRA_RETURN_IF_ERROR(Hold());
     DeviceTallies tallies(batches_, sensors, options);
-    FENESTRA_RETURN_IF_ERROR(Check(annual_->TallySums(device_sums, batches_, sensors,
-                                                      batch_paths.data(), tallies.request)));
+    FENESTRA_RETURN_IF_ERROR(Check(
+        annual_->TallySums(device_sums, batches_, sensors, batch_paths.data(), tallies.request)));
     return tallies.Versions(steps());
   }
 
@@ -231,17 +231,12 @@ class CudaReplay {
     return replay;
   }
 
-  // Makes the tracer hold the records and the room with `design`'s blind; `blind` gets the
-  // blind alone. InvalidArgument for a design outside the recorded ranges.
-  absl::Status Prepare(const BlindDesign& design, BvhLayout* blind) {
+  // Makes the tracer hold the records and the room with `design`'s blind; `blind` gets its
+  // slats alone. InvalidArgument for a design outside the recorded ranges.
+  absl::Status Prepare(const BlindDesign& design, SlatOccluder* blind) {
     FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(*scene_.blind, design));
     if (slot_->current != generation_) FENESTRA_RETURN_IF_ERROR(Record());
-    TriangleMesh blind_mesh;
-    GenerateBlind(scene_.window, *scene_.blind, design, 0, blind_mesh);
-    FENESTRA_ASSIGN_OR_RETURN(blind_geometry,
-                              PrepareTraceGeometry(blind_mesh, scene_.materials, &room_.origin));
-    FENESTRA_ASSIGN_OR_RETURN(blind_bvh, BuildBvh(blind_geometry, BvhQuality::kMedium));
-    *blind = std::move(blind_bvh);
+    *blind = LocalSlatsOfBlind(room_, scene_, design);
     FENESTRA_ASSIGN_OR_RETURN(
         geometry, PrepareTraceGeometry(SelectSide(AssembleMesh(scene_, design), Side::kIndoor),
                                        scene_.materials, &room_.origin));
@@ -312,7 +307,7 @@ class CudaReplayStages : public IndoorStages {
 
   absl::StatusOr<IndoorResult> Compute(const BlindDesign& design) const override {
     const auto start = std::chrono::steady_clock::now();
-    BvhLayout blind;
+    SlatOccluder blind;
     FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind));
     IndoorTally tally;
     tally.sensors = replay_->sensors();
@@ -429,7 +424,7 @@ class CudaDesignTallies : public DesignTallies {
   std::unique_ptr<CudaAnnualProduct> product_;
   // The replay's last design, its blind, and how many parts of it the tracer holds
   BlindDesign held_design_;
-  BvhLayout blind_;
+  SlatOccluder blind_;
   int held_parts_ = 0;
   uint64_t rays_ = 0;
 };

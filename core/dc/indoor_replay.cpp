@@ -37,26 +37,11 @@ struct Chunk {
 using OutdoorEmbreeView = OutdoorView<EmbreeIntersector>;
 using Recording = RecordingIntersector<EmbreeIntersector>;
 
-// Adds the value of every connection the blind leaves clear to its column of `sum`; the
-// shadow rays go in packets (the answers are Occluded's, ray by ray).
-void TestConnections(const EmbreeIntersector& blind,
-                     const std::vector<ReplayConnection>& connections, std::vector<double>& sum) {
-  constexpr int kPacket = EmbreeIntersector::kPacketRays;
-  Vec3f origins[kPacket], directions[kPacket];
-  float distances[kPacket];
-  bool blocked[kPacket];
-  for (size_t first = 0; first < connections.size(); first += kPacket) {
-    const int count = static_cast<int>(std::min<size_t>(kPacket, connections.size() - first));
-    for (int i = 0; i < count; ++i) {
-      const ReplayConnection& k = connections[first + i];
-      origins[i] = k.origin;
-      directions[i] = k.direction;
-      distances[i] = k.distance;
-    }
-    blind.OccludedPacket(origins, directions, distances, count, blocked);
-    for (int i = 0; i < count; ++i) {
-      if (!blocked[i]) sum[connections[first + i].column] += connections[first + i].value;
-    }
+// Adds the value of every connection the slats leave clear to its column of `sum`.
+void TestConnections(const SlatOccluder& slats, const std::vector<ReplayConnection>& connections,
+                     std::vector<double>& sum) {
+  for (const ReplayConnection& k : connections) {
+    if (!slats.Occluded(k.origin, k.direction, k.distance)) sum[k.column] += k.value;
   }
 }
 
@@ -80,6 +65,28 @@ LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& s
     local.half[k] = static_cast<float>(envelope.half_extent[k]);
   }
   return local;
+}
+
+SlatOccluder LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
+                               const BlindDesign& design) {
+  const SlatStack stack = StackOfBlind(scene.window, *scene.blind, design);
+  const auto axis = [](Vec3d v) {
+    return Vec3f{static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};
+  };
+  SlatOccluder slats;
+  slats.center = geometry.ToLocal(stack.center);
+  slats.stack = axis(stack.stack);
+  slats.length = axis(stack.length);
+  slats.into_room = axis(stack.into_room);
+  slats.pitch = static_cast<float>(stack.pitch_m);
+  slats.half_length = static_cast<float>(stack.half_length_m);
+  slats.half_width = static_cast<float>(stack.half_width_m);
+  slats.half_thickness = static_cast<float>(stack.half_thickness_m);
+  slats.cos_tilt = static_cast<float>(std::cos(stack.tilt_rad));
+  slats.sin_tilt = static_cast<float>(std::sin(stack.tilt_rad));
+  slats.reach = static_cast<float>(std::hypot(stack.half_width_m, stack.half_thickness_m));
+  slats.count = stack.count;
+  return slats;
 }
 
 absl::Status CheckReplayDesign(const BlindSpec& spec, const BlindDesign& design) {
@@ -194,18 +201,13 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
   FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(spec, design));
   FENESTRA_RETURN_IF_ERROR(CheckDesignParts(first, last));
 
-  // The room with this blind, and the blind alone, in the recorded frame
+  // The room with this blind, and the slats alone, in the recorded frame
   const TriangleMesh full = SelectSide(AssembleMesh(d.scene, design), Side::kIndoor);
-  TriangleMesh blind;
-  GenerateBlind(d.scene.window, spec, design, 0, blind);
   FENESTRA_ASSIGN_OR_RETURN(full_geometry,
                             PrepareTraceGeometry(full, d.scene.materials, &d.origin));
-  FENESTRA_ASSIGN_OR_RETURN(blind_geometry,
-                            PrepareTraceGeometry(blind, d.scene.materials, &d.origin));
   FENESTRA_ASSIGN_OR_RETURN(full_scene, EmbreeScene::Build(full_geometry));
-  FENESTRA_ASSIGN_OR_RETURN(blind_scene, EmbreeScene::Build(blind_geometry));
   const EmbreeIntersector full_view = full_scene->Intersector();
-  const EmbreeIntersector blind_view = blind_scene->Intersector();
+  const SlatOccluder slats = LocalSlatsOfBlind(full_geometry, d.scene, design);
   const SurfaceTable surfaces = full_geometry.Surfaces();
   const PathSettings settings = IndoorPathSettings(d.options);
 
@@ -236,7 +238,7 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
       [&](uint64_t i, Slot& slot) {
         const Chunk& chunk = chunk_of(i);
         slot.sum = chunk.fixed;
-        TestConnections(blind_view, chunk.connections, slot.sum);
+        TestConnections(slats, chunk.connections, slot.sum);
         slot.counters.rays += chunk.connections.size();
         const TraceSensor& sensor = d.sensors[chunk.sensor];
         IndoorMode<Slot, OutdoorEmbreeView> mode{

@@ -316,8 +316,8 @@ absl::StatusOr<IndoorTally> IndoorStages::TraceParts(const BlindDesign&, int, in
 
 absl::Status CheckDesignParts(int first, int last) {
   if (0 <= first && first < last && last <= kDesignParts) return absl::OkStatus();
-  return absl::InvalidArgumentError(absl::StrCat("parts [", first, ", ", last,
-                                                 ") of a design's paths, of ", kDesignParts));
+  return absl::InvalidArgumentError(
+      absl::StrCat("parts [", first, ", ", last, ") of a design's paths, of ", kDesignParts));
 }
 
 absl::Status AddIndoorTally(const IndoorTally& more, IndoorTally& into) {

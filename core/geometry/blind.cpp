@@ -95,23 +95,38 @@ double MaxSlatCount(const Window& window, const BlindSpec& spec, double min_slat
   return 1 + std::ceil(BlindFrame(window, spec).stack_extent_m / min_slat_width_m);
 }
 
+SlatStack StackOfBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design) {
+  const BlindLayout layout = LayoutBlind(window, spec, design);
+  const Frame frame = BlindFrame(window, spec);
+  SlatStack slats;
+  slats.stack = frame.stack;
+  slats.length = frame.length;
+  slats.into_room = -window.normal;
+  const Vec3d inner_center = window.center - window.depth_m * window.normal;
+  slats.center = inner_center + layout.axis_depth_m * slats.into_room;
+  slats.pitch_m = layout.pitch_m;
+  slats.count = layout.slat_count;
+  slats.half_length_m = 0.5 * frame.length_extent_m + spec.side_margin_m;
+  slats.half_width_m = 0.5 * design.slat_width_m;
+  slats.half_thickness_m = 0.5 * design.slat_thickness_m;
+  slats.tilt_rad = design.tilt_rad;
+  return slats;
+}
+
 BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design,
                           uint32_t part_index, TriangleMesh& mesh) {
   const BlindLayout layout = LayoutBlind(window, spec, design);
-  const Frame frame = BlindFrame(window, spec);
-  const Vec3d into_room = -window.normal;
-  const Vec3d inner_center = window.center - window.depth_m * window.normal;
-  const Vec3d axis_center = inner_center + layout.axis_depth_m * into_room;
-  const double c = std::cos(design.tilt_rad);
-  const double s = std::sin(design.tilt_rad);
-  const Vec3d half_width = (0.5 * design.slat_width_m) * (c * frame.stack + s * into_room);
-  const Vec3d half_thick = (0.5 * design.slat_thickness_m) * (-s * frame.stack + c * into_room);
-  const Vec3d half_length = (0.5 * frame.length_extent_m + spec.side_margin_m) * frame.length;
+  const SlatStack slats = StackOfBlind(window, spec, design);
+  const double c = std::cos(slats.tilt_rad);
+  const double s = std::sin(slats.tilt_rad);
+  const Vec3d half_width = slats.half_width_m * (c * slats.stack + s * slats.into_room);
+  const Vec3d half_thick = slats.half_thickness_m * (-s * slats.stack + c * slats.into_room);
+  const Vec3d half_length = slats.half_length_m * slats.length;
 
   // Corners of each slat box, then its 6 faces as 12 triangles
-  for (int k = 0; k < layout.slat_count; ++k) {
-    const double offset = (k - 0.5 * (layout.slat_count - 1)) * layout.pitch_m;
-    const Vec3d center = axis_center + offset * frame.stack;
+  for (int k = 0; k < slats.count; ++k) {
+    const double offset = (k - 0.5 * (slats.count - 1)) * slats.pitch_m;
+    const Vec3d center = slats.center + offset * slats.stack;
     Vec3d corner[8];
     for (int i = 0; i < 8; ++i) {
       corner[i] = center + ((i & 1) ? 1.0 : -1.0) * half_length +

@@ -84,6 +84,17 @@ struct BlindEnvelope {
 // The envelope of `spec` in `window`, with `margin_m` to spare on every side.
 BlindEnvelope EnvelopeOfBlind(const Window& window, const BlindSpec& spec, double margin_m);
 
+// The slats of a design as a stack of equal boxes, which GenerateBlind triangulates: slat k
+// (0 <= k < count) is centred at center + (k - (count - 1) / 2) pitch_m stack; its half
+// extents are half_length_m along `length`, half_width_m along cos(tilt) stack + sin(tilt)
+// into_room and half_thickness_m along -sin(tilt) stack + cos(tilt) into_room.
+struct SlatStack {
+  Vec3d center, stack, length, into_room;
+  double pitch_m = 0, half_length_m = 0, half_width_m = 0, half_thickness_m = 0, tilt_rad = 0;
+  int count = 0;
+};
+SlatStack StackOfBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design);
+
 // Appends the slats (12 triangles each, indoor) to `mesh` under part `part_index`.
 BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design,
                           uint32_t part_index, TriangleMesh& mesh);

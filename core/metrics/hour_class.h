@@ -19,7 +19,7 @@ struct HourClass {
 FENESTRA_CPU_GPU inline HourClass ClassifyHour(double value, double lower, double upper,
                                                double da) {
   const double ratio = value / da;
-  return {value < lower, value > upper, value >= da, 1.0 < ratio ? 1.0 : ratio};
+  return {value<lower, value> upper, value >= da, 1.0 < ratio ? 1.0 : ratio};
 }
 
 }  // namespace fenestra

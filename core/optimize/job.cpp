@@ -299,8 +299,7 @@ absl::Status CheckCheckpointFormat(const v1::SearchCheckpoint& checkpoint) {
 
 // The search so far that `checkpoint` holds, once it is known to be of this format, of the
 // job whose content hash is `job_hash` and a history its search makes (CheckVnsResume).
-absl::StatusOr<VnsResult> ResumedSearch(const std::string& job_hash,
-                                        const SearchSettings& search,
+absl::StatusOr<VnsResult> ResumedSearch(const std::string& job_hash, const SearchSettings& search,
                                         const v1::SearchCheckpoint& checkpoint) {
   FENESTRA_RETURN_IF_ERROR(CheckCheckpointFormat(checkpoint));
   if (checkpoint.job_hash() != job_hash) {

@@ -75,8 +75,7 @@ absl::StatusOr<Evaluation> Racer::Evaluate(const BlindDesign& design) {
     ++stats_.candidates;
   }
   for (size_t r = 0; races && r < s_.racing.rounds.size(); ++r) {
-    FENESTRA_ASSIGN_OR_RETURN(versions,
-                              s_.tallies->Tally(design, s_.options, s_.racing.rounds[r]));
+    FENESTRA_ASSIGN_OR_RETURN(versions, s_.tallies->Tally(design, s_.options, s_.racing.rounds[r]));
     FENESTRA_ASSIGN_OR_RETURN(scores, VersionScores(versions));
     last_rounds_.push_back(std::move(scores));
     if (against && Rejects(Paired(last_rounds_[r], (*against)[r]), s_.racing)) {

@@ -56,13 +56,13 @@ using RoundScores = std::vector<std::vector<double>>;
 
 // What racing did over a search.
 struct RacingStats {
-  int candidates = 0;                // designs evaluated in rounds against an incumbent
-  std::vector<int> rejected;         // per round but the last: candidates rejected there
+  int candidates = 0;         // designs evaluated in rounds against an incumbent
+  std::vector<int> rejected;  // per round but the last: candidates rejected there
   // Over every evaluation, an incumbent's rounds traced again after a resume included, the
   // audit's tracing not
   int64_t parts_traced = 0;
-  int64_t parts_in_full = 0;  // what tracing each evaluation in full would have cost
-  uint64_t rays_traced = 0;   // closest-hit queries, as parts_traced
+  int64_t parts_in_full = 0;       // what tracing each evaluation in full would have cost
+  uint64_t rays_traced = 0;        // closest-hit queries, as parts_traced
   int rejected_audited = 0;        // rejected candidates also traced in full (audit)
   int rejected_would_improve = 0;  // of them, those a full evaluation would have accepted
   // Of them, those a full evaluation finds better than the incumbent by more than the

@@ -6,8 +6,8 @@
 
 #include "core/dc/cuda/annual_tally.h"
 #include "core/metrics/hour_class.h"
-#include "core/trace/path.h"
 #include "core/trace/cuda/device_buffer.cuh"
+#include "core/trace/path.h"
 
 namespace fenestra {
 namespace {
@@ -198,8 +198,8 @@ struct CudaAnnualTally::Impl {
     FENESTRA_CUDA_RETURN_IF_ERROR(tally_counts.Download(
         reinterpret_cast<unsigned long long*>(request.counts), 3 * per_sensor));
     FENESTRA_CUDA_RETURN_IF_ERROR(tally_sums.Download(request.sums, 2 * per_sensor));
-    FENESTRA_CUDA_RETURN_IF_ERROR(tally_hours.Download(
-        reinterpret_cast<unsigned long long*>(request.hours), 4 * versions));
+    FENESTRA_CUDA_RETURN_IF_ERROR(
+        tally_hours.Download(reinterpret_cast<unsigned long long*>(request.hours), 4 * versions));
     return "";
   }
 };
@@ -236,8 +236,7 @@ std::string CudaAnnualTally::SetProduct(const double* outdoor, int batches, int 
   }
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_transposed.Upload(transposed.data(), transposed.size()));
-  FENESTRA_CUDA_RETURN_IF_ERROR(
-      d.sky.Upload(sky, static_cast<size_t>(kTregenzaBinCount) * steps));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.sky.Upload(sky, static_cast<size_t>(kTregenzaBinCount) * steps));
   d.cells = cells;
   d.steps = steps;
   d.batches = batches;

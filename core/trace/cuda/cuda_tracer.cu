@@ -309,7 +309,7 @@ struct ReplayParts {
 // connections the blind leaves clear, and their resumed paths traced on through the room
 // with the blind.
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
-    ReplayKernel(BvhIntersector scene, BvhIntersector blind, SurfaceTable surfaces,
+    ReplayKernel(BvhIntersector scene, SlatOccluder blind, SurfaceTable surfaces,
                  PathSettings settings, OutdoorView<BvhIntersector> outdoor,
                  const TraceSensor* sensors, int sensor_count, TraceWindow window,
                  HemisphereBasis basis, ReplayParts parts, uint64_t seed, DeviceRecords records,
@@ -458,8 +458,6 @@ struct CudaTracer::Impl {
   DeviceBuffer<unsigned long long> record_counts;  // per row: connections, then resumes
   DeviceBuffer<double> fixed;
   DeviceBuffer<TraceSensor> replay_sensors;
-  DeviceBuffer<BvhNode> blind_nodes;
-  DeviceBuffer<BvhTriangle> blind_triangles;
   struct Recorded {
     bool valid = false;
     int sensor_count = 0, batches = 0, parts = 0;  // rows: sensors x batches x parts
@@ -479,7 +477,7 @@ struct CudaTracer::Impl {
                           CudaCounters* out);
   // One design's indoor sums of parts [first, last) from the records
   // (CudaTracer::ReplayIndoor), added to those of parts [0, first) already in `sum`.
-  std::string Replay(const BvhLayout& blind, int first, int last, double* host_sum,
+  std::string Replay(const SlatOccluder& blind, int first, int last, double* host_sum,
                      CudaCounters* out);
   // Parts [0, replayed_parts) of the last replay are in `sum`; 0 once `sum` holds other sums.
   int replayed_parts = 0;
@@ -777,7 +775,7 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   return "";
 }
 
-std::string CudaTracer::Impl::Replay(const BvhLayout& blind, int first, int last,
+std::string CudaTracer::Impl::Replay(const SlatOccluder& blind, int first, int last,
                                      double* host_sum, CudaCounters* out) {
   Impl& d = *this;
   if (!d.recorded.valid) return "CUDA tracer: no indoor paths recorded";
@@ -792,8 +790,6 @@ std::string CudaTracer::Impl::Replay(const BvhLayout& blind, int first, int last
            " are no longer on the device";
   }
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
-  FENESTRA_CUDA_RETURN_IF_ERROR(d.blind_nodes.Upload(blind.nodes.data(), blind.nodes.size()));
-  FENESTRA_CUDA_RETURN_IF_ERROR(d.blind_triangles.Upload(blind.triangles.data(), blind.triangles.size()));
   const ReplayParts parts{r.batches, r.parts, first, last};
   const unsigned int rows = static_cast<unsigned int>(r.sensor_count * r.batches);
   const int columns = IndoorColumnCount(r.window, r.basis);
@@ -801,12 +797,11 @@ std::string CudaTracer::Impl::Replay(const BvhLayout& blind, int first, int last
   const dim3 grid(
       d.BlocksPerRow(ReplayKernel, shared, r.resume_capacity * (last - first), rows), rows);
   const DeviceRecords records = d.Records();
-  const BvhIntersector blind_scene{d.blind_nodes.get(), d.blind_triangles.get()};
   std::string error = d.Run(
       rows, static_cast<size_t>(r.sensor_count) * r.batches * columns, false,
       [&] {
         ReplayKernel<<<grid, kThreads, shared>>>(
-            d.Scene(), blind_scene, d.Surfaces(), r.path, d.Outdoor(r.outdoor_offset),
+            d.Scene(), blind, d.Surfaces(), r.path, d.Outdoor(r.outdoor_offset),
             d.replay_sensors.get(), r.sensor_count, r.window, r.basis, parts, r.seed, records,
             d.fixed.get(), d.sum.get(), d.counters.get(), d.next_path.get());
       },
@@ -817,7 +812,7 @@ std::string CudaTracer::Impl::Replay(const BvhLayout& blind, int first, int last
 
 int CudaTracer::ReplayedParts() const { return impl_->replayed_parts; }
 
-std::string CudaTracer::ReplayIndoor(const BvhLayout& blind, int first, int last, double* sum,
+std::string CudaTracer::ReplayIndoor(const SlatOccluder& blind, int first, int last, double* sum,
                                      CudaCounters* counters) {
   return impl_->Replay(blind, first, last, sum, counters);
 }

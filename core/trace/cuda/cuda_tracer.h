@@ -14,6 +14,7 @@
 #include "core/trace/bvh_layout.h"
 #include "core/trace/indoor_replay_modes.h"
 #include "core/trace/path.h"
+#include "core/trace/slat_occluder.h"
 #include "core/trace/two_stage_modes.h"
 
 namespace fenestra {
@@ -99,7 +100,7 @@ class CudaTracer {
   // reached the envelope (an error, and nothing recorded, where that would take more than
   // `max_bytes`). ReplayIndoor then gives Indoor's sums for the uploaded scene, a room with
   // a blind inside the envelope in the recorded frame, from the records: the connections
-  // tested against `blind` (the blind alone), the paths that reached the envelope traced
+  // tested against `blind` (its slats alone), the paths that reached the envelope traced
   // on. Each batch's paths are recorded in `parts` parts of consecutive paths, and
   // ReplayIndoor replays parts [first, last) of every batch, added to the sums of parts
   // [0, first) that the replay before it left on the device (an error where they are no
@@ -109,7 +110,7 @@ class CudaTracer {
                            const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
                            int parts, uint64_t seed, const PathSettings& path, size_t max_bytes,
                            CudaReplayStats* stats);
-  std::string ReplayIndoor(const BvhLayout& blind, int first, int last, double* sum,
+  std::string ReplayIndoor(const SlatOccluder& blind, int first, int last, double* sum,
                            CudaCounters* counters);
 
   // The sums of the last Indoor or ReplayIndoor on the device, in their layout (valid until

@@ -16,12 +16,11 @@ inline std::string CudaErrorText(cudaError_t e) {
 }
 
 // In a function returning the error text: returns it when `expr` (a cudaError_t) fails.
-#define FENESTRA_CUDA_RETURN_IF_ERROR(expr)                                     \
-  do {                                                                          \
-    if (const cudaError_t fenestra_cuda_error_ = (expr);                        \
-        fenestra_cuda_error_ != cudaSuccess) {                                  \
-      return ::fenestra::CudaErrorText(fenestra_cuda_error_);                   \
-    }                                                                           \
+#define FENESTRA_CUDA_RETURN_IF_ERROR(expr)                                                     \
+  do {                                                                                          \
+    if (const cudaError_t fenestra_cuda_error_ = (expr); fenestra_cuda_error_ != cudaSuccess) { \
+      return ::fenestra::CudaErrorText(fenestra_cuda_error_);                                   \
+    }                                                                                           \
   } while (0)
 
 // Where an allocation lives: device memory, or page-locked host memory.

@@ -25,19 +25,21 @@ inline std::vector<std::map<std::string, double>> ReplayCheckDesigns() {
           {{"alpha", 0.3}, {"thickness", 0.02}}};
 }
 
-// Expects `replayed` to equal `traced` up to the order of the sums (and the rare path whose
-// float rounding differs between the two acceleration structures), with light in both kinds
-// of column: the direct ones (the view reaches the sky) and the window cells (it meets the
-// street's buildings). Returns the relative L1 difference.
+// Expects `replayed` to equal `traced` up to the order of the sums and the rare shadow ray
+// that grazes a slat's edge, which the slats' layout (SlatOccluder) and their triangles may
+// answer differently within float rounding (about one in a million: a few connections, each
+// up to 1e-4 of a sensor's light), with light in both kinds of column: the direct ones (the
+// view reaches the sky) and the window cells (it meets the street's buildings). Returns the
+// relative L1 difference.
 inline double ExpectReplayEqualsTrace(const IndoorResult& traced, const IndoorResult& replayed) {
   EXPECT_EQ(traced.coefficients.cols(), replayed.coefficients.cols());
   if (traced.coefficients.cols() != replayed.coefficients.cols()) return 1.0;
   for (Eigen::Index s = 0; s < traced.coefficients.rows(); ++s) {
     const double a = traced.coefficients.row(s).sum(), b = replayed.coefficients.row(s).sum();
-    EXPECT_NEAR(b, a, 1e-6 * a) << "sensor " << s + 1;
+    EXPECT_NEAR(b, a, 5e-4 * a) << "sensor " << s + 1;
   }
   const double difference = (traced.coefficients - replayed.coefficients).cwiseAbs().sum();
-  EXPECT_LT(difference, 1e-6 * traced.coefficients.sum());
+  EXPECT_LT(difference, 3e-5 * traced.coefficients.sum());
   EXPECT_GT(replayed.coefficients.rightCols(kDaylightBins).sum(), 0);
   EXPECT_GT(replayed.coefficients.leftCols(replayed.coefficients.cols() - kDaylightBins).sum(), 0);
   return difference / traced.coefficients.sum();

@@ -49,7 +49,8 @@ TEST(RacingTest, NeverRejectsACandidateTheFullEvaluationFindsBetter) {
   sampling.set_backend("cpu");
   sampling.set_final_check(false);
   sampling.set_racing_audit(true);
-  absl::StatusOr<PreparedJob> prepared = PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
+  absl::StatusOr<PreparedJob> prepared =
+      PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
   ASSERT_TRUE(prepared.ok()) << prepared.status();
   absl::StatusOr<v1::JobResult> result = RunJob(*prepared, nullptr);
   ASSERT_TRUE(result.ok()) << result.status();
@@ -96,7 +97,8 @@ TEST(RacingTest, OffTracesEveryCandidateInFull) {
   sampling.set_backend("cpu");
   sampling.set_final_check(false);
   sampling.set_racing(false);
-  absl::StatusOr<PreparedJob> prepared = PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
+  absl::StatusOr<PreparedJob> prepared =
+      PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
   ASSERT_TRUE(prepared.ok()) << prepared.status();
   absl::StatusOr<v1::JobResult> result = RunJob(*prepared, nullptr);
   ASSERT_TRUE(result.ok()) << result.status();
