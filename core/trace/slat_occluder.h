@@ -4,8 +4,8 @@
 // periodic stack of equal boxes, SlatStack in core/geometry/blind.h) rather than by
 // traversing its triangles: the segment is clipped to the stack's slab, and only the few
 // slats whose axes lie within reach of that piece are tested (box slab tests), so the cost
-// does not grow with the slat count. The indoor replays test their recorded shadow rays
-// with it (core/dc/indoor_replay.h, the GPU's replay kernel).
+// does not grow with the slat count. The GPU's indoor replay tests its recorded shadow rays
+// with it (core/dc/indoor_replay.h, LocalSlatsOfBlind).
 #include <math.h>
 
 #include "core/common/cpu_gpu.h"

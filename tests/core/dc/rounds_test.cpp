@@ -241,8 +241,10 @@ TEST(TargetErrorTest, TwoStageReachesTheTargetAndSplitsTheVariance) {
             run->outcome.rounds.back().outdoor_paths);
 }
 
-// With the indoor stage already precise (many paths, cheap) and the outdoor stage coarse, only
-// the outdoor stage is traced again.
+// With the indoor stage already precise (many paths, cheap) and the outdoor stage coarse, the
+// outdoor stage is traced again and the indoor stage hardly: the allocation weighs the
+// stages' measured seconds per path, which a loaded machine (or a sanitizer) skews, so the
+// indoor stage may get a few percent more paths, not a round of its own size.
 TEST(TargetErrorTest, TwoStageRefinesOnlyTheStageThatNeedsIt) {
   const Scene scene = LoadExample("lightwell");
   TargetErrorOptions target;
@@ -253,8 +255,9 @@ TEST(TargetErrorTest, TwoStageRefinesOnlyTheStageThatNeedsIt) {
   EXPECT_TRUE(run->outcome.reached);
   ASSERT_GE(run->outcome.rounds.size(), 2u);
   EXPECT_LT(run->outcome.rounds[0].indoor_variance_share, 0.2);
-  EXPECT_EQ(run->indoor.paths_per_sensor, 100000);
-  EXPECT_GT(run->outcome.rounds.back().outdoor_paths, run->outcome.rounds[0].outdoor_paths);
+  EXPECT_GE(run->indoor.paths_per_sensor, 100000);
+  EXPECT_LE(run->indoor.paths_per_sensor, 105000);
+  EXPECT_GT(run->outcome.rounds.back().outdoor_paths, 2 * run->outcome.rounds[0].outdoor_paths);
 }
 
 }  // namespace
