@@ -42,9 +42,9 @@ TEST(RacingTest, NeverRejectsACandidateTheFullEvaluationFindsBetter) {
   absl::StatusOr<v1::Job> job =
       ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/four_variables.json");
   ASSERT_TRUE(job.ok()) << job.status();
-  job->mutable_budget()->set_max_evaluations(80);
+  job->mutable_budget()->set_max_evaluations(60);
   v1::Sampling& sampling = *job->mutable_sampling();
-  sampling.set_indoor_paths_per_sensor(64'000);
+  sampling.set_indoor_paths_per_sensor(32'000);
   sampling.set_outdoor_paths(576'000);
   sampling.set_backend("cpu");
   sampling.set_final_check(false);
