@@ -361,7 +361,8 @@ class CudaDesignTallies : public DesignTallies {
                                                const MetricOptions& options, int parts) override {
     FENESTRA_RETURN_IF_ERROR(CheckDesignParts(0, parts));
     const int sensor_count = static_cast<int>(scene_.sensors.size());
-    const std::vector<uint64_t> batch_paths = PartPaths(parts);
+    const std::vector<uint64_t> batch_paths = PartPaths(
+        static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, kDesignParts, 0, parts);
     CudaCounters counters;
     if (replay_ != nullptr) {
       // The parts not traced yet: all of them for another design, or where the sums of the
@@ -403,18 +404,6 @@ class CudaDesignTallies : public DesignTallies {
   uint64_t RaysTraced() const override { return rays_; }
 
  private:
-  // The paths of parts [0, parts) of each batch (kDesignParts parts of consecutive paths).
-  std::vector<uint64_t> PartPaths(int parts) const {
-    const uint64_t paths = static_cast<uint64_t>(options_.paths_per_sensor);
-    const int all = options_.batches * kDesignParts;
-    std::vector<uint64_t> batch_paths(options_.batches);
-    for (int b = 0; b < options_.batches; ++b) {
-      batch_paths[b] = BatchStart(paths, all, b * kDesignParts + parts) -
-                       BatchStart(paths, all, b * kDesignParts);
-    }
-    return batch_paths;
-  }
-
   CudaTracer* tracer_;
   Scene scene_;
   IndoorOptions options_;

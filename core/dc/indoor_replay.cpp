@@ -128,7 +128,6 @@ struct IndoorReplay::Data {
   std::vector<uint8_t> met;              // the window cells whose views all meet them
   OutdoorEmbreeView outdoor_view;
   std::vector<Chunk> chunks;
-  std::vector<uint64_t> batch_paths;
   int columns = 0;  // of I
   uint64_t resumed = 0;
   double record_seconds = 0;
@@ -167,7 +166,6 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
   // Chunks: (sensor, batch, part of the batch), as TraceIndoorCpu
   const int batches = options.batches;
   const uint64_t paths = static_cast<uint64_t>(options.paths_per_sensor);
-  data->batch_paths = BatchSizes(paths, batches);
   const uint64_t parts = kDesignParts;
   data->chunks.resize(data->sensors.size() * batches * parts);
   const PathSettings settings = IndoorPathSettings(options);
@@ -175,11 +173,9 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
     Chunk& chunk = data->chunks[c];
     chunk.sensor = static_cast<uint32_t>(c / (batches * parts));
     chunk.batch = static_cast<int>((c / parts) % batches);
-    const uint64_t part = c % parts;
-    const uint64_t first_in_batch = BatchStart(paths, batches, chunk.batch);
-    const uint64_t size = data->batch_paths[chunk.batch];
-    const uint64_t first = first_in_batch + part * size / parts;
-    const uint64_t last = first_in_batch + (part + 1) * size / parts;
+    const int part = static_cast<int>(c % parts);
+    const uint64_t first = PartStart(paths, batches, kDesignParts, chunk.batch, part);
+    const uint64_t last = PartStart(paths, batches, kDesignParts, chunk.batch, part + 1);
     chunk.fixed.assign(data->columns, 0.0);
     chunk.paths = last - first;
     Recording scene_view{embree->Intersector(), local};
@@ -244,7 +240,7 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
   tally.columns = d.columns;
   tally.batches = d.options.batches;
   tally.paths_per_sensor = static_cast<uint64_t>(d.options.paths_per_sensor);
-  tally.batch_paths.assign(tally.batches, 0);
+  tally.batch_paths = PartPaths(tally.paths_per_sensor, tally.batches, kDesignParts, first, last);
   tally.threads = ResolveThreadCount(d.options.threads);
   tally.sum.assign(static_cast<size_t>(tally.batches) * tally.sensors * tally.columns, 0.0);
   // The chunks of parts [first, last) of every (sensor, batch), in the order Record made them
@@ -252,9 +248,6 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
   const auto chunk_of = [&](uint64_t i) -> const Chunk& {
     return d.chunks[(i / span) * kDesignParts + first + i % span];
   };
-  for (uint64_t i = 0; i < span * tally.batches; ++i) {
-    tally.batch_paths[chunk_of(i).batch] += chunk_of(i).paths;  // sensor 0's chunks
-  }
   TraceChunksCpu<Slot>(
       span * tally.batches * tally.sensors, tally.threads,
       [&](uint64_t i, Slot& slot) {

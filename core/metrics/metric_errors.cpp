@@ -147,9 +147,9 @@ absl::StatusOr<std::vector<HourTally>> TallyBatchVersions(
   return versions;
 }
 
-absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromTallies(std::span<const HourTally> versions,
-                                                               int analysed_hours,
-                                                               const MetricOptions& options) {
+absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromTallies(
+    std::span<const HourTally> versions, int analysed_hours, const MetricOptions& options,
+    std::vector<AnnualMetrics>* version_metrics) {
   if (versions.size() < 3) {
     return absl::InvalidArgumentError(
         absl::StrCat("standard errors need the tallies of the mean and of at least 2 "
@@ -176,12 +176,15 @@ absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromTallies(std::span<const H
   AnnualMetricsEstimate estimate;
   estimate.batches = batches;
   estimate.value = MetricsFromTally(mean, analysed_hours, options);
+  if (version_metrics != nullptr) version_metrics->assign(1, estimate.value);
 
   // Leave each batch out in turn
   const size_t fields = kSceneFields.size() + kSensorFields.size() * mean.sensors.size();
   Matrix loo(batches, static_cast<Eigen::Index>(fields));
   for (int b = 0; b < batches; ++b) {
-    Flatten(MetricsFromTally(versions[1 + b], analysed_hours, options), loo.row(b).data());
+    const AnnualMetrics left_out = MetricsFromTally(versions[1 + b], analysed_hours, options);
+    Flatten(left_out, loo.row(b).data());
+    if (version_metrics != nullptr) version_metrics->push_back(left_out);
   }
   std::vector<double> se(fields);
   std::vector<double> column(batches);

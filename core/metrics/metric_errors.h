@@ -46,9 +46,10 @@ absl::StatusOr<std::vector<HourTally>> TallyBatchVersions(
 // of the B >= 2 batches, versions[1 + b] of E_(-b), the hours beyond them dark as in
 // MetricsFromTally; no ASE. InvalidArgument for fewer than 3 versions, versions that differ
 // in sensors or hours, no sensors, analysed_hours < 1 or below the tallied hours, bad options.
-absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromTallies(std::span<const HourTally> versions,
-                                                               int analysed_hours,
-                                                               const MetricOptions& options);
+// `version_metrics` (may be null) gets each version's metrics, in the order of `versions`.
+absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromTallies(
+    std::span<const HourTally> versions, int analysed_hours, const MetricOptions& options,
+    std::vector<AnnualMetrics>* version_metrics = nullptr);
 
 // Metrics and standard errors from B >= 2 batch estimates of grey daylight coefficients
 // (each n x m) under a sky of 1 or 3 channels (illuminance.h); `columns`, `occupied`,

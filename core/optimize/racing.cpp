@@ -24,26 +24,18 @@ Racer::Racer(Setting setting) : s_(std::move(setting)) {
   stats_.rejected.assign(s_.racing.rounds.size(), 0);
 }
 
-absl::StatusOr<std::vector<double>> Racer::VersionScores(
-    const std::vector<HourTally>& versions) const {
-  // The same checks as the metrics with errors
-  FENESTRA_RETURN_IF_ERROR(
-      AnnualMetricsFromTallies(versions, s_.analysed_hours, s_.options).status());
-  std::vector<double> scores;
-  for (const HourTally& v : versions) {
-    const AnnualMetrics metrics = MetricsFromTally(v, s_.analysed_hours, s_.options);
-    scores.push_back(Score(s_.objective, SceneMetricValue(metrics.scene, s_.metric)));
+absl::StatusOr<Racer::Scored> Racer::ScoreTallies(const std::vector<HourTally>& versions,
+                                                  bool partial) const {
+  std::vector<AnnualMetrics> version_metrics;
+  FENESTRA_ASSIGN_OR_RETURN(
+      metrics, AnnualMetricsFromTallies(versions, s_.analysed_hours, s_.options, &version_metrics));
+  Scored scored;
+  for (const AnnualMetrics& m : version_metrics) {
+    scored.scores.push_back(Score(s_.objective, SceneMetricValue(m.scene, s_.metric)));
   }
-  return scores;
-}
-
-absl::StatusOr<Evaluation> Racer::MetricEvaluationOf(const std::vector<HourTally>& versions,
-                                                     bool partial) const {
-  FENESTRA_ASSIGN_OR_RETURN(metrics,
-                            AnnualMetricsFromTallies(versions, s_.analysed_hours, s_.options));
-  Evaluation evaluation = MetricEvaluation(std::move(metrics), s_.metric);
-  evaluation.partial = partial;
-  return evaluation;
+  scored.evaluation = MetricEvaluation(std::move(metrics), s_.metric);
+  scored.evaluation.partial = partial;
+  return scored;
 }
 
 absl::StatusOr<RoundScores> Racer::IncumbentRounds() {
@@ -51,8 +43,8 @@ absl::StatusOr<RoundScores> Racer::IncumbentRounds() {
     RoundScores rounds;
     for (const int parts : s_.racing.rounds) {
       FENESTRA_ASSIGN_OR_RETURN(versions, s_.tallies->Tally(incumbent_, s_.options, parts));
-      FENESTRA_ASSIGN_OR_RETURN(scores, VersionScores(versions));
-      rounds.push_back(std::move(scores));
+      FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, true));
+      rounds.push_back(std::move(scored.scores));
     }
     stats_.parts_traced += s_.racing.rounds.back();
     incumbent_rounds_ = std::move(rounds);
@@ -76,32 +68,30 @@ absl::StatusOr<Evaluation> Racer::Evaluate(const BlindDesign& design) {
   }
   for (size_t r = 0; races && r < s_.racing.rounds.size(); ++r) {
     FENESTRA_ASSIGN_OR_RETURN(versions, s_.tallies->Tally(design, s_.options, s_.racing.rounds[r]));
-    FENESTRA_ASSIGN_OR_RETURN(scores, VersionScores(versions));
-    last_rounds_.push_back(std::move(scores));
+    FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, true));
+    last_rounds_.push_back(std::move(scored.scores));
     if (against && Rejects(Paired(last_rounds_[r], (*against)[r]), s_.racing)) {
       ++stats_.rejected[r];
       stats_.parts_traced += s_.racing.rounds[r];
       last_paths_fraction_ = static_cast<double>(s_.racing.rounds[r]) / kDesignParts;
       stats_.rays_traced += s_.tallies->RaysTraced() - rays_before;
-      FENESTRA_ASSIGN_OR_RETURN(evaluation, MetricEvaluationOf(versions, true));
       if (s_.audit) FENESTRA_RETURN_IF_ERROR(Audit(design));
-      return evaluation;
+      return std::move(scored.evaluation);
     }
   }
   FENESTRA_ASSIGN_OR_RETURN(versions, s_.tallies->Tally(design, s_.options, kDesignParts));
   stats_.parts_traced += kDesignParts;
   stats_.rays_traced += s_.tallies->RaysTraced() - rays_before;
   last_paths_fraction_ = 1;
-  if (s_.audit) {
-    FENESTRA_ASSIGN_OR_RETURN(scores, VersionScores(versions));
-    last_full_ = std::move(scores);
-  }
-  return MetricEvaluationOf(versions, false);
+  FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, false));
+  if (s_.audit) last_full_ = std::move(scored.scores);
+  return std::move(scored.evaluation);
 }
 
 absl::StatusOr<std::vector<double>> Racer::FullScores(const BlindDesign& design) {
   FENESTRA_ASSIGN_OR_RETURN(versions, s_.tallies->Tally(design, s_.options, kDesignParts));
-  return VersionScores(versions);
+  FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, false));
+  return std::move(scored.scores);
 }
 
 absl::Status Racer::Audit(const BlindDesign& design) {

@@ -107,9 +107,13 @@ class Racer {
   const RacingSettings& settings() const { return s_.racing; }
 
  private:
-  absl::StatusOr<std::vector<double>> VersionScores(const std::vector<HourTally>& versions) const;
-  absl::StatusOr<Evaluation> MetricEvaluationOf(const std::vector<HourTally>& versions,
-                                                bool partial) const;
+  // A tally's evaluation (partial: of a round) and each version's score, from one pass of
+  // the metrics over the versions.
+  struct Scored {
+    Evaluation evaluation;
+    std::vector<double> scores;
+  };
+  absl::StatusOr<Scored> ScoreTallies(const std::vector<HourTally>& versions, bool partial) const;
   absl::StatusOr<RoundScores> IncumbentRounds();
   absl::StatusOr<std::vector<double>> FullScores(const BlindDesign& design);
   absl::Status Audit(const BlindDesign& design);

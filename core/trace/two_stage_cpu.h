@@ -68,6 +68,24 @@ inline std::vector<uint64_t> BatchSizes(uint64_t paths, int batches) {
   return sizes;
 }
 
+// Each batch split into `parts` parts of consecutive paths (the rounds of the indoor replays,
+// core/dc/indoor_replay.h): part p of batch b starts at path PartStart(paths, batches, parts,
+// b, p), the batches x parts batches of all paths, so a batch's parts are exactly its paths.
+inline uint64_t PartStart(uint64_t paths, int batches, int parts, int b, int p) {
+  return BatchStart(paths, batches * parts, b * parts + p);
+}
+
+// Per batch, the paths of its parts [first, last).
+inline std::vector<uint64_t> PartPaths(uint64_t paths, int batches, int parts, int first,
+                                       int last) {
+  std::vector<uint64_t> sizes;
+  for (int b = 0; b < batches; ++b) {
+    sizes.push_back(PartStart(paths, batches, parts, b, last) -
+                    PartStart(paths, batches, parts, b, first));
+  }
+  return sizes;
+}
+
 template <class Intersector>
 OutdoorTally TraceOutdoorCpu(const Intersector& scene, const SurfaceTable& surfaces,
                              const TraceWindow& window, const HemisphereBasis& basis,

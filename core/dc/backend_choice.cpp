@@ -1,0 +1,75 @@
+// Which backend a job gets, and on which GPU: the "backend" and "gpus" settings.
+#include <algorithm>
+#include <atomic>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "absl/strings/escaping.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
+#include "core/dc/dc_backend.h"
+
+namespace fenestra {
+namespace {
+
+std::mutex devices_mutex;
+std::vector<int> chosen_devices;  // UseCudaDevices'; empty: every visible GPU
+
+}  // namespace
+
+void UseCudaDevices(std::vector<int> devices) {
+  const std::lock_guard<std::mutex> lock(devices_mutex);
+  chosen_devices = std::move(devices);
+}
+
+int NextCudaDevice() {
+  static std::atomic<uint64_t> next{0};
+  const uint64_t k = next.fetch_add(1);
+  {
+    const std::lock_guard<std::mutex> lock(devices_mutex);
+    if (!chosen_devices.empty()) return chosen_devices[k % chosen_devices.size()];
+  }
+  const int count = CudaDevices();
+  return count > 0 ? static_cast<int>(k % static_cast<uint64_t>(count)) : 0;
+}
+
+absl::StatusOr<std::vector<int>> ParseGpuList(const std::string& gpus, int visible) {
+  std::vector<int> devices;
+  if (gpus == "all") {
+    for (int d = 0; d < visible; ++d) devices.push_back(d);
+    return devices;
+  }
+  const std::string seen =
+      visible > 0 ? absl::StrCat(visible, " visible: 0 to ", visible - 1) : "none visible";
+  for (const absl::string_view part : absl::StrSplit(gpus, ',')) {
+    int device = 0;
+    if (!absl::SimpleAtoi(part, &device)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "gpus must be \"all\" or comma-separated device indices such as \"0,1\", got \"",
+          absl::CHexEscape(gpus), "\""));
+    }
+    if (device < 0 || device >= visible) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("gpus: there is no GPU ", device, " (", seen, ")"));
+    }
+    if (std::find(devices.begin(), devices.end(), device) != devices.end()) {
+      return absl::InvalidArgumentError(absl::StrCat("gpus: GPU ", device, " is listed twice"));
+    }
+    devices.push_back(device);
+  }
+  return devices;
+}
+
+absl::StatusOr<std::unique_ptr<DcBackend>> MakeBackend(const std::string& name) {
+  if (name == "cpu") return MakeEmbreeBackend();
+  if (name == "cuda") return MakeCudaBackend(NextCudaDevice());
+  if (name == "auto") {
+    if (CudaDevices() > 0) return MakeCudaBackend(NextCudaDevice());
+    return MakeEmbreeBackend();
+  }
+  return absl::InvalidArgumentError("backend must be cpu, cuda or auto, got '" + name + "'");
+}
+
+}  // namespace fenestra
