@@ -8,6 +8,7 @@
 #include <fstream>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "core/optimize/job.h"
 
@@ -186,6 +187,37 @@ TEST(JobValidationTest, BudgetObjectiveAndSampling) {
   job = QuickJob();
   job.add_neighborhoods()->set_radius(kNaN);
   EXPECT_THAT(ErrorOf(job), HasSubstr("job neighborhoods[0]: needs variables >= 0"));
+}
+
+// Racing's settings: k a finite number in its range, rounds increasing eighths below all of
+// them, a long list refused; the defaults filled in, racing itself left to the backend.
+TEST(JobValidationTest, RacingSettings) {
+  for (const double k : {kNaN, -4.0, 1.0, 1e9, std::numeric_limits<double>::infinity()}) {
+    v1::Job job = QuickJob();
+    job.mutable_sampling()->set_racing_standard_errors(k);
+    EXPECT_THAT(ErrorOf(job), HasSubstr("sampling.racing_standard_errors")) << k;
+  }
+  for (const std::vector<int>& rounds : std::vector<std::vector<int>>{
+           {0}, {8}, {-1}, {2, 1}, {1, 1}, {1, 2, 3, 4, 5, 6, 7, 7}, {1 << 30}}) {
+    v1::Job job = QuickJob();
+    for (const int parts : rounds) job.mutable_sampling()->add_racing_rounds(parts);
+    EXPECT_THAT(ErrorOf(job), HasSubstr("sampling.racing_rounds"));
+  }
+  v1::Job many = QuickJob();
+  for (int i = 0; i < 100'000; ++i) many.mutable_sampling()->add_racing_rounds(1 + i % 7);
+  EXPECT_THAT(ErrorOf(many), HasSubstr("sampling.racing_rounds"));
+
+  absl::StatusOr<PreparedJob> prepared = ValidateJob(QuickJob(), kOffice);
+  ASSERT_TRUE(prepared.ok()) << prepared.status();
+  const v1::Sampling& sampling = prepared->job.sampling();
+  EXPECT_FALSE(sampling.has_racing());  // decided by the backend (DesignTallies::RoundsPay)
+  EXPECT_EQ(sampling.racing_standard_errors(), 4);
+  EXPECT_THAT(sampling.racing_rounds(), ::testing::ElementsAre(1, 2));
+  v1::Job custom = QuickJob();
+  custom.mutable_sampling()->set_racing_standard_errors(2.5);
+  custom.mutable_sampling()->add_racing_rounds(3);
+  custom.mutable_sampling()->add_racing_rounds(7);
+  EXPECT_TRUE(ValidateJob(custom, kOffice).ok()) << ErrorOf(custom);
 }
 
 TEST(JobValidationTest, Names) {
