@@ -65,6 +65,10 @@ absl::Status CheckInputs(std::span<const DesignVariable> variables, const VnsOpt
     return absl::InvalidArgumentError(
         absl::StrCat("max_evaluations ", o.max_evaluations, ": must be at least 1"));
   }
+  if (o.lookahead < 1 || o.lookahead > kMaxLookahead) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("lookahead ", o.lookahead, ": must be in [1, ", kMaxLookahead, "]"));
+  }
   if (!(o.max_seconds >= 0) || o.failed_cycles_to_stop < 0 || !(o.min_improvement >= 0) ||
       !(o.min_improvement_standard_errors >= 0) || o.max_consecutive_cache_hits < 1 ||
       !(o.objective.target_tolerance >= 0) || !std::isfinite(o.objective.target)) {
@@ -93,18 +97,48 @@ double Constrain(const DesignVariable& v, double x, BoundaryRule rule) {
   return x;
 }
 
+// Where the search goes next: the random stream and the counts the steps move on.
+struct Walk {
+  explicit Walk(uint64_t seed) : rng(seed) {}
+
+  // A step (not the start) is done: an improvement returns to the first neighborhood, a
+  // failure goes on to the next, and after the last to a new cycle.
+  void Advance(bool improved, bool cached, int neighborhoods) {
+    consecutive_hits = cached ? consecutive_hits + 1 : 0;
+    if (improved) {
+      neighborhood = 0;
+      failed_cycles = 0;
+    } else if (++neighborhood == neighborhoods) {
+      neighborhood = 0;
+      ++failed_cycles;
+    }
+  }
+
+  std::mt19937_64 rng;
+  int neighborhood = 0;  // of the next step
+  int failed_cycles = 0;
+  int consecutive_hits = 0;
+};
+
+// A design evaluated ahead of its step.
+struct Ahead {
+  std::vector<double> x;
+  absl::StatusOr<Evaluation> evaluation;
+  double seconds = 0;  // its share of its batch's time
+};
+
 // One run of the search: its state between steps (the result so far and where it goes on),
 // and the steps.
 class Search {
  public:
-  Search(std::span<const DesignVariable> variables, const ObjectiveFunction& objective,
+  Search(std::span<const DesignVariable> variables, const BatchObjective& objective,
          const VnsOptions& options, const VnsCallbacks& callbacks)
       : variables_(variables),
         objective_(objective),
         options_(options),
         callbacks_(callbacks),
         start_time_(Clock::now()),
-        rng_(options.seed) {
+        walk_(options.seed) {
     for (size_t i = 0; i < variables.size(); ++i) {
       if (IsFree(variables[i])) free_.push_back(i);
     }
@@ -120,25 +154,26 @@ class Search {
  private:
   double Elapsed() const { return resumed_seconds_ + SecondsSince(start_time_); }
   std::vector<double> StartDesign() const;
-  std::vector<double> Propose();
+  std::vector<double> Propose(Walk& walk) const;
   absl::StatusOr<VnsRecord> Evaluate(std::vector<double> x, int neighborhood);
+  void EvaluateAhead(const std::vector<double>& x, bool start);
+  void DropAhead();
   void Record(VnsRecord record);
   void Publish();
+  bool WalkEnds(const Walk& walk, int evaluations) const;
   std::optional<StopReason> StopBeforeStep();
 
   std::span<const DesignVariable> variables_;
-  const ObjectiveFunction& objective_;
+  const BatchObjective& objective_;
   const VnsOptions& options_;
   const VnsCallbacks& callbacks_;
   const Clock::time_point start_time_;
   double resumed_seconds_ = 0;  // the clock at the checkpoint resumed from
   std::vector<size_t> free_;    // indices of the free variables
-  std::mt19937_64 rng_;
+  Walk walk_;
   VnsResult state_;
   std::map<std::vector<double>, int> cache_;  // design -> history index of its evaluation
-  int neighborhood_ = 0;                      // of the next step
-  int failed_cycles_ = 0;
-  int consecutive_hits_ = 0;
+  std::vector<Ahead> ahead_;  // evaluated ahead against the current incumbent, not yet taken
 };
 
 std::vector<double> Search::StartDesign() const {
@@ -149,23 +184,63 @@ std::vector<double> Search::StartDesign() const {
 
 // Moves v randomly chosen free variables of the incumbent (v and the radius of the current
 // neighborhood).
-std::vector<double> Search::Propose() {
-  const Neighborhood& n = options_.neighborhoods[neighborhood_];
+std::vector<double> Search::Propose(Walk& walk) const {
+  const Neighborhood& n = options_.neighborhoods[walk.neighborhood];
   const size_t count = n.variables == Neighborhood::kAllVariables
                            ? free_.size()
                            : std::min(free_.size(), static_cast<size_t>(n.variables));
   std::vector<size_t> order = free_;
   std::vector<double> x = state_.best_x;
   for (size_t c = 0; c < count; ++c) {
-    std::swap(order[c], order[c + UniformIndex(rng_, order.size() - c)]);
+    std::swap(order[c], order[c + UniformIndex(walk.rng, order.size() - c)]);
     const DesignVariable& v = variables_[order[c]];
-    const double delta = (2 * Uniform01(rng_) - 1) * n.radius_fraction * (v.upper - v.lower);
+    const double delta = (2 * Uniform01(walk.rng) - 1) * n.radius_fraction * (v.upper - v.lower);
     x[order[c]] = Constrain(v, x[order[c]] + delta, options_.boundary);
   }
   return x;
 }
 
-// The step at design `x`: looked up in the cache, else evaluated.
+// Evaluates `x`, the design of the next step, with the designs the steps after it propose
+// if none of them improves (options_.lookahead in all, new ones only, within the budget);
+// the start alone (there is no incumbent to propose from yet).
+void Search::EvaluateAhead(const std::vector<double>& x, bool start) {
+  std::vector<std::vector<double>> designs = {x};
+  const auto known = [&](const std::vector<double>& y) {
+    return cache_.contains(y) || std::find(designs.begin(), designs.end(), y) != designs.end();
+  };
+  const int neighborhoods = static_cast<int>(options_.neighborhoods.size());
+  Walk walk = walk_;  // past x's proposal
+  walk.Advance(false, false, neighborhoods);
+  const int max_steps = 16 * options_.lookahead;
+  for (int step = 0; !start && step < max_steps && static_cast<int>(designs.size()) < options_.lookahead &&
+                     !WalkEnds(walk, state_.evaluations + static_cast<int>(designs.size()));
+       ++step) {
+    std::vector<double> y = Propose(walk);
+    const bool cached = known(y);
+    if (!cached) designs.push_back(std::move(y));
+    walk.Advance(false, cached, neighborhoods);
+  }
+  const Clock::time_point t0 = Clock::now();
+  std::vector<absl::StatusOr<Evaluation>> evaluations = objective_(designs);
+  const double share = SecondsSince(t0) / static_cast<double>(designs.size());
+  for (size_t i = 0; i < designs.size(); ++i) {
+    absl::StatusOr<Evaluation> e =
+        i < evaluations.size() ? std::move(evaluations[i])
+                               : absl::InternalError("the objective returned too few results");
+    ahead_.push_back({std::move(designs[i]), std::move(e), share});
+  }
+}
+
+// Drops the designs evaluated ahead that no step took (the incumbent changed, or the search
+// stops), keeping their time.
+void Search::DropAhead() {
+  for (const Ahead& a : ahead_) state_.evaluation_seconds += a.seconds;
+  state_.discarded += static_cast<int>(ahead_.size());
+  ahead_.clear();
+}
+
+// The step at design `x`: looked up in the cache, else evaluated (ahead, or now with the
+// designs after it).
 absl::StatusOr<VnsRecord> Search::Evaluate(std::vector<double> x, int neighborhood) {
   VnsRecord record;
   record.index = static_cast<int>(state_.history.size());
@@ -176,9 +251,15 @@ absl::StatusOr<VnsRecord> Search::Evaluate(std::vector<double> x, int neighborho
     record.score = earlier.score;
     record.cached = true;
   } else {
-    const Clock::time_point t0 = Clock::now();
-    absl::StatusOr<Evaluation> evaluation = objective_(x);
-    record.evaluation_seconds = SecondsSince(t0);
+    auto ahead = std::find_if(ahead_.begin(), ahead_.end(), [&](const Ahead& a) { return a.x == x; });
+    if (ahead == ahead_.end()) {
+      EvaluateAhead(x, neighborhood < 0);
+      ahead = ahead_.end() - 1;
+      while (ahead->x != x) --ahead;
+    }
+    absl::StatusOr<Evaluation> evaluation = std::move(ahead->evaluation);
+    record.evaluation_seconds = ahead->seconds;
+    ahead_.erase(ahead);
     if (!evaluation.ok()) {
       return absl::Status(evaluation.status().code(),
                           absl::StrCat("evaluating x = (", absl::StrJoin(x, ", "),
@@ -215,14 +296,10 @@ void Search::Record(VnsRecord record) {
                  options_.min_improvement_standard_errors *
                      std::hypot(record.evaluation.standard_error, best.evaluation.standard_error));
     record.improved = !record.evaluation.partial && record.score > best.score + margin;
-    consecutive_hits_ = record.cached ? consecutive_hits_ + 1 : 0;
+    walk_.Advance(record.improved, record.cached, static_cast<int>(options_.neighborhoods.size()));
     if (record.improved) {
       ++state_.improvements;
-      neighborhood_ = 0;
-      failed_cycles_ = 0;
-    } else if (++neighborhood_ == static_cast<int>(options_.neighborhoods.size())) {
-      neighborhood_ = 0;
-      ++failed_cycles_;
+      DropAhead();  // evaluated against the incumbent before
     }
   }
   state_.elapsed_seconds = record.elapsed_seconds;
@@ -279,10 +356,10 @@ absl::Status Search::Replay(const VnsResult& so_far) {
                        "): the history belongs to another search (variables, options or seed)"));
     };
     if (done.index != i) return differs(absl::StrCat("index ", done.index));
-    if (done.neighborhood != (i == 0 ? -1 : neighborhood_)) {
+    if (done.neighborhood != (i == 0 ? -1 : walk_.neighborhood)) {
       return differs(absl::StrCat("neighborhood ", done.neighborhood));
     }
-    if (done.x != (i == 0 ? StartDesign() : Propose())) {
+    if (done.x != (i == 0 ? StartDesign() : Propose(walk_))) {
       return differs(absl::StrCat("design (", absl::StrJoin(done.x, ", "), ")"));
     }
     if (!std::isfinite(done.evaluation.value) || !std::isfinite(done.evaluation.standard_error) ||
@@ -309,12 +386,24 @@ absl::Status Search::Replay(const VnsResult& so_far) {
   return absl::OkStatus();
 }
 
+// Whether a search at `walk`, with `evaluations` done, stops before its next step by the
+// rules that follow from the steps alone (not the incumbent, the clock or a cancellation).
+bool Search::WalkEnds(const Walk& walk, int evaluations) const {
+  return (options_.failed_cycles_to_stop > 0 &&
+          walk.failed_cycles >= options_.failed_cycles_to_stop) ||
+         walk.consecutive_hits >= options_.max_consecutive_cache_hits ||
+         evaluations >= options_.max_evaluations;
+}
+
 // The stopping rules, checked before each step but the start.
 std::optional<StopReason> Search::StopBeforeStep() {
-  if (options_.failed_cycles_to_stop > 0 && failed_cycles_ >= options_.failed_cycles_to_stop) {
+  if (options_.failed_cycles_to_stop > 0 &&
+      walk_.failed_cycles >= options_.failed_cycles_to_stop) {
     return StopReason::kAllNeighborhoodsFailed;
   }
-  if (consecutive_hits_ >= options_.max_consecutive_cache_hits) return StopReason::kSpaceExhausted;
+  if (walk_.consecutive_hits >= options_.max_consecutive_cache_hits) {
+    return StopReason::kSpaceExhausted;
+  }
   if (free_.empty()) return StopReason::kNoFreeVariables;
   if (options_.objective.sense == ObjectiveSense::kTarget &&
       -state_.best_score <= options_.objective.target_tolerance) {
@@ -329,11 +418,13 @@ std::optional<StopReason> Search::StopBeforeStep() {
 absl::StatusOr<VnsResult> Search::Run() {
   while (true) {
     if (const std::optional<StopReason> stop = StopBeforeStep()) {
+      DropAhead();
       state_.stop_reason = *stop;
       state_.elapsed_seconds = Elapsed();
       return std::move(state_);
     }
-    FENESTRA_ASSIGN_OR_RETURN(step, Evaluate(Propose(), neighborhood_));
+    const int neighborhood = walk_.neighborhood;
+    FENESTRA_ASSIGN_OR_RETURN(step, Evaluate(Propose(walk_), neighborhood));
     step.elapsed_seconds = Elapsed();
     Record(std::move(step));
     Publish();
@@ -381,6 +472,17 @@ std::string_view StopReasonName(StopReason reason) {
 absl::StatusOr<VnsResult> RunVns(std::span<const DesignVariable> variables,
                                  const ObjectiveFunction& objective, const VnsOptions& options,
                                  const VnsCallbacks& callbacks, const VnsResult* resume) {
+  const BatchObjective each = [&](const std::vector<std::vector<double>>& designs) {
+    std::vector<absl::StatusOr<Evaluation>> evaluations;
+    for (const std::vector<double>& x : designs) evaluations.push_back(objective(x));
+    return evaluations;
+  };
+  return RunVns(variables, each, options, callbacks, resume);
+}
+
+absl::StatusOr<VnsResult> RunVns(std::span<const DesignVariable> variables,
+                                 const BatchObjective& objective, const VnsOptions& options,
+                                 const VnsCallbacks& callbacks, const VnsResult* resume) {
   FENESTRA_RETURN_IF_ERROR(CheckInputs(variables, options));
   Search search(variables, objective, options, callbacks);
   if (resume != nullptr) {
@@ -397,7 +499,7 @@ absl::StatusOr<VnsResult> RunVns(std::span<const DesignVariable> variables,
 absl::Status CheckVnsResume(std::span<const DesignVariable> variables, const VnsOptions& options,
                             const VnsResult& resume) {
   FENESTRA_RETURN_IF_ERROR(CheckInputs(variables, options));
-  const ObjectiveFunction unused;  // a replay never evaluates
+  const BatchObjective unused;  // a replay never evaluates
   return Search(variables, unused, options, {}).Replay(resume);
 }
 

@@ -19,6 +19,13 @@
 // platform and standard library, provided the objective is deterministic and no time
 // budget or cancellation cuts the run short.
 //
+// A search may evaluate several designs at once (VnsOptions::lookahead, a BatchObjective):
+// it proposes the designs the next steps would propose if none of them improved, evaluates
+// them together (on several devices, say), then takes the steps one by one as before. At the
+// first improvement the designs evaluated ahead are dropped, and the search proposes from the
+// new incumbent. The steps, and so the result, are those of the search one design at a time
+// for the same seed; only time is spent on the dropped evaluations (VnsResult::discarded).
+//
 // A search can stop and go on later, in another process: after each step it hands out its
 // result so far (VnsCallbacks::checkpoint), and RunVns continues from one (`resume`). All of
 // its state follows from its history: replaying it (the same proposals, without calling the
@@ -95,7 +102,12 @@ struct VnsOptions {
   // Stop when this many proposals in a row were already in the cache: the space is used up
   // at the resolution of the variables' steps.
   int max_consecutive_cache_hits = 1000;
+  // Designs evaluated at once, ahead of the steps that take them (the file comment); 1 = one
+  // at a time. In [1, kMaxLookahead].
+  int lookahead = 1;
 };
+
+inline constexpr int kMaxLookahead = 64;
 
 // What the objective returns for one design.
 struct Evaluation {
@@ -110,6 +122,12 @@ struct Evaluation {
 // Evaluates one design (one coordinate per variable, fixed ones included). An error status
 // stops the search and is returned.
 using ObjectiveFunction = std::function<absl::StatusOr<Evaluation>(const std::vector<double>& x)>;
+
+// Evaluates several designs, each as ObjectiveFunction would, and returns one result per
+// design in their order. An error stops the search only when the search takes that design's
+// step; the evaluations of the designs it drops are never looked at.
+using BatchObjective = std::function<std::vector<absl::StatusOr<Evaluation>>(
+    const std::vector<std::vector<double>>& designs)>;
 
 // One step of the search.
 struct VnsRecord {
@@ -165,7 +183,9 @@ struct VnsResult {
   // The search's clock [s]: since it started, the time between a checkpoint and its resume
   // left out.
   double elapsed_seconds = 0;
-  double evaluation_seconds = 0;  // total time in the objective
+  double evaluation_seconds = 0;  // total time in the objective, dropped evaluations included
+  // Designs evaluated ahead and dropped because an earlier one improved (lookahead > 1)
+  int discarded = 0;
 };
 
 struct VnsCallbacks {
@@ -190,6 +210,13 @@ struct VnsCallbacks {
 // (a step's design, neighborhood, cache hit or improvement differs from the replay's).
 absl::StatusOr<VnsResult> RunVns(std::span<const DesignVariable> variables,
                                  const ObjectiveFunction& objective, const VnsOptions& options = {},
+                                 const VnsCallbacks& callbacks = {},
+                                 const VnsResult* resume = nullptr);
+
+// The same with designs evaluated options.lookahead at a time: the same steps and result.
+// A step's evaluation_seconds is its share of its batch's time.
+absl::StatusOr<VnsResult> RunVns(std::span<const DesignVariable> variables,
+                                 const BatchObjective& objective, const VnsOptions& options = {},
                                  const VnsCallbacks& callbacks = {},
                                  const VnsResult* resume = nullptr);
 

@@ -409,6 +409,11 @@ TEST(VnsTest, RejectsBadVariablesAndOptions) {
   VnsOptions bad_neighborhood;
   bad_neighborhood.neighborhoods = {{1, 0}};
   EXPECT_FALSE(RunVns(ok, Bowl, bad_neighborhood).ok());
+  for (const int lookahead : {0, -1, kMaxLookahead + 1}) {
+    VnsOptions bad_lookahead;
+    bad_lookahead.lookahead = lookahead;
+    EXPECT_EQ(RunVns(ok, Bowl, bad_lookahead).status().code(), absl::StatusCode::kInvalidArgument);
+  }
 }
 
 // Resuming: a noisy bowl over a continuous variable starting on its bound, a gridded one
@@ -664,5 +669,124 @@ TEST(VnsTest, ResumeRefusesAHistoryOfAnotherSearch) {
   refused(bad, options, "elapsed_seconds -1 is not a time");
   refused(VnsResult(), options, "no steps");
 }
+// The steps of a search that evaluates designs ahead, in batches, against one design at a
+// time: a noisy bowl over a continuous and a gridded variable (cache hits), with partial
+// evaluations on one side (as racing makes them).
+class LookaheadTest : public ::testing::Test {
+ protected:
+  static absl::StatusOr<Evaluation> Objective(const std::vector<double>& x) {
+    absl::StatusOr<Evaluation> e = NoisyBowl(x);
+    e->partial = x[0] < 0.2;
+    return e;
+  }
+  // The batch objective, keeping every batch it was given
+  BatchObjective Batches() {
+    return [this](const std::vector<std::vector<double>>& designs) {
+      batches_.push_back(designs);
+      std::vector<absl::StatusOr<Evaluation>> out;
+      for (const std::vector<double>& x : designs) {
+        out.push_back(failing_.contains(x) ? absl::InternalError("out of memory") : Objective(x));
+      }
+      return out;
+    };
+  }
+  static VnsOptions Options(int lookahead) {
+    VnsOptions options;
+    options.max_evaluations = 120;
+    options.failed_cycles_to_stop = 0;
+    options.seed = 7;
+    options.lookahead = lookahead;
+    return options;
+  }
+  static void ExpectSameSteps(const VnsResult& a, const VnsResult& b) {
+    ASSERT_EQ(a.history.size(), b.history.size());
+    for (size_t i = 0; i < a.history.size(); ++i) {
+      SCOPED_TRACE(absl::StrCat("step ", i));
+      EXPECT_EQ(a.history[i].x, b.history[i].x);
+      EXPECT_EQ(a.history[i].evaluation.value, b.history[i].evaluation.value);
+      EXPECT_EQ(a.history[i].evaluation.partial, b.history[i].evaluation.partial);
+      EXPECT_EQ(a.history[i].cached, b.history[i].cached);
+      EXPECT_EQ(a.history[i].improved, b.history[i].improved);
+      EXPECT_EQ(a.history[i].neighborhood, b.history[i].neighborhood);
+    }
+    EXPECT_EQ(a.best_x, b.best_x);
+    EXPECT_EQ(a.evaluations, b.evaluations);
+    EXPECT_EQ(a.improvements, b.improvements);
+  }
+
+  std::vector<DesignVariable> vars_ = {Var("x", 0, 1, 0.1), GridVar("y", 0, 1, 0.5, 0.05)};
+  std::vector<std::vector<std::vector<double>>> batches_;
+  std::set<std::vector<double>> failing_;
+
+ private:
+  static DesignVariable GridVar(std::string name, double lower, double upper, double start,
+                                double step) {
+    DesignVariable v = Var(std::move(name), lower, upper, start);
+    v.step = step;
+    return v;
+  }
+};
+
+TEST_F(LookaheadTest, TakesTheStepsOfTheSearchOneDesignAtATime) {
+  const absl::StatusOr<VnsResult> one = RunVns(vars_, Objective, Options(1));
+  ASSERT_TRUE(one.ok()) << one.status();
+  ASSERT_GT(one->improvements, 5);
+  ASSERT_GT(one->cache_hits, 0);
+  for (const int lookahead : {2, 5, 16}) {
+    SCOPED_TRACE(absl::StrCat("lookahead ", lookahead));
+    batches_.clear();
+    const absl::StatusOr<VnsResult> ahead = RunVns(vars_, Batches(), Options(lookahead));
+    ASSERT_TRUE(ahead.ok()) << ahead.status();
+    ExpectSameSteps(*one, *ahead);
+    size_t evaluated = 0, largest = 0;
+    for (const auto& batch : batches_) {
+      evaluated += batch.size();
+      largest = std::max(largest, batch.size());
+      EXPECT_LE(batch.size(), static_cast<size_t>(lookahead));
+      EXPECT_EQ(std::set<std::vector<double>>(batch.begin(), batch.end()).size(), batch.size());
+    }
+    EXPECT_EQ(largest, static_cast<size_t>(lookahead));
+    EXPECT_LT(batches_.size(), static_cast<size_t>(one->evaluations));
+    EXPECT_GT(ahead->discarded, 0);
+    EXPECT_EQ(evaluated, static_cast<size_t>(ahead->evaluations + ahead->discarded));
+  }
+}
+
+// An error in a design evaluated ahead and dropped never reaches the search; one in a design
+// a step takes stops it.
+TEST_F(LookaheadTest, AnErrorMattersOnlyWhereAStepTakesItsDesign) {
+  const absl::StatusOr<VnsResult> ahead = RunVns(vars_, Batches(), Options(4));
+  ASSERT_TRUE(ahead.ok()) << ahead.status();
+  std::set<std::vector<double>> taken;
+  for (const VnsRecord& step : ahead->history) taken.insert(step.x);
+  for (const auto& batch : batches_) {
+    for (const std::vector<double>& x : batch) {
+      if (!taken.contains(x)) failing_.insert(x);
+    }
+  }
+  ASSERT_FALSE(failing_.empty());
+  batches_.clear();
+  const absl::StatusOr<VnsResult> again = RunVns(vars_, Batches(), Options(4));
+  ASSERT_TRUE(again.ok()) << again.status();
+  ExpectSameSteps(*ahead, *again);
+
+  failing_ = {ahead->history[40].x};
+  ASSERT_FALSE(ahead->history[40].cached);
+  const absl::StatusOr<VnsResult> stopped = RunVns(vars_, Batches(), Options(4));
+  EXPECT_EQ(stopped.status().code(), absl::StatusCode::kInternal);
+  EXPECT_NE(stopped.status().message().find("out of memory"), std::string::npos);
+}
+
+// A search with lookahead resumes from a checkpoint of one without, and the other way round.
+TEST_F(LookaheadTest, ResumesAcrossLookaheads) {
+  const absl::StatusOr<VnsResult> one = RunVns(vars_, Objective, Options(1));
+  ASSERT_TRUE(one.ok()) << one.status();
+  VnsResult so_far = *one;
+  so_far.history.resize(50);
+  const absl::StatusOr<VnsResult> resumed = RunVns(vars_, Batches(), Options(6), {}, &so_far);
+  ASSERT_TRUE(resumed.ok()) << resumed.status();
+  ExpectSameSteps(*one, *resumed);
+}
+
 }  // namespace
 }  // namespace fenestra
