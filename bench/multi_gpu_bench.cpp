@@ -41,6 +41,33 @@ int main(int argc, char** argv) {
   v1::Job job = ValueOrExit(ReadJobFile(kRoot + "/examples/city_office/four_variables.json"));
   job.mutable_sampling()->set_backend("cuda");
   const PreparedJob prepared = ValueOrExit(PrepareJob(job, kRoot + "/examples/city_office"));
+  // One job across the GPUs: the four-variable job with 1 to 2 x visible candidates at once
+  // (each lane a tracer on the next GPU in turn), twice each
+  std::vector<int> all;
+  for (int d = 0; d < visible; ++d) all.push_back(d);
+  UseCudaDevices(all);
+  ValueOrExit(RunJob(prepared, nullptr));  // warm-up: contexts, first launches
+  for (int lanes = 1; lanes <= std::max(4, 2 * visible); ++lanes) {
+    PreparedJob one = prepared;
+    one.job.mutable_sampling()->set_candidates_at_once(lanes);
+    for (int run = 0; run < 2; ++run) {
+      const auto start = std::chrono::steady_clock::now();
+      const v1::JobResult r = ValueOrExit(RunJob(one, nullptr));
+      const double wall = Since(start);
+      std::printf(
+          "one job, %2d at once on %d GPU(s): %.3f s (outdoor %.3f s, evaluations %.3f s, final "
+          "check %.3f s, the rest %.3f s), %d evaluations (+%d dropped), mean %.3f ms; best %.3f "
+          "+- %.3f %%\n",
+          lanes, std::min(lanes, visible), wall, r.timings().outdoor_seconds(),
+          r.timings().evaluation_seconds(), r.final_check().seconds(),
+          r.timings().total_seconds() - r.timings().outdoor_seconds() -
+              r.timings().evaluation_seconds() - r.final_check().seconds(),
+          r.evaluations(), r.evaluations_discarded(),
+          1e3 * r.timings().evaluation_seconds() / std::max(1, r.evaluations()),
+          r.best_value().value(), r.best_value().standard_error());
+    }
+  }
+
   double one_gpu = 0;
   for (int gpus = 1; gpus <= visible; gpus *= 2) {
     std::vector<int> devices;

@@ -35,6 +35,14 @@ int NextCudaDevice() {
   return count > 0 ? static_cast<int>(k % static_cast<uint64_t>(count)) : 0;
 }
 
+int CudaDevicesInUse() {
+  {
+    const std::lock_guard<std::mutex> lock(devices_mutex);
+    if (!chosen_devices.empty()) return static_cast<int>(chosen_devices.size());
+  }
+  return CudaDevices();
+}
+
 absl::StatusOr<std::vector<int>> ParseGpuList(const std::string& gpus, int visible) {
   std::vector<int> devices;
   if (gpus == "all") {

@@ -1,6 +1,7 @@
 // The CUDA backend: the same path code and random streams as the Embree backend, traced
 // on a GPU over a BVH built on the host (core/trace/bvh.h). Weight windows (the one-stage
 // importance map) are CPU-only: on the GPU the one-stage method uses plain roulette.
+#include <algorithm>
 #include <chrono>
 #include <memory>
 
@@ -424,6 +425,9 @@ class CudaBackend : public DcBackend {
       : tracer_(std::move(tracer)), annual_(std::move(annual)) {}
 
   std::string Name() const override { return absl::StrCat("cuda (", tracer_->device_name(), ")"); }
+  int DefaultCandidatesAtOnce() const override {
+    return kCandidatesPerGpu * std::max(1, CudaDevicesInUse());
+  }
 
   absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(
       const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {

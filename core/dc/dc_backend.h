@@ -128,6 +128,9 @@ class DcBackend {
  public:
   virtual ~DcBackend() = default;
   virtual std::string Name() const = 0;
+  // Designs a job evaluates at once by default (Sampling.candidates_at_once): one on the CPU,
+  // whose one evaluation uses every core; kCandidatesPerGpu per GPU in use on CUDA.
+  virtual int DefaultCandidatesAtOnce() const { return 1; }
 
   // Traces options.paths_per_sensor paths from every sensor through `mesh` (materials
   // indexed by mesh.material). InvalidArgument for bad options, sensors or materials.
@@ -199,5 +202,12 @@ absl::StatusOr<std::vector<int>> ParseGpuList(const std::string& gpus, int visib
 
 // Makes NextCudaDevice take `devices` in turn (process-wide); empty: every visible GPU.
 void UseCudaDevices(std::vector<int> devices);
+
+// How many GPUs NextCudaDevice takes in turn.
+int CudaDevicesInUse();
+
+// Designs evaluated at once per GPU by default: while one design's mesh and BVH are built
+// on the host, the other's kernels run (bench/README.md, "Several candidates at once").
+inline constexpr int kCandidatesPerGpu = 2;
 
 }  // namespace fenestra

@@ -29,6 +29,7 @@
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
 #include "core/sky/sky_matrix.h"
+#include "core/trace/thread_pool.h"
 #include "google/protobuf/io/coded_stream.h"
 #include "google/protobuf/io/zero_copy_stream_impl_lite.h"
 
@@ -428,6 +429,47 @@ void AddSearch(const SearchSettings& settings, const VnsResult& search,
   result.mutable_timings()->set_evaluation_seconds(search.evaluation_seconds);
 }
 
+// The lanes a job's designs are evaluated on at once (Sampling.candidates_at_once): the
+// job's backend and as many more as asked (on CUDA each takes the next GPU in turn), each
+// with the indoor stage's design tallies. The tallies are made at once.
+struct Lanes {
+  std::vector<std::unique_ptr<DcBackend>> more;  // the backends after the job's
+  std::vector<std::unique_ptr<DesignTallies>> tallies;
+
+  std::vector<DesignTallies*> Tallies() const {
+    std::vector<DesignTallies*> out;
+    for (const auto& t : tallies) out.push_back(t.get());
+    return out;
+  }
+};
+
+absl::StatusOr<Lanes> MakeLanes(const v1::Sampling& sampling, DcBackend& first, const Scene& scene,
+                                const IndoorOptions& options,
+                                const std::vector<Matrix>& outdoor_batches, const Matrix& sky) {
+  const int count = sampling.candidates_at_once() > 0 ? sampling.candidates_at_once()
+                                                      : first.DefaultCandidatesAtOnce();
+  Lanes lanes;
+  std::vector<DcBackend*> backends = {&first};
+  for (int l = 1; l < count; ++l) {
+    FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(sampling.backend()));
+    backends.push_back(backend.get());
+    lanes.more.push_back(std::move(backend));
+  }
+  lanes.tallies.resize(count);
+  std::vector<absl::Status> made(count);
+  ParallelFor(count, count, [&](uint64_t l) {
+    absl::StatusOr<std::unique_ptr<DesignTallies>> tallies =
+        backends[l]->MakeDesignTallies(scene, options, outdoor_batches, sky);
+    if (tallies.ok()) {
+      lanes.tallies[l] = *std::move(tallies);
+    } else {
+      made[l] = tallies.status();
+    }
+  });
+  for (const absl::Status& status : made) FENESTRA_RETURN_IF_ERROR(status);
+  return lanes;
+}
+
 // The job's search from the start or from `so_far`, keeping `checkpoint` (that of `so_far`,
 // else new) up to date after each step and handing it out with the progress; `racer`
 // evaluates the designs and learns of each new incumbent.
@@ -440,20 +482,22 @@ absl::StatusOr<VnsResult> RunJobSearch(const PreparedJob& job, const SearchSetti
   if (so_far != nullptr) {
     for (auto step = so_far->history.rbegin(); step != so_far->history.rend(); ++step) {
       if (!step->improved) continue;
-      racer.SetIncumbent(DesignAt(job, step->x), step->evaluation, false);
+      racer.SetIncumbent(DesignAt(job, step->x));
       break;
     }
   }
-  const ObjectiveFunction objective = [&](const std::vector<double>& x) {
-    return racer.Evaluate(DesignAt(job, x));
+  const BatchObjective objective = [&](const std::vector<std::vector<double>>& xs) {
+    std::vector<BlindDesign> designs;
+    for (const std::vector<double>& x : xs) designs.push_back(DesignAt(job, x));
+    return racer.EvaluateBatch(designs);
   };
   VnsCallbacks vns_callbacks;
   vns_callbacks.cancelled = callbacks.cancelled;
   vns_callbacks.checkpoint = [&](const VnsResult& state) {
     const VnsRecord& step = state.history.back();
     v1::Evaluation& e = *checkpoint.add_history() = ToProto(job, step, search_start);
-    if (!step.cached) e.set_paths_fraction(racer.LastPathsFraction());
-    if (step.improved) racer.SetIncumbent(DesignAt(job, step.x), step.evaluation, !step.cached);
+    if (!step.cached) e.set_paths_fraction(racer.PathsFraction(DesignAt(job, step.x)));
+    if (step.improved) racer.SetIncumbent(DesignAt(job, step.x));
     if (step.improved) {
       if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&step.evaluation.payload)) {
         *checkpoint.mutable_best_metrics() = ToProto(*metrics);
@@ -574,6 +618,8 @@ std::string JobContentHash(const PreparedJob& job) {
   v1::Job content = job.job;
   content.clear_scene_file();
   *content.mutable_scene() = SelfContainedSceneProto(job.scene);
+  // How many designs are evaluated at once changes the time, not the steps
+  content.mutable_sampling()->clear_candidates_at_once();
   std::string bytes;
   {
     google::protobuf::io::StringOutputStream stream(&bytes);
@@ -623,7 +669,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   v1::JobResult result;
 
   // The search, and where it starts: a checkpoint is checked before any work
-  const SearchSettings search_settings = MakeSearchSettings(spec);
+  SearchSettings search_settings = MakeSearchSettings(spec);
   FENESTRA_ASSIGN_OR_RETURN(from, StartOfSearch(job, search_settings, resume));
   v1::SearchCheckpoint& checkpoint = from.checkpoint;
   const JobClock clock{start, from.resumed_seconds};
@@ -670,9 +716,9 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   // search evaluates as the uninterrupted one would.
   if (callbacks.stage) callbacks.stage("indoor paths");
   const Scene ranged = WithJobRanges(job.scene, spec);
-  FENESTRA_ASSIGN_OR_RETURN(design_tallies, backend->MakeDesignTallies(ranged, indoor_options,
-                                                                       outdoor->batches, lit_sky));
-  Racer racer({.tallies = design_tallies.get(),
+  FENESTRA_ASSIGN_OR_RETURN(lanes, MakeLanes(spec.sampling(), *backend, ranged, indoor_options,
+                                            outdoor->batches, lit_sky));
+  Racer racer({.lanes = lanes.Tallies(),
                .options = metric_options,
                .analysed_hours = setting.analysed_hours,
                .metric = setting.metric,
@@ -681,18 +727,21 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
                                      spec.sampling().racing_rounds().end()},
                           .standard_errors = spec.sampling().racing_standard_errors()},
                .enabled = spec.sampling().has_racing() ? spec.sampling().racing()
-                                                       : design_tallies->RoundsPay(),
+                                                       : lanes.tallies.front()->RoundsPay(),
                .audit = spec.sampling().racing_audit()});
 
   // The search
   if (callbacks.stage) callbacks.stage("search");
+  search_settings.options.lookahead = static_cast<int>(lanes.tallies.size());
   FENESTRA_ASSIGN_OR_RETURN(search,
                             RunJobSearch(job, search_settings, racer, callbacks, clock,
                                          from.so_far ? &*from.so_far : nullptr, checkpoint));
   if (racer.Races()) AddRacing(racer, result);
+  result.set_candidates_at_once(static_cast<int>(lanes.tallies.size()));
+  result.set_evaluations_discarded(search.discarded);
 
   // The best design's hourly illuminance, for reports and other tools
-  design_tallies.reset();  // the search's paths are no longer needed
+  lanes.tallies.clear();  // the search's paths are no longer needed
   if (search.evaluations > 0 && search.stop_reason != StopReason::kCancelled &&
       static_cast<int64_t>(job.scene.sensors.size() * setting.sky.steps.size()) <=
           kMaxHourlyIlluminanceValues) {

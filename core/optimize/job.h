@@ -37,6 +37,8 @@ struct OutdoorMatrix {
 
 // Objective evaluations of a job whose budget leaves them open (job.proto).
 inline constexpr int kDefaultMaxEvaluations = 150;
+// The most designs a job evaluates at once (Sampling.candidates_at_once).
+inline constexpr int kMaxCandidatesAtOnce = 16;
 
 // A job checked and resolved: scene loaded, weather read, variables known, defaults filled
 // in. Preparing does all validation, so a job that prepares runs.

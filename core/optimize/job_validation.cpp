@@ -254,6 +254,10 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   if (s.batches() == 0) s.set_batches(kDefaultBatches);
   if (!s.has_final_check()) s.set_final_check(kFinalCheckByDefault);
   FENESTRA_RETURN_IF_ERROR(ResolveRacing(s));
+  if (s.candidates_at_once() < 0 || s.candidates_at_once() > kMaxCandidatesAtOnce) {
+    return Invalid("sampling.candidates_at_once",
+                   absl::StrCat("must be in [0, ", kMaxCandidatesAtOnce, "] (0 = the default)"));
+  }
   if (s.basis_cells() != 288 && s.basis_cells() != 1152) {
     return Invalid("sampling.basis_cells", "must be 288 or 1152");
   }

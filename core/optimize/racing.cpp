@@ -1,10 +1,12 @@
 #include "core/optimize/racing.h"
 
+#include <algorithm>
 #include <utility>
 
 #include "core/common/status_macros.h"
 #include "core/metrics/metric_errors.h"
 #include "core/optimize/metric_objective.h"
+#include "core/trace/thread_pool.h"
 
 namespace fenestra {
 
@@ -20,9 +22,13 @@ bool Rejects(const PairedDifference& difference, const RacingSettings& settings)
   return difference.difference < -settings.standard_errors * difference.standard_error;
 }
 
-Racer::Racer(Setting setting) : s_(std::move(setting)) {
+Racer::Racer(Setting setting)
+    : s_(std::move(setting)),
+      threads_(std::make_unique<StandingThreads>(static_cast<int>(s_.lanes.size()))) {
   stats_.rejected.assign(s_.racing.rounds.size(), 0);
 }
+
+Racer::~Racer() = default;
 
 absl::StatusOr<Racer::Scored> Racer::ScoreTallies(const std::vector<HourTally>& versions,
                                                   bool partial) const {
@@ -38,90 +44,142 @@ absl::StatusOr<Racer::Scored> Racer::ScoreTallies(const std::vector<HourTally>& 
   return scored;
 }
 
-absl::StatusOr<RoundScores> Racer::IncumbentRounds() {
+// The incumbent's round scores (and full scores, under the audit) for the next batch: kept
+// from its evaluation here, else traced again on the first lane (after a resume).
+absl::Status Racer::PrepareIncumbent() {
+  if (!incumbent_set_ || !Races()) return absl::OkStatus();
+  DesignTallies& lane = *s_.lanes.front();
   if (!incumbent_rounds_) {
     RoundScores rounds;
     for (const int parts : s_.racing.rounds) {
-      FENESTRA_ASSIGN_OR_RETURN(versions, s_.tallies->Tally(incumbent_, s_.options, parts));
+      FENESTRA_ASSIGN_OR_RETURN(versions, lane.Tally(incumbent_, s_.options, parts));
       FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, true));
       rounds.push_back(std::move(scored.scores));
     }
     stats_.parts_traced += s_.racing.rounds.back();
     incumbent_rounds_ = std::move(rounds);
   }
-  return *incumbent_rounds_;
+  if (s_.audit && !incumbent_full_) {
+    FENESTRA_ASSIGN_OR_RETURN(full, FullScores(lane, incumbent_));
+    incumbent_full_ = std::move(full);
+  }
+  return absl::OkStatus();
 }
 
-absl::StatusOr<Evaluation> Racer::Evaluate(const BlindDesign& design) {
-  const uint64_t rays_before = s_.tallies->RaysTraced();
+// Evaluates c.design on `lane`: in rounds against the incumbent when racing, then in full
+// unless a round rejects it.
+absl::Status Racer::Race(DesignTallies& lane, Candidate& c) const {
+  const uint64_t rays_before = lane.RaysTraced();
   const bool races = Races();
-  last_rounds_.clear();
-  last_full_.clear();
-  stats_.parts_in_full += kDesignParts;
-  // The incumbent's rounds first: they may need tracing (after a resume), which would
-  // replace this design's sums on the device
-  std::optional<RoundScores> against;
-  if (races && incumbent_score_set_) {
-    FENESTRA_ASSIGN_OR_RETURN(rounds, IncumbentRounds());
-    against = std::move(rounds);
-    ++stats_.candidates;
-  }
+  const bool against = races && incumbent_set_;
+  c.stats.rejected.assign(s_.racing.rounds.size(), 0);
+  c.stats.parts_in_full = kDesignParts;
+  if (against) c.stats.candidates = 1;
   for (size_t r = 0; races && r < s_.racing.rounds.size(); ++r) {
-    FENESTRA_ASSIGN_OR_RETURN(versions, s_.tallies->Tally(design, s_.options, s_.racing.rounds[r]));
+    FENESTRA_ASSIGN_OR_RETURN(versions, lane.Tally(c.design, s_.options, s_.racing.rounds[r]));
     FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, true));
-    last_rounds_.push_back(std::move(scored.scores));
-    if (against && Rejects(Paired(last_rounds_[r], (*against)[r]), s_.racing)) {
-      ++stats_.rejected[r];
-      stats_.parts_traced += s_.racing.rounds[r];
-      last_paths_fraction_ = static_cast<double>(s_.racing.rounds[r]) / kDesignParts;
-      stats_.rays_traced += s_.tallies->RaysTraced() - rays_before;
-      if (s_.audit) FENESTRA_RETURN_IF_ERROR(Audit(design));
-      return std::move(scored.evaluation);
+    c.rounds.push_back(std::move(scored.scores));
+    if (against && Rejects(Paired(c.rounds[r], (*incumbent_rounds_)[r]), s_.racing)) {
+      c.stats.rejected[r] = 1;
+      c.stats.parts_traced = s_.racing.rounds[r];
+      c.paths_fraction = static_cast<double>(s_.racing.rounds[r]) / kDesignParts;
+      c.stats.rays_traced = lane.RaysTraced() - rays_before;
+      c.evaluation = std::move(scored.evaluation);
+      return s_.audit ? Audit(lane, c) : absl::OkStatus();
     }
   }
-  FENESTRA_ASSIGN_OR_RETURN(versions, s_.tallies->Tally(design, s_.options, kDesignParts));
-  stats_.parts_traced += kDesignParts;
-  stats_.rays_traced += s_.tallies->RaysTraced() - rays_before;
-  last_paths_fraction_ = 1;
+  FENESTRA_ASSIGN_OR_RETURN(versions, lane.Tally(c.design, s_.options, kDesignParts));
+  c.stats.parts_traced = kDesignParts;
+  c.stats.rays_traced = lane.RaysTraced() - rays_before;
+  c.paths_fraction = 1;
   FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, false));
-  if (s_.audit) last_full_ = std::move(scored.scores);
-  return std::move(scored.evaluation);
+  if (s_.audit) c.full = std::move(scored.scores);
+  c.evaluation = std::move(scored.evaluation);
+  return absl::OkStatus();
 }
 
-absl::StatusOr<std::vector<double>> Racer::FullScores(const BlindDesign& design) {
-  FENESTRA_ASSIGN_OR_RETURN(versions, s_.tallies->Tally(design, s_.options, kDesignParts));
+absl::StatusOr<std::vector<double>> Racer::FullScores(DesignTallies& lane,
+                                                      const BlindDesign& design) const {
+  FENESTRA_ASSIGN_OR_RETURN(versions, lane.Tally(design, s_.options, kDesignParts));
   FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, false));
   return std::move(scored.scores);
 }
 
-absl::Status Racer::Audit(const BlindDesign& design) {
-  if (!incumbent_full_) {
-    FENESTRA_ASSIGN_OR_RETURN(scores, FullScores(incumbent_));
-    incumbent_full_ = std::move(scores);
-  }
-  FENESTRA_ASSIGN_OR_RETURN(full, FullScores(design));
-  ++stats_.rejected_audited;
+// Traces the rejected candidate to the end and counts whether a full evaluation would have
+// accepted it; its result stays the rejection.
+absl::Status Racer::Audit(DesignTallies& lane, Candidate& c) const {
+  FENESTRA_ASSIGN_OR_RETURN(full, FullScores(lane, c.design));
+  c.stats.rejected_audited = 1;
   // The search accepts any strict improvement of the score (the job's VnsOptions)
   const PairedDifference difference = Paired(full, *incumbent_full_);
-  if (difference.difference > 0) ++stats_.rejected_would_improve;
-  if (difference.difference > difference.standard_error) ++stats_.rejected_better_beyond_error;
+  if (difference.difference > 0) c.stats.rejected_would_improve = 1;
+  if (difference.difference > difference.standard_error) c.stats.rejected_better_beyond_error = 1;
   return absl::OkStatus();
 }
 
-void Racer::SetIncumbent(const BlindDesign& design, const Evaluation& evaluation,
-                         bool last_evaluated) {
-  incumbent_ = design;
-  incumbent_score_ = Score(s_.objective, evaluation.value);
-  incumbent_score_set_ = true;
-  if (last_evaluated && last_rounds_.size() == s_.racing.rounds.size()) {
-    incumbent_rounds_ = last_rounds_;
-  } else {
-    incumbent_rounds_.reset();
+void Racer::AddStats(const RacingStats& s) {
+  stats_.candidates += s.candidates;
+  for (size_t r = 0; r < s.rejected.size() && r < stats_.rejected.size(); ++r) {
+    stats_.rejected[r] += s.rejected[r];
   }
-  if (last_evaluated && !last_full_.empty()) {
-    incumbent_full_ = last_full_;
+  stats_.parts_traced += s.parts_traced;
+  stats_.parts_in_full += s.parts_in_full;
+  stats_.rays_traced += s.rays_traced;
+  stats_.rejected_audited += s.rejected_audited;
+  stats_.rejected_would_improve += s.rejected_would_improve;
+  stats_.rejected_better_beyond_error += s.rejected_better_beyond_error;
+}
+
+absl::StatusOr<Evaluation> Racer::Evaluate(const BlindDesign& design) {
+  return std::move(EvaluateBatch({design}).front());
+}
+
+std::vector<absl::StatusOr<Evaluation>> Racer::EvaluateBatch(
+    const std::vector<BlindDesign>& designs) {
+  last_batch_.clear();
+  std::vector<absl::StatusOr<Evaluation>> out;
+  if (const absl::Status ready = PrepareIncumbent(); !ready.ok()) {
+    out.assign(designs.size(), ready);
+    return out;
+  }
+  last_batch_.resize(designs.size());
+  for (size_t i = 0; i < designs.size(); ++i) last_batch_[i].design = designs[i];
+  // Lane l takes candidates l, l + lanes, ... on its own thread
+  const size_t lanes = s_.lanes.size();
+  const auto race = [&](int l) {
+    for (size_t i = l; i < last_batch_.size(); i += lanes) {
+      Candidate& c = last_batch_[i];
+      if (const absl::Status raced = Race(*s_.lanes[l], c); !raced.ok()) c.evaluation = raced;
+    }
+  };
+  if (designs.size() == 1) {
+    race(0);
   } else {
-    incumbent_full_.reset();
+    threads_->Run(race);
+  }
+  for (Candidate& c : last_batch_) {
+    AddStats(c.stats);
+    out.push_back(c.evaluation);
+  }
+  return out;
+}
+
+double Racer::PathsFraction(const BlindDesign& design) const {
+  for (const Candidate& c : last_batch_) {
+    if (c.design == design) return c.paths_fraction;
+  }
+  return 0;
+}
+
+void Racer::SetIncumbent(const BlindDesign& design) {
+  incumbent_ = design;
+  incumbent_set_ = true;
+  incumbent_rounds_.reset();
+  incumbent_full_.reset();
+  for (const Candidate& c : last_batch_) {
+    if (c.design != design || !c.evaluation.ok()) continue;
+    if (c.rounds.size() == s_.racing.rounds.size()) incumbent_rounds_ = c.rounds;
+    if (!c.full.empty()) incumbent_full_ = c.full;
   }
 }
 

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -21,6 +22,7 @@
 #include "core/dc/dc_backend.h"
 #include "core/metrics/annual_metrics.h"
 #include "core/optimize/vns.h"
+#include "core/trace/thread_pool.h"
 
 namespace fenestra {
 
@@ -70,14 +72,16 @@ struct RacingStats {
   int rejected_better_beyond_error = 0;
 };
 
-// The objective of a search in rounds over one DesignTallies. Evaluate traces a design in
-// rounds, rejecting it after a round where it is clearly worse than the incumbent (set by
-// SetIncumbent from the search's steps); without an incumbent, or with racing off, it is
-// traced in full (its round scores still kept, so it can serve as the incumbent).
+// The objective of a search in rounds over one or more DesignTallies of the same job (lanes:
+// each on its own GPU, say). Evaluate traces a design in rounds, rejecting it after a round
+// where it is clearly worse than the incumbent (set by SetIncumbent from the search's
+// steps); without an incumbent, or with racing off, it is traced in full (its round scores
+// still kept, so it can serve as the incumbent). EvaluateBatch evaluates several designs at
+// once, spread over the lanes, each as Evaluate would against the same incumbent.
 class Racer {
  public:
   struct Setting {
-    DesignTallies* tallies = nullptr;
+    std::vector<DesignTallies*> lanes;  // at least one
     MetricOptions options;
     int analysed_hours = 0;
     SceneMetric metric = SceneMetric::kUdiMean;
@@ -89,20 +93,23 @@ class Racer {
     bool audit = false;
   };
   explicit Racer(Setting setting);
+  ~Racer();
 
   // The evaluation of `design` (payload: AnnualMetricsEstimate); `partial` when rejected.
   absl::StatusOr<Evaluation> Evaluate(const BlindDesign& design);
-  // The search's incumbent changed to `design`, whose evaluation was Evaluate's last (its
-  // round scores are kept) or, after a resume, is unknown here (then traced again when the
-  // next candidate needs them).
-  void SetIncumbent(const BlindDesign& design, const Evaluation& evaluation, bool last_evaluated);
+  // The evaluations of `designs` in their order, the lanes tracing at once.
+  std::vector<absl::StatusOr<Evaluation>> EvaluateBatch(const std::vector<BlindDesign>& designs);
+  // The search's incumbent changed to `design`: one of the last batch's (its round scores
+  // are kept) or, after a resume, unknown here (then traced again when the next candidate
+  // needs them).
+  void SetIncumbent(const BlindDesign& design);
 
   // Whether candidates are traced in rounds (enabled, and the tallies trace in parts).
   bool Races() const {
-    return s_.enabled && !s_.racing.rounds.empty() && s_.tallies->TracesInParts();
+    return s_.enabled && !s_.racing.rounds.empty() && s_.lanes.front()->TracesInParts();
   }
-  // Share of its paths the last evaluation traced.
-  double LastPathsFraction() const { return last_paths_fraction_; }
+  // Share of its paths the evaluation of `design` in the last batch traced (0: not there).
+  double PathsFraction(const BlindDesign& design) const;
   const RacingStats& stats() const { return stats_; }
   const RacingSettings& settings() const { return s_.racing; }
 
@@ -113,22 +120,31 @@ class Racer {
     Evaluation evaluation;
     std::vector<double> scores;
   };
+  // One design's evaluation on one lane, with what the racer keeps of it.
+  struct Candidate {
+    BlindDesign design;
+    absl::StatusOr<Evaluation> evaluation = absl::UnknownError("not evaluated");
+    RoundScores rounds;          // its scores after each round but the last
+    std::vector<double> full;    // its full version scores, when traced in full (audit)
+    double paths_fraction = 0;   // of its paths traced
+    RacingStats stats;           // what racing did for it
+  };
   absl::StatusOr<Scored> ScoreTallies(const std::vector<HourTally>& versions, bool partial) const;
-  absl::StatusOr<RoundScores> IncumbentRounds();
-  absl::StatusOr<std::vector<double>> FullScores(const BlindDesign& design);
-  absl::Status Audit(const BlindDesign& design);
+  absl::Status PrepareIncumbent();
+  absl::StatusOr<std::vector<double>> FullScores(DesignTallies& lane,
+                                                 const BlindDesign& design) const;
+  absl::Status Race(DesignTallies& lane, Candidate& c) const;
+  absl::Status Audit(DesignTallies& lane, Candidate& c) const;
+  void AddStats(const RacingStats& s);
 
   Setting s_;
+  std::unique_ptr<StandingThreads> threads_;  // one per lane: lane l always on thread l
   RacingStats stats_;
-  RoundScores last_rounds_;  // of the design Evaluate evaluated last
-  double last_paths_fraction_ = 0;
+  std::vector<Candidate> last_batch_;
   BlindDesign incumbent_;
-  double incumbent_score_ = 0;
-  bool incumbent_score_set_ = false;
+  bool incumbent_set_ = false;
   std::optional<RoundScores> incumbent_rounds_;
-  // Full version scores (audit): of the last design Evaluate traced in full, the incumbent's
-  std::vector<double> last_full_;
-  std::optional<std::vector<double>> incumbent_full_;
+  std::optional<std::vector<double>> incumbent_full_;  // (audit)
 };
 
 }  // namespace fenestra

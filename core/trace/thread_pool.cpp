@@ -24,4 +24,50 @@ void ParallelFor(uint64_t count, int threads, const std::function<void(uint64_t)
   for (std::thread& t : pool) t.join();
 }
 
+StandingThreads::StandingThreads(int count) {
+  for (int w = 1; w < count; ++w) threads_.emplace_back([this, w] { Stand(w); });
+}
+
+StandingThreads::~StandingThreads() {
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  start_.notify_all();
+  for (std::thread& t : threads_) t.join();
+}
+
+void StandingThreads::Stand(int worker) {
+  uint64_t seen = 0;
+  while (true) {
+    const std::function<void(int)>* task = nullptr;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      start_.wait(lock, [&] { return stopping_ || round_ != seen; });
+      if (stopping_) return;
+      seen = round_;
+      task = task_;
+    }
+    (*task)(worker);
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      --running_;
+    }
+    done_.notify_one();
+  }
+}
+
+void StandingThreads::Run(const std::function<void(int)>& task) {
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    task_ = &task;
+    running_ = static_cast<int>(threads_.size());
+    ++round_;
+  }
+  start_.notify_all();
+  task(0);
+  std::unique_lock<std::mutex> lock(mutex_);
+  done_.wait(lock, [&] { return running_ == 0; });
+}
+
 }  // namespace fenestra

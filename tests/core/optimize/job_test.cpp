@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
+#include "core/dc/dc_backend.h"
 #include "core/optimize/final_check.h"
 #include "google/protobuf/util/message_differencer.h"
 #include "tests/example_scene.h"
@@ -406,6 +408,94 @@ TEST_F(JobResumeTest, ResumedJobEndsAsTheUninterruptedOne) {
   ASSERT_TRUE(last.result.ok()) << last.result.status();
   EXPECT_TRUE(last.checkpoints.empty());
   ExpectEqual(Timeless(*last.result), Timeless(full));
+}
+
+// Designs evaluated three at once, on three CPU lanes standing in for GPUs: the steps and
+// the result of one at a time, with the evaluations made ahead and dropped counted; a
+// checkpoint of one resumes with the other.
+TEST_F(JobResumeTest, SeveralCandidatesAtOnceTakeTheSameSteps) {
+  const Run one = RunJobOf(*job_);
+  ASSERT_TRUE(one.result.ok()) << one.result.status();
+  EXPECT_EQ(one.result->candidates_at_once(), 1);  // the CPU's default
+  EXPECT_EQ(one.result->evaluations_discarded(), 0);
+  ASSERT_GT(one.result->best_over_time_size(), 2);  // improvements after the start
+
+  PreparedJob three_at_once = *job_;
+  three_at_once.job.mutable_sampling()->set_candidates_at_once(3);
+  EXPECT_EQ(JobContentHash(three_at_once), JobContentHash(*job_));
+  const Run three = RunJobOf(three_at_once);
+  ASSERT_TRUE(three.result.ok()) << three.result.status();
+  EXPECT_EQ(three.result->candidates_at_once(), 3);
+  EXPECT_GT(three.result->evaluations_discarded(), 0);
+  v1::JobResult same = Timeless(*three.result);
+  same.clear_candidates_at_once();
+  same.clear_evaluations_discarded();
+  same.mutable_job()->mutable_sampling()->clear_candidates_at_once();
+  v1::JobResult one_same = Timeless(*one.result);
+  one_same.clear_candidates_at_once();
+  ExpectEqual(same, one_same);
+
+  const v1::SearchCheckpoint after_5 = Parsed(one.checkpoints[4]);
+  const Run resumed = RunJobOf(three_at_once, &after_5);
+  ASSERT_TRUE(resumed.result.ok()) << resumed.result.status();
+  for (int i = 0; i < one.result->history_size(); ++i) {
+    v1::Evaluation a = one.result->history(i), b = resumed.result->history(i);
+    a.clear_seconds(), a.clear_elapsed_seconds(), b.clear_seconds(), b.clear_elapsed_seconds();
+    ExpectEqual(a, b);
+  }
+}
+
+// On the GPU (none in CI): the four-variable job (150 evaluations) with four candidates at
+// once, the lanes tracers of their own on the visible GPUs in turn, takes the steps of one at
+// a time, with racing and without. The values agree to the GPU's summation order (its
+// per-row sums add in the order the lanes finish), the designs and decisions exactly.
+TEST(JobLanesTest, GpuLanesTakeTheStepsOfOneAtATime) {
+  if (CudaDevices() == 0) GTEST_SKIP() << "no CUDA device";
+  absl::StatusOr<v1::Job> job =
+      ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/four_variables.json");
+  ASSERT_TRUE(job.ok()) << job.status();
+  job->mutable_budget()->set_max_evaluations(150);
+  job->mutable_sampling()->set_backend("cuda");
+  job->mutable_sampling()->set_final_check(false);
+  for (const bool racing : {false, true}) {
+    job->mutable_sampling()->set_racing(racing);
+    std::vector<v1::JobResult> results;
+    for (const int lanes : {1, 4}) {
+      job->mutable_sampling()->set_candidates_at_once(lanes);
+      absl::StatusOr<PreparedJob> prepared =
+          PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
+      ASSERT_TRUE(prepared.ok()) << prepared.status();
+      absl::StatusOr<v1::JobResult> result = RunJob(*prepared, nullptr);
+      ASSERT_TRUE(result.ok()) << result.status();
+      EXPECT_EQ(result->candidates_at_once(), lanes);
+      results.push_back(*std::move(result));
+    }
+    const v1::JobResult &one = results[0], &four = results[1];
+    SCOPED_TRACE(racing ? "racing" : "no racing");
+    EXPECT_GT(four.evaluations_discarded(), 0);
+    EXPECT_GT(one.best_over_time_size(), 3);
+    ASSERT_EQ(one.history_size(), four.history_size());
+    int partial = 0;
+    for (int i = 0; i < one.history_size(); ++i) {
+      const v1::Evaluation &a = one.history(i), &b = four.history(i);
+      SCOPED_TRACE(absl::StrCat("step ", i));
+      ASSERT_EQ(a.design().size(), b.design().size());
+      for (const auto& [name, value] : a.design()) EXPECT_EQ(b.design().at(name), value);
+      EXPECT_EQ(a.improved(), b.improved());
+      EXPECT_EQ(a.cached(), b.cached());
+      EXPECT_EQ(a.raced_out(), b.raced_out());
+      EXPECT_NEAR(a.value().value(), b.value().value(), 1e-9 * std::abs(a.value().value()));
+      partial += a.raced_out() ? 1 : 0;
+    }
+    if (racing) {
+      EXPECT_GT(partial, 0);
+    }
+    std::printf("%s: %d evaluations, %d improvements, %d raced out; four at once: %d dropped, "
+                "evaluations %.3f s against %.3f s\n",
+                racing ? "racing" : "no racing", one.evaluations(), one.best_over_time_size() - 1,
+                partial, four.evaluations_discarded(), four.timings().evaluation_seconds(),
+                one.timings().evaluation_seconds());
+  }
 }
 
 // A checkpoint belongs to one job: any change of the job's content refuses it.

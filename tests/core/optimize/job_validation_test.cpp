@@ -3,6 +3,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstdint>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -218,6 +220,21 @@ TEST(JobValidationTest, RacingSettings) {
   custom.mutable_sampling()->add_racing_rounds(3);
   custom.mutable_sampling()->add_racing_rounds(7);
   EXPECT_TRUE(ValidateJob(custom, kOffice).ok()) << ErrorOf(custom);
+}
+
+TEST(JobValidationTest, CandidatesAtOnce) {
+  for (const int n : {-1, kMaxCandidatesAtOnce + 1, 1 << 30, INT32_MIN}) {
+    v1::Job job = QuickJob();
+    job.mutable_sampling()->set_candidates_at_once(n);
+    EXPECT_THAT(ErrorOf(job), HasSubstr("sampling.candidates_at_once")) << n;
+  }
+  for (const int n : {0, 1, kMaxCandidatesAtOnce}) {
+    v1::Job job = QuickJob();
+    job.mutable_sampling()->set_candidates_at_once(n);
+    absl::StatusOr<PreparedJob> prepared = ValidateJob(job, kOffice);
+    ASSERT_TRUE(prepared.ok()) << prepared.status();
+    EXPECT_EQ(prepared->job.sampling().candidates_at_once(), n);  // 0: decided by the backend
+  }
 }
 
 TEST(JobValidationTest, Names) {
