@@ -116,6 +116,10 @@ std::string FormatResult(const v1::JobResult& r) {
       "total {:.2f} s\n",
       r.evaluations(), r.stop_reason(), r.backend(), r.timings().sky_seconds(),
       r.timings().outdoor_seconds(), r.timings().evaluation_seconds(), r.timings().total_seconds());
+  if (r.candidates_at_once() > 1) {
+    out += fmt::format("{} candidates at once: {} evaluations made ahead and dropped\n",
+                       r.candidates_at_once(), r.evaluations_discarded());
+  }
   if (r.has_final_check()) {
     const v1::FinalCheck& c = r.final_check();
     out += fmt::format(

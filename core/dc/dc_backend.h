@@ -206,8 +206,9 @@ void UseCudaDevices(std::vector<int> devices);
 // How many GPUs NextCudaDevice takes in turn.
 int CudaDevicesInUse();
 
-// Designs evaluated at once per GPU by default: while one design's mesh and BVH are built
-// on the host, the other's kernels run (bench/README.md, "Several candidates at once").
-inline constexpr int kCandidatesPerGpu = 2;
+// Designs evaluated at once per GPU by default. One design already keeps an H100 busy: two
+// or more at once on one GPU trace 8-14% more designs per second, but the designs evaluated
+// ahead and dropped cost more than that (bench/README.md, "Several GPUs").
+inline constexpr int kCandidatesPerGpu = 1;
 
 }  // namespace fenestra
