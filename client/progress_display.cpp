@@ -61,8 +61,8 @@ std::string FormatProgress(const JobProgress& p) {
                      p.current.cached()      ? " cached"
                      : p.current.raced_out() ? " raced out"
                                              : "",
-                     FormatDesign(p.current.design()),
-                     Clock(p.elapsed_seconds), Clock(p.remaining_seconds));
+                     FormatDesign(p.current.design()), Clock(p.elapsed_seconds),
+                     Clock(p.remaining_seconds));
 }
 
 std::string StageText(const std::string& stage, bool cached) {

@@ -717,7 +717,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (callbacks.stage) callbacks.stage("indoor paths");
   const Scene ranged = WithJobRanges(job.scene, spec);
   FENESTRA_ASSIGN_OR_RETURN(lanes, MakeLanes(spec.sampling(), *backend, ranged, indoor_options,
-                                            outdoor->batches, lit_sky));
+                                             outdoor->batches, lit_sky));
   Racer racer({.lanes = lanes.Tallies(),
                .options = metric_options,
                .analysed_hours = setting.analysed_hours,

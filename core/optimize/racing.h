@@ -124,10 +124,10 @@ class Racer {
   struct Candidate {
     BlindDesign design;
     absl::StatusOr<Evaluation> evaluation = absl::UnknownError("not evaluated");
-    RoundScores rounds;          // its scores after each round but the last
-    std::vector<double> full;    // its full version scores, when traced in full (audit)
-    double paths_fraction = 0;   // of its paths traced
-    RacingStats stats;           // what racing did for it
+    RoundScores rounds;         // its scores after each round but the last
+    std::vector<double> full;   // its full version scores, when traced in full (audit)
+    double paths_fraction = 0;  // of its paths traced
+    RacingStats stats;          // what racing did for it
   };
   absl::StatusOr<Scored> ScoreTallies(const std::vector<HourTally>& versions, bool partial) const;
   absl::Status PrepareIncumbent();

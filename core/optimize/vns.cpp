@@ -212,8 +212,9 @@ void Search::EvaluateAhead(const std::vector<double>& x, bool start) {
   Walk walk = walk_;  // past x's proposal
   walk.Advance(false, false, neighborhoods);
   const int max_steps = 16 * options_.lookahead;
-  for (int step = 0; !start && step < max_steps && static_cast<int>(designs.size()) < options_.lookahead &&
-                     !WalkEnds(walk, state_.evaluations + static_cast<int>(designs.size()));
+  for (int step = 0;
+       !start && step < max_steps && static_cast<int>(designs.size()) < options_.lookahead &&
+       !WalkEnds(walk, state_.evaluations + static_cast<int>(designs.size()));
        ++step) {
     std::vector<double> y = Propose(walk);
     const bool cached = known(y);
@@ -251,7 +252,8 @@ absl::StatusOr<VnsRecord> Search::Evaluate(std::vector<double> x, int neighborho
     record.score = earlier.score;
     record.cached = true;
   } else {
-    auto ahead = std::find_if(ahead_.begin(), ahead_.end(), [&](const Ahead& a) { return a.x == x; });
+    auto ahead =
+        std::find_if(ahead_.begin(), ahead_.end(), [&](const Ahead& a) { return a.x == x; });
     if (ahead == ahead_.end()) {
       EvaluateAhead(x, neighborhood < 0);
       ahead = ahead_.end() - 1;
@@ -397,8 +399,7 @@ bool Search::WalkEnds(const Walk& walk, int evaluations) const {
 
 // The stopping rules, checked before each step but the start.
 std::optional<StopReason> Search::StopBeforeStep() {
-  if (options_.failed_cycles_to_stop > 0 &&
-      walk_.failed_cycles >= options_.failed_cycles_to_stop) {
+  if (options_.failed_cycles_to_stop > 0 && walk_.failed_cycles >= options_.failed_cycles_to_stop) {
     return StopReason::kAllNeighborhoodsFailed;
   }
   if (walk_.consecutive_hits >= options_.max_consecutive_cache_hits) {

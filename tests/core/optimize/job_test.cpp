@@ -490,11 +490,12 @@ TEST(JobLanesTest, GpuLanesTakeTheStepsOfOneAtATime) {
     if (racing) {
       EXPECT_GT(partial, 0);
     }
-    std::printf("%s: %d evaluations, %d improvements, %d raced out; four at once: %d dropped, "
-                "evaluations %.3f s against %.3f s\n",
-                racing ? "racing" : "no racing", one.evaluations(), one.best_over_time_size() - 1,
-                partial, four.evaluations_discarded(), four.timings().evaluation_seconds(),
-                one.timings().evaluation_seconds());
+    std::printf(
+        "%s: %d evaluations, %d improvements, %d raced out; four at once: %d dropped, "
+        "evaluations %.3f s against %.3f s\n",
+        racing ? "racing" : "no racing", one.evaluations(), one.best_over_time_size() - 1, partial,
+        four.evaluations_discarded(), four.timings().evaluation_seconds(),
+        one.timings().evaluation_seconds());
   }
 }
 
