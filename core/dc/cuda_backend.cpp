@@ -213,7 +213,8 @@ class OutdoorHolder {
 
 // The indoor replay on the GPU (core/dc/indoor_replay.h): the room without the blind is
 // traced once up to the blind's envelope; per design, the tracer replays the records
-// against the room with the design's blind and the blind alone, all in the room's frame.
+// against the room with the design's slats (their BVH put beside the room's) and the
+// slats' layout alone, all in the room's frame.
 class CudaReplay {
  public:
   // Records `scene`'s indoor paths; Unavailable where the records would take more than
@@ -232,17 +233,24 @@ class CudaReplay {
     return replay;
   }
 
-  // Makes the tracer hold the records and the room with `design`'s blind; `blind` gets its
-  // slats alone. InvalidArgument for a design outside the recorded ranges.
-  absl::Status Prepare(const BlindDesign& design, SlatOccluder* blind) {
+  // Makes the tracer hold the records and the recorded room with `design`'s slats
+  // (BvhWithSlats: no build per design); `blind` gets the slats' layout, for the shadow
+  // rays. InvalidArgument for a design outside the recorded ranges.
+  absl::Status Prepare(const BlindDesign& design, LocalSlats* blind) {
     FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(*scene_.blind, design));
     if (slot_->current != generation_) FENESTRA_RETURN_IF_ERROR(Record());
     *blind = LocalSlatsOfBlind(room_, scene_, design);
-    FENESTRA_ASSIGN_OR_RETURN(
-        geometry, PrepareTraceGeometry(SelectSide(AssembleMesh(scene_, design), Side::kIndoor),
-                                       scene_.materials, &room_.origin));
-    triangles_ = geometry.TriangleCount();
-    FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, geometry, BvhQuality::kMedium));
+    const std::vector<Vec3f> corners = LocalSlatCorners(room_, scene_, design);
+    const BvhLayout bvh =
+        BvhWithSlats(room_bvh_, corners, static_cast<uint32_t>(room_.TriangleCount()));
+    std::vector<uint32_t> triangle_material = room_.triangle_material;
+    triangle_material.resize(room_.TriangleCount() + kTrianglesPerSlat * corners.size() / 8,
+                             scene_.blind->material);
+    triangles_ = triangle_material.size();
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->SetScene(bvh, triangle_material.data(),
+                                                     triangle_material.size(),
+                                                     room_.materials.data(),
+                                                     room_.materials.size())));
     return outdoor_->Hold();
   }
 
@@ -266,7 +274,13 @@ class CudaReplay {
         room_(std::move(room)) {}
 
   absl::Status Record() {
-    FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, room_, BvhQuality::kHigh));
+    if (room_bvh_.nodes.empty()) {
+      FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(room_, BvhQuality::kHigh));
+      room_bvh_ = std::move(bvh);
+    }
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->SetScene(
+        room_bvh_, room_.triangle_material.data(), room_.triangle_material.size(),
+        room_.materials.data(), room_.materials.size())));
     FENESTRA_RETURN_IF_ERROR(outdoor_->Hold());
     const std::vector<TraceSensor> sensors = LocalSensors(room_, scene_.sensors);
     PathSettings path = IndoorPathSettings(options_);
@@ -291,6 +305,7 @@ class CudaReplay {
   HemisphereBasis basis_;
   OutdoorHolder* outdoor_;
   TraceGeometry room_;  // the room without the blind; its frame is every design's
+  BvhLayout room_bvh_;
   CudaReplayStats stats_;
   size_t triangles_ = 0;
 };
@@ -308,7 +323,7 @@ class CudaReplayStages : public IndoorStages {
 
   absl::StatusOr<IndoorResult> Compute(const BlindDesign& design) const override {
     const auto start = std::chrono::steady_clock::now();
-    SlatOccluder blind;
+    LocalSlats blind;
     FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind));
     IndoorTally tally;
     tally.sensors = replay_->sensors();
@@ -414,7 +429,7 @@ class CudaDesignTallies : public DesignTallies {
   std::unique_ptr<CudaAnnualProduct> product_;
   // The replay's last design, its blind, and how many parts of it the tracer holds
   BlindDesign held_design_;
-  SlatOccluder blind_;
+  LocalSlats blind_;
   int held_parts_ = 0;
   uint64_t rays_ = 0;
 };

@@ -39,7 +39,7 @@ using Recording = RecordingIntersector<EmbreeIntersector>;
 
 // Adds the value of every connection the blind leaves clear to its column of `sum`; the
 // shadow rays go in packets against the blind's triangles alone (the answers are
-// Occluded's, ray by ray). On the CPU this beats the slats' layout (SlatOccluder, the GPU's
+// Occluded's, ray by ray). On the CPU this beats the slats' layout (LocalSlats, the GPU's
 // test): Embree tests 16 rays at once (bench/README.md, "Racing").
 void TestConnections(const EmbreeIntersector& blind,
                      const std::vector<ReplayConnection>& connections, std::vector<double>& sum) {
@@ -84,13 +84,13 @@ LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& s
   return local;
 }
 
-SlatOccluder LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
+LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
                                const BlindDesign& design) {
   const SlatStack stack = StackOfBlind(scene.window, *scene.blind, design);
   const auto axis = [](Vec3d v) {
     return Vec3f{static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};
   };
-  SlatOccluder slats;
+  LocalSlats slats;
   slats.center = geometry.ToLocal(stack.center);
   slats.stack = axis(stack.stack);
   slats.length = axis(stack.length);
@@ -104,6 +104,16 @@ SlatOccluder LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene
   slats.reach = static_cast<float>(std::hypot(stack.half_width_m, stack.half_thickness_m));
   slats.count = stack.count;
   return slats;
+}
+
+std::vector<Vec3f> LocalSlatCorners(const TraceGeometry& geometry, const Scene& scene,
+                                    const BlindDesign& design) {
+  const SlatBoxes boxes = BoxesOfStack(StackOfBlind(scene.window, *scene.blind, design));
+  std::vector<Vec3f> corners(8 * static_cast<size_t>(boxes.count));
+  for (int k = 0; k < boxes.count; ++k) {
+    for (int i = 0; i < 8; ++i) corners[8 * k + i] = geometry.ToLocal(boxes.Corner(k, i));
+  }
+  return corners;
 }
 
 absl::Status CheckReplayDesign(const BlindSpec& spec, const BlindDesign& design) {

@@ -11,13 +11,15 @@
 // the blind. Per design, those recorded shadow rays are tested against the blind alone (here
 // its triangles, 16 rays at a time; the GPU's replay tests them against the slats' layout,
 // LocalSlatsOfBlind), and the paths that reached the envelope are traced on from there
-// through the room and the blind.
+// through the room and the blind (on the GPU, the room's BVH recorded once with the slats'
+// put beside it per design, BvhWithSlats).
 #include <memory>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/dc/two_stage.h"
 #include "core/trace/indoor_replay_modes.h"
-#include "core/trace/slat_occluder.h"
+#include "core/trace/local_slats.h"
 #include "core/trace/trace_geometry.h"
 
 namespace fenestra {
@@ -30,8 +32,14 @@ LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& s
 // GPU is faster (replay kernel 1.08 ms against 1.44 ms) and on the CPU slower than Embree's
 // packets of 16 rays (bench/README.md, "Racing"). A ray that grazes a slat's edge within
 // float rounding, about one in a million, may be answered otherwise than by the triangles.
-SlatOccluder LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
-                               const BlindDesign& design);
+LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
+                             const BlindDesign& design);
+
+// The corners of those slats, 8 per slat in SlatBoxes::Corner's order, as the blind's mesh
+// has them in `geometry`'s frame (GenerateBlind, then PrepareTraceGeometry): BvhWithSlats
+// makes the mesh's triangles from them.
+std::vector<Vec3f> LocalSlatCorners(const TraceGeometry& geometry, const Scene& scene,
+                                    const BlindDesign& design);
 
 // InvalidArgument unless `design` has a blind within the ranges of `spec`: a replay is
 // only valid there.

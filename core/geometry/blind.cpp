@@ -113,30 +113,34 @@ SlatStack StackOfBlind(const Window& window, const BlindSpec& spec, const BlindD
   return slats;
 }
 
+SlatBoxes BoxesOfStack(const SlatStack& slats) {
+  const double c = std::cos(slats.tilt_rad);
+  const double s = std::sin(slats.tilt_rad);
+  SlatBoxes boxes;
+  boxes.center = slats.center;
+  boxes.stack = slats.stack;
+  boxes.half_length = slats.half_length_m * slats.length;
+  boxes.half_width = slats.half_width_m * (c * slats.stack + s * slats.into_room);
+  boxes.half_thickness = slats.half_thickness_m * (-s * slats.stack + c * slats.into_room);
+  boxes.pitch = slats.pitch_m;
+  boxes.count = slats.count;
+  return boxes;
+}
+
 BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design,
                           uint32_t part_index, TriangleMesh& mesh) {
   const BlindLayout layout = LayoutBlind(window, spec, design);
-  const SlatStack slats = StackOfBlind(window, spec, design);
-  const double c = std::cos(slats.tilt_rad);
-  const double s = std::sin(slats.tilt_rad);
-  const Vec3d half_width = slats.half_width_m * (c * slats.stack + s * slats.into_room);
-  const Vec3d half_thick = slats.half_thickness_m * (-s * slats.stack + c * slats.into_room);
-  const Vec3d half_length = slats.half_length_m * slats.length;
-
-  // Corners of each slat box, then its 6 faces as 12 triangles
-  for (int k = 0; k < slats.count; ++k) {
-    const double offset = (k - 0.5 * (slats.count - 1)) * slats.pitch_m;
-    const Vec3d center = slats.center + offset * slats.stack;
+  const SlatBoxes boxes = BoxesOfStack(StackOfBlind(window, spec, design));
+  for (int k = 0; k < boxes.count; ++k) {
     Vec3d corner[8];
-    for (int i = 0; i < 8; ++i) {
-      corner[i] = center + ((i & 1) ? 1.0 : -1.0) * half_length +
-                  ((i & 2) ? 1.0 : -1.0) * half_width + ((i & 4) ? 1.0 : -1.0) * half_thick;
-    }
-    static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
-                                         {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
-    for (const auto& f : kFaces) {
-      mesh.Add(corner[f[0]], corner[f[1]], corner[f[2]], spec.material, Side::kIndoor, part_index);
-      mesh.Add(corner[f[0]], corner[f[2]], corner[f[3]], spec.material, Side::kIndoor, part_index);
+    for (int i = 0; i < 8; ++i) corner[i] = boxes.Corner(k, i);
+    for (int f = 0; f < 6; ++f) {
+      const Vec3d& a = corner[SlatBoxes::FaceCorner(f, 0)];
+      const Vec3d& b = corner[SlatBoxes::FaceCorner(f, 1)];
+      const Vec3d& c = corner[SlatBoxes::FaceCorner(f, 2)];
+      const Vec3d& d = corner[SlatBoxes::FaceCorner(f, 3)];
+      mesh.Add(a, b, c, spec.material, Side::kIndoor, part_index);
+      mesh.Add(a, c, d, spec.material, Side::kIndoor, part_index);
     }
   }
   return layout;

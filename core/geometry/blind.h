@@ -6,6 +6,7 @@
 #include "absl/status/status.h"
 #include "core/common/vec3.h"
 #include "core/geometry/mesh.h"
+#include "core/geometry/slat_boxes.h"
 
 namespace fenestra {
 
@@ -84,7 +85,8 @@ struct BlindEnvelope {
 // The envelope of `spec` in `window`, with `margin_m` to spare on every side.
 BlindEnvelope EnvelopeOfBlind(const Window& window, const BlindSpec& spec, double margin_m);
 
-// The slats of a design as a stack of equal boxes, which GenerateBlind triangulates: slat k
+// The slats of a design as a stack of equal boxes, which GenerateBlind triangulates
+// (through BoxesOfStack): slat k
 // (0 <= k < count) is centred at center + (k - (count - 1) / 2) pitch_m stack; its half
 // extents are half_length_m along `length`, half_width_m along cos(tilt) stack + sin(tilt)
 // into_room and half_thickness_m along -sin(tilt) stack + cos(tilt) into_room.
@@ -95,7 +97,13 @@ struct SlatStack {
 };
 SlatStack StackOfBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design);
 
-// Appends the slats (12 triangles each, indoor) to `mesh` under part `part_index`.
+// The slats' boxes (core/geometry/slat_boxes.h) of a stack.
+SlatBoxes BoxesOfStack(const SlatStack& slats);
+
+// Triangles GenerateBlind makes per slat (its box's 6 faces).
+inline constexpr int kTrianglesPerSlat = 12;
+
+// Appends the slats (kTrianglesPerSlat each, indoor) to `mesh` under part `part_index`.
 BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design,
                           uint32_t part_index, TriangleMesh& mesh);
 

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <limits>
 #include <memory>
+#include <tuple>
 
 #include "absl/strings/str_cat.h"
+#include "core/geometry/slat_boxes.h"
 #include "core/trace/trace_geometry.h"
 
 namespace fenestra {
@@ -256,6 +258,110 @@ absl::StatusOr<BvhLayout> BuildBvh(const TraceGeometry& geometry, BvhQuality qua
   } else {
     layout.depth = flatten.Inner(*static_cast<const BuildInner*>(root), 0);
   }
+  return layout;
+}
+
+namespace {
+
+// An axis-aligned box, grown point by point.
+struct Bounds {
+  Vec3f lo{std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+           std::numeric_limits<float>::infinity()};
+  Vec3f hi = -lo;
+  void Grow(Vec3f p) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  void Grow(const Bounds& b) {
+    Grow(b.lo);
+    Grow(b.hi);
+  }
+};
+
+// Child i of `node`: `child` in `box`.
+void SetChild(BvhNode& node, int i, int32_t child, const Bounds& box) {
+  node.lo[i][0] = box.lo.x, node.lo[i][1] = box.lo.y, node.lo[i][2] = box.lo.z;
+  node.hi[i][0] = box.hi.x, node.hi[i][1] = box.hi.y, node.hi[i][2] = box.hi.z;
+  node.child[i] = child;
+}
+
+// Appends slats [first, last) as a subtree of `layout`; returns its node and box and sets
+// *depth to its depth in nodes.
+int32_t AppendSlats(const std::vector<Vec3f>& corners, uint32_t first_index, int first, int last,
+                    BvhLayout& layout, Bounds* box, int* depth) {
+  const int32_t index = static_cast<int32_t>(layout.nodes.size());
+  layout.nodes.emplace_back();
+  if (last - first == 1) {
+    // The slat's faces: the ends and the edges across its width in one leaf (8 triangles),
+    // its two sides in the other (4)
+    const int k = first;
+    for (const auto& [face_begin, face_end, i] : {std::tuple{0, 4, 0}, std::tuple{4, 6, 1}}) {
+      const uint32_t leaf_first = static_cast<uint32_t>(layout.triangles.size());
+      Bounds leaf;
+      for (int f = face_begin; f < face_end; ++f) {
+        const Vec3f* c = &corners[8 * static_cast<size_t>(k)];
+        const Vec3f a = c[SlatBoxes::FaceCorner(f, 0)], b = c[SlatBoxes::FaceCorner(f, 1)];
+        const Vec3f d = c[SlatBoxes::FaceCorner(f, 2)], e = c[SlatBoxes::FaceCorner(f, 3)];
+        const uint32_t triangle = first_index + 12 * static_cast<uint32_t>(k) + 2 * f;
+        layout.triangles.push_back({a, b, d, triangle, {0, 0}});
+        layout.triangles.push_back({a, d, e, triangle + 1, {0, 0}});
+        for (const Vec3f p : {a, b, d, e}) leaf.Grow(p);
+      }
+      const uint32_t count = static_cast<uint32_t>(layout.triangles.size()) - leaf_first;
+      SetChild(layout.nodes[index], i,
+               ~static_cast<int32_t>(leaf_first * kBvhMaxLeafSize + (count - 1)), leaf);
+      box->Grow(leaf);
+    }
+    *depth = 2;
+    return index;
+  }
+  const int middle = first + (last - first) / 2;
+  Bounds left, right;
+  int left_depth = 0, right_depth = 0;
+  const int32_t a = AppendSlats(corners, first_index, first, middle, layout, &left, &left_depth);
+  const int32_t b = AppendSlats(corners, first_index, middle, last, layout, &right, &right_depth);
+  SetChild(layout.nodes[index], 0, a, left);
+  SetChild(layout.nodes[index], 1, b, right);
+  box->Grow(left);
+  box->Grow(right);
+  *depth = 1 + std::max(left_depth, right_depth);
+  return index;
+}
+
+}  // namespace
+
+BvhLayout BvhWithSlats(const BvhLayout& room, const std::vector<Vec3f>& slat_corners,
+                       uint32_t first_index) {
+  BvhLayout layout;
+  layout.triangles = room.triangles;  // their leaves keep their places
+  // Node 0 the new root, then the room's nodes one place on, then the slats'
+  layout.nodes.resize(1 + room.nodes.size());
+  Bounds room_box;
+  for (size_t n = 0; n < room.nodes.size(); ++n) {
+    BvhNode node = room.nodes[n];
+    for (int i = 0; i < 2; ++i) {
+      if (node.child[i] >= 0) ++node.child[i];
+    }
+    layout.nodes[1 + n] = node;
+  }
+  for (int i = 0; i < 2 && !room.nodes.empty(); ++i) {
+    if (room.nodes[0].child[i] == kBvhEmptyChild) continue;
+    room_box.Grow(Vec3f{room.nodes[0].lo[i][0], room.nodes[0].lo[i][1], room.nodes[0].lo[i][2]});
+    room_box.Grow(Vec3f{room.nodes[0].hi[i][0], room.nodes[0].hi[i][1], room.nodes[0].hi[i][2]});
+  }
+  SetChild(layout.nodes[0], 0, 1, room_box);
+  const int slats = static_cast<int>(slat_corners.size() / 8);
+  if (slats == 0) {
+    Flattener::SetEmpty(layout.nodes[0], 1);
+    layout.depth = room.depth + 1;
+    return layout;
+  }
+  Bounds slat_box;
+  int slat_depth = 0;
+  const int32_t top = AppendSlats(slat_corners, first_index, 0, slats, layout, &slat_box,
+                                  &slat_depth);
+  SetChild(layout.nodes[0], 1, top, slat_box);
+  layout.depth = 1 + std::max(room.depth, slat_depth);
   return layout;
 }
 

@@ -2,6 +2,7 @@
 #include <cuda_runtime.h>
 
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "core/dc/cuda/annual_tally.h"
@@ -34,30 +35,50 @@ __global__ void MultiplyKernel(const double* a, const double* b, double* c, int 
   if (row < m && col < n) c[static_cast<size_t>(row) * n + col] = sum;
 }
 
-// C = A B_g^T for row-major A (m x k) and B_g (n x k), one warp per entry of C: for a long
-// k and a small C (indoor rows through the window cells), where tiles would leave the
-// device idle. The rows of A come in groups of group_rows, group g with its own B_g (the
-// batches of the annual product), one after the other from b.
-__global__ void MultiplyTransposedKernel(const double* a, const double* b, double* c, int m, int k,
-                                         int n, int group_rows) {
-  const int warp = static_cast<int>((blockIdx.x * blockDim.x + threadIdx.x) / 32);
+// C = A B_g^T for row-major A (m x k) and B_g (n x k): for a long k and a small C (indoor
+// rows through the window cells). The rows of A come in groups of group_rows, group g with
+// its own B_g (the batches of the annual product), one after the other from b. A block takes
+// kRowTile rows of a group and kColumnTile columns of C, a warp per column: the rows' chunks
+// of k wait in shared memory, so each row of B_g is read once per row tile (not once per
+// entry of C) and each of A once per column tile.
+constexpr int kRowTile = 8, kColumnTile = 8, kChunk = 128;
+__global__ void MultiplyTransposedKernel(const double* a, const double* b, double* c, int k, int n,
+                                         int group_rows) {
+  __shared__ double a_chunk[kRowTile][kChunk];
+  const int group = static_cast<int>(blockIdx.z);
+  const int tile_row = static_cast<int>(blockIdx.y) * kRowTile;
+  const int first_row = group * group_rows + tile_row;
+  const int rows = min(kRowTile, group_rows - tile_row);
   const int lane = static_cast<int>(threadIdx.x % 32);
-  if (warp >= m * n) return;
-  const int row = warp / n;
-  const double* a_row = a + static_cast<size_t>(row) * k;
-  const double* b_row =
-      b + (static_cast<size_t>(row / group_rows) * n + static_cast<size_t>(warp % n)) * k;
-  double sum = 0;
-  for (int i = lane; i < k; i += 32) sum += a_row[i] * b_row[i];
-  for (int offset = 16; offset > 0; offset /= 2) sum += __shfl_down_sync(0xffffffffu, sum, offset);
-  if (lane == 0) c[warp] = sum;
+  const int column = static_cast<int>(blockIdx.x) * kColumnTile + static_cast<int>(threadIdx.x / 32);
+  const double* b_row = b + (static_cast<size_t>(group) * n + min(column, n - 1)) * k;
+  double sum[kRowTile] = {};
+  for (int start = 0; start < k; start += kChunk) {
+    const int width = min(kChunk, k - start);
+    __syncthreads();
+    for (int e = static_cast<int>(threadIdx.x); e < kRowTile * kChunk; e += blockDim.x) {
+      const int r = e / kChunk, i = e % kChunk;
+      a_chunk[r][i] =
+          r < rows && i < width ? a[static_cast<size_t>(first_row + r) * k + start + i] : 0.0;
+    }
+    __syncthreads();
+    for (int i = lane; i < width; i += 32) {
+      const double x = b_row[start + i];
+      for (int r = 0; r < kRowTile; ++r) sum[r] += a_chunk[r][i] * x;
+    }
+  }
+  for (int r = 0; r < kRowTile; ++r) {
+    double v = sum[r];
+    for (int offset = 16; offset > 0; offset /= 2) v += __shfl_down_sync(0xffffffffu, v, offset);
+    if (lane == 0 && r < rows && column < n) c[static_cast<size_t>(first_row + r) * n + column] = v;
+  }
 }
 
 void MultiplyTransposed(const double* a, const double* b, double* c, int m, int k, int n,
                         int group_rows) {
-  const int threads = 256;
-  const int blocks = static_cast<int>((static_cast<int64_t>(m) * n * 32 + threads - 1) / threads);
-  MultiplyTransposedKernel<<<blocks, threads>>>(a, b, c, m, k, n, group_rows);
+  const dim3 grid((n + kColumnTile - 1) / kColumnTile, (group_rows + kRowTile - 1) / kRowTile,
+                  m / group_rows);
+  MultiplyTransposedKernel<<<grid, 32 * kColumnTile>>>(a, b, c, k, n, group_rows);
 }
 
 void Multiply(const double* a, const double* b, double* c, int m, int k, int n) {
@@ -156,8 +177,10 @@ struct CudaAnnualTally::Impl {
   int device = 0;
   // O_b transposed, S, the indoor rows, I_b O_b and E; E's tallies
   DeviceBuffer<double> outdoor_transposed, sky, indoor, through_window, illuminance;
-  DeviceBuffer<unsigned long long> tally_counts, tally_hours;
-  DeviceBuffer<double> tally_sums;
+  // E's tallies in one buffer, zeroed and downloaded at once: the counts, the hours, then
+  // the sums (doubles)
+  DeviceBuffer<unsigned long long> tallies;
+  std::vector<unsigned long long> host_tallies;
   PinnedBuffer staging;
   int cells = 0, steps = 0, batches = 0;  // cells: columns of I, rows of O_b
 
@@ -184,22 +207,24 @@ struct CudaAnnualTally::Impl {
     const int versions = batches + 1;
     const size_t per_sensor = static_cast<size_t>(versions) * sensors;
     if (std::string error = FormIlluminance(batches * sensors); !error.empty()) return error;
-    FENESTRA_CUDA_RETURN_IF_ERROR(tally_counts.Zero(3 * per_sensor));
-    FENESTRA_CUDA_RETURN_IF_ERROR(tally_sums.Zero(2 * per_sensor));
-    FENESTRA_CUDA_RETURN_IF_ERROR(tally_hours.Zero(4 * static_cast<size_t>(versions)));
+    const size_t counts = 3 * per_sensor, hours = 4 * static_cast<size_t>(versions);
+    const size_t total = counts + hours + 2 * per_sensor;
+    FENESTRA_CUDA_RETURN_IF_ERROR(tallies.Zero(total));
+    static_assert(sizeof(double) == sizeof(unsigned long long));
+    double* sums = reinterpret_cast<double*>(tallies.get() + counts + hours);
     const int threads = 256;
     const dim3 grid((steps + threads - 1) / threads, versions);
     const TallyLimits limits{request.lower_lux, request.upper_lux, request.da_lux,
                              static_cast<double>(batches), 1.0 / (batches - 1)};
     TallyKernel<<<grid, threads>>>(illuminance.get(), batches, sensors, steps, limits,
-                                   tally_counts.get(), tally_sums.get(), tally_hours.get());
+                                   tallies.get(), sums, tallies.get() + counts);
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
+    host_tallies.resize(total);
+    FENESTRA_CUDA_RETURN_IF_ERROR(tallies.Download(host_tallies.data(), total));
     static_assert(sizeof(int64_t) == sizeof(unsigned long long));
-    FENESTRA_CUDA_RETURN_IF_ERROR(tally_counts.Download(
-        reinterpret_cast<unsigned long long*>(request.counts), 3 * per_sensor));
-    FENESTRA_CUDA_RETURN_IF_ERROR(tally_sums.Download(request.sums, 2 * per_sensor));
-    FENESTRA_CUDA_RETURN_IF_ERROR(
-        tally_hours.Download(reinterpret_cast<unsigned long long*>(request.hours), 4 * versions));
+    std::memcpy(request.counts, host_tallies.data(), counts * sizeof(int64_t));
+    std::memcpy(request.hours, host_tallies.data() + counts, hours * sizeof(int64_t));
+    std::memcpy(request.sums, host_tallies.data() + counts + hours, 2 * per_sensor * sizeof(double));
     return "";
   }
 };

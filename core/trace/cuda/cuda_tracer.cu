@@ -309,7 +309,7 @@ struct ReplayParts {
 // connections the blind leaves clear, and their resumed paths traced on through the room
 // with the blind.
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
-    ReplayKernel(BvhIntersector scene, SlatOccluder blind, SurfaceTable surfaces,
+    ReplayKernel(BvhIntersector scene, LocalSlats blind, SurfaceTable surfaces,
                  PathSettings settings, OutdoorView<BvhIntersector> outdoor,
                  const TraceSensor* sensors, int sensor_count, TraceWindow window,
                  HemisphereBasis basis, ReplayParts parts, uint64_t seed, DeviceRecords records,
@@ -477,7 +477,7 @@ struct CudaTracer::Impl {
                           CudaCounters* out);
   // One design's indoor sums of parts [first, last) from the records
   // (CudaTracer::ReplayIndoor), added to those of parts [0, first) already in `sum`.
-  std::string Replay(const SlatOccluder& blind, int first, int last, double* host_sum,
+  std::string Replay(const LocalSlats& blind, int first, int last, double* host_sum,
                      CudaCounters* out);
   // Parts [0, replayed_parts) of the last replay are in `sum`; 0 once `sum` holds other sums.
   int replayed_parts = 0;
@@ -775,7 +775,7 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   return "";
 }
 
-std::string CudaTracer::Impl::Replay(const SlatOccluder& blind, int first, int last,
+std::string CudaTracer::Impl::Replay(const LocalSlats& blind, int first, int last,
                                      double* host_sum, CudaCounters* out) {
   Impl& d = *this;
   if (!d.recorded.valid) return "CUDA tracer: no indoor paths recorded";
@@ -812,7 +812,7 @@ std::string CudaTracer::Impl::Replay(const SlatOccluder& blind, int first, int l
 
 int CudaTracer::ReplayedParts() const { return impl_->replayed_parts; }
 
-std::string CudaTracer::ReplayIndoor(const SlatOccluder& blind, int first, int last, double* sum,
+std::string CudaTracer::ReplayIndoor(const LocalSlats& blind, int first, int last, double* sum,
                                      CudaCounters* counters) {
   return impl_->Replay(blind, first, last, sum, counters);
 }

@@ -14,7 +14,7 @@
 #include "core/trace/bvh_layout.h"
 #include "core/trace/indoor_replay_modes.h"
 #include "core/trace/path.h"
-#include "core/trace/slat_occluder.h"
+#include "core/trace/local_slats.h"
 #include "core/trace/two_stage_modes.h"
 
 namespace fenestra {
@@ -110,7 +110,7 @@ class CudaTracer {
                            const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
                            int parts, uint64_t seed, const PathSettings& path, size_t max_bytes,
                            CudaReplayStats* stats);
-  std::string ReplayIndoor(const SlatOccluder& blind, int first, int last, double* sum,
+  std::string ReplayIndoor(const LocalSlats& blind, int first, int last, double* sum,
                            CudaCounters* counters);
 
   // The sums of the last Indoor or ReplayIndoor on the device, in their layout (valid until

@@ -26,7 +26,7 @@ inline std::vector<std::map<std::string, double>> ReplayCheckDesigns() {
 }
 
 // Expects `replayed` to equal `traced` up to the order of the sums and, on the GPU, the rare
-// shadow ray that grazes a slat's edge, which the slats' layout (SlatOccluder) and their
+// shadow ray that grazes a slat's edge, which the slats' layout (LocalSlats) and their
 // triangles may answer differently within float rounding (about one in a million: a few
 // connections, each up to 1e-4 of a sensor's light), with light in both kinds of column: the direct ones (the
 // view reaches the sky) and the window cells (it meets the street's buildings). Returns the

@@ -13,7 +13,7 @@
 
 namespace fenestra {
 
-struct SlatOccluder {
+struct LocalSlats {
   Vec3f center;                    // the middle of the stack's axes (trace frame)
   Vec3f stack, length, into_room;  // unit axes
   float pitch = 0;

@@ -1,0 +1,129 @@
+#include "core/trace/local_slats.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/dc/indoor_replay.h"
+#include "core/dc/two_stage.h"
+#include "core/trace/bvh.h"
+#include "core/trace/bvh_intersector.h"
+#include "core/trace/embree_scene.h"
+#include "tests/example_scene.h"
+
+namespace fenestra {
+namespace {
+
+// The designs the tests take: at the ends of the city office's ranges (slats touching, in
+// the window plane, perpendicular to it, the thinnest and widest).
+std::vector<std::map<std::string, double>> EdgeDesigns() {
+  return {{{"alpha", 0.0}, {"spacing", 0.0}},
+          {{"alpha", 0.8}, {"width", 0.05}},
+          {{"alpha", 1.5707963}, {"spacing", 0.1}},
+          {{"alpha", 0.3}, {"thickness", 0.02}},
+          {{"alpha", 1.2}, {"width", 0.15}}};
+}
+
+// The slats' occlusion from their layout is the triangle mesh's: for segments from room
+// points towards the window (the replays' shadow rays) and every other way, across designs
+// at the ends of the city office's ranges (slats touching, in the window plane,
+// perpendicular to it, the thinnest and widest), horizontal and vertical, the answers agree
+// but for segments that graze an edge within float rounding.
+TEST(LocalSlatsTest, AgreesWithTheTriangles) {
+  Scene scene = LoadExample("city_office");
+  for (const bool vertical : {false, true})
+    for (const std::map<std::string, double>& values : EdgeDesigns()) {
+      scene.blind->vertical = vertical;  // slats stacked across the window instead
+      absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, values);
+      ASSERT_TRUE(design.ok()) << design.status();
+      TriangleMesh blind;
+      GenerateBlind(scene.window, *scene.blind, *design, 0, blind);
+      absl::StatusOr<TraceGeometry> geometry = PrepareTraceGeometry(blind, scene.materials);
+      ASSERT_TRUE(geometry.ok()) << geometry.status();
+      absl::StatusOr<std::unique_ptr<EmbreeScene>> triangles = EmbreeScene::Build(*geometry);
+      ASSERT_TRUE(triangles.ok()) << triangles.status();
+      const LocalSlats slats = LocalSlatsOfBlind(*geometry, scene, *design);
+      // Segments between points of a box around the window, inside the room and outside
+      const Vec3f middle = geometry->ToLocal(scene.window.center - 0.2 * scene.window.normal);
+      std::mt19937 random(7);
+      std::uniform_real_distribution<float> u(-1.5f, 1.5f);
+      int blocked = 0, differ = 0;
+      const int segments = 200'000;
+      for (int i = 0; i < segments; ++i) {
+        const Vec3f a = middle + Vec3f{u(random), u(random), u(random)};
+        const Vec3f b = middle + Vec3f{u(random), u(random), u(random)};
+        const float distance = Length(b - a);
+        const Vec3f direction = (b - a) / distance;
+        const bool by_mesh = (*triangles)->Intersector().Occluded(a, direction, distance);
+        blocked += by_mesh ? 1 : 0;
+        differ += by_mesh != slats.Occluded(a, direction, distance) ? 1 : 0;
+      }
+      std::printf("%s, alpha %.2f: %d of %d segments blocked, %d answers differ\n",
+                  vertical ? "vertical" : "horizontal", design->tilt_rad, blocked, segments,
+                  differ);
+      EXPECT_GT(blocked, segments / 50);
+      EXPECT_LE(differ, segments / 100'000);
+    }
+}
+
+// The room's BVH with the slats put beside it (BvhWithSlats) holds the mesh's triangles: for
+// rays from points around the window every way, across the same designs, horizontal and
+// vertical, its closest hits are those of a BVH built over the room with the blind's mesh
+// (the same triangle, at the same point) but for rays through an edge shared by two
+// triangles, which either may take.
+TEST(BvhWithSlatsTest, HitsAreTheMeshes) {
+  Scene scene = LoadExample("city_office");
+  for (const bool vertical : {false, true})
+    for (const std::map<std::string, double>& values : EdgeDesigns()) {
+      scene.blind->vertical = vertical;
+      absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, values);
+      ASSERT_TRUE(design.ok()) << design.status();
+      absl::StatusOr<TraceGeometry> room =
+          PrepareTraceGeometry(SelectSide(scene.fixed, Side::kIndoor), scene.materials);
+      ASSERT_TRUE(room.ok()) << room.status();
+      absl::StatusOr<TraceGeometry> full = PrepareTraceGeometry(
+          SelectSide(AssembleMesh(scene, *design), Side::kIndoor), scene.materials, &room->origin);
+      ASSERT_TRUE(full.ok()) << full.status();
+      absl::StatusOr<BvhLayout> room_bvh = BuildBvh(*room, BvhQuality::kHigh);
+      absl::StatusOr<BvhLayout> built = BuildBvh(*full, BvhQuality::kMedium);
+      ASSERT_TRUE(room_bvh.ok() && built.ok());
+      const std::vector<Vec3f> corners = LocalSlatCorners(*room, scene, *design);
+      const BvhLayout beside =
+          BvhWithSlats(*room_bvh, corners, static_cast<uint32_t>(room->TriangleCount()));
+      ASSERT_EQ(beside.triangles.size(), built->triangles.size());
+      const BvhIntersector a{built->nodes.data(), built->triangles.data()};
+      const BvhIntersector b{beside.nodes.data(), beside.triangles.data()};
+      const Vec3f middle = room->ToLocal(scene.window.center - 0.3 * scene.window.normal);
+      std::mt19937 random(11);
+      std::uniform_real_distribution<float> u(-1.5f, 1.5f);
+      int on_slats = 0, differ = 0;
+      const int rays = 100'000;
+      for (int i = 0; i < rays; ++i) {
+        const Vec3f origin = middle + Vec3f{u(random), u(random), u(random)};
+        const Vec3f toward = Vec3f{u(random), u(random), u(random)};
+        const Vec3f direction = toward / Length(toward);
+        SurfaceHit by_build, by_beside;
+        const bool hit_a = a.Intersect(origin, direction, &by_build);
+        const bool hit_b = b.Intersect(origin, direction, &by_beside);
+        on_slats += hit_a && by_build.triangle >= room->TriangleCount() ? 1 : 0;
+        const bool same = hit_a == hit_b && (!hit_a || (by_build.triangle == by_beside.triangle &&
+                                                        Length(by_build.position - by_beside.position) == 0.0f));
+        const bool occluded_same = a.Occluded(origin, direction, 1.0f) ==
+                                   b.Occluded(origin, direction, 1.0f);
+        differ += same && occluded_same ? 0 : 1;
+      }
+      std::printf("%s, alpha %.2f: %d of %d rays end on a slat, %d differ\n",
+                  vertical ? "vertical" : "horizontal", design->tilt_rad, on_slats, rays, differ);
+      EXPECT_GT(on_slats, rays / 50);
+      EXPECT_LE(differ, rays / 10'000);
+    }
+}
+
+}  // namespace
+}  // namespace fenestra
