@@ -206,8 +206,8 @@ int main(int argc, char** argv) {
   // what a build of the room with the blind's mesh would take instead); and the kernel of the
   // same stage traced in full
   const std::unique_ptr<IndoorStages> stages = ValueOrExit(gpu->MakeIndoorStages(office, indoor));
-  const TraceGeometry room = ValueOrExit(
-      PrepareTraceGeometry(SelectSide(office.fixed, Side::kIndoor), office.materials));
+  const TraceGeometry room =
+      ValueOrExit(PrepareTraceGeometry(SelectSide(office.fixed, Side::kIndoor), office.materials));
   const BvhLayout room_bvh = ValueOrExit(BuildBvh(room));
   double build = 0;
   for (int c = 1; c <= candidates; ++c) {
@@ -238,8 +238,7 @@ int main(int argc, char** argv) {
       "would take %.2f ms (%.2f G closest-hit rays/s)\n",
       indoor.max_bounces, analysed.size(), 1e3 * total / candidates, 1e3 * kernel / candidates,
       rays / kernel / 1e9, 1e3 * prepare / candidates, 1e3 * build / candidates, udi, udi_se,
-      1e3 * record_seconds,
-      1e3 * full_kernel / candidates, full_rays / full_kernel / 1e9);
+      1e3 * record_seconds, 1e3 * full_kernel / candidates, full_rays / full_kernel / 1e9);
 
   // Is one candidate enough to fill the GPU? The same design with 4 and 16 times the paths
   // (as if that many candidates shared a launch)

@@ -247,10 +247,9 @@ class CudaReplay {
     triangle_material.resize(room_.TriangleCount() + kTrianglesPerSlat * corners.size() / 8,
                              scene_.blind->material);
     triangles_ = triangle_material.size();
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->SetScene(bvh, triangle_material.data(),
-                                                     triangle_material.size(),
-                                                     room_.materials.data(),
-                                                     room_.materials.size())));
+    FENESTRA_RETURN_IF_ERROR(
+        Check(tracer_->SetScene(bvh, triangle_material.data(), triangle_material.size(),
+                                room_.materials.data(), room_.materials.size())));
     return outdoor_->Hold();
   }
 
@@ -278,9 +277,9 @@ class CudaReplay {
       FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(room_, BvhQuality::kHigh));
       room_bvh_ = std::move(bvh);
     }
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->SetScene(
-        room_bvh_, room_.triangle_material.data(), room_.triangle_material.size(),
-        room_.materials.data(), room_.materials.size())));
+    FENESTRA_RETURN_IF_ERROR(Check(
+        tracer_->SetScene(room_bvh_, room_.triangle_material.data(), room_.triangle_material.size(),
+                          room_.materials.data(), room_.materials.size())));
     FENESTRA_RETURN_IF_ERROR(outdoor_->Hold());
     const std::vector<TraceSensor> sensors = LocalSensors(room_, scene_.sensors);
     PathSettings path = IndoorPathSettings(options_);

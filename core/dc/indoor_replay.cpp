@@ -85,7 +85,7 @@ LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& s
 }
 
 LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
-                               const BlindDesign& design) {
+                             const BlindDesign& design) {
   const SlatStack stack = StackOfBlind(scene.window, *scene.blind, design);
   const auto axis = [](Vec3d v) {
     return Vec3f{static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};

@@ -358,8 +358,8 @@ BvhLayout BvhWithSlats(const BvhLayout& room, const std::vector<Vec3f>& slat_cor
   }
   Bounds slat_box;
   int slat_depth = 0;
-  const int32_t top = AppendSlats(slat_corners, first_index, 0, slats, layout, &slat_box,
-                                  &slat_depth);
+  const int32_t top =
+      AppendSlats(slat_corners, first_index, 0, slats, layout, &slat_box, &slat_depth);
   SetChild(layout.nodes[0], 1, top, slat_box);
   layout.depth = 1 + std::max(room.depth, slat_depth);
   return layout;

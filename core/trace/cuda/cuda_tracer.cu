@@ -362,9 +362,8 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
              [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
                // Item i of the parts' resumes, one part after the other
                unsigned int r = first_row;
-               for (uint64_t n; i >= (n = Smaller(records.resume_count[r],
-                                                  records.resume_capacity));
-                    ++r) {
+               for (uint64_t n;
+                    i >= (n = Smaller(records.resume_count[r], records.resume_capacity)); ++r) {
                  i -= n;
                }
                const ReplayResume resume = records.resumes[r * records.resume_capacity + i];
@@ -532,8 +531,13 @@ struct CudaTracer::Impl {
     FENESTRA_CUDA_RETURN_IF_ERROR(TimeKernels(launch, &seconds));
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaDeviceSynchronize());
     unsigned long long host_counters[kCounters] = {};
-    if (host_sum != nullptr) FENESTRA_CUDA_RETURN_IF_ERROR(staging.Download(sum.get(), host_sum, sum_size));
-    if (squares) FENESTRA_CUDA_RETURN_IF_ERROR(staging.Download(sum_squares.get(), host_sum_squares, sum_size));
+    if (host_sum != nullptr) {
+      FENESTRA_CUDA_RETURN_IF_ERROR(staging.Download(sum.get(), host_sum, sum_size));
+    }
+    if (squares) {
+      FENESTRA_CUDA_RETURN_IF_ERROR(
+          staging.Download(sum_squares.get(), host_sum_squares, sum_size));
+    }
     FENESTRA_CUDA_RETURN_IF_ERROR(counters.Download(host_counters, kCounters));
     out->rays = host_counters[0];
     for (int i = 0; i < 6; ++i) out->ends[i] = host_counters[1 + i];
@@ -663,7 +667,8 @@ std::string CudaTracer::SetOutdoorScene(const BvhLayout& bvh, const std::vector<
   d.has_outdoor = false;
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_nodes.Upload(bvh.nodes.data(), bvh.nodes.size()));
-  FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_triangles.Upload(bvh.triangles.data(), bvh.triangles.size()));
+  FENESTRA_CUDA_RETURN_IF_ERROR(
+      d.outdoor_triangles.Upload(bvh.triangles.data(), bvh.triangles.size()));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_met.Upload(met.data(), met.size()));
   d.has_outdoor = true;
   return "";
@@ -725,8 +730,18 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
   const uint64_t row_paths = paths_per_sensor / row_batches + 1;
   Impl::Recorded& r = d.recorded;
-  r = {false,     sensor_count,       batches, parts,          paths_per_sensor, seed,
-       3 * row_paths + 64, row_paths, window,  basis,          outdoor_offset,   path};
+  r = {false,
+       sensor_count,
+       batches,
+       parts,
+       paths_per_sensor,
+       seed,
+       3 * row_paths + 64,
+       row_paths,
+       window,
+       basis,
+       outdoor_offset,
+       path};
   std::vector<unsigned long long> counts(2 * static_cast<size_t>(rows));
   CudaCounters counters;
   // Connections per row are not known in advance: a row that made more than there was room
@@ -762,7 +777,8 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   }
   FENESTRA_CUDA_RETURN_IF_ERROR(d.fixed.Reserve(static_cast<size_t>(rows) * columns));
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaMemcpy(d.fixed.get(), d.sum.get(),
-                 static_cast<size_t>(rows) * columns * sizeof(double), cudaMemcpyDeviceToDevice));
+                                           static_cast<size_t>(rows) * columns * sizeof(double),
+                                           cudaMemcpyDeviceToDevice));
   r.valid = true;
   stats->paths = paths_per_sensor * sensor_count;
   stats->connections = stats->resumes = 0;
@@ -775,15 +791,15 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   return "";
 }
 
-std::string CudaTracer::Impl::Replay(const LocalSlats& blind, int first, int last,
-                                     double* host_sum, CudaCounters* out) {
+std::string CudaTracer::Impl::Replay(const LocalSlats& blind, int first, int last, double* host_sum,
+                                     CudaCounters* out) {
   Impl& d = *this;
   if (!d.recorded.valid) return "CUDA tracer: no indoor paths recorded";
   if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
   const Recorded& r = d.recorded;
   if (first < 0 || first >= last || last > r.parts) {
-    return "CUDA tracer: parts [" + std::to_string(first) + ", " + std::to_string(last) +
-           ") of " + std::to_string(r.parts) + " recorded";
+    return "CUDA tracer: parts [" + std::to_string(first) + ", " + std::to_string(last) + ") of " +
+           std::to_string(r.parts) + " recorded";
   }
   if (first > 0 && d.replayed_parts != first) {
     return "CUDA tracer: the sums of the parts before " + std::to_string(first) +
@@ -794,8 +810,8 @@ std::string CudaTracer::Impl::Replay(const LocalSlats& blind, int first, int las
   const unsigned int rows = static_cast<unsigned int>(r.sensor_count * r.batches);
   const int columns = IndoorColumnCount(r.window, r.basis);
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
-  const dim3 grid(
-      d.BlocksPerRow(ReplayKernel, shared, r.resume_capacity * (last - first), rows), rows);
+  const dim3 grid(d.BlocksPerRow(ReplayKernel, shared, r.resume_capacity * (last - first), rows),
+                  rows);
   const DeviceRecords records = d.Records();
   std::string error = d.Run(
       rows, static_cast<size_t>(r.sensor_count) * r.batches * columns, false,

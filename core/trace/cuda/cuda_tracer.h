@@ -13,8 +13,8 @@
 #include "core/geometry/hemisphere_basis.h"
 #include "core/trace/bvh_layout.h"
 #include "core/trace/indoor_replay_modes.h"
-#include "core/trace/path.h"
 #include "core/trace/local_slats.h"
+#include "core/trace/path.h"
 #include "core/trace/two_stage_modes.h"
 
 namespace fenestra {

@@ -112,10 +112,11 @@ TEST(BvhWithSlatsTest, HitsAreTheMeshes) {
         const bool hit_a = a.Intersect(origin, direction, &by_build);
         const bool hit_b = b.Intersect(origin, direction, &by_beside);
         on_slats += hit_a && by_build.triangle >= room->TriangleCount() ? 1 : 0;
-        const bool same = hit_a == hit_b && (!hit_a || (by_build.triangle == by_beside.triangle &&
-                                                        Length(by_build.position - by_beside.position) == 0.0f));
-        const bool occluded_same = a.Occluded(origin, direction, 1.0f) ==
-                                   b.Occluded(origin, direction, 1.0f);
+        const bool same =
+            hit_a == hit_b && (!hit_a || (by_build.triangle == by_beside.triangle &&
+                                          Length(by_build.position - by_beside.position) == 0.0f));
+        const bool occluded_same =
+            a.Occluded(origin, direction, 1.0f) == b.Occluded(origin, direction, 1.0f);
         differ += same && occluded_same ? 0 : 1;
       }
       std::printf("%s, alpha %.2f: %d of %d rays end on a slat, %d differ\n",

@@ -28,9 +28,9 @@ inline std::vector<std::map<std::string, double>> ReplayCheckDesigns() {
 // Expects `replayed` to equal `traced` up to the order of the sums and, on the GPU, the rare
 // shadow ray that grazes a slat's edge, which the slats' layout (LocalSlats) and their
 // triangles may answer differently within float rounding (about one in a million: a few
-// connections, each up to 1e-4 of a sensor's light), with light in both kinds of column: the direct ones (the
-// view reaches the sky) and the window cells (it meets the street's buildings). Returns the
-// relative L1 difference.
+// connections, each up to 1e-4 of a sensor's light), with light in both kinds of column: the direct
+// ones (the view reaches the sky) and the window cells (it meets the street's buildings). Returns
+// the relative L1 difference.
 inline double ExpectReplayEqualsTrace(const IndoorResult& traced, const IndoorResult& replayed) {
   EXPECT_EQ(traced.coefficients.cols(), replayed.coefficients.cols());
   if (traced.coefficients.cols() != replayed.coefficients.cols()) return 1.0;
