@@ -30,6 +30,20 @@ std::vector<std::map<std::string, double>> EdgeDesigns() {
           {{"alpha", 1.2}, {"width", 0.15}}};
 }
 
+// Random offsets within a 3 m cube, and points that far from `middle` (by the window), from
+// a fixed seed.
+class AroundWindow {
+ public:
+  AroundWindow(Vec3f middle, unsigned seed) : middle_(middle), random_(seed) {}
+  Vec3f Offset() { return Vec3f{u_(random_), u_(random_), u_(random_)}; }
+  Vec3f Point() { return middle_ + Offset(); }
+
+ private:
+  Vec3f middle_;
+  std::mt19937 random_;
+  std::uniform_real_distribution<float> u_{-1.5f, 1.5f};
+};
+
 // The slats' occlusion from their layout is the triangle mesh's: for segments from room
 // points towards the window (the replays' shadow rays) and every other way, across designs
 // at the ends of the city office's ranges (slats touching, in the window plane,
@@ -50,14 +64,12 @@ TEST(LocalSlatsTest, AgreesWithTheTriangles) {
       ASSERT_TRUE(triangles.ok()) << triangles.status();
       const LocalSlats slats = LocalSlatsOfBlind(*geometry, scene, *design);
       // Segments between points of a box around the window, inside the room and outside
-      const Vec3f middle = geometry->ToLocal(scene.window.center - 0.2 * scene.window.normal);
-      std::mt19937 random(7);
-      std::uniform_real_distribution<float> u(-1.5f, 1.5f);
+      AroundWindow around(geometry->ToLocal(scene.window.center - 0.2 * scene.window.normal), 7);
       int blocked = 0, differ = 0;
       const int segments = 200'000;
       for (int i = 0; i < segments; ++i) {
-        const Vec3f a = middle + Vec3f{u(random), u(random), u(random)};
-        const Vec3f b = middle + Vec3f{u(random), u(random), u(random)};
+        const Vec3f a = around.Point();
+        const Vec3f b = around.Point();
         const float distance = Length(b - a);
         const Vec3f direction = (b - a) / distance;
         const bool by_mesh = (*triangles)->Intersector().Occluded(a, direction, distance);
@@ -99,14 +111,12 @@ TEST(BvhWithSlatsTest, HitsAreTheMeshes) {
       ASSERT_EQ(beside.triangles.size(), built->triangles.size());
       const BvhIntersector a{built->nodes.data(), built->triangles.data()};
       const BvhIntersector b{beside.nodes.data(), beside.triangles.data()};
-      const Vec3f middle = room->ToLocal(scene.window.center - 0.3 * scene.window.normal);
-      std::mt19937 random(11);
-      std::uniform_real_distribution<float> u(-1.5f, 1.5f);
+      AroundWindow around(room->ToLocal(scene.window.center - 0.3 * scene.window.normal), 11);
       int on_slats = 0, differ = 0;
       const int rays = 100'000;
       for (int i = 0; i < rays; ++i) {
-        const Vec3f origin = middle + Vec3f{u(random), u(random), u(random)};
-        const Vec3f toward = Vec3f{u(random), u(random), u(random)};
+        const Vec3f origin = around.Point();
+        const Vec3f toward = around.Offset();
         const Vec3f direction = toward / Length(toward);
         SurfaceHit by_build, by_beside;
         const bool hit_a = a.Intersect(origin, direction, &by_build);
