@@ -25,6 +25,8 @@ constexpr int kDefaultMaxSitesPerUser = 100;
 constexpr int64_t kDefaultMaxUploadBytesPerUser = int64_t{256} << 20;
 constexpr int64_t kDefaultMaxDataDirBytes = int64_t{10} << 30;
 constexpr int kDefaultMaxConcurrentHeavyRequests = 2;
+// Defaults of the settings added with several candidates at once (daemon.proto documents them)
+constexpr int kDefaultMaxCandidatesAtOnce = 4;
 // Defaults of the settings added with replicas (daemon.proto documents them)
 constexpr double kDefaultLeaseSeconds = 10;
 constexpr int64_t kDefaultOutdoorMemoryBytes = int64_t{1} << 30;
@@ -195,6 +197,8 @@ absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
            fill(limits.max_concurrent_heavy_requests(), kDefaultMaxConcurrentHeavyRequests,
                 "max_concurrent_heavy_requests",
                 [&](int v) { limits.set_max_concurrent_heavy_requests(v); }),
+           fill(limits.max_candidates_at_once(), kDefaultMaxCandidatesAtOnce,
+                "max_candidates_at_once", [&](int v) { limits.set_max_candidates_at_once(v); }),
        }) {
     if (!s.ok()) return s;
   }

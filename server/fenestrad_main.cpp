@@ -38,7 +38,8 @@ struct Flags {
   std::string tls_cert, tls_key, tls_client_ca;
   bool allow_plaintext = false, check_config = false;
   int workers = 0, max_sensors = 0, max_evaluations = 0, max_message_bytes = 0, max_queued_jobs = 0,
-      max_sites = 0, max_queued_jobs_per_user = 0, max_sites_per_user = 0, max_heavy_requests = 0;
+      max_sites = 0, max_queued_jobs_per_user = 0, max_sites_per_user = 0, max_heavy_requests = 0,
+      max_candidates_at_once = 0;
   int64_t max_outdoor_paths = 0, max_indoor_paths = 0, max_triangles = 0,
           max_upload_bytes_per_user = 0, max_data_dir_bytes = 0, outdoor_memory_bytes = 0;
   double grace = 0, lease_seconds = 0;
@@ -94,6 +95,9 @@ void AddDaemonFlags(CLI::App& app, Flags& f) {
   app.add_option("--max-heavy-requests", f.max_heavy_requests,
                  "limit: requests of 1 MiB or more (registrations, submissions, site "
                  "scenes sent back) processed at once [2]");
+  app.add_option("--max-candidates-at-once", f.max_candidates_at_once,
+                 "limit: designs one job may ask to evaluate at once, each with its own copy "
+                 "of the job's indoor records [4]");
   app.add_option("--shutdown-grace", f.grace,
                  "seconds running jobs may go on after SIGTERM before they are interrupted [10]");
   app.add_option("--log-level", f.log_level, "trace, debug, info, warn, error [info]");
@@ -138,6 +142,7 @@ void ApplyFlags(const Flags& f, fenestra::v1::DaemonConfig& config) {
   if (f.max_upload_bytes_per_user) l.set_max_upload_bytes_per_user(f.max_upload_bytes_per_user);
   if (f.max_data_dir_bytes) l.set_max_data_dir_bytes(f.max_data_dir_bytes);
   if (f.max_heavy_requests) l.set_max_concurrent_heavy_requests(f.max_heavy_requests);
+  if (f.max_candidates_at_once) l.set_max_candidates_at_once(f.max_candidates_at_once);
 }
 
 // `fenestrad user ...`: what was asked, on the store in `data_dir` or `store`.

@@ -88,6 +88,10 @@ absl::Status CheckSamplingLimits(const v1::Sampling& sampling, const v1::Limits&
                      static_cast<double>(sampling.indoor_paths_per_sensor()),
                      "max_indoor_paths_per_sensor", limits.max_indoor_paths_per_sensor());
   }
+  if (indoor && sampling.candidates_at_once() > limits.max_candidates_at_once()) {
+    return OverLimit("sampling.candidates_at_once", sampling.candidates_at_once(),
+                     "max_candidates_at_once", limits.max_candidates_at_once());
+  }
   return absl::OkStatus();
 }
 

@@ -24,8 +24,8 @@ absl::Status CheckInlineScene(const v1::Scene& scene);
 absl::Status CheckSceneLimits(const v1::Scene& scene, const v1::Limits& limits,
                               double min_slat_width_m = 0);
 
-// Checks resolved sampling settings: outdoor paths, and indoor paths per sensor when
-// `indoor`. InvalidArgument naming the limit.
+// Checks resolved sampling settings: outdoor paths, and when `indoor` indoor paths per
+// sensor and designs at once. InvalidArgument naming the limit.
 absl::Status CheckSamplingLimits(const v1::Sampling& sampling, const v1::Limits& limits,
                                  bool indoor);
 

@@ -110,6 +110,8 @@ absl::Status CheckSubmitJobRequest(const v1::SubmitJobRequest& request,
           "an accepted job has more indoor paths than max_indoor_paths_per_sensor");
   Require(prepared.job.budget().max_evaluations() <= limits.max_evaluations(),
           "an accepted job has more evaluations than max_evaluations");
+  Require(prepared.job.sampling().candidates_at_once() <= limits.max_candidates_at_once(),
+          "an accepted job asks for more designs at once than max_candidates_at_once");
   Require(AllFinite(mesh.vertices), "an accepted job's scene has non-finite vertices");
   return absl::OkStatus();
 }

@@ -32,6 +32,7 @@ TEST(ConfigTest, EmptyConfigGetsTheDocumentedDefaults) {
   EXPECT_EQ(config->limits().max_sites(), 1000);
   EXPECT_EQ(config->limits().max_data_dir_bytes(), int64_t{10} << 30);
   EXPECT_EQ(config->limits().max_concurrent_heavy_requests(), 2);
+  EXPECT_EQ(config->limits().max_candidates_at_once(), 4);
   EXPECT_EQ(config->limits().max_queued_jobs_per_user(), 8);
   EXPECT_EQ(config->limits().max_sites_per_user(), 100);
   EXPECT_EQ(config->limits().max_upload_bytes_per_user(), 256 << 20);

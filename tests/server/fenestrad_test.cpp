@@ -342,10 +342,10 @@ TEST_F(FenestradTest, BadRequestsGetTheRightCodeAndTheDaemonKeepsServing) {
 }
 
 TEST_F(FenestradTest, LimitsAreCheckedBeforeAnyWork) {
-  auto d =
-      StartDaemon({"--max-outdoor-paths", "100000", "--max-indoor-paths", "5000",
-                   "--max-evaluations", "50", "--max-sensors", "20", "--max-triangles", "50000",
-                   "--max-message-bytes", "3000000", "--max-queued-jobs", "1", "--max-sites", "1"});
+  auto d = StartDaemon({"--max-outdoor-paths", "100000", "--max-indoor-paths", "5000",
+                        "--max-evaluations", "50", "--max-sensors", "20", "--max-triangles",
+                        "50000", "--max-message-bytes", "3000000", "--max-queued-jobs", "1",
+                        "--max-sites", "1", "--max-candidates-at-once", "3"});
   auto submit = [&](const v1::SubmitJobRequest& request) {
     grpc::ClientContext context;
     v1::JobInfo info;
@@ -365,6 +365,13 @@ TEST_F(FenestradTest, LimitsAreCheckedBeforeAnyWork) {
   job.mutable_sampling()->set_indoor_paths_per_sensor(10000);
   expect(submit(InlineRequest(job)), grpc::StatusCode::INVALID_ARGUMENT,
          "max_indoor_paths_per_sensor");
+  job = TinyJob();
+  job.mutable_sampling()->set_candidates_at_once(4);
+  expect(submit(InlineRequest(job)), grpc::StatusCode::INVALID_ARGUMENT,
+         "sampling.candidates_at_once is 4, above this server's limit max_candidates_at_once = 3");
+  job.mutable_sampling()->set_candidates_at_once(-1);
+  expect(submit(InlineRequest(job)), grpc::StatusCode::INVALID_ARGUMENT,
+         "sampling.candidates_at_once");
   expect(submit(InlineRequest(TinyJob(100))), grpc::StatusCode::INVALID_ARGUMENT,
          "max_evaluations = 50");
   v1::SubmitJobRequest request = InlineRequest(TinyJob());

@@ -3,6 +3,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <limits>
+#include <string>
+
 #include "server/config.h"
 
 namespace fenestra {
@@ -68,6 +72,19 @@ TEST(LimitsTest, PathsAndEvaluations) {
   EXPECT_TRUE(CheckSamplingLimits(sampling, limits, false).ok());
   EXPECT_THAT(CheckSamplingLimits(sampling, limits, true).message(),
               HasSubstr("max_indoor_paths_per_sensor"));
+  // Designs at once: each holds its own copy of the indoor records
+  sampling.set_indoor_paths_per_sensor(1000);
+  for (const int n : {0, 1, 4}) {
+    sampling.set_candidates_at_once(n);
+    EXPECT_TRUE(CheckSamplingLimits(sampling, limits, true).ok()) << n;
+  }
+  for (const int n : {5, 16, std::numeric_limits<int32_t>::max()}) {
+    sampling.set_candidates_at_once(n);
+    EXPECT_THAT(CheckSamplingLimits(sampling, limits, true).message(),
+                HasSubstr("sampling.candidates_at_once is " + std::to_string(n) +
+                          ", above this server's limit max_candidates_at_once = 4"));
+  }
+  sampling.set_candidates_at_once(0);
   v1::Budget budget;
   EXPECT_TRUE(CheckBudgetLimits(budget, limits).ok());  // the default, 150
   budget.set_max_evaluations(10'001);
