@@ -104,7 +104,8 @@ absl::Status Daemon::OpenStore() {
     spdlog::warn("cannot take over what was running ({}); it is taken over when its lease ends",
                  std::string(s.message()));
   }
-  cache_ = std::make_unique<OutdoorCache>(dir.outdoor_dir().string(), data_dir_.get());
+  cache_ = std::make_unique<OutdoorCache>(dir.outdoor_dir().string(), data_dir_.get(),
+                                          config_.outdoor_memory_bytes());
   return absl::OkStatus();
 }
 

@@ -60,7 +60,7 @@ void AddDaemonFlags(CLI::App& app, Flags& f) {
                  "how long a replica's claim on running work lasts unrenewed; another replica "
                  "takes the work over after it [10]");
   app.add_option("--outdoor-memory-bytes", f.outdoor_memory_bytes,
-                 "PostgreSQL store: outdoor matrices kept in memory after use [1 GiB]");
+                 "outdoor matrices kept in memory after use [1 GiB]");
   app.add_option(
       "--workers", f.workers,
       "jobs and site computations run at once [one per GPU, at least 1; 1 with --backend cpu]");

@@ -8,7 +8,10 @@ namespace fenestra {
 
 void ReleaseFreeMemory() { malloc_trim(0); }
 
-void ReleaseLargeBlocksWhenFreed() { mallopt(M_MMAP_THRESHOLD, 1 << 20); }
+void ReleaseLargeBlocksWhenFreed() {
+  mallopt(M_MMAP_THRESHOLD, kOwnMappingBytes);
+  mallopt(M_TRIM_THRESHOLD, 2 * kOwnMappingBytes);
+}
 
 HeavyRequests::Pass::~Pass() {
   if (!gate_) return;

@@ -15,10 +15,18 @@ inline constexpr size_t kHeavyRequestBytes = size_t{1} << 20;
 // after a large request or a trace, so the daemon's resident memory falls back.
 void ReleaseFreeMemory();
 
-// Makes glibc's malloc map blocks of 1 MiB or more on their own, so they go back to the
-// system when freed (M_MMAP_THRESHOLD; set, it also stops the threshold and the heaps' trim
-// threshold from growing after large frees, which left freed scenes resident in the
-// threads' arenas, where malloc_trim does not reach). Call once at start.
+// Blocks of at least this size are mapped on their own by glibc's malloc [bytes]
+// (ReleaseLargeBlocksWhenFreed).
+inline constexpr int kOwnMappingBytes = 8 << 20;
+
+// Makes glibc's malloc map blocks of kOwnMappingBytes or more on their own, so they go back
+// to the system when freed (M_MMAP_THRESHOLD), and trim an arena's free top beyond twice
+// that (M_TRIM_THRESHOLD). Set, they also stop both thresholds from growing after large
+// frees, which left freed scenes resident in the threads' arenas, where malloc_trim does not
+// reach. Not lower: a job's evaluations allocate and free buffers of a few MiB each (a
+// design's indoor matrix, the annual products), and with blocks of 1 MiB mapped on their
+// own every evaluation faulted its pages in again, which doubled a CPU job's evaluation
+// time. Call once at start.
 void ReleaseLargeBlocksWhenFreed();
 
 // Bounds the heavy requests processed at once (limits.max_concurrent_heavy_requests); one

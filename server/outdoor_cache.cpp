@@ -120,8 +120,8 @@ absl::StatusOr<OutdoorMatrix> DecodeOutdoorMatrix(std::string_view bytes) {
   return matrix;
 }
 
-OutdoorCache::OutdoorCache(std::string dir, const DataDir* data_dir)
-    : dir_(std::move(dir)), data_dir_(data_dir) {}
+OutdoorCache::OutdoorCache(std::string dir, const DataDir* data_dir, int64_t memory_bytes)
+    : dir_(std::move(dir)), data_dir_(data_dir), memory_bytes_(memory_bytes) {}
 
 OutdoorCache::OutdoorCache(Store& store, int64_t memory_bytes)
     : store_(&store), memory_bytes_(memory_bytes) {}
@@ -238,19 +238,30 @@ absl::Status OutdoorCache::WriteOut(const OutdoorMatrix& matrix) {
   return written;
 }
 
-void OutdoorCache::KeepRecent(const std::string& key, std::shared_ptr<const OutdoorMatrix> matrix) {
+bool OutdoorCache::DropRecent(const std::string& key) {
   for (auto it = recent_.begin(); it != recent_.end(); ++it) {
     if (it->first != key) continue;
     recent_bytes_ -= MatrixBytes(*it->second);
     recent_.erase(it);
-    break;
+    return true;
   }
+  return false;
+}
+
+void OutdoorCache::KeepRecent(const std::string& key, std::shared_ptr<const OutdoorMatrix> matrix) {
+  DropRecent(key);
   recent_bytes_ += MatrixBytes(*matrix);
   recent_.emplace_front(key, std::move(matrix));
   while (!recent_.empty() && recent_bytes_ > memory_bytes_) {
     recent_bytes_ -= MatrixBytes(*recent_.back().second);
     recent_.pop_back();
   }
+}
+
+bool OutdoorCache::HeldOutside(const std::string& key, const Entry& entry) const {
+  const bool recent = std::any_of(recent_.begin(), recent_.end(),
+                                  [&](const auto& kept) { return kept.first == key; });
+  return entry.held.use_count() > (recent ? 1 : 0);
 }
 
 absl::StatusOr<std::shared_ptr<const OutdoorMatrix>> OutdoorCache::FindOrError(
@@ -262,7 +273,10 @@ absl::StatusOr<std::shared_ptr<const OutdoorMatrix>> OutdoorCache::FindOrError(
     if (it != entries_.end()) {
       it->second.last_used = ++uses_;
       if (it->second.kept) return it->second.kept;
-      if (auto held = it->second.held.lock()) return held;
+      if (auto held = it->second.held.lock()) {
+        KeepRecent(key, held);
+        return held;
+      }
     }
   }
   // Read it back, outside the lock (megabytes)
@@ -294,7 +308,7 @@ absl::StatusOr<std::shared_ptr<const OutdoorMatrix>> OutdoorCache::FindOrError(
   if (!known) entry.from_disk = true;  // another replica's
   entry.held = shared;
   entry.last_used = ++uses_;
-  if (store_) KeepRecent(key, shared);
+  KeepRecent(key, shared);
   return shared;
 }
 
@@ -351,7 +365,7 @@ absl::Status OutdoorCache::Put(std::shared_ptr<const OutdoorMatrix> matrix) {
     entry.kept = written.ok() ? nullptr : matrix;
     entry.from_disk = false;
     entry.last_used = ++uses_;
-    if (store_) KeepRecent(matrix->key, matrix);
+    KeepRecent(matrix->key, matrix);
   }
   changed_.notify_all();
   return written;
@@ -369,7 +383,7 @@ bool OutdoorCache::EvictOne() {
   {
     std::lock_guard lock(mutex_);
     for (const auto& [key, entry] : entries_) {
-      if (!entry.kept && entry.held.expired() && !computing_.contains(key)) {
+      if (!entry.kept && !HeldOutside(key, entry) && !computing_.contains(key)) {
         candidates.push_back({entry.last_used, key});
       }
     }
@@ -383,9 +397,10 @@ bool OutdoorCache::EvictOne() {
       std::lock_guard lock(mutex_);
       auto it = entries_.find(key);
       if (it == entries_.end() || it->second.last_used != last_used || it->second.kept ||
-          !it->second.held.expired()) {
+          HeldOutside(key, it->second)) {
         continue;
       }
+      DropRecent(key);
       entries_.erase(it);
     }
     std::error_code error;

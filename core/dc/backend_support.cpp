@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
 #include "core/trace/one_stage_cpu.h"
 
 namespace fenestra {
@@ -159,17 +160,28 @@ int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count)
   return std::max<int64_t>(1, std::min(options.paths_per_sensor, cap));
 }
 
-absl::StatusOr<Matrix> StackIndoorBatches(const std::vector<Matrix>& batches, Eigen::Index cells) {
+namespace {
+
+// Whether every indoor batch has the first one's rows and `cells` columns.
+absl::Status CheckIndoorBatches(const std::vector<Matrix>& batches, Eigen::Index cells) {
   const Eigen::Index rows = batches.empty() ? 0 : batches[0].rows();
-  Matrix stacked(rows * static_cast<Eigen::Index>(batches.size()), cells);
   for (size_t b = 0; b < batches.size(); ++b) {
     if (batches[b].rows() != rows || batches[b].cols() != cells) {
       return absl::InvalidArgumentError(
           absl::StrCat("indoor batch ", b, " is ", batches[b].rows(), " x ", batches[b].cols(),
                        ", the outdoor matrix has ", cells, " window cells"));
     }
-    stacked.middleRows(b * rows, rows) = batches[b];
   }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<Matrix> StackIndoorBatches(const std::vector<Matrix>& batches, Eigen::Index cells) {
+  FENESTRA_RETURN_IF_ERROR(CheckIndoorBatches(batches, cells));
+  const Eigen::Index rows = batches.empty() ? 0 : batches[0].rows();
+  Matrix stacked(rows * static_cast<Eigen::Index>(batches.size()), cells);
+  for (size_t b = 0; b < batches.size(); ++b) stacked.middleRows(b * rows, rows) = batches[b];
   return stacked;
 }
 
@@ -199,7 +211,7 @@ absl::Status CheckPairs(const std::vector<Matrix>& indoor_batches,
                                                    " batches, the outdoor matrix ",
                                                    outdoor_batches.size(), "; they pair up"));
   }
-  return StackIndoorBatches(indoor_batches, outdoor_batches[0].rows()).status();
+  return CheckIndoorBatches(indoor_batches, outdoor_batches[0].rows());
 }
 
 Matrix ThroughWindow(const std::vector<Matrix>& indoor_batches,

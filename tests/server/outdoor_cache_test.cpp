@@ -185,6 +185,44 @@ TEST(OutdoorCacheTest, MatricesNoOneHoldsAreReadBackFromTheirFiles) {
   EXPECT_FALSE(fs::exists(cache.PathFor("k")));
 }
 
+// With a memory bound, the matrices used last stay in memory though no one holds them, the
+// least recently used dropped first; eviction drops them from memory too.
+TEST(OutdoorCacheTest, TheMatricesUsedLastStayInMemoryUpToTheBound) {
+  const std::string dir = FreshDir("recent");
+  const OutdoorMatrix a = TestMatrix("a"), b = TestMatrix("b");
+  int64_t values = a.coefficients.size() + a.standard_error.size();
+  for (const Matrix& batch : a.batches) values += batch.size();
+  const int64_t one = static_cast<int64_t>(sizeof(double)) * values;
+  OutdoorCache cache(dir, nullptr, /*memory_bytes=*/one * 3 / 2);  // room for one
+  ASSERT_TRUE(cache.Load().ok());
+  std::weak_ptr<const OutdoorMatrix> held_a;
+  {
+    auto shared = std::make_shared<const OutdoorMatrix>(a);
+    held_a = shared;
+    ASSERT_TRUE(cache.Put(shared).ok());
+  }
+  EXPECT_FALSE(held_a.expired());  // kept, though no one holds it
+  // Its file is not read again: a corrupt file goes unnoticed while the matrix is in memory
+  std::ofstream(cache.PathFor("a"), std::ios::binary | std::ios::trunc) << "garbage";
+  EXPECT_EQ(cache.Find("a"), held_a.lock());
+  EXPECT_THAT(cache.KeysInMemory(), testing::ElementsAre("a"));
+
+  ASSERT_TRUE(cache.Put(std::make_shared<const OutdoorMatrix>(b)).ok());
+  EXPECT_TRUE(held_a.expired());  // no room for two: a dropped
+  EXPECT_THAT(cache.KeysInMemory(), testing::ElementsAre("b"));
+  EXPECT_EQ(cache.Find("a"), nullptr);  // read back from its file, found corrupt
+  EXPECT_FALSE(cache.Contains("a"));
+
+  // A matrix only the bound keeps can be evicted, from disk and memory
+  std::weak_ptr<const OutdoorMatrix> held_b = cache.Find("b");
+  EXPECT_FALSE(held_b.expired());
+  ASSERT_TRUE(cache.EvictOne());
+  EXPECT_FALSE(cache.Contains("b"));
+  EXPECT_FALSE(fs::exists(cache.PathFor("b")));
+  EXPECT_TRUE(held_b.expired());
+  EXPECT_THAT(cache.KeysInMemory(), testing::IsEmpty());
+}
+
 TEST(OutdoorCacheTest, EvictionTakesTheLeastRecentlyUsedMatrixNoOneUses) {
   const std::string dir = FreshDir("evict");
   OutdoorCache cache(dir);
