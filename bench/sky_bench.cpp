@@ -1,4 +1,4 @@
-// Time to read the Montevideo EPW and to build its 146 x 8760 sky matrix, one core.
+// Time to read the Montevideo EPW and to build its 146 x 8760 sky matrix (columns on every core).
 // Usage: sky_bench [EPW] [RUNS]
 #include <algorithm>
 #include <chrono>

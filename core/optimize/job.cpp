@@ -29,7 +29,7 @@
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
 #include "core/sky/sky_matrix.h"
-#include "core/trace/thread_pool.h"
+#include "core/common/thread_pool.h"
 #include "google/protobuf/io/coded_stream.h"
 #include "google/protobuf/io/zero_copy_stream_impl_lite.h"
 

@@ -6,7 +6,7 @@
 #include "core/common/status_macros.h"
 #include "core/metrics/metric_errors.h"
 #include "core/optimize/metric_objective.h"
-#include "core/trace/thread_pool.h"
+#include "core/common/thread_pool.h"
 
 namespace fenestra {
 

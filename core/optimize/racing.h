@@ -22,7 +22,7 @@
 #include "core/dc/dc_backend.h"
 #include "core/metrics/annual_metrics.h"
 #include "core/optimize/vns.h"
-#include "core/trace/thread_pool.h"
+#include "core/common/thread_pool.h"
 
 namespace fenestra {
 

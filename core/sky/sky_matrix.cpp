@@ -9,6 +9,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
+#include "core/common/thread_pool.h"
 #include "core/sky/solar_position.h"
 
 namespace fenestra {
@@ -99,24 +100,26 @@ absl::StatusOr<SkyMatrix> BuildSkyMatrix(const EpwData& weather, const SkyMatrix
   SkyMatrix sky;
   sky.radiance = Matrix::Zero(bins, steps);
   sky.steps.resize(steps);
-  std::vector<double> column(bins);
+  std::vector<SolarPosition> suns(steps);
+  std::vector<double> dew_points(steps);
   DewPointMean dew_point;
   bool after_leap_day = false;
 
+  // The steps in order (the dew point's running mean and the leap day carry over)
   for (int t = 0; t < steps; ++t) {
     const EpwRecord& record = weather.records[t];
     SkyStep& step = sky.steps[t];
-    const double dew_point_c = dew_point.Update(record.dew_point_c);
+    dew_points[t] = dew_point.Update(record.dew_point_c);
 
     // Sun position at the centre of the step
     step.month = record.month;
     step.day = record.day;
     step.hour = StepCentreHours(record, weather.records_per_hour);
     step.day_of_year = DayOfYear(record.month, record.day, &after_leap_day);
-    const SolarPosition sun = ComputeSolarPosition(site, step.day_of_year, step.hour);
-    step.solar_altitude_rad = sun.altitude_rad;
-    step.solar_azimuth_rad = sun.azimuth_rad;
-    step.sun_in_sky = SunInSky(sun.altitude_rad);
+    suns[t] = ComputeSolarPosition(site, step.day_of_year, step.hour);
+    step.solar_altitude_rad = suns[t].altitude_rad;
+    step.solar_azimuth_rad = suns[t].azimuth_rad;
+    step.sun_in_sky = SunInSky(suns[t].altitude_rad);
 
     // Night: no light at all, the column stays 0
     const double direct = record.direct_normal_wm2;
@@ -125,11 +128,19 @@ absl::StatusOr<SkyMatrix> BuildSkyMatrix(const EpwData& weather, const SkyMatrix
     step.daytime = true;
     ++sky.daytime_steps;
     if (!step.sun_in_sky && direct > 0) ++sky.direct_with_sun_down_steps;
+  }
 
-    // Perez sky and ground
-    const PerezSkyCondition condition = ComputePerezSkyCondition(
-        direct, diffuse, sun.altitude_rad, step.day_of_year, dew_point_c, options.quantity);
-    std::fill(column.begin(), column.end(), 0.0);
+  // The daytime columns, each on its own: Perez sky and ground, then the sun
+  ParallelFor(steps, ResolveThreadCount(0), [&](uint64_t i) {
+    const int t = static_cast<int>(i);
+    const SkyStep& step = sky.steps[t];
+    if (!step.daytime) return;
+    const EpwRecord& record = weather.records[t];
+    const SolarPosition& sun = suns[t];
+    const PerezSkyCondition condition =
+        ComputePerezSkyCondition(record.direct_normal_wm2, record.diffuse_horizontal_wm2,
+                                 sun.altitude_rad, step.day_of_year, dew_points[t], options.quantity);
+    std::vector<double> column(bins, 0.0);
     if (options.include_sky) {
       ComputePerezSkyRadiance(condition, sun, patches, column);
       const double horizontal_illuminance =
@@ -138,14 +149,12 @@ absl::StatusOr<SkyMatrix> BuildSkyMatrix(const EpwData& weather, const SkyMatrix
       column[0] =
           options.ground_reflectance * horizontal_illuminance / (kPi * kWhiteEfficacyLmPerW);
     }
-
-    // Sun
     if (options.include_sun && condition.direct_illuminance > 1e-4) {
       AddSunToPatches(patches, DirectionFromAltAz(sun.altitude_rad, sun.azimuth_rad),
                       condition.direct_illuminance / kWhiteEfficacyLmPerW, column);
     }
     for (int bin = 0; bin < bins; ++bin) sky.radiance(bin, t) = column[bin];
-  }
+  });
   return sky;
 }
 

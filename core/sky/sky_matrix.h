@@ -51,7 +51,8 @@ struct SkyMatrix {
   int direct_with_sun_down_steps = 0;
 };
 
-// Builds the sky matrix of every record of `weather`. InvalidArgument for a bad option.
+// Builds the sky matrix of every record of `weather`, its daytime columns on every core.
+// InvalidArgument for a bad option.
 absl::StatusOr<SkyMatrix> BuildSkyMatrix(const EpwData& weather,
                                          const SkyMatrixOptions& options = {});
 

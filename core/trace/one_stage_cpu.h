@@ -15,7 +15,7 @@
 #include "core/trace/importance.h"
 #include "core/trace/path.h"
 #include "core/trace/philox.h"
-#include "core/trace/thread_pool.h"
+#include "core/common/thread_pool.h"
 
 namespace fenestra {
 

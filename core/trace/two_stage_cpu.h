@@ -13,7 +13,7 @@
 #include "core/trace/one_stage_cpu.h"
 #include "core/trace/path.h"
 #include "core/trace/philox.h"
-#include "core/trace/thread_pool.h"
+#include "core/common/thread_pool.h"
 #include "core/trace/two_stage_modes.h"
 
 namespace fenestra {

@@ -1,4 +1,4 @@
-#include "core/trace/thread_pool.h"
+#include "core/common/thread_pool.h"
 
 #include <gtest/gtest.h>
 
