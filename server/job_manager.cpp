@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <thread>
+#include <utility>
 
 #include "absl/cleanup/cleanup.h"
 #include "absl/strings/match.h"
@@ -94,6 +95,12 @@ bool EndsStream(const v1::JobEvent& e) {
 // waits after the store could not be reached.
 constexpr auto kWatchPoll = std::chrono::seconds(1);
 constexpr auto kWatchRetry = std::chrono::milliseconds(500);
+
+// The least time between two stored steps of a search (progress and checkpoint): steps that
+// come sooner are not stored, and the next step due carries theirs. Storing each step of a
+// fast search (500 steps in 0.6 s on a GPU) took as long again as the steps: the checkpoint
+// holds the whole history, and was serialized and written every step.
+constexpr auto kStepStoreInterval = std::chrono::milliseconds(100);
 
 }  // namespace
 
@@ -484,13 +491,24 @@ JobCallbacks JobManager::Callbacks(Record& r) {
     event.mutable_stage()->set_name(stage);
     Report(r, event);
   };
-  // Each step's checkpoint is stored with the step's progress, which follows it
+  // A step's checkpoint is stored with the step's progress, which follows it, once
+  // kStepStoreInterval has passed since the last step stored, and for the budget's last
+  // step; the final check's progress always is. So the stored progress never runs ahead of
+  // the stored checkpoint.
   callbacks.checkpoint = [&r](const v1::SearchCheckpoint& checkpoint) {
     std::lock_guard lock(r.mutex);
-    r.checkpoint = checkpoint.SerializeAsString();
+    r.step_checkpoint = &checkpoint;
   };
   callbacks.progress = [this, &r](const JobProgress& progress) {
     std::lock_guard lock(r.mutex);
+    const v1::SearchCheckpoint* checkpoint = std::exchange(r.step_checkpoint, nullptr);
+    const auto now = std::chrono::steady_clock::now();
+    if (!progress.final_check && now - r.step_stored < kStepStoreInterval &&
+        progress.evaluations < progress.max_evaluations) {
+      return;  // stored with a later step
+    }
+    if (checkpoint) r.checkpoint = checkpoint->SerializeAsString();
+    r.step_stored = now;
     v1::JobEvent event;
     *event.mutable_progress() = ToProto(progress);
     *r.wanted.mutable_progress() = event.progress();

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <functional>
 #include <map>
@@ -86,8 +87,11 @@ class JobManager {
     std::optional<v1::JobEvent> end;  // the final event, while its storing waits
     std::string weather;              // the job's weather file, released at its end
     bool store_failing = false;       // the last Report failed (logged once)
-    // The search's latest checkpoint, stored with the next progress
+    // The checkpoint to store with the next progress; the step's checkpoint until its
+    // progress comes; when a step was last stored
     std::optional<std::string> checkpoint;
+    const v1::SearchCheckpoint* step_checkpoint = nullptr;
+    std::chrono::steady_clock::time_point step_stored{};
     // A job taken over: the checkpoint it goes on from
     std::optional<v1::SearchCheckpoint> resume;
   };

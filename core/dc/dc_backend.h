@@ -206,11 +206,11 @@ void UseCudaDevices(std::vector<int> devices);
 // How many GPUs NextCudaDevice takes in turn.
 int CudaDevicesInUse();
 
-// Designs evaluated at once per GPU by default. One design's kernel keeps an H100 busy, but
-// a second lane's kernel runs while the first's tallies and host work go on: two at once take
-// the four-variable job's 500 steps 8-9% faster than one, in spite of the 30 designs
-// evaluated ahead and dropped; three or four gain less than their dropped designs cost
-// (bench/README.md, "Several GPUs").
-inline constexpr int kCandidatesPerGpu = 2;
+// Designs evaluated at once per GPU by default. Since the replay kernel's blocks fill the
+// H100 to its last slot (its rows share them by their work), a second lane's kernel no longer
+// runs beside the first's tallies: two at once took the four-variable job's 500 steps in the
+// time of one (0.578-0.582 s against 0.582-0.586 s) while recording a second copy of the
+// paths, and three or four took longer (bench/README.md, "Several GPUs").
+inline constexpr int kCandidatesPerGpu = 1;
 
 }  // namespace fenestra

@@ -110,7 +110,7 @@ struct JobCallbacks {
   std::function<bool()> cancelled;
   // After each step of the search (an evaluation or a cache hit), before `progress`: what
   // continues the job from there (RunJob's `resume`). The search's state only, built step by
-  // step (one evaluation appended); valid during the call.
+  // step (one evaluation appended); valid until the step's `progress` returns.
   std::function<void(const v1::SearchCheckpoint&)> checkpoint;
 };
 

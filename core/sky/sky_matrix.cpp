@@ -137,9 +137,9 @@ absl::StatusOr<SkyMatrix> BuildSkyMatrix(const EpwData& weather, const SkyMatrix
     if (!step.daytime) return;
     const EpwRecord& record = weather.records[t];
     const SolarPosition& sun = suns[t];
-    const PerezSkyCondition condition =
-        ComputePerezSkyCondition(record.direct_normal_wm2, record.diffuse_horizontal_wm2,
-                                 sun.altitude_rad, step.day_of_year, dew_points[t], options.quantity);
+    const PerezSkyCondition condition = ComputePerezSkyCondition(
+        record.direct_normal_wm2, record.diffuse_horizontal_wm2, sun.altitude_rad, step.day_of_year,
+        dew_points[t], options.quantity);
     std::vector<double> column(bins, 0.0);
     if (options.include_sky) {
       ComputePerezSkyRadiance(condition, sun, patches, column);

@@ -14,6 +14,7 @@
 #include "core/trace/cuda/device_buffer.cuh"
 #include "core/trace/indoor_replay_modes.h"
 #include "core/trace/path.h"
+#include "core/trace/share_blocks.h"
 #include "core/trace/two_stage_modes.h"
 
 namespace fenestra {
@@ -307,28 +308,37 @@ struct ReplayParts {
 // One design's indoor sums from the records (CudaTracer::ReplayIndoor), one row per (sensor,
 // batch) over the parts traced: their fixed light (first block of the row), their
 // connections the blind leaves clear, and their resumed paths traced on through the room
-// with the blind.
+// with the blind. A row has as many blocks as its share of the work (row_blocks,
+// ReplayRowBlocks), so that the rows end together.
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     ReplayKernel(BvhIntersector scene, LocalSlats blind, SurfaceTable surfaces,
                  PathSettings settings, OutdoorView<BvhIntersector> outdoor,
                  const TraceSensor* sensors, int sensor_count, TraceWindow window,
                  HemisphereBasis basis, ReplayParts parts, uint64_t seed, DeviceRecords records,
-                 const double* fixed, double* sum, unsigned long long* counters,
-                 unsigned long long* next_item) {
+                 const unsigned int* row_blocks, const double* fixed, double* sum,
+                 unsigned long long* counters, unsigned long long* next_item) {
   extern __shared__ double row[];  // columns of I
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
   if (threadIdx.x == 0) shared_basis = basis;
   const int columns = IndoorColumnCount(window, basis);
   BeginRow(row, columns, block_counters);
-  const int s = static_cast<int>(blockIdx.y) / parts.batches;
-  const int b = static_cast<int>(blockIdx.y) % parts.batches;
+  // This block's row: blocks [row_blocks[y], row_blocks[y + 1]) work on row y
+  const unsigned int rows = static_cast<unsigned int>(sensor_count * parts.batches);
+  unsigned int y = 0;
+  for (unsigned int step = 1u << 30; step > 0; step >>= 1) {
+    if (y + step < rows && row_blocks[y + step] <= blockIdx.x) y += step;
+  }
+  const unsigned int block = blockIdx.x - row_blocks[y];
+  const unsigned int blocks = row_blocks[y + 1] - row_blocks[y];
+  const int s = static_cast<int>(y) / parts.batches;
+  const int b = static_cast<int>(y) % parts.batches;
   const size_t offset = (static_cast<size_t>(b) * sensor_count + s) * columns;
   // The record rows of the parts, as RecordIndoor made them: (sensor, batch x parts + part)
   const unsigned int first_row =
       static_cast<unsigned int>((s * parts.batches + b) * parts.parts + parts.first);
   const int count = parts.last - parts.first;
-  if (blockIdx.x == 0) {
+  if (block == 0) {
     for (int i = threadIdx.x; i < columns; i += blockDim.x) {
       double light = 0;
       for (int p = 0; p < count; ++p) {
@@ -346,8 +356,8 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     const uint64_t connection_count =
         Smaller(records.connection_count[r], records.connection_capacity);
     const ReplayConnection* connections = records.connections + r * records.connection_capacity;
-    for (uint64_t i = blockIdx.x * static_cast<uint64_t>(blockDim.x) + threadIdx.x;
-         i < connection_count; i += static_cast<uint64_t>(gridDim.x) * blockDim.x) {
+    for (uint64_t i = block * static_cast<uint64_t>(blockDim.x) + threadIdx.x; i < connection_count;
+         i += static_cast<uint64_t>(blocks) * blockDim.x) {
       const ReplayConnection c = connections[i];
       ++counts.values[0];
       if (!blind.Occluded(c.origin, c.direction, c.distance)) atomicAdd(&row[c.column], c.value);
@@ -358,7 +368,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   IndoorMode<SharedSink, OutdoorView<BvhIntersector>> mode{
       sensors[s].position,  sensors[s].normal, window, &shared_basis,
       settings.max_bounces, &outdoor,          &sink};
-  TraceItems(scene, surfaces, settings, mode, resume_count, next_item + blockIdx.y, counts,
+  TraceItems(scene, surfaces, settings, mode, resume_count, next_item + y, counts,
              [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
                // Item i of the parts' resumes, one part after the other
                unsigned int r = first_row;
@@ -431,6 +441,12 @@ std::string AllowSharedRow(Kernel kernel, int columns) {
   return "";
 }
 
+// A resumed path's share of the replay's work, in connection tests (ReplayRowWork): on the
+// city office the replay kernel took 1.24 ms with blocks shared by connections alone, 1.14 ms
+// with resumes weighing 2-4, 1.05 ms with 16, 1.00 ms with 32, 1.01-1.02 ms with 64-128 and
+// 1.04 ms by resumes alone (bench/results/gpu_h100.txt).
+constexpr double kResumeWork = 32;
+
 }  // namespace
 
 struct CudaTracer::Impl {
@@ -457,10 +473,14 @@ struct CudaTracer::Impl {
   DeviceBuffer<unsigned long long> record_counts;  // per row: connections, then resumes
   DeviceBuffer<double> fixed;
   DeviceBuffer<TraceSensor> replay_sensors;
+  DeviceBuffer<unsigned int> row_blocks;  // ReplayRowBlocks of the parts row_blocks_parts
+  std::pair<int, int> row_blocks_parts{-1, -1};
+  unsigned int row_blocks_total = 0;
   struct Recorded {
     bool valid = false;
     int sensor_count = 0, batches = 0, parts = 0;  // rows: sensors x batches x parts
     uint64_t paths_per_sensor = 0, seed = 0, connection_capacity = 0, resume_capacity = 0;
+    std::vector<unsigned long long> counts;  // per row: connections, then resumes
     TraceWindow window;
     HemisphereBasis basis;
     Vec3f outdoor_offset;
@@ -489,6 +509,23 @@ struct CudaTracer::Impl {
             record_counts.get() + rows,
             recorded.connection_capacity,
             recorded.resume_capacity};
+  }
+
+  // The replay's work per row (sensor, batch) over parts [first, last) of the records: a
+  // connection is one query, a resumed path kResumeWork of them.
+  std::vector<double> ReplayRowWork(int first, int last) const {
+    const Recorded& r = recorded;
+    const size_t record_rows = r.counts.size() / 2;
+    std::vector<double> work(static_cast<size_t>(r.sensor_count) * r.batches, 0.0);
+    for (size_t y = 0; y < work.size(); ++y) {
+      for (int p = first; p < last; ++p) {
+        const size_t i = y * r.parts + p;
+        work[y] += static_cast<double>(std::min<uint64_t>(r.counts[i], r.connection_capacity)) +
+                   kResumeWork * static_cast<double>(std::min<uint64_t>(r.counts[record_rows + i],
+                                                                        r.resume_capacity));
+      }
+    }
+    return work;
   }
 
   BvhIntersector Scene() const { return {nodes.get(), triangles.get()}; }
@@ -730,18 +767,9 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
   const uint64_t row_paths = paths_per_sensor / row_batches + 1;
   Impl::Recorded& r = d.recorded;
-  r = {false,
-       sensor_count,
-       batches,
-       parts,
-       paths_per_sensor,
-       seed,
-       3 * row_paths + 64,
-       row_paths,
-       window,
-       basis,
-       outdoor_offset,
-       path};
+  d.row_blocks_parts = {-1, -1};
+  r = {false,     sensor_count, batches, parts, paths_per_sensor, seed, 3 * row_paths + 64,
+       row_paths, {},           window,  basis, outdoor_offset,   path};
   std::vector<unsigned long long> counts(2 * static_cast<size_t>(rows));
   CudaCounters counters;
   // Connections per row are not known in advance: a row that made more than there was room
@@ -780,6 +808,7 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
                                            static_cast<size_t>(rows) * columns * sizeof(double),
                                            cudaMemcpyDeviceToDevice));
   r.valid = true;
+  r.counts = counts;
   stats->paths = paths_per_sensor * sensor_count;
   stats->connections = stats->resumes = 0;
   for (unsigned int i = 0; i < rows; ++i) {
@@ -810,16 +839,25 @@ std::string CudaTracer::Impl::Replay(const LocalSlats& blind, int first, int las
   const unsigned int rows = static_cast<unsigned int>(r.sensor_count * r.batches);
   const int columns = IndoorColumnCount(r.window, r.basis);
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
-  const dim3 grid(d.BlocksPerRow(ReplayKernel, shared, r.resume_capacity * (last - first), rows),
-                  rows);
+  if (d.row_blocks_parts != std::make_pair(first, last)) {
+    int resident = 0;
+    FENESTRA_CUDA_RETURN_IF_ERROR(
+        cudaOccupancyMaxActiveBlocksPerMultiprocessor(&resident, ReplayKernel, kThreads, shared));
+    const std::vector<unsigned int> blocks =
+        ShareBlocks(d.ReplayRowWork(first, last),
+                    static_cast<unsigned int>(std::max(1, resident) * d.multiprocessors));
+    FENESTRA_CUDA_RETURN_IF_ERROR(d.row_blocks.Upload(blocks.data(), blocks.size()));
+    d.row_blocks_parts = {first, last};
+    d.row_blocks_total = blocks.back();
+  }
   const DeviceRecords records = d.Records();
   std::string error = d.Run(
       rows, static_cast<size_t>(r.sensor_count) * r.batches * columns, false,
       [&] {
-        ReplayKernel<<<grid, kThreads, shared>>>(
+        ReplayKernel<<<d.row_blocks_total, kThreads, shared>>>(
             d.Scene(), blind, d.Surfaces(), r.path, d.Outdoor(r.outdoor_offset),
             d.replay_sensors.get(), r.sensor_count, r.window, r.basis, parts, r.seed, records,
-            d.fixed.get(), d.sum.get(), d.counters.get(), d.next_path.get());
+            d.row_blocks.get(), d.fixed.get(), d.sum.get(), d.counters.get(), d.next_path.get());
       },
       host_sum, nullptr, out, first > 0);
   d.replayed_parts = error.empty() ? last : 0;
