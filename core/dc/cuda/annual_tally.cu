@@ -38,15 +38,17 @@ __global__ void MultiplyKernel(const double* a, const double* b, double* c, int 
 // C = A B_g^T for row-major A (m x k) and B_g (n x k): for a long k and a small C (indoor
 // rows through the window cells). The rows of A come in groups of group_rows, group g with
 // its own B_g (the batches of the annual product), one after the other from b. A block takes
-// kRowTile rows of a group and kColumnTile columns of C, a warp per column: the rows' chunks
-// of k wait in shared memory, so each row of B_g is read once per row tile (not once per
-// entry of C) and each of A once per column tile.
-constexpr int kRowTile = 8, kColumnTile = 8, kChunk = 128;
+// kRowTile rows of a group, kColumnTile columns of C (a warp per column) and kSplitChunks
+// chunks of k, whose part of C it adds to C (zeroed before): the rows' chunks wait in shared
+// memory, so each row of B_g is read once per row tile (once for up to kRowTile sensors), and
+// the split of k gives the device enough blocks to stream B at its memory's pace.
+constexpr int kRowTile = 16, kColumnTile = 8, kChunk = 128, kSplitChunks = 4;
 __global__ void MultiplyTransposedKernel(const double* a, const double* b, double* c, int k, int n,
-                                         int group_rows) {
+                                         int group_rows, int splits) {
   __shared__ double a_chunk[kRowTile][kChunk];
   const int group = static_cast<int>(blockIdx.z);
-  const int tile_row = static_cast<int>(blockIdx.y) * kRowTile;
+  const int split = static_cast<int>(blockIdx.y) % splits;
+  const int tile_row = static_cast<int>(blockIdx.y) / splits * kRowTile;
   const int first_row = group * group_rows + tile_row;
   const int rows = min(kRowTile, group_rows - tile_row);
   const int lane = static_cast<int>(threadIdx.x % 32);
@@ -54,8 +56,9 @@ __global__ void MultiplyTransposedKernel(const double* a, const double* b, doubl
       static_cast<int>(blockIdx.x) * kColumnTile + static_cast<int>(threadIdx.x / 32);
   const double* b_row = b + (static_cast<size_t>(group) * n + min(column, n - 1)) * k;
   double sum[kRowTile] = {};
-  for (int start = 0; start < k; start += kChunk) {
-    const int width = min(kChunk, k - start);
+  const int end = min(k, (split + 1) * kSplitChunks * kChunk);
+  for (int start = split * kSplitChunks * kChunk; start < end; start += kChunk) {
+    const int width = min(kChunk, end - start);
     __syncthreads();
     for (int e = static_cast<int>(threadIdx.x); e < kRowTile * kChunk; e += blockDim.x) {
       const int r = e / kChunk, i = e % kChunk;
@@ -71,15 +74,23 @@ __global__ void MultiplyTransposedKernel(const double* a, const double* b, doubl
   for (int r = 0; r < kRowTile; ++r) {
     double v = sum[r];
     for (int offset = 16; offset > 0; offset /= 2) v += __shfl_down_sync(0xffffffffu, v, offset);
-    if (lane == 0 && r < rows && column < n) c[static_cast<size_t>(first_row + r) * n + column] = v;
+    if (lane == 0 && r < rows && column < n) {
+      atomicAdd(&c[static_cast<size_t>(first_row + r) * n + column], v);
+    }
   }
 }
 
-void MultiplyTransposed(const double* a, const double* b, double* c, int m, int k, int n,
-                        int group_rows) {
-  const dim3 grid((n + kColumnTile - 1) / kColumnTile, (group_rows + kRowTile - 1) / kRowTile,
-                  m / group_rows);
-  MultiplyTransposedKernel<<<grid, 32 * kColumnTile>>>(a, b, c, k, n, group_rows);
+cudaError_t MultiplyTransposed(const double* a, const double* b, double* c, int m, int k, int n,
+                               int group_rows) {
+  if (const cudaError_t e = cudaMemsetAsync(c, 0, static_cast<size_t>(m) * n * sizeof(double));
+      e != cudaSuccess) {
+    return e;
+  }
+  const int splits = (k + kSplitChunks * kChunk - 1) / (kSplitChunks * kChunk);
+  const dim3 grid((n + kColumnTile - 1) / kColumnTile,
+                  (group_rows + kRowTile - 1) / kRowTile * splits, m / group_rows);
+  MultiplyTransposedKernel<<<grid, 32 * kColumnTile>>>(a, b, c, k, n, group_rows, splits);
+  return cudaGetLastError();
 }
 
 void Multiply(const double* a, const double* b, double* c, int m, int k, int n) {
@@ -215,8 +226,9 @@ struct CudaAnnualTally::Impl {
     FENESTRA_CUDA_RETURN_IF_ERROR(
         through_window.Reserve(static_cast<size_t>(rows) * kTregenzaBinCount));
     FENESTRA_CUDA_RETURN_IF_ERROR(illuminance.Reserve(static_cast<size_t>(rows) * steps));
-    MultiplyTransposed(indoor.get(), outdoor_transposed.get(), through_window.get(), rows, cells,
-                       kTregenzaBinCount, rows / batches);
+    FENESTRA_CUDA_RETURN_IF_ERROR(MultiplyTransposed(indoor.get(), outdoor_transposed.get(),
+                                                     through_window.get(), rows, cells,
+                                                     kTregenzaBinCount, rows / batches));
     Multiply(through_window.get(), sky.get(), illuminance.get(), rows, kTregenzaBinCount, steps);
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
     return "";
