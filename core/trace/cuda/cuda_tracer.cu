@@ -565,8 +565,9 @@ struct CudaTracer::Impl {
     FENESTRA_CUDA_RETURN_IF_ERROR(counters.Zero(kCounters));
     FENESTRA_CUDA_RETURN_IF_ERROR(next_path.Zero(rows));
     double seconds = 0;
+    // Waits for this thread's stream only (TimeKernels): a device-wide wait would also wait
+    // for the kernels of other lanes and jobs on the GPU
     FENESTRA_CUDA_RETURN_IF_ERROR(TimeKernels(launch, &seconds));
-    FENESTRA_CUDA_RETURN_IF_ERROR(cudaDeviceSynchronize());
     unsigned long long host_counters[kCounters] = {};
     if (host_sum != nullptr) {
       FENESTRA_CUDA_RETURN_IF_ERROR(staging.Download(sum.get(), host_sum, sum_size));
