@@ -308,8 +308,8 @@ struct ReplayParts {
 // One design's indoor sums from the records (CudaTracer::ReplayIndoor), one row per (sensor,
 // batch) over the parts traced: their fixed light (first block of the row), their
 // connections the blind leaves clear, and their resumed paths traced on through the room
-// with the blind. A row has as many blocks as its share of the work (row_blocks,
-// ReplayRowBlocks), so that the rows end together.
+// with the blind. A row has as many blocks as its share of the work (row_blocks: ShareBlocks
+// of Impl::ReplayRowWork), so that the rows end together.
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     ReplayKernel(BvhIntersector scene, LocalSlats blind, SurfaceTable surfaces,
                  PathSettings settings, OutdoorView<BvhIntersector> outdoor,
@@ -444,7 +444,7 @@ std::string AllowSharedRow(Kernel kernel, int columns) {
 // A resumed path's share of the replay's work, in connection tests (ReplayRowWork): on the
 // city office the replay kernel took 1.24 ms with blocks shared by connections alone, 1.14 ms
 // with resumes weighing 2-4, 1.05 ms with 16, 1.00 ms with 32, 1.01-1.02 ms with 64-128 and
-// 1.04 ms by resumes alone (bench/results/gpu_h100.txt).
+// 1.04 ms by resumes alone (bench/results/replay_row_blocks_h100.txt).
 constexpr double kResumeWork = 32;
 
 }  // namespace
@@ -473,7 +473,7 @@ struct CudaTracer::Impl {
   DeviceBuffer<unsigned long long> record_counts;  // per row: connections, then resumes
   DeviceBuffer<double> fixed;
   DeviceBuffer<TraceSensor> replay_sensors;
-  DeviceBuffer<unsigned int> row_blocks;  // ReplayRowBlocks of the parts row_blocks_parts
+  DeviceBuffer<unsigned int> row_blocks;  // each row's first block, for row_blocks_parts
   std::pair<int, int> row_blocks_parts{-1, -1};
   unsigned int row_blocks_total = 0;
   struct Recorded {
