@@ -5,6 +5,13 @@
 #include "absl/strings/str_cat.h"
 
 namespace fenestra {
+namespace {
+
+// Blocks of at least this size are mapped on their own by glibc's malloc [bytes]
+// (ReleaseLargeBlocksWhenFreed).
+constexpr int kOwnMappingBytes = 8 << 20;
+
+}  // namespace
 
 void ReleaseFreeMemory() { malloc_trim(0); }
 

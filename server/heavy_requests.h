@@ -15,13 +15,9 @@ inline constexpr size_t kHeavyRequestBytes = size_t{1} << 20;
 // after a large request or a trace, so the daemon's resident memory falls back.
 void ReleaseFreeMemory();
 
-// Blocks of at least this size are mapped on their own by glibc's malloc [bytes]
-// (ReleaseLargeBlocksWhenFreed).
-inline constexpr int kOwnMappingBytes = 8 << 20;
-
-// Makes glibc's malloc map blocks of kOwnMappingBytes or more on their own, so they go back
-// to the system when freed (M_MMAP_THRESHOLD), and trim an arena's free top beyond twice
-// that (M_TRIM_THRESHOLD). Set, they also stop both thresholds from growing after large
+// Makes glibc's malloc map blocks of 8 MiB or more on their own, so they go back to the
+// system when freed (M_MMAP_THRESHOLD), and trim an arena's free top beyond 16 MiB
+// (M_TRIM_THRESHOLD). Set, they also stop both thresholds from growing after large
 // frees, which left freed scenes resident in the threads' arenas, where malloc_trim does not
 // reach. Not lower: a job's evaluations allocate and free buffers of a few MiB each (a
 // design's indoor matrix, the annual products), and with blocks of 1 MiB mapped on their

@@ -238,14 +238,13 @@ absl::Status OutdoorCache::WriteOut(const OutdoorMatrix& matrix) {
   return written;
 }
 
-bool OutdoorCache::DropRecent(const std::string& key) {
+void OutdoorCache::DropRecent(const std::string& key) {
   for (auto it = recent_.begin(); it != recent_.end(); ++it) {
     if (it->first != key) continue;
     recent_bytes_ -= MatrixBytes(*it->second);
     recent_.erase(it);
-    return true;
+    return;
   }
-  return false;
 }
 
 void OutdoorCache::KeepRecent(const std::string& key, std::shared_ptr<const OutdoorMatrix> matrix) {

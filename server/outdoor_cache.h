@@ -103,8 +103,8 @@ class OutdoorCache {
 
   // Keeps `matrix` among the recently used ones (mutex_ held).
   void KeepRecent(const std::string& key, std::shared_ptr<const OutdoorMatrix> matrix);
-  // Drops `key` from the recently used ones (mutex_ held); whether it was there.
-  bool DropRecent(const std::string& key);
+  // Drops `key` from the recently used ones, if there (mutex_ held).
+  void DropRecent(const std::string& key);
   // Whether someone besides the recently used list holds `key`'s matrix (mutex_ held).
   bool HeldOutside(const std::string& key, const Entry& entry) const;
   // Reads a matrix back from its file or the store; DataLoss when it is corrupt (and

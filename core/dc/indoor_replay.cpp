@@ -7,10 +7,10 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
+#include "core/common/thread_pool.h"
 #include "core/dc/backend_support.h"
 #include "core/trace/embree_scene.h"
 #include "core/trace/one_stage_cpu.h"
-#include "core/common/thread_pool.h"
 #include "core/trace/trace_geometry.h"
 #include "core/trace/two_stage_cpu.h"
 

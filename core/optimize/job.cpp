@@ -14,6 +14,7 @@
 #include "core/common/content_hash.h"
 #include "core/common/json_proto.h"
 #include "core/common/status_macros.h"
+#include "core/common/thread_pool.h"
 #include "core/dc/two_stage.h"
 #include "core/geometry/scene_proto.h"
 #include "core/metrics/annual_metrics.h"
@@ -29,7 +30,6 @@
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
 #include "core/sky/sky_matrix.h"
-#include "core/common/thread_pool.h"
 #include "google/protobuf/io/coded_stream.h"
 #include "google/protobuf/io/zero_copy_stream_impl_lite.h"
 

@@ -4,9 +4,9 @@
 #include <utility>
 
 #include "core/common/status_macros.h"
+#include "core/common/thread_pool.h"
 #include "core/metrics/metric_errors.h"
 #include "core/optimize/metric_objective.h"
-#include "core/common/thread_pool.h"
 
 namespace fenestra {
 

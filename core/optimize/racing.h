@@ -19,10 +19,10 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/common/thread_pool.h"
 #include "core/dc/dc_backend.h"
 #include "core/metrics/annual_metrics.h"
 #include "core/optimize/vns.h"
-#include "core/common/thread_pool.h"
 
 namespace fenestra {
 

@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "absl/container/flat_hash_map.h"
+#include "core/common/thread_pool.h"
 #include "core/common/vec3.h"
 #include "core/trace/importance.h"
 #include "core/trace/path.h"
 #include "core/trace/philox.h"
-#include "core/common/thread_pool.h"
 
 namespace fenestra {
 

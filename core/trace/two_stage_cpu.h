@@ -9,11 +9,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/common/thread_pool.h"
 #include "core/geometry/hemisphere_basis.h"
 #include "core/trace/one_stage_cpu.h"
 #include "core/trace/path.h"
 #include "core/trace/philox.h"
-#include "core/common/thread_pool.h"
 #include "core/trace/two_stage_modes.h"
 
 namespace fenestra {
