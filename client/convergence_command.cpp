@@ -18,6 +18,7 @@
 #include "client/dc_options.h"
 #include "core/common/atomic_file.h"
 #include "core/common/radiance_matrix.h"
+#include "core/common/seconds.h"
 #include "core/dc/one_stage.h"
 #include "core/dc/rounds.h"
 #include "core/dc/two_stage.h"
@@ -219,8 +220,7 @@ void Run(const ConvergenceArgs& a) {
   const auto plural = [](int n) { return n == 1 ? "" : "s"; };
   std::string stop = fmt::format("stopped after {} run{}", runs, plural(runs));
   for (int k = 0; k < runs; ++k) {
-    const double elapsed =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double elapsed = SecondsSince(start);
     if (k > 0 && elapsed + 2 * points.back().seconds > a.max_seconds) {
       stop = fmt::format("stopped after {} run{}, {:.1f} s: the next would pass --max-seconds {}",
                          k, plural(k), elapsed, a.max_seconds);

@@ -9,6 +9,7 @@
 #include "client/cli_util.h"
 #include "client/commands.h"
 #include "core/common/radiance_matrix.h"
+#include "core/common/seconds.h"
 #include "core/sky/epw.h"
 #include "core/sky/sky_matrix.h"
 
@@ -60,8 +61,7 @@ void AddSkyCommand(CLI::App& app) {
         WriteRadianceMatrix(args->output, sky.radiance,
                             args->format == "float" ? MatrixFormat::kFloat : MatrixFormat::kAscii);
     if (!written.ok()) Fail(written);
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = SecondsSince(start);
     fmt::print("sky: {} steps ({} daytime), {} bins (MF {}, {}), wrote {} in {:.2f} s\n",
                sky.steps.size(), sky.daytime_steps, sky.radiance.rows(), args->mf,
                args->solar ? "solar" : "visible", args->output, seconds);

@@ -12,6 +12,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "core/common/seconds.h"
 #include "core/optimize/job.h"
 #include "core/sky/epw.h"
 #include "server/limits.h"
@@ -37,10 +38,6 @@ std::string DesignText(const google::protobuf::Map<std::string, double>& design)
   return absl::StrJoin(sorted, " ", [](std::string* out, const auto& kv) {
     absl::StrAppend(out, kv.first, "=", absl::SixDigits(kv.second));
   });
-}
-
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 // The answer for an unknown job, and for another user's.

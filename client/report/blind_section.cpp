@@ -16,7 +16,7 @@ namespace {
 
 constexpr double kMaxWidth = 250, kMaxHeight = 440;  // drawing area of the section [px]
 constexpr double kDetailSize = 300;                  // of the detail [px]
-constexpr double kLeft = 70, kTop = 40, kRight = 150, kBottom = 62;
+constexpr double kSectionLeft = 70, kSectionTop = 40, kSectionRight = 150, kSectionBottom = 62;
 
 using Uv = std::pair<double, double>;  // depth from the outer face [m], along the stack [m]
 using Xy = std::pair<double, double>;  // [px]
@@ -145,8 +145,8 @@ SectionExtent ExtentOf(const BlindCut& s) {
 Chart EqualScaleChart(Svg& svg, double u0, double u1, double v0, double v1, double max_width,
                       double max_height, const std::string& u_label, const std::string& v_label) {
   const double scale = std::min(max_width / (u1 - u0), max_height / (v1 - v0));
-  return Chart(svg, kLeft, kTop, (u1 - u0) * scale, (v1 - v0) * scale, {u_label, u0, u1},
-               {v_label, v0, v1});
+  return Chart(svg, kSectionLeft, kSectionTop, (u1 - u0) * scale, (v1 - v0) * scale,
+               {u_label, u0, u1}, {v_label, v0, v1});
 }
 
 std::string StackLabel(bool vertical) {
@@ -157,15 +157,16 @@ std::string StackLabel(bool vertical) {
 std::string SectionFigure(const BlindCut& s) {
   const SectionExtent e = ExtentOf(s);
   const double scale = std::min(kMaxWidth / (e.u1 - e.u0), kMaxHeight / (e.v1 - e.v0));
-  Svg svg("plot-blind-section", "blind-plot", kLeft + (e.u1 - e.u0) * scale + kRight,
-          kTop + (e.v1 - e.v0) * scale + kBottom, "The blind at the best design in section");
+  Svg svg("plot-blind-section", "blind-plot", kSectionLeft + (e.u1 - e.u0) * scale + kSectionRight,
+          kSectionTop + (e.v1 - e.v0) * scale + kSectionBottom,
+          "The blind at the best design in section");
   Chart chart = EqualScaleChart(svg, e.u0, e.u1, e.v0, e.v1, kMaxWidth, kMaxHeight,
                                 "depth from the window's outer face [m]", StackLabel(s.vertical));
   chart.DrawAxes(5, 8);
   DrawWall(svg, chart, s, e.stub);
   DrawSlats(svg, chart, s);
-  svg.Text(chart.X(e.u0) + 4, kTop - 8, "outdoors", "plan-label");
-  svg.Text(chart.left() + chart.width() - 4, kTop - 8, "room", "plan-label", Anchor::kEnd);
+  svg.Text(chart.X(e.u0) + 4, kSectionTop - 8, "outdoors", "plan-label");
+  svg.Text(chart.left() + chart.width() - 4, kSectionTop - 8, "room", "plan-label", Anchor::kEnd);
   Dimension(svg, {chart.X(0), chart.Y(s.half_height)}, {chart.X(0), chart.Y(-s.half_height)},
             {-1, 0}, 18, fmt::format("opening {:.2f} m", 2 * s.half_height));
   Dimension(svg, {chart.X(0), chart.Y(s.half_height + e.stub)},
@@ -208,8 +209,9 @@ std::string DetailFigure(const BlindCut& s, const BlindDesign& design) {
   const double u0 = s.depth - margin, u1 = s.centers[k].first + r + margin;
   const double v0 = s.centers[k].second - r - margin, v1 = s.centers[last].second + r + margin;
   const double scale = kDetailSize / std::max(u1 - u0, v1 - v0);
-  Svg svg("plot-blind-detail", "blind-plot", kLeft + (u1 - u0) * scale + kRight,
-          kTop + (v1 - v0) * scale + kBottom, "Two slats enlarged, with their dimensions");
+  Svg svg("plot-blind-detail", "blind-plot", kSectionLeft + (u1 - u0) * scale + kSectionRight,
+          kSectionTop + (v1 - v0) * scale + kSectionBottom,
+          "Two slats enlarged, with their dimensions");
   Chart chart = EqualScaleChart(svg, u0, u1, v0, v1, kDetailSize, kDetailSize,
                                 "depth from the window's outer face [m]", StackLabel(s.vertical));
   chart.DrawAxes(4, 4);

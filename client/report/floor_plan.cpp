@@ -13,7 +13,7 @@ namespace fenestra {
 namespace {
 
 constexpr double kPlanMaxWidth = 320, kPlanMaxHeight = 640;  // [px]
-constexpr double kLeft = 64, kTop = 30, kLabelRoom = 40, kBarRoom = 56, kBottom = 60;
+constexpr double kPlanLeft = 64, kPlanTop = 30, kLabelRoom = 40, kBarRoom = 56, kPlanBottom = 60;
 constexpr double kPadding = 0.5;  // around the room [m]
 constexpr double kSensorRadius = 7;
 constexpr size_t kMaxLabelledSensors = 200;
@@ -147,15 +147,15 @@ std::string PlanFigure(const ReportData& data, const std::string& id, const std:
   const double scale =
       std::min(kPlanMaxWidth / (e.max_x - e.min_x), kPlanMaxHeight / (e.max_y - e.min_y));
   const double width = (e.max_x - e.min_x) * scale, height = (e.max_y - e.min_y) * scale;
-  Svg svg(id, "plan-plot", kLeft + width + kLabelRoom + kBarRoom, kTop + height + kBottom,
-          "Floor plan with the sensors coloured by " + what);
-  Chart chart(svg, kLeft, kTop, width, height, {"x, east [m]", e.min_x, e.max_x},
+  Svg svg(id, "plan-plot", kPlanLeft + width + kLabelRoom + kBarRoom,
+          kPlanTop + height + kPlanBottom, "Floor plan with the sensors coloured by " + what);
+  Chart chart(svg, kPlanLeft, kPlanTop, width, height, {"x, east [m]", e.min_x, e.max_x},
               {"y, north [m]", e.min_y, e.max_y});
   chart.DrawAxes(std::max(2, static_cast<int>(width / 60)),
                  std::max(2, static_cast<int>(height / 60)));
   DrawRoom(svg, chart, scene);
   LabelWindow(svg, chart, scene.window);
-  DrawNorthArrow(svg, kLeft + width - 14, kTop + 20);
+  DrawNorthArrow(svg, kPlanLeft + width - 14, kPlanTop + 20);
 
   std::vector<Xy> at;
   for (const Sensor& s : scene.sensors)
@@ -181,8 +181,8 @@ std::string PlanFigure(const ReportData& data, const std::string& id, const std:
     svg.Circle(at[data.map_sensor].first, at[data.map_sensor].second, kSensorRadius + 4,
                "map-sensor");
   }
-  ViridisColorBar(svg, kLeft + width + kLabelRoom, kTop + 20, std::min(height - 20, 220.0), 0, 100,
-                  short_name + " [%]");
+  ViridisColorBar(svg, kPlanLeft + width + kLabelRoom, kPlanTop + 20, std::min(height - 20, 220.0),
+                  0, 100, short_name + " [%]");
   std::string figure = "<figure class=\"plot\">" + svg.Finish() + "<figcaption>" + EscapeXml(what) +
                        " of each sensor, best design";
   if (!labelled) figure += " (values in the table below)";

@@ -13,7 +13,8 @@ namespace {
 // Figure sizes [px]: the chart area sits inside margins for the legend, ticks and labels.
 constexpr double kWideWidth = 540, kWideHeight = 330;
 constexpr double kSmallWidth = 350, kSmallHeight = 260;
-constexpr double kLeft = 72, kTop = 52, kRight = 20, kBottom = 62;  // two legend rows fit
+constexpr double kSearchLeft = 72, kSearchTop = 52, kSearchRight = 20,
+                 kSearchBottom = 62;  // two legend rows fit
 
 // The value axis: every value ± error (and the target, when there is one), padded.
 Axis ValueAxis(const ReportData& data) {
@@ -78,8 +79,9 @@ std::string ValueByEvaluation(const ReportData& data) {
   Svg svg("plot-value-vs-evaluation", "search-plot", kWideWidth, kWideHeight,
           "Objective of every evaluation against its number");
   const double n = static_cast<double>(data.search.size());
-  Chart chart(svg, kLeft, kTop, kWideWidth - kLeft - kRight, kWideHeight - kTop - kBottom,
-              {"evaluation [number]", 0.5, n + 0.5, true}, ValueAxis(data));
+  Chart chart(svg, kSearchLeft, kSearchTop, kWideWidth - kSearchLeft - kSearchRight,
+              kWideHeight - kSearchTop - kSearchBottom, {"evaluation [number]", 0.5, n + 0.5, true},
+              ValueAxis(data));
   DrawValues(
       svg, chart, data, [](const SearchPoint& p) { return double(p.number); }, n + 0.5);
   return svg.Finish();
@@ -89,8 +91,8 @@ std::string ValueByTime(const ReportData& data) {
   Svg svg("plot-value-vs-time", "search-plot", kWideWidth, kWideHeight,
           "Objective of every evaluation against the time spent");
   const Axis time = TimeAxis(data);
-  Chart chart(svg, kLeft, kTop, kWideWidth - kLeft - kRight, kWideHeight - kTop - kBottom, time,
-              ValueAxis(data));
+  Chart chart(svg, kSearchLeft, kSearchTop, kWideWidth - kSearchLeft - kSearchRight,
+              kWideHeight - kSearchTop - kSearchBottom, time, ValueAxis(data));
   DrawValues(
       svg, chart, data, [](const SearchPoint& p) { return p.seconds; }, time.hi);
   return svg.Finish();
@@ -106,7 +108,8 @@ std::string ErrorByTime(const ReportData& data) {
   }
   const double top = *std::max_element(errors.begin(), errors.end());
   const Axis time = TimeAxis(data);
-  Chart chart(svg, kLeft, kTop, kWideWidth - kLeft - kRight, kWideHeight - kTop - kBottom, time,
+  Chart chart(svg, kSearchLeft, kSearchTop, kWideWidth - kSearchLeft - kSearchRight,
+              kWideHeight - kSearchTop - kSearchBottom, time,
               {"standard error of the best [% points]", 0, top > 0 ? 1.15 * top : 1});
   chart.DrawAxes();
   Points steps;
@@ -134,7 +137,8 @@ std::string DesignVariablePlot(const ReportData& data, const FreeVariable& varia
   Svg svg("plot-design-" + variable.name, "design-plot", kSmallWidth, kSmallHeight,
           fmt::format("Objective against {}", variable.label));
   const double pad = 0.03 * (variable.upper - variable.lower);
-  Chart chart(svg, kLeft, 20, kSmallWidth - kLeft - kRight, kSmallHeight - 20 - kBottom,
+  Chart chart(svg, kSearchLeft, 20, kSmallWidth - kSearchLeft - kSearchRight,
+              kSmallHeight - 20 - kSearchBottom,
               {variable.label, variable.lower - pad, variable.upper + pad}, ValueAxis(data));
   chart.DrawAxes(5, 5);
   svg.BeginGroup("evaluations");

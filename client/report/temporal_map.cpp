@@ -13,7 +13,7 @@ namespace fenestra {
 namespace {
 
 constexpr double kDayWidth = 2, kHourHeight = 11;  // [px]
-constexpr double kLeft = 64, kTop = 20, kRight = 20, kBottom = 84;
+constexpr double kMapLeft = 64, kMapTop = 20, kMapRight = 20, kMapBottom = 84;
 
 enum Band { kDark, kBelow, kInRange, kAbove };
 constexpr std::array<const char*, 4> kBandColors = {"#eeeeee", "#56b4e9", "#009e73", "#d55e00"};
@@ -72,8 +72,8 @@ void DrawCells(Svg& svg, const DayHourGrid& grid, const v1::MetricSettings& m) {
       if (day < grid.days && BandOf(grid.lux[static_cast<size_t>(day) * 24 + hour], m) == band) {
         continue;
       }
-      svg.Rect(kLeft + start * kDayWidth, kTop + hour * kHourHeight, (day - start) * kDayWidth,
-               kHourHeight, "map-cell", kBandColors[band]);
+      svg.Rect(kMapLeft + start * kDayWidth, kMapTop + hour * kHourHeight,
+               (day - start) * kDayWidth, kHourHeight, "map-cell", kBandColors[band]);
       start = day;
     }
   }
@@ -81,26 +81,26 @@ void DrawCells(Svg& svg, const DayHourGrid& grid, const v1::MetricSettings& m) {
 }
 
 void DrawAxes(Svg& svg, const DayHourGrid& grid) {
-  const double width = grid.days * kDayWidth, bottom = kTop + 24 * kHourHeight;
+  const double width = grid.days * kDayWidth, bottom = kMapTop + 24 * kHourHeight;
   svg.BeginGroup("axes");
-  svg.Rect(kLeft, kTop, width, 24 * kHourHeight, "frame");
+  svg.Rect(kMapLeft, kMapTop, width, 24 * kHourHeight, "frame");
   for (size_t i = 0; i < grid.month_start.size(); ++i) {
-    const double x = kLeft + grid.month_start[i] * kDayWidth;
+    const double x = kMapLeft + grid.month_start[i] * kDayWidth;
     const double next = i + 1 < grid.month_start.size()
-                            ? kLeft + grid.month_start[i + 1] * kDayWidth
-                            : kLeft + width;
+                            ? kMapLeft + grid.month_start[i + 1] * kDayWidth
+                            : kMapLeft + width;
     svg.Line(x, bottom, x, bottom + 6, "tick");
     svg.Text((x + next) / 2, bottom + 17, kMonths[grid.month_of_start[i] - 1], "tick-label",
              Anchor::kMiddle);
   }
   for (int hour = 0; hour <= 24; hour += 3) {
-    const double y = kTop + hour * kHourHeight;
-    svg.Line(kLeft - 5, y, kLeft, y, "tick");
-    svg.Text(kLeft - 8, y + 4, fmt::format("{}", hour), "tick-label", Anchor::kEnd);
+    const double y = kMapTop + hour * kHourHeight;
+    svg.Line(kMapLeft - 5, y, kMapLeft, y, "tick");
+    svg.Text(kMapLeft - 8, y + 4, fmt::format("{}", hour), "tick-label", Anchor::kEnd);
   }
-  svg.Text(kLeft + width / 2, bottom + 36, "day of the year [month]", "axis-label",
+  svg.Text(kMapLeft + width / 2, bottom + 36, "day of the year [month]", "axis-label",
            Anchor::kMiddle);
-  svg.Text(kLeft - 40, kTop + 12 * kHourHeight, "local standard time [h]", "axis-label",
+  svg.Text(kMapLeft - 40, kMapTop + 12 * kHourHeight, "local standard time [h]", "axis-label",
            Anchor::kMiddle, -90);
   svg.EndGroup();
 }
@@ -110,7 +110,7 @@ void DrawOccupancy(Svg& svg, const DayHourGrid& grid, const v1::MetricSettings& 
   const double width = grid.days * kDayWidth;
   const double start = m.occupied_start_h(), end = m.occupied_end_h();
   auto band = [&](double from, double to) {
-    svg.Rect(kLeft, kTop + from * kHourHeight, width, (to - from) * kHourHeight, "occupancy");
+    svg.Rect(kMapLeft, kMapTop + from * kHourHeight, width, (to - from) * kHourHeight, "occupancy");
   };
   svg.BeginGroup("occupied-hours");
   if (start < end) {
@@ -149,15 +149,15 @@ std::string TemporalMapSection(const ReportData& data) {
   const DayHourGrid grid = GridOf(data.result.best_hourly(), sensor);
   const double width = grid.days * kDayWidth;
   const std::string name = data.scene->sensors[sensor].name;
-  Svg svg("plot-temporal-map", "map-plot", kLeft + width + kRight,
-          kTop + 24 * kHourHeight + kBottom,
+  Svg svg("plot-temporal-map", "map-plot", kMapLeft + width + kMapRight,
+          kMapTop + 24 * kHourHeight + kMapBottom,
           "Illuminance at " + name + " by day and hour, coloured by the UDI bands");
   DrawCells(svg, grid, m);
   DrawOccupancy(svg, grid, m);
   DrawAxes(svg, grid);
-  const double legend_y = kTop + 24 * kHourHeight + 66;
+  const double legend_y = kMapTop + 24 * kHourHeight + 66;
   Legend(
-      svg, kLeft, legend_y,
+      svg, kMapLeft, legend_y,
       {{fmt::format("swatch:{}", kBandColors[kDark]), "no daylight"},
        {fmt::format("swatch:{}", kBandColors[kBelow]), fmt::format("< {:g} lx", m.udi_lower_lux())},
        {fmt::format("swatch:{}", kBandColors[kInRange]),

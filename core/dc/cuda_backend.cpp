@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
 #include "core/dc/dc_backend.h"
@@ -338,13 +339,11 @@ class CudaReplayStages : public IndoorStages {
     for (int e = 0; e < 6; ++e) tally.counters.ends[e] = counters.ends[e];
     tally.counters.max_weight = 1.0f;
     tally.trace_seconds = counters.kernel_seconds;
-    tally.wall_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    tally.wall_seconds = SecondsSince(start);
     IndoorResult result = IndoorResultFromTally(tally, options_);
     result.triangles = replay_->triangles();
     result.backend = backend_ + " (replay)";
-    result.wall_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.wall_seconds = SecondsSince(start);
     return result;
   }
 
@@ -529,8 +528,7 @@ class CudaBackend : public DcBackend {
     OneStageResult result;
     FillOneStageResult(tally, options.paths_per_sensor, &result);
     result.backend = Name();
-    result.wall_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.wall_seconds = SecondsSince(start);
     return result;
   }
 
@@ -551,7 +549,7 @@ class CudaBackend : public DcBackend {
         Check(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,
                                WithoutImportance(path), tally.sum.data(), &counters)));
     Count(counters, &tally.counters);
-    tally.wall_seconds = Seconds(start);
+    tally.wall_seconds = SecondsSince(start);
     return tally;
   }
 
@@ -579,7 +577,7 @@ class CudaBackend : public DcBackend {
         sensors.data(), tally.sensors, window, OutdoorOffset(geometry, outdoor), basis,
         paths_per_sensor, batches, seed, WithoutImportance(path), tally.sum.data(), &counters)));
     Count(counters, &tally.counters);
-    tally.wall_seconds = Seconds(start);
+    tally.wall_seconds = SecondsSince(start);
     tally.trace_seconds = counters.kernel_seconds;
     return tally;
   }
@@ -613,9 +611,6 @@ class CudaBackend : public DcBackend {
     out->rays = counters.rays;
     for (int e = 0; e < 6; ++e) out->ends[e] = counters.ends[e];
     out->max_weight = 1.0f;
-  }
-  static double Seconds(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 
   absl::Status Upload(const TraceGeometry& geometry, BvhQuality quality = BvhQuality::kHigh) {

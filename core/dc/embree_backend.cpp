@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
 #include "core/dc/dc_backend.h"
@@ -62,8 +63,7 @@ class EmbreeBackend : public DcBackend {
     result.pilot_paths = static_cast<int64_t>(pilot.paths);
     result.importance_cells = settings.path.importance ? pilot.table.CellCount() : 0;
     result.backend = Name();
-    result.wall_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.wall_seconds = SecondsSince(start);
     return result;
   }
 

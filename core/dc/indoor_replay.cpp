@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/common/thread_pool.h"
 #include "core/dc/backend_support.h"
@@ -60,10 +61,6 @@ void TestConnections(const EmbreeIntersector& blind,
       if (!blocked[i]) sum[connections[first + i].column] += connections[first + i].value;
     }
   }
-}
-
-double Seconds(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 bool WithinRange(double value, const ParameterRange& range) {
@@ -202,7 +199,7 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
     }
   });
   for (const Chunk& chunk : data->chunks) data->resumed += chunk.resumes.size();
-  data->record_seconds = Seconds(start);
+  data->record_seconds = SecondsSince(start);
   return std::unique_ptr<IndoorReplay>(new IndoorReplay(std::move(data)));
 }
 
@@ -212,7 +209,7 @@ absl::StatusOr<IndoorResult> IndoorReplay::Compute(const BlindDesign& design) co
   IndoorResult result = IndoorResultFromTally(tally, data_->options);
   result.triangles = SelectSide(AssembleMesh(data_->scene, design), Side::kIndoor).TriangleCount();
   result.backend = "embree-cpu (replay)";
-  result.wall_seconds = Seconds(start);
+  result.wall_seconds = SecondsSince(start);
   return result;
 }
 
@@ -287,8 +284,8 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
         for (int k = 0; k < tally.columns; ++k) row[k] += slot.sum[k];
         tally.counters.Add(slot.counters);
       });
-  tally.trace_seconds = Seconds(traced);
-  tally.wall_seconds = Seconds(start);
+  tally.trace_seconds = SecondsSince(traced);
+  tally.wall_seconds = SecondsSince(start);
   return tally;
 }
 

@@ -7,6 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
 #include "core/dc/one_stage.h"
@@ -17,10 +18,6 @@ namespace {
 // A round that would add less than this share of the paths traced so far is not worth its
 // start-up (scene preparation, a pilot): the limits stop the run instead.
 constexpr double kMinRoundShare = 0.1;
-
-double Seconds(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 // The weights of a and b in their merge, from their path counts.
 std::pair<double, double> Weights(double paths_a, double paths_b) {
@@ -284,7 +281,7 @@ absl::StatusOr<OneStageToTarget> TraceOneStageToTarget(
   for (int round = 0;; ++round) {
     // Report, stop when reached
     RoundReport report =
-        Report(round, run.result.sky_sum, run.result.sky_sum_standard_error, Seconds(start));
+        Report(round, run.result.sky_sum, run.result.sky_sum_standard_error, SecondsSince(start));
     report.paths_per_sensor = run.result.paths_per_sensor;
     run.outcome.rounds.push_back(report);
     if (on_round) on_round(report);
@@ -305,7 +302,7 @@ absl::StatusOr<OneStageToTarget> TraceOneStageToTarget(
               {per_path * pilot},
               {paths},
               {static_cast<double>(target.max_paths_per_sensor)}};
-    run.outcome.stop_reason = LimitPlan(plan, target.max_seconds - Seconds(start));
+    run.outcome.stop_reason = LimitPlan(plan, target.max_seconds - SecondsSince(start));
     if (!run.outcome.stop_reason.empty()) return run;
     options.paths_per_sensor = std::max<int64_t>(2, std::llround((plan.factor[0] - 1) * paths));
     options.seed = RoundSeed(first_round.seed, round + 1);
@@ -337,7 +334,7 @@ absl::StatusOr<TwoStageToTarget> TraceTwoStageToTarget(
     FENESTRA_ASSIGN_OR_RETURN(combined, CombineStages(run.indoor, run.outdoor));
     run.combined = std::move(combined);
     const TwoStageResult& d = run.combined;
-    RoundReport report = Report(round, d.sky_sum, d.sky_sum_standard_error, Seconds(start));
+    RoundReport report = Report(round, d.sky_sum, d.sky_sum_standard_error, SecondsSince(start));
     report.paths_per_sensor = run.indoor.paths_per_sensor;
     report.outdoor_paths = run.outdoor.paths_per_cell * window_cells;
     const Eigen::VectorXd indoor_variance = IndoorSkySumVariance(run.indoor, run.outdoor);
@@ -369,7 +366,7 @@ absl::StatusOr<TwoStageToTarget> TraceTwoStageToTarget(
                static_cast<double>(report.outdoor_paths)},
               {static_cast<double>(target.max_paths_per_sensor),
                static_cast<double>(target.max_outdoor_paths)}};
-    run.outcome.stop_reason = LimitPlan(plan, target.max_seconds - Seconds(start));
+    run.outcome.stop_reason = LimitPlan(plan, target.max_seconds - SecondsSince(start));
     if (!run.outcome.stop_reason.empty()) return run;
 
     // Trace the stages that grow by at least 1%

@@ -8,6 +8,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
+#include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
 #include "core/trace/trace_geometry.h"
@@ -16,10 +17,6 @@
 
 namespace fenestra {
 namespace {
-
-double Seconds(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 PathSettings Settings(int max_bounces, bool russian_roulette, double roulette_threshold) {
   PathSettings settings;
@@ -181,7 +178,7 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const Outd
   result.rays_traced = tally.counters.rays;
   result.triangles = geometry.TriangleCount();
   result.backend = backend->Name();
-  result.wall_seconds = Seconds(start);
+  result.wall_seconds = SecondsSince(start);
   return result;
 }
 
@@ -274,7 +271,7 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
   IndoorResult result = IndoorResultFromTally(tally, options);
   result.triangles = indoor.TriangleCount();
   result.backend = backend->Name();
-  result.wall_seconds = Seconds(start);
+  result.wall_seconds = SecondsSince(start);
   return result;
 }
 

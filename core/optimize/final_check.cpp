@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/dc/one_stage.h"
 
@@ -105,8 +106,7 @@ absl::StatusOr<FinalCheckOutcome> RunFinalCheck(const Scene& scene, const BlindD
   outcome.check.set_paths_per_sensor(paths);
   outcome.check.set_pilot_paths_per_sensor(pilot_paths);
   outcome.check.set_paths_limited(limited);
-  outcome.check.set_seconds(
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  outcome.check.set_seconds(SecondsSince(start));
   outcome.one_stage = std::move(one_stage);
   return outcome;
 }

@@ -13,6 +13,7 @@
 #include "absl/strings/str_join.h"
 #include "core/common/content_hash.h"
 #include "core/common/json_proto.h"
+#include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/common/thread_pool.h"
 #include "core/dc/two_stage.h"
@@ -38,14 +39,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-double Since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-absl::Status Invalid(const std::string& field, const std::string& reason) {
-  return absl::InvalidArgumentError(absl::StrCat("job ", field, ": ", reason));
-}
-
 absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric) {
   switch (metric) {
     case v1::METRIC_UNSPECIFIED:
@@ -64,7 +57,7 @@ absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric) {
     case v1::METRIC_UDI_EXCEEDED:
       return SceneMetric::kUdiMeanExceeded;
     default:
-      return Invalid("objective.metric", "unknown metric");
+      return InvalidJobField("objective.metric", "unknown metric");
   }
 }
 
@@ -226,7 +219,7 @@ absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualS
 struct JobClock {
   std::chrono::steady_clock::time_point start;
   double resumed_seconds = 0;
-  double Seconds() const { return resumed_seconds + Since(start); }
+  double Seconds() const { return resumed_seconds + SecondsSince(start); }
 };
 
 // The final check of the search's best design into `result` (which holds the search's
@@ -540,7 +533,8 @@ absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& ba
     prepared.weather_file = prepared.scene.site.weather_file;
   }
   if (prepared.weather_file.empty()) {
-    return Invalid("weather_file", "no weather file (neither the job nor the scene's site)");
+    return InvalidJobField("weather_file",
+                           "no weather file (neither the job nor the scene's site)");
   }
   FENESTRA_ASSIGN_OR_RETURN(weather, ReadEpw(prepared.weather_file));
   prepared.weather = std::move(weather);
@@ -679,7 +673,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   FENESTRA_ASSIGN_OR_RETURN(setting, MakeAnnualSetting(job));
   const std::vector<int>& columns = setting.columns;
   const MetricOptions& metric_options = setting.options;
-  result.mutable_timings()->set_sky_seconds(Since(start));
+  result.mutable_timings()->set_sky_seconds(SecondsSince(start));
 
   // Outdoor matrix: the cached one, or traced now
   const std::string key = OutdoorMatrixKey(job.scene, spec.sampling());
@@ -750,7 +744,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
         hourly, DesignHourlyIlluminance(job.scene, DesignAt(job, search.best_x), indoor_options,
                                         outdoor->batches, setting.sky, *backend));
     *result.mutable_best_hourly() = std::move(hourly);
-    result.mutable_timings()->set_best_hourly_seconds(Since(hourly_start));
+    result.mutable_timings()->set_best_hourly_seconds(SecondsSince(hourly_start));
   }
   DescribeRun(spec, ranged, job.weather.location, result);
 

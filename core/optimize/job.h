@@ -60,6 +60,9 @@ absl::StatusOr<v1::Job> ReadJobFile(const std::string& path);
 // field and the reason.
 absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& base_dir);
 
+// The error of a job's field: InvalidArgument "job FIELD: REASON".
+absl::Status InvalidJobField(const std::string& field, const std::string& reason);
+
 // ValidateJob, then the weather: the job's weather_file (relative to `base_dir`), else the
 // scene's site.weather_file, read and parsed (ReadEpw).
 absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& base_dir);

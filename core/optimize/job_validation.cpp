@@ -32,51 +32,47 @@ constexpr int kDefaultBasisCells = 288;
 // Whether a job checks its best design by the one-stage method when its sampling does not say.
 constexpr bool kFinalCheckByDefault = true;
 
-absl::Status Invalid(const std::string& field, const std::string& reason) {
-  return absl::InvalidArgumentError(absl::StrCat("job ", field, ": ", reason));
-}
-
 bool AllFinite(std::initializer_list<double> values) {
   return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
 }
 
 absl::StatusOr<Scene> SceneOf(const v1::Job& job, const std::string& base_dir) {
   if (job.has_scene() && !job.scene_file().empty()) {
-    return Invalid("scene", "give either scene or scene_file, not both");
+    return InvalidJobField("scene", "give either scene or scene_file, not both");
   }
   if (!job.scene_file().empty()) {
     return LoadScene((std::filesystem::path(base_dir) / job.scene_file()).string());
   }
-  if (!job.has_scene()) return Invalid("scene", "a scene or scene_file is required");
+  if (!job.has_scene()) return InvalidJobField("scene", "a scene or scene_file is required");
   return BuildScene(job.scene(), (std::filesystem::path(base_dir) / "job.scene").string());
 }
 
 absl::Status CheckVariable(const v1::DesignVariable& v, const DesignVariableInfo& info,
                            const std::string& field) {
   if (!AllFinite({v.lower(), v.upper(), v.start(), v.step()})) {
-    return Invalid(field, "lower, upper, start and step must be finite");
+    return InvalidJobField(field, "lower, upper, start and step must be finite");
   }
   if (v.lower() > v.upper()) {
-    return Invalid(field,
-                   absl::StrCat("empty design range: lower ", v.lower(), " > upper ", v.upper()));
+    return InvalidJobField(
+        field, absl::StrCat("empty design range: lower ", v.lower(), " > upper ", v.upper()));
   }
   if (v.start() < v.lower() || v.start() > v.upper()) {
-    return Invalid(field + ".start", absl::StrCat("start ", v.start(), " is outside [", v.lower(),
-                                                  ", ", v.upper(), "]"));
+    return InvalidJobField(field + ".start", absl::StrCat("start ", v.start(), " is outside [",
+                                                          v.lower(), ", ", v.upper(), "]"));
   }
   constexpr double kRounding = 1e-12;  // π/2 written in decimal
   if (v.lower() < info.bounds.lowest - kRounding || v.upper() > info.bounds.highest + kRounding) {
-    return Invalid(
+    return InvalidJobField(
         field, absl::StrCat(v.name(), " must stay within [", info.bounds.lowest, ", ",
                             info.bounds.highest, "] ", info.unit, ", the range of a real blind"));
   }
-  if (v.step() < 0) return Invalid(field + ".step", "must be >= 0");
+  if (v.step() < 0) return InvalidJobField(field + ".step", "must be >= 0");
   return absl::OkStatus();
 }
 
 absl::Status CheckVariables(const v1::Job& job, const Scene& scene) {
   if (job.variables_size() > 0 && !scene.blind) {
-    return Invalid("variables", "the scene has no blind to design");
+    return InvalidJobField("variables", "the scene has no blind to design");
   }
   std::set<std::string> seen;
   for (int i = 0; i < job.variables_size(); ++i) {
@@ -84,11 +80,13 @@ absl::Status CheckVariables(const v1::Job& job, const Scene& scene) {
     const std::string field = absl::StrCat("variables[", i, "]");
     const DesignVariableInfo* info = FindDesignVariable(v.name());
     if (!info) {
-      return Invalid(field + ".name", absl::StrCat("unknown design variable '", v.name(),
-                                                   "' (known: alpha, width, spacing, thickness)"));
+      return InvalidJobField(field + ".name",
+                             absl::StrCat("unknown design variable '", v.name(),
+                                          "' (known: alpha, width, spacing, thickness)"));
     }
     if (!seen.insert(v.name()).second) {
-      return Invalid(field + ".name", absl::StrCat("variable '", v.name(), "' given twice"));
+      return InvalidJobField(field + ".name",
+                             absl::StrCat("variable '", v.name(), "' given twice"));
     }
     FENESTRA_RETURN_IF_ERROR(CheckVariable(v, *info, field));
   }
@@ -97,15 +95,16 @@ absl::Status CheckVariables(const v1::Job& job, const Scene& scene) {
 
 absl::Status FillBudget(v1::Budget& budget) {
   if (budget.max_evaluations() == 0) budget.set_max_evaluations(kDefaultMaxEvaluations);
-  if (budget.max_evaluations() < 1) return Invalid("budget.max_evaluations", "must be >= 1");
+  if (budget.max_evaluations() < 1)
+    return InvalidJobField("budget.max_evaluations", "must be >= 1");
   if (!(std::isfinite(budget.max_seconds()) && budget.max_seconds() >= 0)) {
-    return Invalid("budget.max_seconds", "must be a finite number >= 0 (0 = no limit)");
+    return InvalidJobField("budget.max_seconds", "must be a finite number >= 0 (0 = no limit)");
   }
   if (budget.failed_cycles_to_stop() == 0) {
     budget.set_failed_cycles_to_stop(VnsOptions().failed_cycles_to_stop);
   }
   if (budget.failed_cycles_to_stop() < -1) {
-    return Invalid("budget.failed_cycles_to_stop", "must be >= -1");
+    return InvalidJobField("budget.failed_cycles_to_stop", "must be >= -1");
   }
   return absl::OkStatus();
 }
@@ -114,8 +113,9 @@ absl::Status FillBudget(v1::Budget& budget) {
 absl::Status CheckLux(double value, const std::string& field, bool zero_allowed) {
   const bool low_ok = zero_allowed ? value >= 0 : value > 0;
   if (!(low_ok && value <= kMaxIlluminanceLux)) {
-    return Invalid("metrics." + field, absl::StrCat("must be in ", zero_allowed ? "[" : "(", "0, ",
-                                                    kMaxIlluminanceLux, "] lx, got ", value));
+    return InvalidJobField("metrics." + field,
+                           absl::StrCat("must be in ", zero_allowed ? "[" : "(", "0, ",
+                                        kMaxIlluminanceLux, "] lx, got ", value));
   }
   return absl::OkStatus();
 }
@@ -136,45 +136,48 @@ absl::Status FillMetricSettings(v1::MetricSettings& m) {
   FENESTRA_RETURN_IF_ERROR(CheckLux(m.udi_lower_lux(), "udi_lower_lux", true));
   FENESTRA_RETURN_IF_ERROR(CheckLux(m.udi_upper_lux(), "udi_upper_lux", false));
   if (!(m.udi_lower_lux() < m.udi_upper_lux())) {
-    return Invalid("metrics", absl::StrCat("udi_lower_lux ", m.udi_lower_lux(),
-                                           " must be below udi_upper_lux ", m.udi_upper_lux()));
+    return InvalidJobField("metrics",
+                           absl::StrCat("udi_lower_lux ", m.udi_lower_lux(),
+                                        " must be below udi_upper_lux ", m.udi_upper_lux()));
   }
   FENESTRA_RETURN_IF_ERROR(CheckLux(m.da_threshold_lux(), "da_threshold_lux", false));
   if (!(m.sda_time_fraction_percent() > 0 && m.sda_time_fraction_percent() <= 100)) {
-    return Invalid("metrics.sda_time_fraction_percent",
-                   absl::StrCat("must be in (0, 100] %, got ", m.sda_time_fraction_percent()));
+    return InvalidJobField(
+        "metrics.sda_time_fraction_percent",
+        absl::StrCat("must be in (0, 100] %, got ", m.sda_time_fraction_percent()));
   }
   for (const auto& [hour, field] : {std::pair{m.occupied_start_h(), "occupied_start_h"},
                                     std::pair{m.occupied_end_h(), "occupied_end_h"}}) {
     if (!(hour >= 0 && hour <= 24)) {
-      return Invalid(absl::StrCat("metrics.", field),
-                     absl::StrCat("must be in [0, 24] h, got ", hour));
+      return InvalidJobField(absl::StrCat("metrics.", field),
+                             absl::StrCat("must be in [0, 24] h, got ", hour));
     }
   }
   if (m.occupied_start_h() == m.occupied_end_h()) {
-    return Invalid("metrics", "occupied_start_h and occupied_end_h must differ");
+    return InvalidJobField("metrics", "occupied_start_h and occupied_end_h must differ");
   }
   return absl::OkStatus();
 }
 
 absl::Status CheckObjective(const v1::Objective& objective) {
   if (!v1::Metric_IsValid(objective.metric())) {
-    return Invalid("objective.metric",
-                   absl::StrCat("unknown metric ", static_cast<int>(objective.metric())));
+    return InvalidJobField("objective.metric",
+                           absl::StrCat("unknown metric ", static_cast<int>(objective.metric())));
   }
   if (!v1::Goal_IsValid(objective.goal())) {
-    return Invalid("objective.goal",
-                   absl::StrCat("unknown goal ", static_cast<int>(objective.goal()),
-                                " (GOAL_MAXIMIZE, GOAL_MINIMIZE or GOAL_TARGET)"));
+    return InvalidJobField("objective.goal",
+                           absl::StrCat("unknown goal ", static_cast<int>(objective.goal()),
+                                        " (GOAL_MAXIMIZE, GOAL_MINIMIZE or GOAL_TARGET)"));
   }
   if (!(objective.target() >= 0 && objective.target() <= 100)) {
-    return Invalid(
+    return InvalidJobField(
         "objective.target",
         absl::StrCat("must be in [0, 100] % (a metric's value), got ", objective.target()));
   }
   if (!(objective.target_tolerance() >= 0 && objective.target_tolerance() <= 100)) {
-    return Invalid("objective.target_tolerance",
-                   absl::StrCat("must be in [0, 100] %, got ", objective.target_tolerance()));
+    return InvalidJobField(
+        "objective.target_tolerance",
+        absl::StrCat("must be in [0, 100] %, got ", objective.target_tolerance()));
   }
   return absl::OkStatus();
 }
@@ -183,8 +186,8 @@ absl::Status CheckNeighborhoods(const v1::Job& job) {
   for (int i = 0; i < job.neighborhoods_size(); ++i) {
     const v1::Neighborhood& n = job.neighborhoods(i);
     if (n.variables() < 0 || !(n.radius() > 0 && n.radius() <= 1)) {
-      return Invalid(absl::StrCat("neighborhoods[", i, "]"),
-                     "needs variables >= 0 and radius in (0, 1]");
+      return InvalidJobField(absl::StrCat("neighborhoods[", i, "]"),
+                             "needs variables >= 0 and radius in (0, 1]");
     }
   }
   return absl::OkStatus();
@@ -196,7 +199,7 @@ absl::Status CheckWindowCells(const v1::Sampling& sampling, const Window& window
   const int64_t window_cells = int64_t{sampling.basis_cells()} * parts.columns * parts.rows;
   const int batches = sampling.batches();
   if (sampling.outdoor_paths() < window_cells * batches) {
-    return Invalid(
+    return InvalidJobField(
         "sampling.outdoor_paths",
         absl::StrCat("must be at least one per window cell and batch (", window_cells * batches,
                      ": ", parts.columns, "x", parts.rows, " window parts x ",
@@ -211,7 +214,7 @@ absl::Status CheckRoomAtEveryDesign(const PreparedJob& prepared) {
   const Scene ranged = WithJobRanges(prepared.scene, prepared.job);
   if (ranged.blind) {
     if (absl::Status fits = CheckBlindFits(*ranged.blind, ranged.window); !fits.ok()) {
-      return Invalid("variables", absl::StrCat("with the scene's blind: ", fits.message()));
+      return InvalidJobField("variables", absl::StrCat("with the scene's blind: ", fits.message()));
     }
   }
   return CheckRoom(ranged);
@@ -223,9 +226,9 @@ absl::Status ResolveRacing(v1::Sampling& s) {
   if (s.racing_standard_errors() == 0) s.set_racing_standard_errors(defaults.standard_errors);
   if (!(s.racing_standard_errors() >= kMinRacingStandardErrors &&
         s.racing_standard_errors() <= kMaxRacingStandardErrors)) {
-    return Invalid("sampling.racing_standard_errors",
-                   absl::StrCat("must be in [", kMinRacingStandardErrors, ", ",
-                                kMaxRacingStandardErrors, "] (0 = the default)"));
+    return InvalidJobField("sampling.racing_standard_errors",
+                           absl::StrCat("must be in [", kMinRacingStandardErrors, ", ",
+                                        kMaxRacingStandardErrors, "] (0 = the default)"));
   }
   if (s.racing_rounds().empty()) {
     for (const int parts : defaults.rounds) s.add_racing_rounds(parts);
@@ -233,14 +236,18 @@ absl::Status ResolveRacing(v1::Sampling& s) {
   for (int r = 0; r < s.racing_rounds_size(); ++r) {
     const int parts = s.racing_rounds(r);
     if (parts < 1 || parts >= kDesignParts || (r > 0 && parts <= s.racing_rounds(r - 1))) {
-      return Invalid("sampling.racing_rounds",
-                     absl::StrCat("must increase, each from 1 to ", kDesignParts - 1));
+      return InvalidJobField("sampling.racing_rounds",
+                             absl::StrCat("must increase, each from 1 to ", kDesignParts - 1));
     }
   }
   return absl::OkStatus();
 }
 
 }  // namespace
+
+absl::Status InvalidJobField(const std::string& field, const std::string& reason) {
+  return absl::InvalidArgumentError(absl::StrCat("job ", field, ": ", reason));
+}
 
 absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   v1::Sampling s = given;
@@ -255,19 +262,21 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   if (!s.has_final_check()) s.set_final_check(kFinalCheckByDefault);
   FENESTRA_RETURN_IF_ERROR(ResolveRacing(s));
   if (s.candidates_at_once() < 0 || s.candidates_at_once() > kMaxCandidatesAtOnce) {
-    return Invalid("sampling.candidates_at_once",
-                   absl::StrCat("must be in [0, ", kMaxCandidatesAtOnce, "] (0 = the default)"));
+    return InvalidJobField(
+        "sampling.candidates_at_once",
+        absl::StrCat("must be in [0, ", kMaxCandidatesAtOnce, "] (0 = the default)"));
   }
   if (s.basis_cells() != 288 && s.basis_cells() != 1152) {
-    return Invalid("sampling.basis_cells", "must be 288 or 1152");
+    return InvalidJobField("sampling.basis_cells", "must be 288 or 1152");
   }
   if (s.window_columns() < 0 || s.window_columns() > kMaxWindowPartsPerSide ||
       s.window_rows() < 0 || s.window_rows() > kMaxWindowPartsPerSide) {
-    return Invalid("sampling.window_columns/window_rows",
-                   absl::StrCat("must be in [0, ", kMaxWindowPartsPerSide, "] (0 = automatic)"));
+    return InvalidJobField(
+        "sampling.window_columns/window_rows",
+        absl::StrCat("must be in [0, ", kMaxWindowPartsPerSide, "] (0 = automatic)"));
   }
   if (s.batches() < 2 || s.batches() > kMaxBatches) {
-    return Invalid("sampling.batches", absl::StrCat("must be in [2, ", kMaxBatches, "]"));
+    return InvalidJobField("sampling.batches", absl::StrCat("must be in [2, ", kMaxBatches, "]"));
   }
   // The outdoor matrix's memory, with automatic parts at their most
   const auto side = [](int parts) { return parts > 0 ? parts : kMaxWindowPartsPerSide; };
@@ -276,7 +285,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   const int64_t matrix_bytes =
       (most_cells + kTregenzaBinCount) * kTregenzaBinCount * 8 * (int64_t{s.batches()} + 2);
   if (matrix_bytes > kMaxOutdoorMatrixBytes) {
-    return Invalid(
+    return InvalidJobField(
         "sampling",
         absl::StrCat("the outdoor matrix with its batches could take ", matrix_bytes >> 20,
                      " MiB (", s.basis_cells(), " direction cells x ", side(s.window_columns()),
@@ -288,22 +297,22 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   const int64_t window_cells =
       int64_t{s.basis_cells()} * std::max(1, s.window_columns()) * std::max(1, s.window_rows());
   if (s.outdoor_paths() < window_cells * s.batches()) {
-    return Invalid("sampling.outdoor_paths",
-                   absl::StrCat("must be at least one per window cell and batch (",
-                                window_cells * s.batches(), ")"));
+    return InvalidJobField("sampling.outdoor_paths",
+                           absl::StrCat("must be at least one per window cell and batch (",
+                                        window_cells * s.batches(), ")"));
   }
   if (s.indoor_paths_per_sensor() < s.batches()) {
-    return Invalid("sampling.indoor_paths_per_sensor", "must be at least the batch count");
+    return InvalidJobField("sampling.indoor_paths_per_sensor", "must be at least the batch count");
   }
   for (const int bounces : {s.outdoor_bounces(), s.indoor_bounces()}) {
     if (bounces < -1 || bounces > kMaxBounces) {
-      return Invalid("sampling", absl::StrCat("bounces must be in [1, ", kMaxBounces,
-                                              "], or -1 for unlimited, got ", bounces));
+      return InvalidJobField("sampling", absl::StrCat("bounces must be in [1, ", kMaxBounces,
+                                                      "], or -1 for unlimited, got ", bounces));
     }
   }
   if (s.backend() != "auto" && s.backend() != "cpu" && s.backend() != "cuda") {
-    return Invalid("sampling.backend",
-                   absl::StrCat("must be cpu, cuda or auto, got '", s.backend(), "'"));
+    return InvalidJobField("sampling.backend",
+                           absl::StrCat("must be cpu, cuda or auto, got '", s.backend(), "'"));
   }
   return s;
 }

@@ -7,7 +7,6 @@
 namespace fenestra {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr double kSolarConstantWm2 = 1367;
 
 // Perez et al. (1990), Table 4: diffuse (eq. 7) and direct (eq. 8) luminous efficacy
@@ -74,17 +73,18 @@ constexpr double kMaxBrightness = 0.6;
 }  // namespace
 
 double PerezSunZenithRad(double solar_altitude_rad) {
-  if (solar_altitude_rad <= 0) return kPi / 2;
-  if (solar_altitude_rad >= 87 * kPi / 180) return 3 * kPi / 180;
-  return kPi / 2 - solar_altitude_rad;
+  if (solar_altitude_rad <= 0) return std::numbers::pi / 2;
+  if (solar_altitude_rad >= 87 * std::numbers::pi / 180) return 3 * std::numbers::pi / 180;
+  return std::numbers::pi / 2 - solar_altitude_rad;
 }
 
 double RelativeAirMass(double zenith_rad) {
-  return 1 / (std::cos(zenith_rad) + 0.15 * std::pow(93.885 - zenith_rad * 180 / kPi, -1.253));
+  return 1 / (std::cos(zenith_rad) +
+              0.15 * std::pow(93.885 - zenith_rad * 180 / std::numbers::pi, -1.253));
 }
 
 double EccentricityCorrection(int day_of_year) {
-  const double day_angle = (day_of_year - 1) * (2 * kPi / 365);
+  const double day_angle = (day_of_year - 1) * (2 * std::numbers::pi / 365);
   return 1.00011 + 0.034221 * std::cos(day_angle) + 0.00128 * std::sin(day_angle) +
          0.000719 * std::cos(2 * day_angle) + 0.000077 * std::sin(2 * day_angle);
 }
@@ -175,7 +175,7 @@ void ComputePerezSkyRadiance(const PerezSkyCondition& sky, const SolarPosition& 
   double horizontal = 0;
   for (int i = 1; i < n; ++i) {
     const SkyPatch& patch = patches[i];
-    const double zeta = kPi / 2 - patch.altitude_rad;
+    const double zeta = std::numbers::pi / 2 - patch.altitude_rad;
     const double cos_gamma =
         cos_z * std::cos(zeta) +
         sin_z * std::sin(zeta) * std::cos(std::fabs(patch.azimuth_rad - sun.azimuth_rad));
@@ -188,7 +188,7 @@ void ComputePerezSkyRadiance(const PerezSkyCondition& sky, const SolarPosition& 
   // Normalize to the diffuse horizontal illuminance (uniform sky if the model vanishes)
   if (!(horizontal > 1e-6)) {
     for (int i = 1; i < n; ++i) radiance[i] = 1;
-    horizontal = kPi;
+    horizontal = std::numbers::pi;
   }
   const double scale = sky.diffuse_illuminance / horizontal / kWhiteEfficacyLmPerW;
   for (int i = 1; i < n; ++i) radiance[i] *= scale;

@@ -15,7 +15,6 @@
 namespace fenestra {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr int kSunPatches = 4;
 constexpr double kNightThresholdWm2 = 1e-4;
 constexpr double kDefaultDewPointC = 11;
@@ -146,8 +145,8 @@ absl::StatusOr<SkyMatrix> BuildSkyMatrix(const EpwData& weather, const SkyMatrix
       const double horizontal_illuminance =
           condition.diffuse_illuminance +
           (sun.altitude_rad > 0 ? condition.direct_illuminance * std::sin(sun.altitude_rad) : 0);
-      column[0] =
-          options.ground_reflectance * horizontal_illuminance / (kPi * kWhiteEfficacyLmPerW);
+      column[0] = options.ground_reflectance * horizontal_illuminance /
+                  (std::numbers::pi * kWhiteEfficacyLmPerW);
     }
     if (options.include_sun && condition.direct_illuminance > 1e-4) {
       AddSunToPatches(patches, DirectionFromAltAz(sun.altitude_rad, sun.azimuth_rad),

@@ -15,9 +15,6 @@ namespace {
 
 // The lock replicas take while one of them migrates
 constexpr int64_t kMigrationLock = 0x46454e4553545241;  // "FENESTRA"
-// Rows read at once while rows are rewritten
-constexpr int64_t kBatch = 64;
-
 // SQLite files written before scenes had their own column keep them inside info.
 absl::Status AddSceneColumn(const Database& db, SqlSession& s) {
   if (db.dialect() != Dialect::kSqlite) return absl::OkStatus();
@@ -29,12 +26,6 @@ absl::Status AddSceneColumn(const Database& db, SqlSession& s) {
   return s.Run("ALTER TABLE sites ADD COLUMN scene BLOB").status();
 }
 
-// The stored weather reference of a path of the data directory's weather folder
-// (".../weather/<sha256>.epw", as stored before replicas): its content hash.
-std::string WeatherOfPath(const std::string& path) {
-  return path.empty() ? "" : std::filesystem::path(path).stem().string();
-}
-
 // Fills the columns version 2 added from each job's and site's stored protobufs; rows
 // that do not parse keep the defaults (state 0: never claimed) and are quarantined at the
 // next start.
@@ -42,7 +33,7 @@ absl::Status FillReplicaColumns(const Database&, SqlSession& s) {
   for (int64_t after = 0;;) {
     absl::StatusOr<SqlResult> rows =
         s.Run("SELECT number, info, job FROM jobs WHERE number > ? ORDER BY number LIMIT ?",
-              {after, kBatch});
+              {after, kRowsPerRead});
     if (!rows.ok()) return rows.status();
     if (rows->rows.empty()) break;
     for (const SqlRow& row : rows->rows) {
@@ -67,7 +58,7 @@ absl::Status FillReplicaColumns(const Database&, SqlSession& s) {
   for (int64_t after = 0;;) {
     absl::StatusOr<SqlResult> rows = s.Run(
         "SELECT number, info, weather_path FROM sites WHERE number > ? ORDER BY number LIMIT ?",
-        {after, kBatch});
+        {after, kRowsPerRead});
     if (!rows.ok()) return rows.status();
     if (rows->rows.empty()) break;
     for (const SqlRow& row : rows->rows) {
@@ -95,6 +86,10 @@ absl::Status FillReplicaColumns(const Database&, SqlSession& s) {
 }
 
 }  // namespace
+
+std::string WeatherOfPath(const std::string& path) {
+  return std::filesystem::path(path).stem().string();
+}
 
 const std::vector<Migration>& Migrations() {
   static const std::vector<Migration> migrations = {

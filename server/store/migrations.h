@@ -4,6 +4,8 @@
 // with the dialects' differences as Database::Sql placeholders, and, where rows must be
 // rewritten from their stored protobufs, code. The version reached is kept in the
 // schema_version table.
+#include <cstdint>
+#include <string>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -18,6 +20,14 @@ struct Migration {
   // Run after the statements in the same transaction, or null.
   absl::Status (*code)(const Database& db, SqlSession& session);
 };
+
+// Rows the store reads at once when it scans or rewrites a table.
+inline constexpr int64_t kRowsPerRead = 64;
+
+// The stored weather reference of a path of the data directory's weather folder
+// (".../weather/<sha256>.epw"): its name without extension, the content's SHA-256 ("" for
+// an empty path).
+std::string WeatherOfPath(const std::string& path);
 
 // Every migration, oldest first; the last one's version is the schema this binary writes.
 const std::vector<Migration>& Migrations();

@@ -29,9 +29,6 @@ constexpr int64_t kAdmissionLock = 1;
 constexpr size_t kMaxPreferredKeys = 32;
 // Jobs a claim reads in order before it locks the first free one.
 constexpr int64_t kClaimCandidates = 16;
-// Rows read at once when a table is copied or scanned.
-constexpr int64_t kBatch = 64;
-
 constexpr int64_t kQueued = v1::JOB_STATE_QUEUED;
 constexpr int64_t kRunning = v1::JOB_STATE_RUNNING;
 constexpr int64_t kComputing = v1::SITE_STATE_COMPUTING;
@@ -52,11 +49,6 @@ absl::Status NoSite(const std::string& id) {
   return absl::NotFoundError(absl::StrCat("no site '", id, "' is stored"));
 }
 
-// The weather reference of a file of the data directory's weather folder: its name
-// without extension, the content's SHA-256.
-std::string WeatherOfPath(const std::string& path) {
-  return std::filesystem::path(path).stem().string();
-}
 std::string WeatherFileName(const std::string& weather) { return weather + ".epw"; }
 
 // `(?, ?, ...)` for `n` values.
@@ -376,7 +368,7 @@ absl::StatusOr<std::vector<v1::JobInfo>> Store::ListJobs(const std::string& owne
             for (const int64_t st : states) params.push_back(st);
           }
           absl::StrAppend(&sql, " ORDER BY number DESC LIMIT ?");
-          params.push_back(kBatch);
+          params.push_back(kRowsPerRead);
           FENESTRA_ASSIGN_OR_RETURN(rows, s.Run(sql, params));
           if (rows.rows.empty()) break;
           for (const SqlRow& r : rows.rows) {
@@ -859,7 +851,7 @@ absl::StatusOr<std::vector<v1::SiteInfo>> Store::ListSites(const std::string& ow
             params.push_back(owner);
           }
           absl::StrAppend(&sql, " ORDER BY number LIMIT ?");
-          params.push_back(kBatch);
+          params.push_back(kRowsPerRead);
           FENESTRA_ASSIGN_OR_RETURN(rows, s.Run(sql, params));
           if (rows.rows.empty()) break;
           for (const SqlRow& r : rows.rows) {
@@ -1155,7 +1147,7 @@ absl::StatusOr<std::vector<Store::Quarantined>> Store::QuarantineUnparsable() {
                 rows, s.Run(absl::StrCat("SELECT number, id, info FROM ", table,
                                          " WHERE id IS NOT NULL AND number > ? ORDER BY number "
                                          "LIMIT ?"),
-                            {after, kBatch}));
+                            {after, kRowsPerRead}));
             if (rows.rows.empty()) break;
             for (const SqlRow& r : rows.rows) {
               after = r.Int(0);
@@ -1382,7 +1374,7 @@ absl::StatusOr<int64_t> CopyRows(Database& from, SqlSession& to, const CopiedTab
       }
     }
     absl::StrAppend(&select, " ORDER BY ", key, " LIMIT ?");
-    params.push_back(kBatch);
+    params.push_back(kRowsPerRead);
     FENESTRA_ASSIGN_OR_RETURN(rows, Read(from, select, params));
     if (rows.rows.empty()) return copied;
     for (const SqlRow& row : rows.rows) {

@@ -12,14 +12,14 @@ namespace {
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
 
-fs::path FreshDir(const std::string& name) {
+fs::path FreshDataDir(const std::string& name) {
   const fs::path dir = fs::path(testing::TempDir()) / ("data_dir_test_" + name);
   fs::remove_all(dir);
   return dir;
 }
 
 TEST(DataDirTest, OpenCreatesTheFoldersAndRemovesTemporaries) {
-  const fs::path root = FreshDir("open");
+  const fs::path root = FreshDataDir("open");
   fs::create_directories(root / "weather");
   std::ofstream(root / "weather" / "a.epw.tmp.12.3") << "partial";
   std::ofstream(root / "weather" / "b.epw") << "whole";
@@ -34,7 +34,7 @@ TEST(DataDirTest, OpenCreatesTheFoldersAndRemovesTemporaries) {
 }
 
 TEST(DataDirTest, OneDaemonPerFolder) {
-  const fs::path root = FreshDir("lock");
+  const fs::path root = FreshDataDir("lock");
   {
     absl::StatusOr<std::unique_ptr<DataDir>> first = DataDir::Open(root, 1 << 20);
     ASSERT_TRUE(first.ok()) << first.status();
@@ -48,7 +48,7 @@ TEST(DataDirTest, OneDaemonPerFolder) {
 }
 
 TEST(DataDirTest, MakeRoomEvictsThenRefusesNamingTheLimit) {
-  const fs::path root = FreshDir("room");
+  const fs::path root = FreshDataDir("room");
   std::unique_ptr<DataDir> dir = *DataDir::Open(root, 1000);
   std::ofstream(root / "outdoor" / "old.omx") << std::string(600, 'x');
   EXPECT_TRUE(dir->MakeRoom(400).ok());
@@ -71,7 +71,7 @@ TEST(DataDirTest, MakeRoomEvictsThenRefusesNamingTheLimit) {
 }
 
 TEST(DataDirTest, WriteFileDurablyLeavesNoTemporary) {
-  const fs::path root = FreshDir("write");
+  const fs::path root = FreshDataDir("write");
   fs::create_directories(root);
   ASSERT_TRUE(WriteFileDurably(root / "f", "content").ok());
   std::ifstream in(root / "f");
@@ -87,7 +87,7 @@ TEST(DataDirTest, WriteFileDurablyLeavesNoTemporary) {
 }
 
 TEST(UploadStoreTest, AFileIsStoredOnceAndRemovedWithItsLastReference) {
-  const fs::path root = FreshDir("uploads");
+  const fs::path root = FreshDataDir("uploads");
   std::unique_ptr<DataDir> dir = *DataDir::Open(root, 1 << 20);
   UploadStore uploads(*dir, dir->weather_dir(), "epw");
   absl::StatusOr<std::string> a = uploads.Add("weather a");
@@ -117,7 +117,7 @@ TEST(UploadStoreTest, AFileIsStoredOnceAndRemovedWithItsLastReference) {
 }
 
 TEST(UploadStoreTest, AnUploadOverTheLimitIsRefused) {
-  const fs::path root = FreshDir("upload_limit");
+  const fs::path root = FreshDataDir("upload_limit");
   std::unique_ptr<DataDir> dir = *DataDir::Open(root, 100);
   UploadStore uploads(*dir, dir->weather_dir(), "epw");
   EXPECT_TRUE(uploads.Add(std::string(100, 'a')).ok());
