@@ -261,12 +261,14 @@ int main(int argc, char** argv) {
   const v1::Timings& t = result.timings();
   const v1::FinalCheck& check = result.final_check();
   std::printf(
-      "four-variable optimization: %d evaluations (%s) in %.2f s (sky %.2f s, outdoor %.2f s, "
+      "four-variable optimization: %d evaluations (%s; %d designs at once, %d evaluated ahead "
+      "and dropped) in %.2f s (sky %.2f s, outdoor %.2f s, "
       "evaluations %.2f s, best design's hourly illuminance %.2f s, final check %.2f s with "
       "%lld + %lld paths per sensor, the rest %.2f s); best UDI %.2f ± %.2f %% (check %.2f ± "
       "%.2f %%) at",
-      result.evaluations(), result.stop_reason().c_str(), Since(start), t.sky_seconds(),
-      t.outdoor_seconds(), t.evaluation_seconds(), t.best_hourly_seconds(), check.seconds(),
+      result.evaluations(), result.stop_reason().c_str(), result.candidates_at_once(),
+      result.evaluations_discarded(), Since(start), t.sky_seconds(), t.outdoor_seconds(),
+      t.evaluation_seconds(), t.best_hourly_seconds(), check.seconds(),
       static_cast<long long>(check.pilot_paths_per_sensor()),
       static_cast<long long>(check.paths_per_sensor()),
       t.total_seconds() - t.sky_seconds() - t.outdoor_seconds() - t.evaluation_seconds() -

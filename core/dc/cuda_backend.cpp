@@ -234,24 +234,40 @@ class CudaReplay {
     return replay;
   }
 
-  // Makes the tracer hold the records and the recorded room with `design`'s slats
-  // (BvhWithSlats: no build per design); `blind` gets the slats' layout, for the shadow
-  // rays. InvalidArgument for a design outside the recorded ranges.
-  absl::Status Prepare(const BlindDesign& design, LocalSlats* blind) {
+  // A design's scene for the replay: the recorded room with its slats (BvhWithSlats: no
+  // build per design), its triangles' materials, and the slats' layout alone, for the
+  // shadow rays. InvalidArgument for a design outside the recorded ranges.
+  absl::StatusOr<CudaTracer::DesignScene> MakeScene(const BlindDesign& design, BvhLayout* bvh,
+                                                    std::vector<uint32_t>* triangle_material) {
     FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(*scene_.blind, design));
-    if (slot_->current != generation_) FENESTRA_RETURN_IF_ERROR(Record());
-    *blind = LocalSlatsOfBlind(room_, scene_, design);
     const std::vector<Vec3f> corners = LocalSlatCorners(room_, scene_, design);
-    const BvhLayout bvh =
-        BvhWithSlats(room_bvh_, corners, static_cast<uint32_t>(room_.TriangleCount()));
-    std::vector<uint32_t> triangle_material = room_.triangle_material;
-    triangle_material.resize(room_.TriangleCount() + kTrianglesPerSlat * corners.size() / 8,
-                             scene_.blind->material);
-    triangles_ = triangle_material.size();
-    FENESTRA_RETURN_IF_ERROR(
-        Check(tracer_->SetScene(bvh, triangle_material.data(), triangle_material.size(),
-                                room_.materials.data(), room_.materials.size())));
-    return outdoor_->Hold();
+    *bvh = BvhWithSlats(room_bvh_, corners, static_cast<uint32_t>(room_.TriangleCount()));
+    *triangle_material = room_.triangle_material;
+    triangle_material->resize(room_.TriangleCount() + kTrianglesPerSlat * corners.size() / 8,
+                              scene_.blind->material);
+    triangles_ = triangle_material->size();
+    return CudaTracer::DesignScene{bvh, triangle_material,
+                                   LocalSlatsOfBlind(room_, scene_, design)};
+  }
+
+  // Makes the tracer hold the records and the recorded room with `design`'s slats; `blind`
+  // gets the slats' layout. InvalidArgument for a design outside the recorded ranges.
+  absl::Status Prepare(const BlindDesign& design, LocalSlats* blind) {
+    BvhLayout bvh;
+    std::vector<uint32_t> triangle_material;
+    FENESTRA_ASSIGN_OR_RETURN(scene, MakeScene(design, &bvh, &triangle_material));
+    FENESTRA_RETURN_IF_ERROR(Hold());
+    *blind = scene.blind;
+    return Check(tracer_->SetScene(bvh, triangle_material.data(), triangle_material.size(),
+                                   room_.materials.data(), room_.materials.size()));
+  }
+
+  // Every part of the designs of `scenes` (MakeScene) in one launch
+  // (CudaTracer::ReplayIndoorDesigns).
+  absl::Status ReplayDesigns(const std::vector<CudaTracer::DesignScene>& scenes,
+                             CudaCounters* counters) {
+    FENESTRA_RETURN_IF_ERROR(Hold());
+    return Check(tracer_->ReplayIndoorDesigns(scenes, room_.materials, counters));
   }
 
   size_t triangles() const { return triangles_; }
@@ -272,6 +288,13 @@ class CudaReplay {
         basis_(basis),
         outdoor_(outdoor),
         room_(std::move(room)) {}
+
+  // Makes the tracer hold the records (recording again after another replay of the tracer)
+  // and the outdoor scene.
+  absl::Status Hold() {
+    if (slot_->current != generation_) FENESTRA_RETURN_IF_ERROR(Record());
+    return outdoor_->Hold();
+  }
 
   absl::Status Record() {
     if (room_bvh_.nodes.empty()) {
@@ -413,11 +436,58 @@ class CudaDesignTallies : public DesignTallies {
     rays_ += counters.rays;
     return product_->TallySums(tracer_->DeviceSums(), sensor_count, batch_paths, options);
   }
+  std::vector<absl::StatusOr<std::vector<HourTally>>> TallyDesigns(
+      const std::vector<BlindDesign>& designs, const MetricOptions& options) override {
+    if (replay_ == nullptr || designs.size() < 2) {
+      return DesignTallies::TallyDesigns(designs, options);
+    }
+    std::vector<absl::StatusOr<std::vector<HourTally>>> out(designs.size(),
+                                                            absl::UnknownError("not traced"));
+    // The designs the replay takes (in order; a design it refuses gets the refusal), each
+    // with its scene
+    std::vector<size_t> traced;
+    std::vector<CudaTracer::DesignScene> scenes;
+    std::vector<BvhLayout> bvhs(designs.size());
+    std::vector<std::vector<uint32_t>> materials(designs.size());
+    for (size_t i = 0; i < designs.size(); ++i) {
+      absl::StatusOr<CudaTracer::DesignScene> scene =
+          replay_->MakeScene(designs[i], &bvhs[i], &materials[i]);
+      if (!scene.ok()) {
+        out[i] = scene.status();
+        continue;
+      }
+      traced.push_back(i);
+      scenes.push_back(*scene);
+    }
+    held_parts_ = 0;  // the tracer's sums are now these designs'
+    for (size_t first = 0; first < scenes.size(); first += CudaTracer::kMaxReplayDesigns) {
+      const size_t count = std::min<size_t>(CudaTracer::kMaxReplayDesigns, scenes.size() - first);
+      CudaCounters counters;
+      const absl::Status replayed = replay_->ReplayDesigns(
+          {scenes.begin() + first, scenes.begin() + first + count}, &counters);
+      rays_ += counters.rays;
+      for (size_t k = 0; k < count; ++k) {
+        out[traced[first + k]] =
+            replayed.ok() ? product_->TallySums(tracer_->DeviceSums() + k * tracer_->DesignSums(),
+                                                static_cast<int>(scene_.sensors.size()),
+                                                FullBatchPaths(), options)
+                          : replayed;
+      }
+    }
+    return out;
+  }
+  int DesignsAtOnce() const override { return replay_ != nullptr ? kReplayDesignsAtOnce : 1; }
   bool TracesInParts() const override { return replay_ != nullptr; }
   bool RoundsPay() const override { return false; }
   uint64_t RaysTraced() const override { return rays_; }
 
  private:
+  // Paths per batch of a design traced in full
+  std::vector<uint64_t> FullBatchPaths() const {
+    return PartPaths(static_cast<uint64_t>(options_.paths_per_sensor), options_.batches,
+                     kDesignParts, 0, kDesignParts);
+  }
+
   CudaTracer* tracer_;
   Scene scene_;
   IndoorOptions options_;

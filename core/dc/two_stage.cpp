@@ -394,6 +394,13 @@ class StagedDesignTallies : public DesignTallies {
 
 }  // namespace
 
+std::vector<absl::StatusOr<std::vector<HourTally>>> DesignTallies::TallyDesigns(
+    const std::vector<BlindDesign>& designs, const MetricOptions& options) {
+  std::vector<absl::StatusOr<std::vector<HourTally>>> out;
+  for (const BlindDesign& design : designs) out.push_back(Tally(design, options));
+  return out;
+}
+
 absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::MakeDesignTallies(
     const Scene& scene, const IndoorOptions& options, const std::vector<Matrix>& outdoor_batches,
     const Matrix& sky) {

@@ -726,12 +726,15 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
 
   // The search
   if (callbacks.stage) callbacks.stage("search");
-  search_settings.options.lookahead = static_cast<int>(lanes.tallies.size());
+  // Designs evaluated at once: each lane's, as many as it traces together (without racing)
+  const int per_lane = racer.Races() ? 1 : lanes.tallies.front()->DesignsAtOnce();
+  search_settings.options.lookahead =
+      std::min(kMaxLookahead, static_cast<int>(lanes.tallies.size()) * per_lane);
   FENESTRA_ASSIGN_OR_RETURN(search,
                             RunJobSearch(job, search_settings, racer, callbacks, clock,
                                          from.so_far ? &*from.so_far : nullptr, checkpoint));
   if (racer.Races()) AddRacing(racer, result);
-  result.set_candidates_at_once(static_cast<int>(lanes.tallies.size()));
+  result.set_candidates_at_once(search_settings.options.lookahead);
   result.set_evaluations_discarded(search.discarded);
 
   // The best design's hourly illuminance, for reports and other tools

@@ -66,16 +66,15 @@ absl::Status Racer::PrepareIncumbent() {
   return absl::OkStatus();
 }
 
-// Evaluates c.design on `lane`: in rounds against the incumbent when racing, then in full
-// unless a round rejects it.
+// Evaluates c.design on `lane` in rounds (racing), against the incumbent where there is one,
+// then in full unless a round rejects it.
 absl::Status Racer::Race(DesignTallies& lane, Candidate& c) const {
   const uint64_t rays_before = lane.RaysTraced();
-  const bool races = Races();
-  const bool against = races && incumbent_set_;
+  const bool against = incumbent_set_;
   c.stats.rejected.assign(s_.racing.rounds.size(), 0);
   c.stats.parts_in_full = kDesignParts;
   if (against) c.stats.candidates = 1;
-  for (size_t r = 0; races && r < s_.racing.rounds.size(); ++r) {
+  for (size_t r = 0; r < s_.racing.rounds.size(); ++r) {
     FENESTRA_ASSIGN_OR_RETURN(versions, lane.Tally(c.design, s_.options, s_.racing.rounds[r]));
     FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, true));
     c.rounds.push_back(std::move(scored.scores));
@@ -89,13 +88,42 @@ absl::Status Racer::Race(DesignTallies& lane, Candidate& c) const {
     }
   }
   FENESTRA_ASSIGN_OR_RETURN(versions, lane.Tally(c.design, s_.options, kDesignParts));
+  return TakeFull(versions, lane.RaysTraced() - rays_before, c);
+}
+
+// c's evaluation from the tallies of all its paths, which took `rays`.
+absl::Status Racer::TakeFull(const std::vector<HourTally>& versions, uint64_t rays,
+                             Candidate& c) const {
   c.stats.parts_traced = kDesignParts;
-  c.stats.rays_traced = lane.RaysTraced() - rays_before;
+  c.stats.rays_traced = rays;
   c.paths_fraction = 1;
   FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, false));
   if (s_.audit) c.full = std::move(scored.scores);
   c.evaluation = std::move(scored.evaluation);
   return absl::OkStatus();
+}
+
+// Without racing: the candidates in full, as many at a time as the lane traces together.
+void Racer::TraceTogether(DesignTallies& lane, const std::vector<Candidate*>& candidates) const {
+  const size_t at_once = static_cast<size_t>(std::max(1, lane.DesignsAtOnce()));
+  for (size_t first = 0; first < candidates.size(); first += at_once) {
+    const size_t count = std::min(at_once, candidates.size() - first);
+    std::vector<BlindDesign> designs;
+    for (size_t k = 0; k < count; ++k) designs.push_back(candidates[first + k]->design);
+    const uint64_t rays_before = lane.RaysTraced();
+    std::vector<absl::StatusOr<std::vector<HourTally>>> tallies =
+        lane.TallyDesigns(designs, s_.options);
+    // Each design's share of the pass's rays
+    const uint64_t rays = (lane.RaysTraced() - rays_before) / count;
+    for (size_t k = 0; k < count; ++k) {
+      Candidate& c = *candidates[first + k];
+      c.stats.rejected.assign(s_.racing.rounds.size(), 0);
+      c.stats.parts_in_full = kDesignParts;
+      const absl::Status taken =
+          tallies[k].ok() ? TakeFull(*tallies[k], rays, c) : tallies[k].status();
+      if (!taken.ok()) c.evaluation = taken;
+    }
+  }
 }
 
 absl::StatusOr<std::vector<double>> Racer::FullScores(DesignTallies& lane,
@@ -147,9 +175,12 @@ std::vector<absl::StatusOr<Evaluation>> Racer::EvaluateBatch(
   // Lane l takes candidates l, l + lanes, ... on its own thread
   const size_t lanes = s_.lanes.size();
   const auto race = [&](int l) {
-    for (size_t i = l; i < last_batch_.size(); i += lanes) {
-      Candidate& c = last_batch_[i];
-      if (const absl::Status raced = Race(*s_.lanes[l], c); !raced.ok()) c.evaluation = raced;
+    DesignTallies& lane = *s_.lanes[l];
+    std::vector<Candidate*> mine;
+    for (size_t i = l; i < last_batch_.size(); i += lanes) mine.push_back(&last_batch_[i]);
+    if (!Races()) return TraceTogether(lane, mine);
+    for (Candidate* c : mine) {
+      if (const absl::Status raced = Race(lane, *c); !raced.ok()) c->evaluation = raced;
     }
   };
   if (designs.size() == 1) {

@@ -77,7 +77,8 @@ struct RacingStats {
 // where it is clearly worse than the incumbent (set by SetIncumbent from the search's
 // steps); without an incumbent, or with racing off, it is traced in full (its round scores
 // still kept, so it can serve as the incumbent). EvaluateBatch evaluates several designs at
-// once, spread over the lanes, each as Evaluate would against the same incumbent.
+// once, spread over the lanes, each as Evaluate would against the same incumbent; without
+// racing a lane traces its designs DesignTallies::DesignsAtOnce() at a time.
 class Racer {
  public:
   struct Setting {
@@ -134,6 +135,8 @@ class Racer {
   absl::StatusOr<std::vector<double>> FullScores(DesignTallies& lane,
                                                  const BlindDesign& design) const;
   absl::Status Race(DesignTallies& lane, Candidate& c) const;
+  absl::Status TakeFull(const std::vector<HourTally>& versions, uint64_t rays, Candidate& c) const;
+  void TraceTogether(DesignTallies& lane, const std::vector<Candidate*>& candidates) const;
   absl::Status Audit(DesignTallies& lane, Candidate& c) const;
   void AddStats(const RacingStats& s);
 

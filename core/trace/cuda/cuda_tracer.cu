@@ -6,6 +6,7 @@
 #include <cuda_runtime.h>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <vector>
 
@@ -305,35 +306,54 @@ struct ReplayParts {
   int batches, parts, first, last;
 };
 
-// One design's indoor sums from the records (CudaTracer::ReplayIndoor), one row per (sensor,
-// batch) over the parts traced: their fixed light (first block of the row), their
-// connections the blind leaves clear, and their resumed paths traced on through the room
-// with the blind. A row has as many blocks as its share of the work (row_blocks: ShareBlocks
-// of Impl::ReplayRowWork), so that the rows end together.
+// A design of a replay on the device: the room with its blind (BVH, and per triangle its
+// material) and its slats alone.
+struct DeviceDesign {
+  const BvhNode* nodes;
+  const BvhTriangle* triangles;
+  const uint32_t* triangle_material;
+  LocalSlats blind;
+};
+
+// The designs one replay launch traces, passed by value.
+struct ReplayDesigns {
+  DeviceDesign design[CudaTracer::kMaxReplayDesigns];
+  int count;
+};
+
+// Designs' indoor sums from the records (CudaTracer::ReplayIndoor, ReplayIndoorDesigns), one
+// row per (design, sensor, batch) over the parts traced: their fixed light (first block of
+// the row), their connections the design's blind leaves clear, and their resumed paths traced
+// on through the room with that blind. A row has as many blocks as its share of the work
+// (row_blocks: ShareBlocks of Impl::ReplayRowWork), so that the rows end together. Design k's
+// sums start at sum + k * design_sums.
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
-    ReplayKernel(BvhIntersector scene, LocalSlats blind, SurfaceTable surfaces,
-                 PathSettings settings, OutdoorView<BvhIntersector> outdoor,
-                 const TraceSensor* sensors, int sensor_count, TraceWindow window,
-                 HemisphereBasis basis, ReplayParts parts, uint64_t seed, DeviceRecords records,
-                 const unsigned int* row_blocks, const double* fixed, double* sum,
-                 unsigned long long* counters, unsigned long long* next_item) {
+    ReplayKernel(ReplayDesigns designs, const TraceMaterial* materials, PathSettings settings,
+                 OutdoorView<BvhIntersector> outdoor, const TraceSensor* sensors, int sensor_count,
+                 TraceWindow window, HemisphereBasis basis, ReplayParts parts, uint64_t seed,
+                 DeviceRecords records, const unsigned int* row_blocks, const double* fixed,
+                 double* sum, size_t design_sums, unsigned long long* counters,
+                 unsigned long long* next_item) {
   extern __shared__ double row[];  // columns of I
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
   if (threadIdx.x == 0) shared_basis = basis;
   const int columns = IndoorColumnCount(window, basis);
-  BeginRow(row, columns, block_counters);
   // This block's row: blocks [row_blocks[y], row_blocks[y + 1]) work on row y
-  const unsigned int rows = static_cast<unsigned int>(sensor_count * parts.batches);
+  const unsigned int design_rows = static_cast<unsigned int>(sensor_count * parts.batches);
+  const unsigned int rows = design_rows * static_cast<unsigned int>(designs.count);
   unsigned int y = 0;
   for (unsigned int step = 1u << 30; step > 0; step >>= 1) {
     if (y + step < rows && row_blocks[y + step] <= blockIdx.x) y += step;
   }
+  const DeviceDesign& design = designs.design[y / design_rows];
+  BeginRow(row, columns, block_counters);
   const unsigned int block = blockIdx.x - row_blocks[y];
   const unsigned int blocks = row_blocks[y + 1] - row_blocks[y];
-  const int s = static_cast<int>(y) / parts.batches;
-  const int b = static_cast<int>(y) % parts.batches;
-  const size_t offset = (static_cast<size_t>(b) * sensor_count + s) * columns;
+  const int s = static_cast<int>(y % design_rows) / parts.batches;
+  const int b = static_cast<int>(y % design_rows) % parts.batches;
+  const size_t offset =
+      (y / design_rows) * design_sums + (static_cast<size_t>(b) * sensor_count + s) * columns;
   // The record rows of the parts, as RecordIndoor made them: (sensor, batch x parts + part)
   const unsigned int first_row =
       static_cast<unsigned int>((s * parts.batches + b) * parts.parts + parts.first);
@@ -360,10 +380,14 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
          i += static_cast<uint64_t>(blocks) * blockDim.x) {
       const ReplayConnection c = connections[i];
       ++counts.values[0];
-      if (!blind.Occluded(c.origin, c.direction, c.distance)) atomicAdd(&row[c.column], c.value);
+      if (!design.blind.Occluded(c.origin, c.direction, c.distance)) {
+        atomicAdd(&row[c.column], c.value);
+      }
     }
     resume_count += Smaller(records.resume_count[r], records.resume_capacity);
   }
+  const BvhIntersector scene{design.nodes, design.triangles};
+  const SurfaceTable surfaces{materials, design.triangle_material};
   SharedSink sink{row, nullptr};
   IndoorMode<SharedSink, OutdoorView<BvhIntersector>> mode{
       sensors[s].position,  sensors[s].normal, window, &shared_basis,
@@ -473,8 +497,13 @@ struct CudaTracer::Impl {
   DeviceBuffer<unsigned long long> record_counts;  // per row: connections, then resumes
   DeviceBuffer<double> fixed;
   DeviceBuffer<TraceSensor> replay_sensors;
-  DeviceBuffer<unsigned int> row_blocks;  // each row's first block, for row_blocks_parts
-  std::pair<int, int> row_blocks_parts{-1, -1};
+  DeviceBuffer<unsigned int> row_blocks;          // each row's first block, for row_blocks_key
+  std::array<int, 3> row_blocks_key{-1, -1, -1};  // parts [first, last) of this many designs
+  // The scenes of ReplayIndoorDesigns' designs, one after the other
+  DeviceBuffer<BvhNode> design_nodes;
+  DeviceBuffer<BvhTriangle> design_triangles;
+  DeviceBuffer<uint32_t> design_triangle_material;
+  DeviceBuffer<TraceMaterial> design_materials;
   unsigned int row_blocks_total = 0;
   struct Recorded {
     bool valid = false;
@@ -494,10 +523,14 @@ struct CudaTracer::Impl {
                           const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
                           uint64_t seed, const PathSettings& path, double* host_sum,
                           CudaCounters* out);
-  // One design's indoor sums of parts [first, last) from the records
-  // (CudaTracer::ReplayIndoor), added to those of parts [0, first) already in `sum`.
-  std::string Replay(const LocalSlats& blind, int first, int last, double* host_sum,
-                     CudaCounters* out);
+  // The designs' indoor sums of parts [first, last) from the records (CudaTracer::ReplayIndoor,
+  // ReplayIndoorDesigns), added to those of parts [0, first) already in `sum` (one design).
+  std::string Replay(const ReplayDesigns& designs, const TraceMaterial* materials, int first,
+                     int last, double* host_sum, CudaCounters* out);
+  size_t DesignSums() const {
+    return static_cast<size_t>(recorded.batches) * recorded.sensor_count *
+           IndoorColumnCount(recorded.window, recorded.basis);
+  }
   // Parts [0, replayed_parts) of the last replay are in `sum`; 0 once `sum` holds other sums.
   int replayed_parts = 0;
   DeviceRecords Records() {
@@ -511,13 +544,15 @@ struct CudaTracer::Impl {
             recorded.resume_capacity};
   }
 
-  // The replay's work per row (sensor, batch) over parts [first, last) of the records: a
-  // connection is one query, a resumed path kResumeWork of them.
-  std::vector<double> ReplayRowWork(int first, int last) const {
+  // The replay's work per row (design, sensor, batch) over parts [first, last) of the
+  // records, for `designs` designs: a connection is one query, a resumed path kResumeWork of
+  // them.
+  std::vector<double> ReplayRowWork(int first, int last, int designs) const {
     const Recorded& r = recorded;
     const size_t record_rows = r.counts.size() / 2;
-    std::vector<double> work(static_cast<size_t>(r.sensor_count) * r.batches, 0.0);
-    for (size_t y = 0; y < work.size(); ++y) {
+    const size_t design_rows = static_cast<size_t>(r.sensor_count) * r.batches;
+    std::vector<double> work(design_rows, 0.0);
+    for (size_t y = 0; y < design_rows; ++y) {
       for (int p = first; p < last; ++p) {
         const size_t i = y * r.parts + p;
         work[y] += static_cast<double>(std::min<uint64_t>(r.counts[i], r.connection_capacity)) +
@@ -525,6 +560,9 @@ struct CudaTracer::Impl {
                                                                         r.resume_capacity));
       }
     }
+    work.reserve(design_rows * designs);
+    for (int k = 1; k < designs; ++k)
+      work.insert(work.end(), work.begin(), work.begin() + design_rows);
     return work;
   }
 
@@ -768,7 +806,7 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
   const uint64_t row_paths = paths_per_sensor / row_batches + 1;
   Impl::Recorded& r = d.recorded;
-  d.row_blocks_parts = {-1, -1};
+  d.row_blocks_key = {-1, -1, -1};
   r = {false,     sensor_count, batches, parts, paths_per_sensor, seed, 3 * row_paths + 64,
        row_paths, {},           window,  basis, outdoor_offset,   path};
   std::vector<unsigned long long> counts(2 * static_cast<size_t>(rows));
@@ -821,8 +859,8 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   return "";
 }
 
-std::string CudaTracer::Impl::Replay(const LocalSlats& blind, int first, int last, double* host_sum,
-                                     CudaCounters* out) {
+std::string CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceMaterial* materials,
+                                     int first, int last, double* host_sum, CudaCounters* out) {
   Impl& d = *this;
   if (!d.recorded.valid) return "CUDA tracer: no indoor paths recorded";
   if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
@@ -831,37 +869,37 @@ std::string CudaTracer::Impl::Replay(const LocalSlats& blind, int first, int las
     return "CUDA tracer: parts [" + std::to_string(first) + ", " + std::to_string(last) + ") of " +
            std::to_string(r.parts) + " recorded";
   }
-  if (first > 0 && d.replayed_parts != first) {
+  if (first > 0 && (d.replayed_parts != first || designs.count != 1)) {
     return "CUDA tracer: the sums of the parts before " + std::to_string(first) +
            " are no longer on the device";
   }
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   const ReplayParts parts{r.batches, r.parts, first, last};
-  const unsigned int rows = static_cast<unsigned int>(r.sensor_count * r.batches);
+  const unsigned int rows = static_cast<unsigned int>(r.sensor_count * r.batches * designs.count);
   const int columns = IndoorColumnCount(r.window, r.basis);
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
-  if (d.row_blocks_parts != std::make_pair(first, last)) {
+  if (d.row_blocks_key != std::array<int, 3>{first, last, designs.count}) {
     int resident = 0;
     FENESTRA_CUDA_RETURN_IF_ERROR(
         cudaOccupancyMaxActiveBlocksPerMultiprocessor(&resident, ReplayKernel, kThreads, shared));
     const std::vector<unsigned int> blocks =
-        ShareBlocks(d.ReplayRowWork(first, last),
+        ShareBlocks(d.ReplayRowWork(first, last, designs.count),
                     static_cast<unsigned int>(std::max(1, resident) * d.multiprocessors));
     FENESTRA_CUDA_RETURN_IF_ERROR(d.row_blocks.Upload(blocks.data(), blocks.size()));
-    d.row_blocks_parts = {first, last};
+    d.row_blocks_key = {first, last, designs.count};
     d.row_blocks_total = blocks.back();
   }
   const DeviceRecords records = d.Records();
   std::string error = d.Run(
-      rows, static_cast<size_t>(r.sensor_count) * r.batches * columns, false,
+      rows, d.DesignSums() * designs.count, false,
       [&] {
         ReplayKernel<<<d.row_blocks_total, kThreads, shared>>>(
-            d.Scene(), blind, d.Surfaces(), r.path, d.Outdoor(r.outdoor_offset),
-            d.replay_sensors.get(), r.sensor_count, r.window, r.basis, parts, r.seed, records,
-            d.row_blocks.get(), d.fixed.get(), d.sum.get(), d.counters.get(), d.next_path.get());
+            designs, materials, r.path, d.Outdoor(r.outdoor_offset), d.replay_sensors.get(),
+            r.sensor_count, r.window, r.basis, parts, r.seed, records, d.row_blocks.get(),
+            d.fixed.get(), d.sum.get(), d.DesignSums(), d.counters.get(), d.next_path.get());
       },
       host_sum, nullptr, out, first > 0);
-  d.replayed_parts = error.empty() ? last : 0;
+  d.replayed_parts = error.empty() && designs.count == 1 ? last : 0;
   return error;
 }
 
@@ -869,8 +907,51 @@ int CudaTracer::ReplayedParts() const { return impl_->replayed_parts; }
 
 std::string CudaTracer::ReplayIndoor(const LocalSlats& blind, int first, int last, double* sum,
                                      CudaCounters* counters) {
-  return impl_->Replay(blind, first, last, sum, counters);
+  Impl& d = *impl_;
+  ReplayDesigns designs{};
+  designs.design[0] = {d.nodes.get(), d.triangles.get(), d.triangle_material.get(), blind};
+  designs.count = 1;
+  return d.Replay(designs, d.materials.get(), first, last, sum, counters);
 }
+
+std::string CudaTracer::ReplayIndoorDesigns(const std::vector<DesignScene>& scenes,
+                                            const std::vector<TraceMaterial>& materials,
+                                            CudaCounters* counters) {
+  Impl& d = *impl_;
+  if (scenes.empty() || scenes.size() > kMaxReplayDesigns) {
+    return "CUDA tracer: " + std::to_string(scenes.size()) + " designs in one replay (1 to " +
+           std::to_string(kMaxReplayDesigns) + ")";
+  }
+  // The designs' scenes one after the other; each design's BVH indexes its own part
+  std::vector<BvhNode> nodes;
+  std::vector<BvhTriangle> triangles;
+  std::vector<uint32_t> triangle_material;
+  std::vector<std::array<size_t, 3>> starts;
+  for (const DesignScene& scene : scenes) {
+    starts.push_back({nodes.size(), triangles.size(), triangle_material.size()});
+    nodes.insert(nodes.end(), scene.bvh->nodes.begin(), scene.bvh->nodes.end());
+    triangles.insert(triangles.end(), scene.bvh->triangles.begin(), scene.bvh->triangles.end());
+    triangle_material.insert(triangle_material.end(), scene.triangle_material->begin(),
+                             scene.triangle_material->end());
+  }
+  d.replayed_parts = 0;
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.design_nodes.Upload(nodes.data(), nodes.size()));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.design_triangles.Upload(triangles.data(), triangles.size()));
+  FENESTRA_CUDA_RETURN_IF_ERROR(
+      d.design_triangle_material.Upload(triangle_material.data(), triangle_material.size()));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.design_materials.Upload(materials.data(), materials.size()));
+  ReplayDesigns designs{};
+  designs.count = static_cast<int>(scenes.size());
+  for (size_t k = 0; k < scenes.size(); ++k) {
+    designs.design[k] = {d.design_nodes.get() + starts[k][0],
+                         d.design_triangles.get() + starts[k][1],
+                         d.design_triangle_material.get() + starts[k][2], scenes[k].blind};
+  }
+  return d.Replay(designs, d.design_materials.get(), 0, d.recorded.parts, nullptr, counters);
+}
+
+size_t CudaTracer::DesignSums() const { return impl_->recorded.valid ? impl_->DesignSums() : 0; }
 
 const double* CudaTracer::DeviceSums() const { return impl_->sum.get(); }
 

@@ -113,6 +113,23 @@ class CudaTracer {
   std::string ReplayIndoor(const LocalSlats& blind, int first, int last, double* sum,
                            CudaCounters* counters);
 
+  // ReplayIndoor for several designs in one launch, every part of each (a launch's last
+  // paths end one after another, so designs traced together share that tail): design k's
+  // room with its blind (`scenes[k]`, its triangles' materials indexed into `materials`)
+  // and its slats alone (`blinds[k]`). The sums stay on the device, design k's at
+  // DeviceSums() + k * DesignSums(). At most kMaxReplayDesigns. "" or the error.
+  struct DesignScene {
+    const BvhLayout* bvh;
+    const std::vector<uint32_t>* triangle_material;
+    LocalSlats blind;
+  };
+  std::string ReplayIndoorDesigns(const std::vector<DesignScene>& scenes,
+                                  const std::vector<TraceMaterial>& materials,
+                                  CudaCounters* counters);
+  static constexpr int kMaxReplayDesigns = 8;
+  // Doubles of one design's sums in a replay (batches x sensors x columns); 0 with no records.
+  size_t DesignSums() const;
+
   // The sums of the last Indoor or ReplayIndoor on the device, in their layout (valid until
   // the next trace): where `sum` was null, they stay there for the annual product
   // (core/dc/cuda/annual_tally.h).

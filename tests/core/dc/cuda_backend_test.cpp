@@ -274,6 +274,15 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
   ExpectRoundsEndAsOneCall(**on_device, *DesignWithOverrides(scene, {{"alpha", 0.2}}),
                            *DesignWithOverrides(scene, {{"alpha", 1.0}, {"width", 0.05}}),
                            options);
+  // Several designs in one launch, each as alone
+  EXPECT_GT((*on_device)->DesignsAtOnce(), 1);
+  BlindDesign wide = DefaultDesign(scene);
+  wide.slat_width_m = 0.3;
+  ExpectTogetherAsAlone(**on_device,
+                        {*DesignWithOverrides(scene, {{"alpha", 0.2}}),
+                         *DesignWithOverrides(scene, {{"alpha", 0.5}, {"width", 0.05}}),
+                         *DesignWithOverrides(scene, {{"alpha", 1.2}})},
+                        wide, options);
   EXPECT_FALSE((*in_turn)->TracesInParts());
   EXPECT_EQ((*in_turn)->Tally(DefaultDesign(scene), options, 2).status().code(),
             absl::StatusCode::kUnimplemented);

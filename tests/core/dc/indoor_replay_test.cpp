@@ -42,7 +42,8 @@ TEST(IndoorReplayTest, EqualsTheIndoorStage) {
 }
 
 // A search's designs in rounds on the CPU (racing): each round traces only the parts it
-// adds, and the last ends where one full trace does.
+// adds, and the last ends where one full trace does; designs asked together are traced as
+// alone.
 TEST(IndoorReplayTest, RoundsEndAsOneTrace) {
   const Scene scene = LoadExample("city_office");
   IndoorOptions options;
@@ -65,9 +66,13 @@ TEST(IndoorReplayTest, RoundsEndAsOneTrace) {
   ASSERT_TRUE(i.ok() && product.ok());
   absl::StatusOr<std::vector<Matrix>> e = (*product)->Apply(i->batches);
   ASSERT_TRUE(e.ok()) << e.status();
+  const MetricOptions limits = QuartileLimits((*e)[0]);
   ExpectRoundsEndAsOneCall(**tallies, a,
-                           *DesignWithOverrides(scene, {{"alpha", 1.0}, {"width", 0.05}}),
-                           QuartileLimits((*e)[0]));
+                           *DesignWithOverrides(scene, {{"alpha", 1.0}, {"width", 0.05}}), limits);
+  BlindDesign wide = DefaultDesign(scene);
+  wide.slat_width_m = 0.3;
+  ExpectTogetherAsAlone(**tallies, {a, *DesignWithOverrides(scene, {{"alpha", 0.5}})}, wide,
+                        limits);
 }
 
 }  // namespace

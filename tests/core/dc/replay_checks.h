@@ -114,4 +114,36 @@ inline void ExpectRoundsEndAsOneCall(DesignTallies& tallies, const BlindDesign& 
             absl::StatusCode::kInvalidArgument);
 }
 
+// Designs tallied together (DesignTallies::TallyDesigns) give what each gives alone; a
+// design the tallies refuse gets its error without taking the others' results; rounds of a
+// design after them still end as one call does.
+inline void ExpectTogetherAsAlone(DesignTallies& tallies, const std::vector<BlindDesign>& designs,
+                                  const BlindDesign& refused, const MetricOptions& options) {
+  std::vector<std::vector<HourTally>> alone;
+  for (const BlindDesign& design : designs) {
+    absl::StatusOr<std::vector<HourTally>> tally = tallies.Tally(design, options);
+    ASSERT_TRUE(tally.ok()) << tally.status();
+    alone.push_back(*std::move(tally));
+  }
+  std::vector<BlindDesign> asked = designs;
+  asked.insert(asked.begin() + 1, refused);
+  const std::vector<absl::StatusOr<std::vector<HourTally>>> together =
+      tallies.TallyDesigns(asked, options);
+  ASSERT_EQ(together.size(), asked.size());
+  EXPECT_EQ(together[1].status().code(), absl::StatusCode::kInvalidArgument);
+  for (size_t i = 0; i < designs.size(); ++i) {
+    const absl::StatusOr<std::vector<HourTally>>& tally = together[i < 1 ? i : i + 1];
+    ASSERT_TRUE(tally.ok()) << tally.status();
+    ExpectTalliesEqual(*tally, alone[i]);
+  }
+  // Designs that differ give different tallies (the comparison is not of one design)
+  EXPECT_NE((*together[0])[0].sensors[0].sum, (*together[2])[0].sensors[0].sum);
+  if (tallies.TracesInParts()) {
+    ASSERT_TRUE(tallies.Tally(designs.back(), options, 2).ok());
+    absl::StatusOr<std::vector<HourTally>> rounds = tallies.Tally(designs.back(), options);
+    ASSERT_TRUE(rounds.ok()) << rounds.status();
+    ExpectTalliesEqual(*rounds, alone.back());
+  }
+}
+
 }  // namespace fenestra
