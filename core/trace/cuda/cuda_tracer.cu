@@ -560,10 +560,11 @@ struct CudaTracer::Impl {
                                                                         r.resume_capacity));
       }
     }
-    work.reserve(design_rows * designs);
-    for (int k = 1; k < designs; ++k)
-      work.insert(work.end(), work.begin(), work.begin() + design_rows);
-    return work;
+    // Every design's rows have the same records
+    std::vector<double> all;
+    all.reserve(design_rows * designs);
+    for (int k = 0; k < designs; ++k) all.insert(all.end(), work.begin(), work.end());
+    return all;
   }
 
   BvhIntersector Scene() const { return {nodes.get(), triangles.get()}; }
