@@ -1,7 +1,8 @@
-// Several GPUs (bench/README.md, "Several GPUs"): independent four-variable jobs, one worker
-// thread per GPU as fenestrad runs them (UseCudaDevices, the GPUs taken in turn), for 1 to
-// all visible GPUs; jobs per second and the ratio to one GPU. Without a GPU it says so and
-// exits with 1.
+// Several GPUs (bench/README.md, "Several GPUs"): one four-variable job with its lanes on 1 to
+// all visible GPUs; then independent four-variable jobs, one worker thread per GPU as
+// fenestrad runs them (WorkerCudaDevices: each worker's jobs on its own GPU), for 1 to all
+// visible GPUs: jobs per second and the ratio to one GPU. Without a GPU it says so and exits
+// with 1.
 //   multi_gpu_bench [jobs per GPU (4)]
 #include <atomic>
 #include <chrono>
@@ -81,7 +82,8 @@ int main(int argc, char** argv) {
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::thread> workers;
     for (int w = 0; w < gpus; ++w) {
-      workers.emplace_back([&] {
+      workers.emplace_back([&, w] {
+        const ThreadCudaDevices mine(WorkerCudaDevices(w, gpus));
         for (int k; (k = next.fetch_add(1)) < jobs;) {
           const auto job_start = std::chrono::steady_clock::now();
           absl::StatusOr<v1::JobResult> result = RunJob(prepared, nullptr);

@@ -66,7 +66,8 @@ void AddDaemonFlags(CLI::App& app, Flags& f) {
       "jobs and site computations run at once [one per GPU, at least 1; 1 with --backend cpu]");
   app.add_option("--backend", f.backend, "tracer for jobs that name none: cpu, cuda, auto [auto]");
   app.add_option("--gpus", f.gpus,
-                 "GPUs jobs take in turn: all, or device indices such as 0,2 [all]");
+                 "GPUs the workers share out (one each by default): all, or device indices "
+                 "such as 0,2 [all]");
   app.add_option("--tls-cert", f.tls_cert, "TLS certificate chain (PEM) [none: plaintext]");
   app.add_option("--tls-key", f.tls_key, "TLS private key (PEM) of --tls-cert");
   app.add_option("--tls-client-ca", f.tls_client_ca,

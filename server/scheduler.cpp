@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/dc/dc_backend.h"
 #include "server/log_safe.h"
 
 namespace fenestra {
@@ -23,7 +24,7 @@ Scheduler::~Scheduler() { Join(); }
 void Scheduler::Start(Runner run_job, Runner run_site) {
   run_job_ = std::move(run_job);
   run_site_ = std::move(run_site);
-  for (int i = 0; i < workers_; ++i) threads_.emplace_back([this] { Work(); });
+  for (int i = 0; i < workers_; ++i) threads_.emplace_back([this, i] { Work(i); });
   threads_.emplace_back([this] { Renew(); });
 }
 
@@ -110,7 +111,10 @@ void Scheduler::NoteClaimFailure(const absl::Status& status, const std::string& 
   }
 }
 
-void Scheduler::Work() {
+void Scheduler::Work(int worker) {
+  // The worker's jobs and site computations run on its GPUs, so that with a worker per GPU
+  // (the default) concurrent jobs never share one
+  const ThreadCudaDevices gpus(WorkerCudaDevices(worker, workers_));
   while (true) {
     const uint64_t seen = store_.database().ChangeCount();
     std::vector<std::string> excluded;

@@ -66,7 +66,7 @@ class Scheduler {
   int64_t lease_ms() const { return lease_ms_; }
 
  private:
-  void Work();
+  void Work(int worker);
   void Renew();
   // The claims held now (mutex_ held), expired entries dropped.
   std::vector<std::shared_ptr<Held>> HeldNow() const;

@@ -17,6 +17,16 @@ namespace {
 std::mutex devices_mutex;
 std::vector<int> chosen_devices;  // UseCudaDevices'; empty: every visible GPU
 
+thread_local std::vector<int> thread_devices;  // ThreadCudaDevices'; empty: the process's
+thread_local uint64_t thread_turn = 0;
+
+// The GPUs NextCudaDevice takes in turn on this thread (empty: every visible one)
+std::vector<int> DevicesInUse() {
+  if (!thread_devices.empty()) return thread_devices;
+  const std::lock_guard<std::mutex> lock(devices_mutex);
+  return chosen_devices;
+}
+
 }  // namespace
 
 void UseCudaDevices(std::vector<int> devices) {
@@ -26,22 +36,38 @@ void UseCudaDevices(std::vector<int> devices) {
 
 int NextCudaDevice() {
   static std::atomic<uint64_t> next{0};
-  const uint64_t k = next.fetch_add(1);
-  {
-    const std::lock_guard<std::mutex> lock(devices_mutex);
-    if (!chosen_devices.empty()) return chosen_devices[k % chosen_devices.size()];
-  }
+  const uint64_t k = thread_devices.empty() ? next.fetch_add(1) : thread_turn++;
+  const std::vector<int> devices = DevicesInUse();
+  if (!devices.empty()) return devices[k % devices.size()];
   const int count = CudaDevices();
   return count > 0 ? static_cast<int>(k % static_cast<uint64_t>(count)) : 0;
 }
 
 int CudaDevicesInUse() {
-  {
-    const std::lock_guard<std::mutex> lock(devices_mutex);
-    if (!chosen_devices.empty()) return static_cast<int>(chosen_devices.size());
-  }
-  return CudaDevices();
+  const std::vector<int> devices = DevicesInUse();
+  return devices.empty() ? CudaDevices() : static_cast<int>(devices.size());
 }
+
+std::vector<int> WorkerCudaDevices(int worker, int workers) {
+  std::vector<int> all = DevicesInUse();
+  if (all.empty()) {
+    for (int d = 0; d < CudaDevices(); ++d) all.push_back(d);
+  }
+  std::vector<int> mine;
+  if (all.empty() || workers < 1 || worker < 0) return mine;
+  if (workers >= static_cast<int>(all.size())) return {all[worker % all.size()]};
+  for (size_t d = worker; d < all.size(); d += workers) mine.push_back(all[d]);
+  return mine;
+}
+
+ThreadCudaDevices::ThreadCudaDevices(std::vector<int> devices) : before_(thread_devices) {
+  if (!devices.empty()) {
+    thread_devices = std::move(devices);
+    thread_turn = 0;
+  }
+}
+
+ThreadCudaDevices::~ThreadCudaDevices() { thread_devices = before_; }
 
 absl::StatusOr<std::vector<int>> ParseGpuList(const std::string& gpus, int visible) {
   std::vector<int> devices;

@@ -193,14 +193,14 @@ std::unique_ptr<DcBackend> MakeEmbreeBackend();
 absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int device = 0);
 
 // "cpu", "cuda" or "auto" (a GPU when there is one, else the CPU). Successive GPU backends
-// take the visible GPUs in turn, so concurrent jobs spread over them.
+// take the GPUs in use in turn (NextCudaDevice).
 absl::StatusOr<std::unique_ptr<DcBackend>> MakeBackend(const std::string& name);
 
 // Number of CUDA devices this build and host can use (0 without CUDA).
 int CudaDevices();
 
-// The GPU the next backend should use: the GPUs of UseCudaDevices (by default every visible
-// one) in turn.
+// The GPU the next backend should use: the GPUs of this thread's ThreadCudaDevices in turn,
+// else those of UseCudaDevices (by default every visible one) in turn across the process.
 int NextCudaDevice();
 
 // The GPUs of a "gpus" setting: "all" (every one of the `visible`) or comma-separated device
@@ -210,8 +210,26 @@ absl::StatusOr<std::vector<int>> ParseGpuList(const std::string& gpus, int visib
 // Makes NextCudaDevice take `devices` in turn (process-wide); empty: every visible GPU.
 void UseCudaDevices(std::vector<int> devices);
 
-// How many GPUs NextCudaDevice takes in turn.
+// How many GPUs NextCudaDevice takes in turn on this thread.
 int CudaDevicesInUse();
+
+// The GPUs worker `worker` of `workers` takes (a daemon's worker threads share those of
+// UseCudaDevices): with at least as many workers as GPUs each worker has one, the GPUs taken in
+// turn; with fewer, worker w has every workers-th GPU from the w-th. Empty without a GPU.
+std::vector<int> WorkerCudaDevices(int worker, int workers);
+
+// While it lives, NextCudaDevice and CudaDevicesInUse on the thread that made it take `devices`
+// (a worker's, WorkerCudaDevices) rather than the process's; empty changes nothing.
+class ThreadCudaDevices {
+ public:
+  explicit ThreadCudaDevices(std::vector<int> devices);
+  ~ThreadCudaDevices();
+  ThreadCudaDevices(const ThreadCudaDevices&) = delete;
+  ThreadCudaDevices& operator=(const ThreadCudaDevices&) = delete;
+
+ private:
+  std::vector<int> before_;
+};
 
 // Designs evaluated at once per GPU by default. Since the replay kernel's blocks fill the
 // H100 to its last slot (its rows share them by their work), a second lane's kernel no longer

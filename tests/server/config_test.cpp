@@ -3,8 +3,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <thread>
+#include <vector>
 
 #include "core/dc/dc_backend.h"
 
@@ -18,7 +21,7 @@ TEST(ConfigTest, EmptyConfigGetsTheDocumentedDefaults) {
   ASSERT_TRUE(config.ok()) << config.status();
   EXPECT_EQ(config->listen_address(), "localhost:50051");
   EXPECT_EQ(config->data_dir(), "fenestra-data");
-  EXPECT_EQ(config->worker_threads(), 1);
+  EXPECT_EQ(config->worker_threads(), std::max(1, CudaDevices()));  // one per GPU
   EXPECT_EQ(config->backend(), "auto");
   EXPECT_EQ(config->gpus(), "all");
   EXPECT_EQ(config->shutdown_grace_seconds(), 10);
@@ -61,6 +64,35 @@ TEST(ConfigTest, GpusAreAllOrDistinctVisibleDeviceIndices) {
   config.set_gpus("99");
   EXPECT_THAT(ResolveConfig(config).status().message(),
               HasSubstr("configuration: gpus: there is no GPU 99"));
+}
+
+// The workers share out the GPUs of `gpus`; a worker's thread takes only its own in turn, and
+// other threads keep the process's. The share-out is index arithmetic, so it runs without a GPU.
+TEST(ConfigTest, WorkersShareOutTheGpus) {
+  UseCudaDevices({3, 1, 2});
+  EXPECT_THAT(WorkerCudaDevices(0, 3), ::testing::ElementsAre(3));
+  EXPECT_THAT(WorkerCudaDevices(2, 3), ::testing::ElementsAre(2));
+  EXPECT_THAT(WorkerCudaDevices(4, 6), ::testing::ElementsAre(1));  // more workers: shared
+  EXPECT_THAT(WorkerCudaDevices(0, 2), ::testing::ElementsAre(3, 2));
+  EXPECT_THAT(WorkerCudaDevices(1, 2), ::testing::ElementsAre(1));
+  EXPECT_THAT(WorkerCudaDevices(0, 1), ::testing::ElementsAre(3, 1, 2));
+  EXPECT_EQ(CudaDevicesInUse(), 3);
+  {
+    const ThreadCudaDevices mine(WorkerCudaDevices(0, 2));
+    EXPECT_EQ(CudaDevicesInUse(), 2);
+    std::vector<int> taken;
+    for (int k = 0; k < 5; ++k) taken.push_back(NextCudaDevice());
+    EXPECT_THAT(taken, ::testing::ElementsAre(3, 2, 3, 2, 3));
+    std::thread other([] { EXPECT_EQ(CudaDevicesInUse(), 3); });
+    other.join();
+    {
+      const ThreadCudaDevices none({});  // empty: this thread's devices stay
+      EXPECT_EQ(CudaDevicesInUse(), 2);
+    }
+  }
+  EXPECT_EQ(CudaDevicesInUse(), 3);
+  UseCudaDevices({});
+  EXPECT_EQ(WorkerCudaDevices(0, 2).empty(), CudaDevices() == 0);  // every visible GPU
 }
 
 TEST(ConfigTest, TheStoreIsSqliteOrAPostgresqlUrlAndLeasesAreNotTooShort) {
