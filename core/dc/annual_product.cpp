@@ -17,9 +17,14 @@ class CpuAnnualProduct : public AnnualProduct {
       : outdoor_(std::move(outdoor)), sky_(std::move(sky)) {}
 
   absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
+    return ApplyToSky(indoor_batches, sky_);
+  }
+  absl::StatusOr<std::vector<Matrix>> ApplyToSky(const std::vector<Matrix>& indoor_batches,
+                                                 const Matrix& sky) override {
     FENESTRA_RETURN_IF_ERROR(CheckPairs(indoor_batches, outdoor_));
+    FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
     // Every batch's light through the window, then all batches' E in one product
-    return SplitBatches(ThroughWindow(indoor_batches, outdoor_) * sky_, indoor_batches.size());
+    return SplitBatches(ThroughWindow(indoor_batches, outdoor_) * sky, indoor_batches.size());
   }
 
  private:

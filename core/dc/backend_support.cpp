@@ -197,6 +197,10 @@ absl::Status CheckOutdoorBatches(const std::vector<Matrix>& outdoor_batches, con
                        outdoor_batches[0].rows(), " x ", kDaylightBins));
     }
   }
+  return CheckSkyRows(sky);
+}
+
+absl::Status CheckSkyRows(const Matrix& sky) {
   if (sky.rows() != kDaylightBins) {
     return absl::InvalidArgumentError(
         absl::StrCat("the outdoor matrix has ", kDaylightBins, " sky bins, the sky ", sky.rows()));

@@ -47,6 +47,9 @@ int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count)
 // InvalidArgument unless every batch has the same rows and `cells` columns.
 absl::StatusOr<Matrix> StackIndoorBatches(const std::vector<Matrix>& batches, Eigen::Index cells);
 
+// A sky for the annual product: 146 sky bins as rows; or InvalidArgument.
+absl::Status CheckSkyRows(const Matrix& sky);
+
 // The outdoor batches of an annual product: at least 2, of equal shape, 146 sky bins as
 // columns like the sky's rows; or InvalidArgument.
 absl::Status CheckOutdoorBatches(const std::vector<Matrix>& outdoor_batches, const Matrix& sky);

@@ -85,6 +85,29 @@ struct DeviceTallies {
   CudaAnnualTally::TallyRequest request;
 };
 
+PathSettings WithoutImportance(PathSettings path) {
+  path.importance = nullptr;
+  return path;
+}
+
+void Count(const CudaCounters& counters, TraceCounters* out) {
+  out->rays = counters.rays;
+  for (int e = 0; e < 6; ++e) out->ends[e] = counters.ends[e];
+  out->max_weight = 1.0f;
+}
+
+// An indoor tally of zeros for the sums of a trace to be downloaded into.
+IndoorTally ZeroIndoorTally(int sensors, int columns, int batches, uint64_t paths_per_sensor) {
+  IndoorTally tally;
+  tally.sensors = sensors;
+  tally.columns = columns;
+  tally.batches = batches;
+  tally.paths_per_sensor = paths_per_sensor;
+  tally.batch_paths = BatchSizes(paths_per_sensor, batches);
+  tally.sum.resize(static_cast<size_t>(batches) * sensors * columns);
+  return tally;
+}
+
 // What the tracer holds one of at a time (an annual product's matrices, an outdoor scene,
 // indoor records), shared by the objects of one backend that use it: each object takes a
 // generation when made, and uploads its own again when another one replaced it.
@@ -110,17 +133,12 @@ class CudaAnnualProduct : public AnnualProduct {
   }
 
   absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
-    if (static_cast<int>(indoor_batches.size()) != batches_) {
-      return absl::InvalidArgumentError(absl::StrCat("the indoor stage has ", indoor_batches.size(),
-                                                     " batches, the outdoor matrix ", batches_,
-                                                     "; they pair up"));
-    }
-    FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
-    FENESTRA_RETURN_IF_ERROR(Hold());
-    Matrix illuminance(stacked.rows(), sky_.cols());
-    FENESTRA_RETURN_IF_ERROR(Check(annual_->Illuminance(
-        stacked.data(), static_cast<int>(stacked.rows()), illuminance.data())));
-    return SplitBatches(illuminance, indoor_batches.size());
+    return Illuminance(indoor_batches, nullptr);
+  }
+  absl::StatusOr<std::vector<Matrix>> ApplyToSky(const std::vector<Matrix>& indoor_batches,
+                                                 const Matrix& sky) override {
+    FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
+    return Illuminance(indoor_batches, &sky);
   }
 
   // E is formed and tallied on the device; only the tallies come back.
@@ -165,6 +183,24 @@ class CudaAnnualProduct : public AnnualProduct {
   }
 
  private:
+  // E through S, or through `other_sky` where it is not null.
+  absl::StatusOr<std::vector<Matrix>> Illuminance(const std::vector<Matrix>& indoor_batches,
+                                                  const Matrix* other_sky) {
+    if (static_cast<int>(indoor_batches.size()) != batches_) {
+      return absl::InvalidArgumentError(absl::StrCat("the indoor stage has ", indoor_batches.size(),
+                                                     " batches, the outdoor matrix ", batches_,
+                                                     "; they pair up"));
+    }
+    FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
+    FENESTRA_RETURN_IF_ERROR(Hold());
+    const Matrix& sky = other_sky != nullptr ? *other_sky : sky_;
+    Matrix illuminance(stacked.rows(), sky.cols());
+    FENESTRA_RETURN_IF_ERROR(Check(annual_->Illuminance(
+        stacked.data(), static_cast<int>(stacked.rows()), illuminance.data(),
+        other_sky != nullptr ? sky.data() : nullptr, static_cast<int>(sky.cols()))));
+    return SplitBatches(illuminance, indoor_batches.size());
+  }
+
   CudaAnnualTally* annual_;
   TracerSlot* slot_;
   int generation_;
@@ -262,6 +298,22 @@ class CudaReplay {
                                    room_.materials.data(), room_.materials.size()));
   }
 
+  // Every part of `design`, its sums downloaded (IndoorResultFromTally gives its I).
+  absl::StatusOr<IndoorTally> Sums(const BlindDesign& design) {
+    const auto start = std::chrono::steady_clock::now();
+    LocalSlats blind;
+    FENESTRA_RETURN_IF_ERROR(Prepare(design, &blind));
+    IndoorTally tally = ZeroIndoorTally(sensors(), columns(), options_.batches,
+                                        static_cast<uint64_t>(options_.paths_per_sensor));
+    CudaCounters counters;
+    FENESTRA_RETURN_IF_ERROR(
+        Check(tracer_->ReplayIndoor(blind, 0, kDesignParts, tally.sum.data(), &counters)));
+    Count(counters, &tally.counters);
+    tally.trace_seconds = counters.kernel_seconds;
+    tally.wall_seconds = SecondsSince(start);
+    return tally;
+  }
+
   // Every part of the designs of `scenes` (MakeScene) in one launch
   // (CudaTracer::ReplayIndoorDesigns).
   absl::Status ReplayDesigns(const std::vector<CudaTracer::DesignScene>& scenes,
@@ -336,33 +388,16 @@ class CudaReplay {
 // IndoorStages by the GPU's replay.
 class CudaReplayStages : public IndoorStages {
  public:
-  CudaReplayStages(CudaTracer* tracer, std::string backend, const IndoorOptions& options,
+  CudaReplayStages(std::string backend, const IndoorOptions& options,
                    std::unique_ptr<OutdoorHolder> outdoor, std::unique_ptr<CudaReplay> replay)
-      : tracer_(tracer),
-        backend_(std::move(backend)),
+      : backend_(std::move(backend)),
         options_(options),
         outdoor_(std::move(outdoor)),
         replay_(std::move(replay)) {}
 
   absl::StatusOr<IndoorResult> Compute(const BlindDesign& design) const override {
     const auto start = std::chrono::steady_clock::now();
-    LocalSlats blind;
-    FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind));
-    IndoorTally tally;
-    tally.sensors = replay_->sensors();
-    tally.columns = replay_->columns();
-    tally.batches = options_.batches;
-    tally.paths_per_sensor = static_cast<uint64_t>(options_.paths_per_sensor);
-    tally.batch_paths = BatchSizes(tally.paths_per_sensor, tally.batches);
-    tally.sum.resize(static_cast<size_t>(tally.batches) * tally.sensors * tally.columns);
-    CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(
-        Check(tracer_->ReplayIndoor(blind, 0, kDesignParts, tally.sum.data(), &counters)));
-    tally.counters.rays = counters.rays;
-    for (int e = 0; e < 6; ++e) tally.counters.ends[e] = counters.ends[e];
-    tally.counters.max_weight = 1.0f;
-    tally.trace_seconds = counters.kernel_seconds;
-    tally.wall_seconds = SecondsSince(start);
+    FENESTRA_ASSIGN_OR_RETURN(tally, replay_->Sums(design));
     IndoorResult result = IndoorResultFromTally(tally, options_);
     result.triangles = replay_->triangles();
     result.backend = backend_ + " (replay)";
@@ -371,7 +406,6 @@ class CudaReplayStages : public IndoorStages {
   }
 
  private:
-  CudaTracer* tracer_;
   std::string backend_;
   IndoorOptions options_;
   std::unique_ptr<OutdoorHolder> outdoor_;
@@ -420,21 +454,20 @@ class CudaDesignTallies : public DesignTallies {
     if (parts != kDesignParts) {
       return absl::UnimplementedError("designs traced in full are traced in one round");
     }
-    FENESTRA_ASSIGN_OR_RETURN(
-        geometry, PrepareTraceGeometry(SelectSide(AssembleMesh(scene_, design), Side::kIndoor),
-                                       scene_.materials));
-    FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, geometry, BvhQuality::kMedium));
-    FENESTRA_RETURN_IF_ERROR(outdoor_->Hold());
-    const std::vector<TraceSensor> sensors = LocalSensors(geometry, scene_.sensors);
-    PathSettings path = IndoorPathSettings(options_);
-    path.importance = nullptr;
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->Indoor(
-        sensors.data(), sensor_count, LocalWindow(geometry, scene_.window, options_.parts),
-        OutdoorOffset(geometry, outdoor_->geometry()), basis_,
-        static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, options_.seed, path,
-        nullptr, &counters)));
-    rays_ += counters.rays;
+    FENESTRA_RETURN_IF_ERROR(TraceInFull(design, nullptr));
     return product_->TallySums(tracer_->DeviceSums(), sensor_count, batch_paths, options);
+  }
+  absl::StatusOr<std::vector<Matrix>> IndoorBatches(const BlindDesign& design) override {
+    held_parts_ = 0;  // the tracer's sums become this design's
+    IndoorTally tally;
+    if (replay_ != nullptr) {
+      FENESTRA_ASSIGN_OR_RETURN(sums, replay_->Sums(design));
+      tally = std::move(sums);
+      rays_ += tally.counters.rays;
+    } else {
+      FENESTRA_RETURN_IF_ERROR(TraceInFull(design, &tally));
+    }
+    return IndoorResultFromTally(tally, options_).batches;
   }
   std::vector<absl::StatusOr<std::vector<HourTally>>> TallyDesigns(
       const std::vector<BlindDesign>& designs, const MetricOptions& options) override {
@@ -476,12 +509,39 @@ class CudaDesignTallies : public DesignTallies {
     }
     return out;
   }
+  AnnualProduct& Product() override { return *product_; }
   int DesignsAtOnce() const override { return replay_ != nullptr ? kReplayDesignsAtOnce : 1; }
   bool TracesInParts() const override { return replay_ != nullptr; }
   bool RoundsPay() const override { return false; }
   uint64_t RaysTraced() const override { return rays_; }
 
  private:
+  // Traces every path of `design` against the room with its blind; `tally`, unless null,
+  // gets the sums (else they stay on the device).
+  absl::Status TraceInFull(const BlindDesign& design, IndoorTally* tally) {
+    FENESTRA_ASSIGN_OR_RETURN(
+        geometry, PrepareTraceGeometry(SelectSide(AssembleMesh(scene_, design), Side::kIndoor),
+                                       scene_.materials));
+    FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, geometry, BvhQuality::kMedium));
+    FENESTRA_RETURN_IF_ERROR(outdoor_->Hold());
+    const std::vector<TraceSensor> sensors = LocalSensors(geometry, scene_.sensors);
+    const TraceWindow window = LocalWindow(geometry, scene_.window, options_.parts);
+    const uint64_t paths = static_cast<uint64_t>(options_.paths_per_sensor);
+    if (tally != nullptr) {
+      *tally = ZeroIndoorTally(static_cast<int>(sensors.size()), IndoorColumnCount(window, basis_),
+                               options_.batches, paths);
+    }
+    CudaCounters counters;
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->Indoor(
+        sensors.data(), static_cast<int>(sensors.size()), window,
+        OutdoorOffset(geometry, outdoor_->geometry()), basis_, paths, options_.batches,
+        options_.seed, WithoutImportance(IndoorPathSettings(options_)),
+        tally != nullptr ? tally->sum.data() : nullptr, &counters)));
+    if (tally != nullptr) Count(counters, &tally->counters);
+    rays_ += counters.rays;
+    return absl::OkStatus();
+  }
+
   // Paths per batch of a design traced in full
   std::vector<uint64_t> FullBatchPaths() const {
     return PartPaths(static_cast<uint64_t>(options_.paths_per_sensor), options_.batches,
@@ -547,7 +607,7 @@ class CudaBackend : public DcBackend {
     FENESTRA_ASSIGN_OR_RETURN(outdoor, MakeOutdoor(scene, options.parts, basis));
     FENESTRA_ASSIGN_OR_RETURN(replay, MaybeReplay(scene, options, basis, outdoor.get()));
     if (replay == nullptr) return DcBackend::MakeIndoorStages(scene, options);
-    return std::make_unique<CudaReplayStages>(tracer_.get(), Name(), options, std::move(outdoor),
+    return std::make_unique<CudaReplayStages>(Name(), options, std::move(outdoor),
                                               std::move(replay));
   }
 
@@ -635,13 +695,9 @@ class CudaBackend : public DcBackend {
     FENESTRA_RETURN_IF_ERROR(Check(
         tracer_->SetOutdoorScene(outdoor_bvh, OutdoorMetCells(geometry, outdoor, window, basis))));
     outdoor_slot_.current = 0;
-    IndoorTally tally;
-    tally.sensors = static_cast<int>(sensors.size());
-    tally.columns = IndoorColumnCount(window, basis);
-    tally.batches = batches;
-    tally.paths_per_sensor = paths_per_sensor;
-    tally.batch_paths = BatchSizes(paths_per_sensor, batches);
-    tally.sum.resize(static_cast<size_t>(batches) * sensors.size() * tally.columns);
+    IndoorTally tally =
+        ZeroIndoorTally(static_cast<int>(sensors.size()), IndoorColumnCount(window, basis), batches,
+                        paths_per_sensor);
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(Check(tracer_->Indoor(
         sensors.data(), tally.sensors, window, OutdoorOffset(geometry, outdoor), basis,
@@ -671,16 +727,6 @@ class CudaBackend : public DcBackend {
         CudaReplay::Make(tracer_.get(), &replay_slot_, scene, options, basis, outdoor);
     if (replay.status().code() == absl::StatusCode::kUnavailable) return nullptr;
     return replay;
-  }
-
-  static PathSettings WithoutImportance(PathSettings path) {
-    path.importance = nullptr;
-    return path;
-  }
-  static void Count(const CudaCounters& counters, TraceCounters* out) {
-    out->rays = counters.rays;
-    for (int e = 0; e < 6; ++e) out->ends[e] = counters.ends[e];
-    out->max_weight = 1.0f;
   }
 
   absl::Status Upload(const TraceGeometry& geometry, BvhQuality quality = BvhQuality::kHigh) {

@@ -86,6 +86,10 @@ class AnnualProduct {
   virtual ~AnnualProduct() = default;
   // InvalidArgument when a batch's columns are not O's rows, or the batch counts differ.
   virtual absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) = 0;
+  // Apply with `sky` (146 x any steps) in S's place for this call; S stays. InvalidArgument
+  // as Apply, or for a sky of other rows.
+  virtual absl::StatusOr<std::vector<Matrix>> ApplyToSky(const std::vector<Matrix>& indoor_batches,
+                                                         const Matrix& sky) = 0;
   // The tallies of E of the mean of the B >= 2 batches, then of each leave-one-out mean
   // (TallyBatchVersions in core/metrics/metric_errors.h), every column of S an analysed hour.
   // By default from Apply; a GPU can tally where E is. InvalidArgument as Apply, or B < 2.
@@ -117,6 +121,12 @@ class DesignTallies {
   // other; the GPU's replay traces up to DesignsAtOnce() of them in one launch.
   virtual std::vector<absl::StatusOr<std::vector<HourTally>>> TallyDesigns(
       const std::vector<BlindDesign>& designs, const MetricOptions& options);
+  // The design's I per batch (IndoorResult::batches), every part, as ComputeIndoorStage gives
+  // it to rounding: by the tallies' replay where they have one, which spares building the
+  // design's scene. Errors as Tally.
+  virtual absl::StatusOr<std::vector<Matrix>> IndoorBatches(const BlindDesign& design) = 0;
+  // The annual product the tallies form E with: their O_b, already where they are used.
+  virtual AnnualProduct& Product() = 0;
   // How many designs TallyDesigns takes in one pass (more only cost proportionally more).
   virtual int DesignsAtOnce() const { return 1; }
   // Whether Tally takes fewer than kDesignParts (the replays do; full traces do not).

@@ -378,6 +378,12 @@ class StagedDesignTallies : public DesignTallies {
     held_parts_ = parts;
     return product_->Tally(IndoorResultFromTally(held_, options_).batches, options);
   }
+  absl::StatusOr<std::vector<Matrix>> IndoorBatches(const BlindDesign& design) override {
+    FENESTRA_ASSIGN_OR_RETURN(indoor, stages_->Compute(design));
+    rays_ += indoor.rays_traced;
+    return std::move(indoor.batches);
+  }
+  AnnualProduct& Product() override { return *product_; }
   bool TracesInParts() const override { return stages_->TracesInParts(); }
   uint64_t RaysTraced() const override { return rays_; }
 

@@ -30,25 +30,23 @@ Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns) {
 }
 
 absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
-    const Scene& scene, const BlindDesign& design, const IndoorOptions& options,
-    const std::vector<Matrix>& outdoor_batches, const SkyMatrix& sky, DcBackend& backend) {
+    const Scene& scene, const std::vector<Matrix>& indoor_batches, AnnualProduct& product,
+    const SkyMatrix& sky) {
   v1::HourlyIlluminance out;
   SetAxes(scene, sky, out);
   const int64_t sensors = static_cast<int64_t>(scene.sensors.size());
   const int64_t steps = static_cast<int64_t>(sky.steps.size());
   out.mutable_illuminance_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
   out.mutable_standard_error_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
-  if (options.batches < 2) {
+  if (indoor_batches.size() < 2) {
     return absl::InvalidArgumentError("standard errors need at least 2 batches");
   }
   const std::vector<int> lit = LitColumns(sky.radiance);
   if (lit.empty()) return out;
 
   // E_b = (I_b O_b) S over the steps with daylight, for each batch b
-  FENESTRA_ASSIGN_OR_RETURN(indoor, ComputeIndoorStage(scene, design, options, &backend));
-  FENESTRA_ASSIGN_OR_RETURN(
-      product, backend.MakeAnnualProduct(outdoor_batches, SkyColumnsInLux(sky.radiance, lit)));
-  FENESTRA_ASSIGN_OR_RETURN(batches, product->Apply(indoor.batches));
+  FENESTRA_ASSIGN_OR_RETURN(batches,
+                            product.ApplyToSky(indoor_batches, SkyColumnsInLux(sky.radiance, lit)));
 
   // Their mean, and its standard error from the spread of the batches
   const double count = static_cast<double>(batches.size());

@@ -1,7 +1,7 @@
 #pragma once
 
-// The hourly illuminance of one design, for reports and other tools: the design's indoor
-// stage with the search's random streams, then the backend's annual product
+// The hourly illuminance of one design, for reports and other tools: from the design's
+// indoor stage (the search's random streams), the backend's annual product
 // E_b = (I_b O_b) S (core/dc/dc_backend.h) over every time step with daylight.
 #include <cstdint>
 #include <span>
@@ -25,13 +25,13 @@ inline constexpr int64_t kMaxHourlyIlluminanceValues = 2'000'000;
 // efficacy, so that (I O) S comes out in lux.
 Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns);
 
-// The illuminance of `design` at every sensor of `scene` and every step of `sky`, the mean
-// over the paired batches with its standard error (both stages' noise). `outdoor_batches`
-// are O's batches O_b ((window cells + 146) x sky bins, core/dc/two_stage.h) traced with the
-// parts, basis and batch count of `options`. Errors as ComputeIndoorStage and
-// AnnualProduct::Apply.
+// The illuminance of a design at every sensor of `scene` and every step of `sky`, the mean
+// over the paired batches with its standard error (both stages' noise), from the design's
+// I_b (`indoor_batches`: IndoorResult::batches, DesignTallies::IndoorBatches) through the
+// O_b of `product` (traced with the same parts and basis; its own S is not used).
+// InvalidArgument for fewer than 2 batches; errors as AnnualProduct::ApplyToSky.
 absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
-    const Scene& scene, const BlindDesign& design, const IndoorOptions& options,
-    const std::vector<Matrix>& outdoor_batches, const SkyMatrix& sky, DcBackend& backend);
+    const Scene& scene, const std::vector<Matrix>& indoor_batches, AnnualProduct& product,
+    const SkyMatrix& sky);
 
 }  // namespace fenestra

@@ -737,18 +737,20 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   result.set_candidates_at_once(search_settings.options.lookahead);
   result.set_evaluations_discarded(search.discarded);
 
-  // The best design's hourly illuminance, for reports and other tools
-  lanes.tallies.clear();  // the search's paths are no longer needed
+  // The best design's hourly illuminance, for reports and other tools: by the search's replay
+  // and annual product (its O_b already on the device)
   if (search.evaluations > 0 && search.stop_reason != StopReason::kCancelled &&
       static_cast<int64_t>(job.scene.sensors.size() * setting.sky.steps.size()) <=
           kMaxHourlyIlluminanceValues) {
     const auto hourly_start = std::chrono::steady_clock::now();
+    DesignTallies& tallies = *lanes.tallies.front();
+    FENESTRA_ASSIGN_OR_RETURN(indoor, tallies.IndoorBatches(DesignAt(job, search.best_x)));
     FENESTRA_ASSIGN_OR_RETURN(
-        hourly, DesignHourlyIlluminance(job.scene, DesignAt(job, search.best_x), indoor_options,
-                                        outdoor->batches, setting.sky, *backend));
+        hourly, DesignHourlyIlluminance(job.scene, indoor, tallies.Product(), setting.sky));
     *result.mutable_best_hourly() = std::move(hourly);
     result.mutable_timings()->set_best_hourly_seconds(SecondsSince(hourly_start));
   }
+  lanes.tallies.clear();  // the search's paths are no longer needed
   DescribeRun(spec, ranged, job.weather.location, result);
 
   // The result

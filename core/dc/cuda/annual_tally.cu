@@ -207,6 +207,7 @@ struct CudaAnnualTally::Impl {
   int device = 0;
   // O_b as uploaded and transposed, S, the indoor rows, I_b O_b and E; E's tallies
   DeviceBuffer<double> outdoor_rows, outdoor_transposed, sky, indoor, through_window, illuminance;
+  DeviceBuffer<double> other_sky;  // a sky for one call to Illuminance
   // E's tallies in one buffer, zeroed and downloaded at once: the counts, the hours, then
   // the sums (doubles)
   DeviceBuffer<unsigned long long> tallies;
@@ -221,15 +222,21 @@ struct CudaAnnualTally::Impl {
         staging.Upload(host_indoor, indoor.get(), static_cast<size_t>(rows) * cells));
     return "";
   }
-  // E = (I O) S from `indoor` into `illuminance`.
-  std::string FormIlluminance(int rows) {
+  // E = (I O) S from `indoor` into `illuminance`; with `sky_steps` columns of `sky_matrix`
+  // in S's place where it is not null.
+  std::string FormIlluminance(int rows, const double* sky_matrix = nullptr, int sky_steps = 0) {
+    if (sky_matrix == nullptr) {
+      sky_matrix = sky.get();
+      sky_steps = steps;
+    }
     FENESTRA_CUDA_RETURN_IF_ERROR(
         through_window.Reserve(static_cast<size_t>(rows) * kTregenzaBinCount));
-    FENESTRA_CUDA_RETURN_IF_ERROR(illuminance.Reserve(static_cast<size_t>(rows) * steps));
+    FENESTRA_CUDA_RETURN_IF_ERROR(illuminance.Reserve(static_cast<size_t>(rows) * sky_steps));
     FENESTRA_CUDA_RETURN_IF_ERROR(MultiplyTransposed(indoor.get(), outdoor_transposed.get(),
                                                      through_window.get(), rows, cells,
                                                      kTregenzaBinCount, rows / batches));
-    Multiply(through_window.get(), sky.get(), illuminance.get(), rows, kTregenzaBinCount, steps);
+    Multiply(through_window.get(), sky_matrix, illuminance.get(), rows, kTregenzaBinCount,
+             sky_steps);
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
     return "";
   }
@@ -298,7 +305,8 @@ std::string CudaAnnualTally::SetProduct(const double* outdoor, int batches, int 
   return "";
 }
 
-std::string CudaAnnualTally::Illuminance(const double* indoor, int rows, double* illuminance) {
+std::string CudaAnnualTally::Illuminance(const double* indoor, int rows, double* illuminance,
+                                         const double* other_sky, int other_steps) {
   Impl& d = *impl_;
   if (d.cells == 0) return kNoProduct;
   if (rows % d.batches != 0) {
@@ -306,9 +314,17 @@ std::string CudaAnnualTally::Illuminance(const double* indoor, int rows, double*
            std::to_string(d.batches) + " batches";
   }
   if (std::string error = d.UploadIndoor(indoor, rows); !error.empty()) return error;
-  if (std::string error = d.FormIlluminance(rows); !error.empty()) return error;
+  const double* sky = nullptr;
+  int steps = d.steps;
+  if (other_sky != nullptr) {
+    FENESTRA_CUDA_RETURN_IF_ERROR(
+        d.other_sky.Upload(other_sky, static_cast<size_t>(kTregenzaBinCount) * other_steps));
+    sky = d.other_sky.get();
+    steps = other_steps;
+  }
+  if (std::string error = d.FormIlluminance(rows, sky, steps); !error.empty()) return error;
   FENESTRA_CUDA_RETURN_IF_ERROR(
-      d.staging.Download(d.illuminance.get(), illuminance, static_cast<size_t>(rows) * d.steps));
+      d.staging.Download(d.illuminance.get(), illuminance, static_cast<size_t>(rows) * steps));
   return "";
 }
 

@@ -23,8 +23,10 @@ class CudaAnnualTally {
   std::string SetProduct(const double* outdoor, int batches, int cells, const double* sky,
                          int steps);
   // `rows` stacked indoor rows (rows x cells, batch-major, rows / B per batch) through the
-  // product into `illuminance` (rows x steps).
-  std::string Illuminance(const double* indoor, int rows, double* illuminance);
+  // product into `illuminance` (rows x steps). With `other_sky` (kTregenzaBinCount x
+  // `other_steps`, row-major) that sky takes S's place for this call, S staying uploaded.
+  std::string Illuminance(const double* indoor, int rows, double* illuminance,
+                          const double* other_sky = nullptr, int other_steps = 0);
 
   // Version 0 is E of the mean of the batches, version 1 + b the mean of the others
   // (B E - E_b) / (B - 1). Per version v and sensor i, counts[(v * sensors + i) * 3 + k] gets

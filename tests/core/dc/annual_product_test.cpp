@@ -39,6 +39,19 @@ TEST(AnnualProductTest, IsDTimesTheSky) {
     const Matrix expected = d->batches[b] * sky;
     EXPECT_LT(((*e)[b] - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff());
   }
+  // Another sky for one call: its E, and the product's own S after it
+  const Matrix other = Matrix::Random(kDaylightBins, 7).cwiseAbs();
+  absl::StatusOr<std::vector<Matrix>> e_other = (*product)->ApplyToSky(i->batches, other);
+  absl::StatusOr<std::vector<Matrix>> e_again = (*product)->Apply(i->batches);
+  ASSERT_TRUE(e_other.ok() && e_again.ok()) << e_other.status();
+  for (size_t b = 0; b < e->size(); ++b) {
+    const Matrix expected = d->batches[b] * other;
+    EXPECT_LT(((*e_other)[b] - expected).cwiseAbs().maxCoeff(),
+              1e-12 * expected.cwiseAbs().maxCoeff());
+    EXPECT_EQ((*e_again)[b], (*e)[b]);
+  }
+  EXPECT_EQ((*product)->ApplyToSky(i->batches, Matrix::Zero(10, 4)).status().code(),
+            absl::StatusCode::kInvalidArgument);
   // Batches of another window split, or other batch counts, are rejected
   std::vector<Matrix> wrong(i->batches.size(), Matrix::Zero(9, 288));
   EXPECT_EQ((*product)->Apply(wrong).status().code(), absl::StatusCode::kInvalidArgument);

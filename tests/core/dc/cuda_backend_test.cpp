@@ -142,8 +142,8 @@ RandomInputs RandomProduct(int steps) {
 
 // UDI limits and DA threshold at the quartiles and median of `illuminance`, so that every
 // count lies far from none and from all.
-// The annual product (I_b O_b) S on the GPU equals the CPU's, and a second product on the
-// same backend does not disturb the first.
+// The annual product (I_b O_b) S on the GPU equals the CPU's, also with another sky for one
+// call, and a second product on the same backend does not disturb the first.
 TEST(CudaBackendTest, AnnualProductMatchesCpu) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
@@ -163,6 +163,20 @@ TEST(CudaBackendTest, AnnualProductMatchesCpu) {
     EXPECT_LT(((*e_gpu)[b] - (*e_cpu)[b]).cwiseAbs().maxCoeff(),
               1e-12 * (*e_cpu)[b].cwiseAbs().maxCoeff());
     EXPECT_EQ((*e_zero)[b].cwiseAbs().maxCoeff(), 0.0);
+  }
+  // Another sky for one call, as on the CPU; S stays on the device for the next
+  const Matrix other = Matrix::Random(kDaylightBins, 777).cwiseAbs();
+  absl::StatusOr<std::vector<Matrix>> o_cpu = (*expected)->ApplyToSky(indoor, other);
+  absl::StatusOr<std::vector<Matrix>> o_gpu = (*first)->ApplyToSky(indoor, other);
+  absl::StatusOr<std::vector<Matrix>> e_again = (*first)->Apply(indoor);
+  ASSERT_TRUE(o_cpu.ok() && o_gpu.ok() && e_again.ok()) << o_gpu.status();
+  for (int b = 0; b < batches; ++b) {
+    ASSERT_EQ((*o_gpu)[b].cols(), 777);
+    EXPECT_LT(((*o_gpu)[b] - (*o_cpu)[b]).cwiseAbs().maxCoeff(),
+              1e-12 * (*o_cpu)[b].cwiseAbs().maxCoeff());
+    // S, not the other sky: E as before, but for the order of the device's sums
+    EXPECT_LT(((*e_again)[b] - (*e_gpu)[b]).cwiseAbs().maxCoeff(),
+              1e-12 * (*e_gpu)[b].cwiseAbs().maxCoeff());
   }
 }
 
@@ -270,10 +284,16 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
       EXPECT_GT((*a)[0].any_above, 0);
     }
   }
+  // A design's I from the replay is its full trace's (the best design's hourly illuminance);
+  // rounds after it still end as one call
+  const BlindDesign tilted = *DesignWithOverrides(scene, {{"alpha", 0.8}});
+  absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(scene, tilted, indoor, gpu.get());
+  ASSERT_TRUE(traced.ok()) << traced.status();
+  ExpectIndoorBatchesAreTheTrace(**on_device, tilted, *traced);
+  ExpectIndoorBatchesAreTheTrace(**in_turn, tilted, *traced);
   // In rounds (racing), each round replays only the parts it adds
   ExpectRoundsEndAsOneCall(**on_device, *DesignWithOverrides(scene, {{"alpha", 0.2}}),
-                           *DesignWithOverrides(scene, {{"alpha", 1.0}, {"width", 0.05}}),
-                           options);
+                           *DesignWithOverrides(scene, {{"alpha", 1.0}, {"width", 0.05}}), options);
   // Several designs in one launch, each as alone
   EXPECT_GT((*on_device)->DesignsAtOnce(), 1);
   BlindDesign wide = DefaultDesign(scene);

@@ -43,7 +43,7 @@ TEST(IndoorReplayTest, EqualsTheIndoorStage) {
 
 // A search's designs in rounds on the CPU (racing): each round traces only the parts it
 // adds, and the last ends where one full trace does; designs asked together are traced as
-// alone.
+// alone; a design's I from the tallies is its full trace's.
 TEST(IndoorReplayTest, RoundsEndAsOneTrace) {
   const Scene scene = LoadExample("city_office");
   IndoorOptions options;
@@ -67,6 +67,7 @@ TEST(IndoorReplayTest, RoundsEndAsOneTrace) {
   absl::StatusOr<std::vector<Matrix>> e = (*product)->Apply(i->batches);
   ASSERT_TRUE(e.ok()) << e.status();
   const MetricOptions limits = QuartileLimits((*e)[0]);
+  ExpectIndoorBatchesAreTheTrace(**tallies, a, *i);
   ExpectRoundsEndAsOneCall(**tallies, a,
                            *DesignWithOverrides(scene, {{"alpha", 1.0}, {"width", 0.05}}), limits);
   BlindDesign wide = DefaultDesign(scene);

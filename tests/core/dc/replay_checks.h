@@ -45,6 +45,24 @@ inline double ExpectReplayEqualsTrace(const IndoorResult& traced, const IndoorRe
   return difference / traced.coefficients.sum();
 }
 
+// The tallies' I of `design` (DesignTallies::IndoorBatches, which gives the best design's
+// hourly illuminance) is `traced`'s, the design's indoor stage traced in full: the same
+// batches, and their mean equal as ExpectReplayEqualsTrace has it.
+inline void ExpectIndoorBatchesAreTheTrace(DesignTallies& tallies, const BlindDesign& design,
+                                           const IndoorResult& traced) {
+  absl::StatusOr<std::vector<Matrix>> batches = tallies.IndoorBatches(design);
+  ASSERT_TRUE(batches.ok()) << batches.status();
+  ASSERT_EQ(batches->size(), traced.batches.size());
+  IndoorResult replayed;
+  replayed.coefficients = Matrix::Zero(traced.coefficients.rows(), traced.coefficients.cols());
+  for (const Matrix& b : *batches) {
+    ASSERT_EQ(b.rows(), replayed.coefficients.rows());
+    ASSERT_EQ(b.cols(), replayed.coefficients.cols());
+    replayed.coefficients += b / static_cast<double>(batches->size());
+  }
+  ExpectReplayEqualsTrace(traced, replayed);
+}
+
 // Metric limits at the quartiles of `illuminance`, so that sensors fall on either side.
 inline MetricOptions QuartileLimits(const Matrix& illuminance) {
   std::vector<double> values(illuminance.data(), illuminance.data() + illuminance.size());

@@ -114,8 +114,13 @@ TEST(HourlyIlluminanceTest, StandardErrorsMatchTheSpreadBetweenSeeds) {
     ASSERT_TRUE(outdoor.ok()) << outdoor.status();
     options.parts = outdoor->parts;
     options.seed = seed;
+    absl::StatusOr<IndoorResult> indoor = ComputeIndoorStage(scene, design, options, backend.get());
+    ASSERT_TRUE(indoor.ok()) << indoor.status();
+    absl::StatusOr<std::unique_ptr<AnnualProduct>> product =
+        backend->MakeAnnualProduct(outdoor->batches, Matrix::Zero(kDaylightBins, 1));
+    ASSERT_TRUE(product.ok()) << product.status();
     absl::StatusOr<v1::HourlyIlluminance> hourly =
-        DesignHourlyIlluminance(scene, design, options, outdoor->batches, *sky, *backend);
+        DesignHourlyIlluminance(scene, indoor->batches, **product, *sky);
     ASSERT_TRUE(hourly.ok()) << hourly.status();
     runs.push_back(*std::move(hourly));
   }
@@ -138,12 +143,14 @@ TEST(HourlyIlluminanceTest, StandardErrorsMatchTheSpreadBetweenSeeds) {
 
 TEST(HourlyIlluminanceTest, NeedsTwoBatches) {
   const Scene scene = LoadExample("city_office");
-  IndoorOptions options;
-  options.batches = 1;
   SkyMatrix sky;
   std::unique_ptr<DcBackend> backend = MakeEmbreeBackend();
-  absl::StatusOr<v1::HourlyIlluminance> hourly = DesignHourlyIlluminance(
-      scene, DefaultDesign(scene), options, {Matrix::Zero(288 + 146, 146)}, sky, *backend);
+  const Matrix o = Matrix::Zero(288 + 146, kDaylightBins);
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> product =
+      backend->MakeAnnualProduct({o, o}, Matrix::Zero(kDaylightBins, 1));
+  ASSERT_TRUE(product.ok()) << product.status();
+  absl::StatusOr<v1::HourlyIlluminance> hourly =
+      DesignHourlyIlluminance(scene, {Matrix::Zero(9, 288 + 146)}, **product, sky);
   EXPECT_EQ(hourly.status().code(), absl::StatusCode::kInvalidArgument);
 }
 
