@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/common/thread_pool.h"
+
 namespace fenestra {
 namespace {
 
@@ -156,8 +158,16 @@ std::vector<uint8_t> WindowCellsMeetingSurfaces(const TraceGeometry& geometry,
                                                 const TraceWindow& window,
                                                 const HemisphereBasis& basis) {
   const std::vector<Polygon> polygons = Polygons(geometry);
+  // Each direction cell's boundary and middle, the same from every part
+  std::vector<std::vector<Vec3d>> boundaries(basis.cell_count);
+  std::vector<Vec3d> middles(basis.cell_count);
+  for (int cell = 0; cell < basis.cell_count; ++cell) {
+    boundaries[cell] = Boundary(basis, window, cell);
+    middles[cell] = ToDouble(window.ToWorld(SampleBasisCell(basis, cell, 0.5f, 0.5f)));
+  }
   std::vector<uint8_t> met(static_cast<size_t>(window.Parts()) * basis.cell_count, 0);
-  for (int part = 0; part < window.Parts(); ++part) {
+  ParallelFor(window.Parts(), ResolveThreadCount(0), [&](uint64_t p) {
+    const int part = static_cast<int>(p);
     std::vector<Vec3d> corners;
     for (const float u0 : {0.0f, 1.0f}) {
       for (const float u1 : {0.0f, 1.0f})
@@ -165,8 +175,8 @@ std::vector<uint8_t> WindowCellsMeetingSurfaces(const TraceGeometry& geometry,
     }
     const Vec3d centre = ToDouble(window.PartPoint(part, 0.5f, 0.5f));
     for (int cell = 0; cell < basis.cell_count; ++cell) {
-      const std::vector<Vec3d> directions = Boundary(basis, window, cell);
-      const Vec3d middle = ToDouble(window.ToWorld(SampleBasisCell(basis, cell, 0.5f, 0.5f)));
+      const std::vector<Vec3d>& directions = boundaries[cell];
+      const Vec3d middle = middles[cell];
       for (const Polygon& polygon : polygons) {
         // Only a polygon that the middle ray meets can be met by all
         if (Meets(polygon, centre, middle, 0) && AllMeet(polygon, corners, directions)) {
@@ -175,7 +185,7 @@ std::vector<uint8_t> WindowCellsMeetingSurfaces(const TraceGeometry& geometry,
         }
       }
     }
-  }
+  });
   return met;
 }
 

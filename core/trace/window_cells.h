@@ -23,7 +23,8 @@
 namespace fenestra {
 
 // Per window cell (part * basis cells + direction cell): 1 when every view from it meets
-// one of `geometry`'s surfaces, else 0. `window` in `geometry`'s frame.
+// one of `geometry`'s surfaces, else 0. `window` in `geometry`'s frame. The parts go on
+// every core.
 std::vector<uint8_t> WindowCellsMeetingSurfaces(const TraceGeometry& geometry,
                                                 const TraceWindow& window,
                                                 const HemisphereBasis& basis);
