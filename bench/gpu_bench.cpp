@@ -7,6 +7,7 @@
 #include <string>
 
 #include "bench/bench_util.h"
+#include "core/common/seconds.h"
 #include "core/dc/backend_support.h"
 #include "core/dc/dc_backend.h"
 #include "core/dc/indoor_replay.h"
@@ -27,10 +28,6 @@ namespace fenestra {
 namespace {
 
 const std::string kRoot = FENESTRA_SOURCE_DIR;
-
-double Since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 void OneStage(DcBackend& gpu, const std::string& name, const BlindDesign* design, int64_t paths,
               int bounces) {
@@ -180,7 +177,7 @@ int main(int argc, char** argv) {
   auto recording = std::chrono::steady_clock::now();
   const std::unique_ptr<DesignTallies> design_tallies =
       ValueOrExit(gpu->MakeDesignTallies(office, indoor, o.batches, analysed_sky));
-  const double record_seconds = Since(recording);
+  const double record_seconds = SecondsSince(recording);
   double kernel = 0, total = 0, prepare = 0, full_kernel = 0;
   const int candidates = 20;
   uint64_t rays = 0, full_rays = 0;
@@ -197,7 +194,7 @@ int main(int argc, char** argv) {
     const AnnualMetricsEstimate m =
         ValueOrExit(AnnualMetricsFromTallies(tallies, analysed_hours, metric_options));
     if (c == 0) continue;  // warm-up
-    total += Since(start);
+    total += SecondsSince(start);
     udi = m.value.scene.udi_mean_percent;
     udi_se = m.standard_error.scene.udi_mean_percent;
   }
@@ -217,12 +214,12 @@ int main(int argc, char** argv) {
     const auto host = std::chrono::steady_clock::now();
     BvhWithSlats(room_bvh, LocalSlatCorners(room, office, design),
                  static_cast<uint32_t>(room.TriangleCount()));
-    prepare += Since(host);
+    prepare += SecondsSince(host);
     const auto built = std::chrono::steady_clock::now();
     const TraceGeometry geometry = ValueOrExit(PrepareTraceGeometry(
         SelectSide(AssembleMesh(office, design), Side::kIndoor), office.materials));
     ValueOrExit(BuildBvh(geometry, BvhQuality::kMedium));
-    build += Since(built);
+    build += SecondsSince(built);
     kernel += i.trace_seconds;
     rays += i.rays_traced;
     full_kernel += full.trace_seconds;
@@ -267,7 +264,7 @@ int main(int argc, char** argv) {
       "%lld + %lld paths per sensor, the rest %.2f s); best UDI %.2f ± %.2f %% (check %.2f ± "
       "%.2f %%) at",
       result.evaluations(), result.stop_reason().c_str(), result.candidates_at_once(),
-      result.evaluations_discarded(), Since(start), t.sky_seconds(), t.outdoor_seconds(),
+      result.evaluations_discarded(), SecondsSince(start), t.sky_seconds(), t.outdoor_seconds(),
       t.evaluation_seconds(), t.best_hourly_seconds(), check.seconds(),
       static_cast<long long>(check.pilot_paths_per_sensor()),
       static_cast<long long>(check.paths_per_sensor()),

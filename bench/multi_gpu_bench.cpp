@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bench/bench_util.h"
+#include "core/common/seconds.h"
 #include "core/dc/dc_backend.h"
 #include "core/optimize/job.h"
 
@@ -19,10 +20,6 @@ namespace fenestra {
 namespace {
 
 const std::string kRoot = FENESTRA_SOURCE_DIR;
-
-double Since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 }  // namespace
 }  // namespace fenestra
@@ -54,7 +51,7 @@ int main(int argc, char** argv) {
     for (int run = 0; run < 2; ++run) {
       const auto start = std::chrono::steady_clock::now();
       const v1::JobResult r = ValueOrExit(RunJob(one, nullptr));
-      const double wall = Since(start);
+      const double wall = SecondsSince(start);
       std::printf(
           "one job, %2d at once on %d GPU(s): %.3f s (outdoor %.3f s, evaluations %.3f s, final "
           "check %.3f s, the rest %.3f s), %d evaluations (+%d dropped), mean %.3f ms; best %.3f "
@@ -87,12 +84,12 @@ int main(int argc, char** argv) {
         for (int k; (k = next.fetch_add(1)) < jobs;) {
           const auto job_start = std::chrono::steady_clock::now();
           absl::StatusOr<v1::JobResult> result = RunJob(prepared, nullptr);
-          seconds[k] = result.ok() ? Since(job_start) : -1;
+          seconds[k] = result.ok() ? SecondsSince(job_start) : -1;
         }
       });
     }
     for (std::thread& worker : workers) worker.join();
-    const double wall = Since(start);
+    const double wall = SecondsSince(start);
     double slowest = 0, sum = 0;
     for (const double s : seconds) {
       if (s < 0) {

@@ -14,6 +14,7 @@
 
 #include "absl/strings/str_split.h"
 #include "bench/bench_util.h"
+#include "core/common/seconds.h"
 #include "core/optimize/job.h"
 
 using namespace fenestra;
@@ -42,8 +43,7 @@ void Run(const PreparedJob& base, const OutdoorMatrix& outdoor, const Variant& v
   if (v.standard_errors > 0) s.set_racing_standard_errors(v.standard_errors);
   const auto start = std::chrono::steady_clock::now();
   const v1::JobResult r = ValueOrExit(RunJob(job, &outdoor));
-  const double wall =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double wall = SecondsSince(start);
   std::printf(
       "  %-22s %3d evaluations, job %.2f s, evaluations %.3f s (mean %.2f ms); best %.2f ± %.2f %% "
       "at",

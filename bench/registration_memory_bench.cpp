@@ -22,6 +22,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/common/seconds.h"
 #include "fenestra/v1/service.grpc.pb.h"
 #include "tests/server/large_registration.h"
 
@@ -30,10 +31,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // Samples the daemon's VmRSS every 5 ms while alive; Peak() is the largest since Reset().
 class RssSampler {
@@ -134,7 +131,7 @@ int Main(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::milliseconds(300));
       const auto list_start = Clock::now();
       list();
-      list_seconds = Seconds(list_start);
+      list_seconds = SecondsSince(list_start);
     });
     grpc::ClientContext context;
     v1::SiteInfo info;
@@ -143,14 +140,14 @@ int Main(int argc, char** argv) {
       std::fprintf(stderr, "Register: %s\n", status.error_message().c_str());
       return 1;
     }
-    const double register_seconds = Seconds(start);
+    const double register_seconds = SecondsSince(start);
     const double register_peak = sampler.Peak();
     lister.join();
     wait_ready();
     settle_and_report("register " + info.id() + " (" +
                           std::to_string(request.ByteSizeLong() >> 20) + " MiB, " +
                           std::to_string(triangles) + " triangles) and trace",
-                      before, Seconds(start));
+                      before, SecondsSince(start));
     std::printf(
         "    Register answered in %.2f s (peak until then %.0f MiB); a List meanwhile "
         "took %.3f s\n",
@@ -167,7 +164,7 @@ int Main(int argc, char** argv) {
     v1::DeleteSiteResponse response;
     (void)sites->Delete(&context, request, &response);
   }
-  settle_and_report("delete every site", before, Seconds(start));
+  settle_and_report("delete every site", before, SecondsSince(start));
   kill(pid, SIGTERM);
   waitpid(pid, nullptr, 0);
   fs::remove_all(dir);

@@ -31,6 +31,7 @@
 #include "absl/strings/str_cat.h"
 #include "bench/bench_util.h"
 #include "core/common/json_proto.h"
+#include "core/common/seconds.h"
 #include "core/optimize/job.h"
 #include "fenestra/v1/service.grpc.pb.h"
 #include "server/store/sqlite_database.h"
@@ -42,10 +43,6 @@ namespace fenestra {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 int64_t NowMs() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -113,7 +110,7 @@ ClaimRun RunClaims(const std::vector<std::unique_ptr<Store>>& replicas, int limi
       while (limit == 0 || taken < limit) {
         const auto t0 = Clock::now();
         std::optional<Claim> claim = ValueOrExit(store.ClaimWork(name, 60'000, {}, {}));
-        latencies.push_back(1000 * Seconds(t0));
+        latencies.push_back(1000 * SecondsSince(t0));
         if (!claim) break;
         ++taken;
         v1::JobInfo info = ValueOrExit(store.GetJob(claim->lease.id, /*position=*/false));
@@ -140,7 +137,7 @@ ClaimRun RunClaims(const std::vector<std::unique_ptr<Store>>& replicas, int limi
     });
   }
   for (std::thread& t : workers) t.join();
-  run.seconds = Seconds(start);
+  run.seconds = SecondsSince(start);
   run.jobs = taken;
   return run;
 }
@@ -174,7 +171,7 @@ void StoreBench(PostgresServer& postgres, const std::string& dir) {
     std::vector<std::unique_ptr<Store>> replicas = replicas_on(k, url);
     const auto start = Clock::now();
     Queue(*replicas[0], 10'000);
-    std::printf("(10^4 jobs queued in %.1f s)\n", Seconds(start));
+    std::printf("(10^4 jobs queued in %.1f s)\n", SecondsSince(start));
     PrintClaims(absl::StrCat("PostgreSQL, 10^4 queued, ", k, " replica(s)"),
                 RunClaims(replicas, 500));
   }
@@ -319,7 +316,7 @@ void DaemonBench(PostgresServer& postgres, const std::string& dir) {
       }
       busy_seconds += (info.finished_unix_ms() - info.started_unix_ms()) / 1000.0;
     }
-    const double seconds = Seconds(start);
+    const double seconds = SecondsSince(start);
     std::printf(
         "%d replica(s): %5.2f jobs/s (%d jobs in %.1f s; a job runs %.2f s on average); "
         "submission to start when idle: p50 %.0f ms, max %.0f ms\n",

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/common/seconds.h"
 #include "core/sky/epw.h"
 #include "core/sky/sky_matrix.h"
 
@@ -18,8 +19,7 @@ std::vector<double> TimeRuns(int runs, F&& f) {
   for (int i = 0; i < runs; ++i) {
     const auto start = std::chrono::steady_clock::now();
     f();
-    seconds.push_back(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    seconds.push_back(fenestra::SecondsSince(start));
   }
   std::sort(seconds.begin(), seconds.end());
   return seconds;

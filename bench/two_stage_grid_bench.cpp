@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "bench/bench_util.h"
+#include "core/common/seconds.h"
 #include "core/dc/dc_backend.h"
 #include "core/dc/one_stage.h"
 #include "core/dc/two_stage.h"
@@ -30,10 +31,6 @@ namespace fenestra {
 namespace {
 
 const std::string kRoot = FENESTRA_SOURCE_DIR;
-
-double Since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 struct Design {
   std::string name;
@@ -163,7 +160,7 @@ int main(int argc, char** argv) {
     const auto start = std::chrono::steady_clock::now();
     const IndoorResult i = ValueOrExit(ComputeIndoorStage(scene, design, indoor, backend.get()));
     const TwoStageResult t = ValueOrExit(CombineStages(i, o));
-    const double two = Since(start);
+    const double two = SecondsSince(start);
     one_seconds += r.wall_seconds, two_seconds += two;
     std::printf("%-17s %5.3f %5.3f %5.3f %6.4f |", d.name.c_str(), d.alpha, d.width, d.spacing,
                 d.thickness);

@@ -20,11 +20,17 @@ std::vector<int> chosen_devices;  // UseCudaDevices'; empty: every visible GPU
 thread_local std::vector<int> thread_devices;  // ThreadCudaDevices'; empty: the process's
 thread_local uint64_t thread_turn = 0;
 
-// The GPUs NextCudaDevice takes in turn on this thread (empty: every visible one)
+// The GPUs NextCudaDevice takes in turn on this thread: its own, else the process's, else
+// every visible one (none without a GPU).
 std::vector<int> DevicesInUse() {
   if (!thread_devices.empty()) return thread_devices;
-  const std::lock_guard<std::mutex> lock(devices_mutex);
-  return chosen_devices;
+  {
+    const std::lock_guard<std::mutex> lock(devices_mutex);
+    if (!chosen_devices.empty()) return chosen_devices;
+  }
+  std::vector<int> visible;
+  for (int d = 0; d < CudaDevices(); ++d) visible.push_back(d);
+  return visible;
 }
 
 }  // namespace
@@ -38,21 +44,13 @@ int NextCudaDevice() {
   static std::atomic<uint64_t> next{0};
   const uint64_t k = thread_devices.empty() ? next.fetch_add(1) : thread_turn++;
   const std::vector<int> devices = DevicesInUse();
-  if (!devices.empty()) return devices[k % devices.size()];
-  const int count = CudaDevices();
-  return count > 0 ? static_cast<int>(k % static_cast<uint64_t>(count)) : 0;
+  return devices.empty() ? 0 : devices[k % devices.size()];
 }
 
-int CudaDevicesInUse() {
-  const std::vector<int> devices = DevicesInUse();
-  return devices.empty() ? CudaDevices() : static_cast<int>(devices.size());
-}
+int CudaDevicesInUse() { return static_cast<int>(DevicesInUse().size()); }
 
 std::vector<int> WorkerCudaDevices(int worker, int workers) {
-  std::vector<int> all = DevicesInUse();
-  if (all.empty()) {
-    for (int d = 0; d < CudaDevices(); ++d) all.push_back(d);
-  }
+  const std::vector<int> all = DevicesInUse();
   std::vector<int> mine;
   if (all.empty() || workers < 1 || worker < 0) return mine;
   if (workers >= static_cast<int>(all.size())) return {all[worker % all.size()]};

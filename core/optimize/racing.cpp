@@ -71,8 +71,7 @@ absl::Status Racer::PrepareIncumbent() {
 absl::Status Racer::Race(DesignTallies& lane, Candidate& c) const {
   const uint64_t rays_before = lane.RaysTraced();
   const bool against = incumbent_set_;
-  c.stats.rejected.assign(s_.racing.rounds.size(), 0);
-  c.stats.parts_in_full = kDesignParts;
+  StartStats(c);
   if (against) c.stats.candidates = 1;
   for (size_t r = 0; r < s_.racing.rounds.size(); ++r) {
     FENESTRA_ASSIGN_OR_RETURN(versions, lane.Tally(c.design, s_.options, s_.racing.rounds[r]));
@@ -89,6 +88,12 @@ absl::Status Racer::Race(DesignTallies& lane, Candidate& c) const {
   }
   FENESTRA_ASSIGN_OR_RETURN(versions, lane.Tally(c.design, s_.options, kDesignParts));
   return TakeFull(versions, lane.RaysTraced() - rays_before, c);
+}
+
+// c's racing statistics before any of its paths: no round rejected it yet.
+void Racer::StartStats(Candidate& c) const {
+  c.stats.rejected.assign(s_.racing.rounds.size(), 0);
+  c.stats.parts_in_full = kDesignParts;
 }
 
 // c's evaluation from the tallies of all its paths, which took `rays`.
@@ -117,8 +122,7 @@ void Racer::TraceTogether(DesignTallies& lane, const std::vector<Candidate*>& ca
     const uint64_t rays = (lane.RaysTraced() - rays_before) / count;
     for (size_t k = 0; k < count; ++k) {
       Candidate& c = *candidates[first + k];
-      c.stats.rejected.assign(s_.racing.rounds.size(), 0);
-      c.stats.parts_in_full = kDesignParts;
+      StartStats(c);
       const absl::Status taken =
           tallies[k].ok() ? TakeFull(*tallies[k], rays, c) : tallies[k].status();
       if (!taken.ok()) c.evaluation = taken;

@@ -135,6 +135,7 @@ class Racer {
   absl::StatusOr<std::vector<double>> FullScores(DesignTallies& lane,
                                                  const BlindDesign& design) const;
   absl::Status Race(DesignTallies& lane, Candidate& c) const;
+  void StartStats(Candidate& c) const;
   absl::Status TakeFull(const std::vector<HourTally>& versions, uint64_t rays, Candidate& c) const;
   void TraceTogether(DesignTallies& lane, const std::vector<Candidate*>& candidates) const;
   absl::Status Audit(DesignTallies& lane, Candidate& c) const;

@@ -116,7 +116,7 @@ class CudaTracer {
   // ReplayIndoor for several designs in one launch, every part of each (a launch's last
   // paths end one after another, so designs traced together share that tail): design k's
   // room with its blind (`scenes[k]`, its triangles' materials indexed into `materials`)
-  // and its slats alone (`blinds[k]`). The sums stay on the device, design k's at
+  // and its slats alone (`scenes[k].blind`). The sums stay on the device, design k's at
   // DeviceSums() + k * DesignSums(). At most kMaxReplayDesigns. "" or the error.
   struct DesignScene {
     const BvhLayout* bvh;
