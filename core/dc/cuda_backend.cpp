@@ -108,28 +108,30 @@ IndoorTally ZeroIndoorTally(int sensors, int columns, int batches, uint64_t path
   return tally;
 }
 
-// What the tracer holds one of at a time (an annual product's matrices, an outdoor scene,
-// indoor records), shared by the objects of one backend that use it: each object takes a
-// generation when made, and uploads its own again when another one replaced it.
+// What the tracer holds one of at a time (an outdoor scene, indoor records), shared by the objects
+// of one backend that use it: each object takes a generation when made, and uploads its own again
+// when another one replaced it.
 struct TracerSlot {
   int current = 0;  // the generation the tracer holds
   int made = 0;     // generations handed out
 };
 
-// The annual product on the GPU. The device holds one product's O_b and S at a time; a
-// product whose matrices were replaced by a later one uploads its own again.
+// The annual product on the GPU: its O_b and S uploaded once, on the device for as long as
+// the product lives.
 class CudaAnnualProduct : public AnnualProduct {
  public:
-  CudaAnnualProduct(CudaAnnualTally* annual, TracerSlot* slot, const std::vector<Matrix>& outdoor,
-                    Matrix sky)
-      : annual_(annual),
-        slot_(slot),
-        generation_(++slot->made),
-        batches_(static_cast<int>(outdoor.size())),
-        rows_(outdoor[0].rows()),
-        sky_(std::move(sky)) {
-    outdoor_.resize(rows_ * static_cast<Eigen::Index>(outdoor.size()), kDaylightBins);
-    for (size_t b = 0; b < outdoor.size(); ++b) outdoor_.middleRows(b * rows_, rows_) = outdoor[b];
+  static absl::StatusOr<std::unique_ptr<CudaAnnualProduct>> Make(int device,
+                                                                 const std::vector<Matrix>& outdoor,
+                                                                 const Matrix& sky) {
+    std::string error;
+    std::unique_ptr<CudaAnnualTally> annual = CudaAnnualTally::Create(device, &error);
+    if (!annual) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
+    std::vector<const double*> batches;
+    for (const Matrix& batch : outdoor) batches.push_back(batch.data());
+    FENESTRA_RETURN_IF_ERROR(Check(annual->SetProduct(batches, static_cast<int>(outdoor[0].rows()),
+                                                      sky.data(), static_cast<int>(sky.cols()))));
+    return std::unique_ptr<CudaAnnualProduct>(new CudaAnnualProduct(
+        std::move(annual), static_cast<int>(outdoor.size()), outdoor[0].rows(), sky.cols()));
   }
 
   absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
@@ -150,39 +152,38 @@ class CudaAnnualProduct : public AnnualProduct {
                                                      " batches, the outdoor matrix ", batches_));
     }
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
-    FENESTRA_RETURN_IF_ERROR(Hold());
     const int sensors = static_cast<int>(indoor_batches[0].rows());
     DeviceTallies tallies(batches, sensors, options);
     FENESTRA_RETURN_IF_ERROR(
         Check(annual_->Tally(stacked.data(), batches, sensors, tallies.request)));
-    return tallies.Versions(sky_.cols());
+    return tallies.Versions(steps_);
   }
 
-  // Makes the device hold this product's O_b and S (a later product may have replaced them).
-  absl::Status Hold() {
-    if (slot_->current == generation_) return absl::OkStatus();
-    FENESTRA_RETURN_IF_ERROR(
-        Check(annual_->SetProduct(outdoor_.data(), batches_, static_cast<int>(rows_), sky_.data(),
-                                  static_cast<int>(sky_.cols()))));
-    slot_->current = generation_;
-    return absl::OkStatus();
-  }
-
-  Eigen::Index steps() const { return sky_.cols(); }
-
-  // The tallies of indoor sums on the device (CudaTracer::DeviceSums), batch b's divided by
-  // batch_paths[b].
-  absl::StatusOr<std::vector<HourTally>> TallySums(const double* device_sums, int sensors,
-                                                   const std::vector<uint64_t>& batch_paths,
-                                                   const MetricOptions& options) {
-    FENESTRA_RETURN_IF_ERROR(Hold());
-    DeviceTallies tallies(batches_, sensors, options);
-    FENESTRA_RETURN_IF_ERROR(Check(
-        annual_->TallySums(device_sums, batches_, sensors, batch_paths.data(), tallies.request)));
-    return tallies.Versions(steps());
+  // The tallies of `designs` designs' indoor sums on the device (CudaTracer::DeviceSums),
+  // design k's at device_sums + k * design_sums, batch b's divided by batch_paths[b].
+  std::vector<absl::StatusOr<std::vector<HourTally>>> TallySums(
+      const double* device_sums, size_t design_sums, int designs, int sensors,
+      const std::vector<uint64_t>& batch_paths, const MetricOptions& options) {
+    std::vector<std::unique_ptr<DeviceTallies>> tallies;
+    std::vector<CudaAnnualTally::TallyRequest> requests;
+    for (int k = 0; k < designs; ++k) {
+      tallies.push_back(std::make_unique<DeviceTallies>(batches_, sensors, options));
+      requests.push_back(tallies.back()->request);
+    }
+    const absl::Status tallied = Check(annual_->TallySums(
+        device_sums, design_sums, designs, batches_, sensors, batch_paths.data(), requests.data()));
+    std::vector<absl::StatusOr<std::vector<HourTally>>> out;
+    for (int k = 0; k < designs; ++k) {
+      out.push_back(tallied.ok() ? tallies[k]->Versions(steps_) : tallied);
+    }
+    return out;
   }
 
  private:
+  CudaAnnualProduct(std::unique_ptr<CudaAnnualTally> annual, int batches, Eigen::Index rows,
+                    Eigen::Index steps)
+      : annual_(std::move(annual)), batches_(batches), rows_(rows), steps_(steps) {}
+
   // E through S, or through `other_sky` where it is not null.
   absl::StatusOr<std::vector<Matrix>> Illuminance(const std::vector<Matrix>& indoor_batches,
                                                   const Matrix* other_sky) {
@@ -192,22 +193,18 @@ class CudaAnnualProduct : public AnnualProduct {
                                                      "; they pair up"));
     }
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
-    FENESTRA_RETURN_IF_ERROR(Hold());
-    const Matrix& sky = other_sky != nullptr ? *other_sky : sky_;
-    Matrix illuminance(stacked.rows(), sky.cols());
+    const Eigen::Index steps = other_sky != nullptr ? other_sky->cols() : steps_;
+    Matrix illuminance(stacked.rows(), steps);
     FENESTRA_RETURN_IF_ERROR(Check(annual_->Illuminance(
         stacked.data(), static_cast<int>(stacked.rows()), illuminance.data(),
-        other_sky != nullptr ? sky.data() : nullptr, static_cast<int>(sky.cols()))));
+        other_sky != nullptr ? other_sky->data() : nullptr, static_cast<int>(steps))));
     return SplitBatches(illuminance, indoor_batches.size());
   }
 
-  CudaAnnualTally* annual_;
-  TracerSlot* slot_;
-  int generation_;
+  std::unique_ptr<CudaAnnualTally> annual_;
   int batches_;
-  Eigen::Index rows_;  // of each O_b
-  Matrix outdoor_;     // the O_b one above the other
-  Matrix sky_;
+  Eigen::Index rows_;   // of each O_b
+  Eigen::Index steps_;  // S's columns
 };
 
 // The tracer's outdoor scene (TracerSlot), shared by the indoor stages of one backend.
@@ -449,13 +446,15 @@ class CudaDesignTallies : public DesignTallies {
       rays_ += counters.rays;
       held_design_ = design;
       held_parts_ = parts;
-      return product_->TallySums(tracer_->DeviceSums(), sensor_count, batch_paths, options);
+      return std::move(
+          product_->TallySums(tracer_->DeviceSums(), 0, 1, sensor_count, batch_paths, options)[0]);
     }
     if (parts != kDesignParts) {
       return absl::UnimplementedError("designs traced in full are traced in one round");
     }
     FENESTRA_RETURN_IF_ERROR(TraceInFull(design, nullptr));
-    return product_->TallySums(tracer_->DeviceSums(), sensor_count, batch_paths, options);
+    return std::move(
+        product_->TallySums(tracer_->DeviceSums(), 0, 1, sensor_count, batch_paths, options)[0]);
   }
   absl::StatusOr<std::vector<Matrix>> IndoorBatches(const BlindDesign& design) override {
     held_parts_ = 0;  // the tracer's sums become this design's
@@ -499,13 +498,15 @@ class CudaDesignTallies : public DesignTallies {
       const absl::Status replayed = replay_->ReplayDesigns(
           {scenes.begin() + first, scenes.begin() + first + count}, &counters);
       rays_ += counters.rays;
-      for (size_t k = 0; k < count; ++k) {
-        out[traced[first + k]] =
-            replayed.ok() ? product_->TallySums(tracer_->DeviceSums() + k * tracer_->DesignSums(),
-                                                static_cast<int>(scene_.sensors.size()),
-                                                FullBatchPaths(), options)
-                          : replayed;
+      std::vector<absl::StatusOr<std::vector<HourTally>>> tallies;
+      if (replayed.ok()) {
+        tallies = product_->TallySums(
+            tracer_->DeviceSums(), tracer_->DesignSums(), static_cast<int>(count),
+            static_cast<int>(scene_.sensors.size()), FullBatchPaths(), options);
+      } else {
+        tallies.assign(count, replayed);
       }
+      for (size_t k = 0; k < count; ++k) out[traced[first + k]] = std::move(tallies[k]);
     }
     return out;
   }
@@ -564,8 +565,8 @@ class CudaDesignTallies : public DesignTallies {
 
 class CudaBackend : public DcBackend {
  public:
-  CudaBackend(std::unique_ptr<CudaTracer> tracer, std::unique_ptr<CudaAnnualTally> annual)
-      : tracer_(std::move(tracer)), annual_(std::move(annual)) {}
+  CudaBackend(int device, std::unique_ptr<CudaTracer> tracer)
+      : device_(device), tracer_(std::move(tracer)) {}
 
   std::string Name() const override { return absl::StrCat("cuda (", tracer_->device_name(), ")"); }
   int DefaultCandidatesAtOnce() const override {
@@ -575,7 +576,8 @@ class CudaBackend : public DcBackend {
   absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(
       const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
     FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor_batches, sky));
-    return std::make_unique<CudaAnnualProduct>(annual_.get(), &annual_slot_, outdoor_batches, sky);
+    FENESTRA_ASSIGN_OR_RETURN(product, CudaAnnualProduct::Make(device_, outdoor_batches, sky));
+    return std::unique_ptr<AnnualProduct>(std::move(product));
   }
 
   absl::StatusOr<std::unique_ptr<DesignTallies>> MakeDesignTallies(
@@ -593,8 +595,7 @@ class CudaBackend : public DcBackend {
     }
     FENESTRA_ASSIGN_OR_RETURN(outdoor, MakeOutdoor(scene, options.parts, basis));
     FENESTRA_ASSIGN_OR_RETURN(replay, MaybeReplay(scene, options, basis, outdoor.get()));
-    auto product =
-        std::make_unique<CudaAnnualProduct>(annual_.get(), &annual_slot_, outdoor_batches, sky);
+    FENESTRA_ASSIGN_OR_RETURN(product, CudaAnnualProduct::Make(device_, outdoor_batches, sky));
     return std::make_unique<CudaDesignTallies>(tracer_.get(), scene, options, basis,
                                                std::move(outdoor), std::move(replay),
                                                std::move(product));
@@ -733,9 +734,8 @@ class CudaBackend : public DcBackend {
     return UploadScene(*tracer_, geometry, quality);
   }
 
+  int device_;
   std::unique_ptr<CudaTracer> tracer_;
-  std::unique_ptr<CudaAnnualTally> annual_;
-  TracerSlot annual_slot_;   // annual products' O_b and S
   TracerSlot outdoor_slot_;  // outdoor scenes
   TracerSlot replay_slot_;   // indoor records
 };
@@ -748,10 +748,7 @@ absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int device) {
   std::string error;
   std::unique_ptr<CudaTracer> tracer = CudaTracer::Create(device, &error);
   if (!tracer) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
-  std::unique_ptr<CudaAnnualTally> annual = CudaAnnualTally::Create(device, &error);
-  if (!annual) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
-  return std::unique_ptr<DcBackend>(
-      std::make_unique<CudaBackend>(std::move(tracer), std::move(annual)));
+  return std::unique_ptr<DcBackend>(std::make_unique<CudaBackend>(device, std::move(tracer)));
 }
 
 #else

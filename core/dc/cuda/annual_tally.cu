@@ -121,15 +121,18 @@ struct BatchPaths {
   double paths[kMaxTallyBatches];
 };
 
-// I from indoor sums: row (b, s) divided by batch b's paths, as the host divides them
-// (IndoorResultFromTally).
-__global__ void BatchMeanKernel(const double* sum, int sensors, int cells, BatchPaths batch,
-                                double* indoor) {
+// I from the indoor sums of `designs` designs: design k's row (b, s) at sum + k *
+// design_sums + (b * sensors + s) * cells, divided by batch b's paths as the host divides
+// them (IndoorResultFromTally), into row (b * designs + k) * sensors + s of `indoor` (each
+// batch's rows together, for the product with its O_b).
+__global__ void BatchMeanKernel(const double* sum, size_t design_sums, int designs, int sensors,
+                                int cells, BatchPaths batch, double* indoor) {
   const int cell = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
   if (cell >= cells) return;
   const int row = static_cast<int>(blockIdx.y);
-  const size_t k = static_cast<size_t>(row) * cells + cell;
-  indoor[k] = __ddiv_rn(sum[k], batch.paths[row / sensors]);
+  const int s = row % sensors, k = row / sensors % designs, b = row / (sensors * designs);
+  const double value = sum[k * design_sums + (static_cast<size_t>(b) * sensors + s) * cells + cell];
+  indoor[static_cast<size_t>(row) * cells + cell] = __ddiv_rn(value, batch.paths[b]);
 }
 
 // The metric thresholds of the tallies.
@@ -138,13 +141,23 @@ struct TallyLimits {
   double batches, leave_one_out_scale;  // B and 1 / (B - 1)
 };
 
-// One thread per (hour, version): E of the version (formed as the CPU forms it, without
-// contracted multiply-adds), classified per sensor as the CPU classifies it (ClassifyHour);
-// warps add their counts and sums to the version's totals.
-__global__ void TallyKernel(const double* e, int batches, int sensors, int steps,
-                            TallyLimits limits, unsigned long long* counts, double* sums,
-                            unsigned long long* hours) {
+// Where one design's tallies lie in the tallies buffer: the counts, the hours, then the sums
+// (doubles), `total` entries per design.
+struct TallyLayout {
+  size_t counts, hours, total;
+};
+
+// One thread per (hour, version, design): E of the version (formed as the CPU forms it,
+// without contracted multiply-adds), classified per sensor as the CPU classifies it
+// (ClassifyHour); warps add their counts and sums to the version's totals. Design k's row
+// (b, i) of E is (b * designs + k) * sensors + i.
+__global__ void TallyKernel(const double* e, int designs, int batches, int sensors, int steps,
+                            TallyLimits limits, TallyLayout layout, unsigned long long* tallies) {
   const int version = static_cast<int>(blockIdx.y);
+  const int design = static_cast<int>(blockIdx.z);
+  unsigned long long* counts = tallies + design * layout.total;
+  unsigned long long* hours = counts + layout.counts;
+  double* sums = reinterpret_cast<double*>(hours + layout.hours);
   const int t = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
   const bool active = t < steps;
   const unsigned all = 0xffffffffu;
@@ -155,11 +168,13 @@ __global__ void TallyKernel(const double* e, int batches, int sensors, int steps
     if (active) {
       double total = 0;
       for (int b = 0; b < batches; ++b) {
-        total = __dadd_rn(total, e[(static_cast<size_t>(b) * sensors + i) * steps + t]);
+        total = __dadd_rn(
+            total, e[((static_cast<size_t>(b) * designs + design) * sensors + i) * steps + t]);
       }
       value = __ddiv_rn(total, limits.batches);
       if (version > 0) {
-        const double left_out = e[(static_cast<size_t>(version - 1) * sensors + i) * steps + t];
+        const double left_out =
+            e[((static_cast<size_t>(version - 1) * designs + design) * sensors + i) * steps + t];
         value = __dmul_rn(__dsub_rn(__dmul_rn(limits.batches, value), left_out),
                           limits.leave_one_out_scale);
       }
@@ -208,8 +223,7 @@ struct CudaAnnualTally::Impl {
   // O_b as uploaded and transposed, S, the indoor rows, I_b O_b and E; E's tallies
   DeviceBuffer<double> outdoor_rows, outdoor_transposed, sky, indoor, through_window, illuminance;
   DeviceBuffer<double> other_sky;  // a sky for one call to Illuminance
-  // E's tallies in one buffer, zeroed and downloaded at once: the counts, the hours, then
-  // the sums (doubles)
+  // E's tallies in one buffer, zeroed and downloaded at once (TallyLayout per design)
   DeviceBuffer<unsigned long long> tallies;
   std::vector<unsigned long long> host_tallies;
   PinnedBuffer staging;
@@ -240,30 +254,36 @@ struct CudaAnnualTally::Impl {
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
     return "";
   }
-  // E's tallies from `indoor`.
-  std::string Tally(int sensors, const TallyRequest& request) {
+  // The tallies of E from `indoor` (BatchMeanKernel's rows) for `designs` designs, design
+  // k's into requests[k].
+  std::string Tally(int designs, int sensors, const TallyRequest* requests) {
     const int versions = batches + 1;
     const size_t per_sensor = static_cast<size_t>(versions) * sensors;
-    if (std::string error = FormIlluminance(batches * sensors); !error.empty()) return error;
-    const size_t counts = 3 * per_sensor, hours = 4 * static_cast<size_t>(versions);
-    const size_t total = counts + hours + 2 * per_sensor;
-    FENESTRA_CUDA_RETURN_IF_ERROR(tallies.Zero(total));
+    if (std::string error = FormIlluminance(designs * batches * sensors); !error.empty()) {
+      return error;
+    }
     static_assert(sizeof(double) == sizeof(unsigned long long));
-    double* sums = reinterpret_cast<double*>(tallies.get() + counts + hours);
+    static_assert(sizeof(int64_t) == sizeof(unsigned long long));
+    const TallyLayout layout{3 * per_sensor, 4 * static_cast<size_t>(versions),
+                             5 * per_sensor + 4 * static_cast<size_t>(versions)};
+    const size_t total = layout.total * designs;
+    FENESTRA_CUDA_RETURN_IF_ERROR(tallies.Zero(total));
     const int threads = 256;
-    const dim3 grid((steps + threads - 1) / threads, versions);
-    const TallyLimits limits{request.lower_lux, request.upper_lux, request.da_lux,
+    const dim3 grid((steps + threads - 1) / threads, versions, designs);
+    const TallyLimits limits{requests[0].lower_lux, requests[0].upper_lux, requests[0].da_lux,
                              static_cast<double>(batches), 1.0 / (batches - 1)};
-    TallyKernel<<<grid, threads>>>(illuminance.get(), batches, sensors, steps, limits,
-                                   tallies.get(), sums, tallies.get() + counts);
+    TallyKernel<<<grid, threads>>>(illuminance.get(), designs, batches, sensors, steps, limits,
+                                   layout, tallies.get());
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
     host_tallies.resize(total);
     FENESTRA_CUDA_RETURN_IF_ERROR(tallies.Download(host_tallies.data(), total));
-    static_assert(sizeof(int64_t) == sizeof(unsigned long long));
-    std::memcpy(request.counts, host_tallies.data(), counts * sizeof(int64_t));
-    std::memcpy(request.hours, host_tallies.data() + counts, hours * sizeof(int64_t));
-    std::memcpy(request.sums, host_tallies.data() + counts + hours,
-                2 * per_sensor * sizeof(double));
+    for (int k = 0; k < designs; ++k) {
+      const unsigned long long* design = host_tallies.data() + k * layout.total;
+      std::memcpy(requests[k].counts, design, layout.counts * sizeof(int64_t));
+      std::memcpy(requests[k].hours, design + layout.counts, layout.hours * sizeof(int64_t));
+      std::memcpy(requests[k].sums, design + layout.counts + layout.hours,
+                  2 * per_sensor * sizeof(double));
+    }
     return "";
   }
 };
@@ -281,19 +301,24 @@ std::unique_ptr<CudaAnnualTally> CudaAnnualTally::Create(int device, std::string
   return std::unique_ptr<CudaAnnualTally>(new CudaAnnualTally(std::move(impl)));
 }
 
-std::string CudaAnnualTally::SetProduct(const double* outdoor, int batches, int cells,
+std::string CudaAnnualTally::SetProduct(const std::vector<const double*>& outdoor, int cells,
                                         const double* sky, int steps) {
   Impl& d = *impl_;
+  const int batches = static_cast<int>(outdoor.size());
   if (batches < 1 || batches > kMaxTallyBatches) {
     return "CUDA annual product: " + std::to_string(batches) + " outdoor batches, not 1 to " +
            std::to_string(kMaxTallyBatches);
   }
   // O_b as the host holds them, then transposed on the device (on the host, the transpose
   // took 50-60 ms of a four-variable job's second)
-  const size_t size = static_cast<size_t>(cells) * kTregenzaBinCount * batches;
+  const size_t batch_size = static_cast<size_t>(cells) * kTregenzaBinCount;
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
-  FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_rows.Upload(outdoor, size));
-  FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_transposed.Reserve(size));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_rows.Reserve(batch_size * batches));
+  for (int b = 0; b < batches; ++b) {
+    FENESTRA_CUDA_RETURN_IF_ERROR(cudaMemcpy(d.outdoor_rows.get() + b * batch_size, outdoor[b],
+                                             batch_size * sizeof(double), cudaMemcpyHostToDevice));
+  }
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_transposed.Reserve(batch_size * batches));
   const dim3 grid((kTregenzaBinCount + kTile - 1) / kTile, (cells + kTile - 1) / kTile, batches);
   TransposeKernel<<<grid, dim3(kTile, kTile)>>>(d.outdoor_rows.get(), d.outdoor_transposed.get(),
                                                 cells, kTregenzaBinCount);
@@ -333,22 +358,24 @@ std::string CudaAnnualTally::Tally(const double* indoor, int batches, int sensor
   Impl& d = *impl_;
   if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
   if (std::string error = d.UploadIndoor(indoor, batches * sensors); !error.empty()) return error;
-  return d.Tally(sensors, request);
+  return d.Tally(1, sensors, &request);
 }
 
-std::string CudaAnnualTally::TallySums(const double* device_sums, int batches, int sensors,
-                                       const uint64_t* batch_paths, const TallyRequest& request) {
+std::string CudaAnnualTally::TallySums(const double* device_sums, size_t design_sums, int designs,
+                                       int batches, int sensors, const uint64_t* batch_paths,
+                                       const TallyRequest* requests) {
   Impl& d = *impl_;
   if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
   BatchPaths paths{};
   for (int b = 0; b < batches; ++b) paths.paths[b] = static_cast<double>(batch_paths[b]);
-  const int rows = batches * sensors;
+  const int rows = designs * batches * sensors;
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.indoor.Reserve(static_cast<size_t>(rows) * d.cells));
   const int threads = 256;
   const dim3 grid((d.cells + threads - 1) / threads, rows);
-  BatchMeanKernel<<<grid, threads>>>(device_sums, sensors, d.cells, paths, d.indoor.get());
-  return d.Tally(sensors, request);
+  BatchMeanKernel<<<grid, threads>>>(device_sums, design_sums, designs, sensors, d.cells, paths,
+                                     d.indoor.get());
+  return d.Tally(designs, sensors, requests);
 }
 
 std::string CudaAnnualTally::CheckPairs(int columns, int batches) const {

@@ -4,9 +4,11 @@
 // (I_b O_b) S, then what the annual metrics need of E (core/metrics/annual_metrics.h,
 // HourTally), reduced on the device so that E never leaves it. Host-only declarations (no
 // CUDA headers); errors come back as text ("" is success), as the tracer's.
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace fenestra {
 
@@ -18,9 +20,10 @@ class CudaAnnualTally {
   CudaAnnualTally(const CudaAnnualTally&) = delete;
   CudaAnnualTally& operator=(const CudaAnnualTally&) = delete;
 
-  // Uploads the `batches` O_b (each cells x kTregenzaBinCount, one after the other; cells =
-  // the columns of I) and S (kTregenzaBinCount x steps), row-major.
-  std::string SetProduct(const double* outdoor, int batches, int cells, const double* sky,
+  // Uploads the O_b (each cells x kTregenzaBinCount, row-major, one per batch; cells = the
+  // columns of I) and S (kTregenzaBinCount x steps, row-major). The device keeps them until
+  // the next SetProduct.
+  std::string SetProduct(const std::vector<const double*>& outdoor, int cells, const double* sky,
                          int steps);
   // `rows` stacked indoor rows (rows x cells, batch-major, rows / B per batch) through the
   // product into `illuminance` (rows x steps). With `other_sky` (kTregenzaBinCount x
@@ -43,11 +46,13 @@ class CudaAnnualTally {
   // The tallies of E_b = (I_b O_b) S for the host's `indoor`, batches x sensors stacked rows
   // (batch-major), as many batches as the product's.
   std::string Tally(const double* indoor, int batches, int sensors, const TallyRequest& request);
-  // The same from indoor sums on this device (a tracer's, CudaTracer::DeviceSums): row (b, s)
-  // of `device_sums`, batches x sensors rows of the product's cells, divided by
-  // batch_paths[b], the paths summed into batch b.
-  std::string TallySums(const double* device_sums, int batches, int sensors,
-                        const uint64_t* batch_paths, const TallyRequest& request);
+  // The same for `designs` designs at once from indoor sums on this device (a tracer's,
+  // CudaTracer::DeviceSums): design k's row (b, s) at device_sums + k * design_sums +
+  // (b * sensors + s) * cells, divided by batch_paths[b], the paths summed into batch b; its
+  // tallies into requests[k]. Their products read each O_b once for all the designs, and
+  // their tallies come back in one download.
+  std::string TallySums(const double* device_sums, size_t design_sums, int designs, int batches,
+                        int sensors, const uint64_t* batch_paths, const TallyRequest* requests);
 
   // "" when the product pairs with indoor stages of `columns` columns in `batches` batches.
   std::string CheckPairs(int columns, int batches) const;

@@ -504,6 +504,7 @@ struct CudaTracer::Impl {
   DeviceBuffer<BvhTriangle> design_triangles;
   DeviceBuffer<uint32_t> design_triangle_material;
   DeviceBuffer<TraceMaterial> design_materials;
+  std::vector<TraceMaterial> design_materials_held;  // what design_materials holds
   unsigned int row_blocks_total = 0;
   struct Recorded {
     bool valid = false;
@@ -941,7 +942,15 @@ std::string CudaTracer::ReplayIndoorDesigns(const std::vector<DesignScene>& scen
   FENESTRA_CUDA_RETURN_IF_ERROR(d.design_triangles.Upload(triangles.data(), triangles.size()));
   FENESTRA_CUDA_RETURN_IF_ERROR(
       d.design_triangle_material.Upload(triangle_material.data(), triangle_material.size()));
-  FENESTRA_CUDA_RETURN_IF_ERROR(d.design_materials.Upload(materials.data(), materials.size()));
+  // The materials change with the job, not with its designs
+  const auto same = [](const TraceMaterial& a, const TraceMaterial& b) {
+    return a.reflectance == b.reflectance && a.transmittance == b.transmittance;
+  };
+  if (!std::equal(materials.begin(), materials.end(), d.design_materials_held.begin(),
+                  d.design_materials_held.end(), same)) {
+    FENESTRA_CUDA_RETURN_IF_ERROR(d.design_materials.Upload(materials.data(), materials.size()));
+    d.design_materials_held = materials;
+  }
   ReplayDesigns designs{};
   designs.count = static_cast<int>(scenes.size());
   for (size_t k = 0; k < scenes.size(); ++k) {
