@@ -157,10 +157,19 @@ PerezLuminanceParams ComputePerezLuminanceParams(const PerezSkyCondition& sky) {
   return p;
 }
 
-double PerezRelativeLuminance(const PerezLuminanceParams& p, double gamma_rad, double zeta_rad) {
-  const double cos_gamma = std::cos(gamma_rad);
-  return (1 + p.a * std::exp(p.b / std::cos(zeta_rad))) *
+namespace {
+
+// Eq. 1 from the cosines the caller has: of gamma and of zeta.
+double RelativeLuminance(const PerezLuminanceParams& p, double gamma_rad, double cos_gamma,
+                         double cos_zeta) {
+  return (1 + p.a * std::exp(p.b / cos_zeta)) *
          (1 + p.c * std::exp(p.d * gamma_rad) + p.e * cos_gamma * cos_gamma);
+}
+
+}  // namespace
+
+double PerezRelativeLuminance(const PerezLuminanceParams& p, double gamma_rad, double zeta_rad) {
+  return RelativeLuminance(p, gamma_rad, std::cos(gamma_rad), std::cos(zeta_rad));
 }
 
 void ComputePerezSkyRadiance(const PerezSkyCondition& sky, const SolarPosition& sun,
@@ -168,21 +177,23 @@ void ComputePerezSkyRadiance(const PerezSkyCondition& sky, const SolarPosition& 
   const PerezLuminanceParams params = ComputePerezLuminanceParams(sky);
   const double cos_z = std::cos(sky.sun_zenith_rad);
   const double sin_z = std::sin(sky.sun_zenith_rad);
+  const double sin_azimuth = std::sin(sun.azimuth_rad), cos_azimuth = std::cos(sun.azimuth_rad);
   const int n = patches.size();
   radiance[0] = 0;
 
-  // Relative luminance at the patch centres and its horizontal illuminance
+  // Relative luminance at the patch centres and its horizontal illuminance. From a patch's
+  // unit direction (x east, y north, z up): cos zeta = z, and sin zeta cos(azimuth
+  // difference) = x sin(sun azimuth) + y cos(sun azimuth).
   double horizontal = 0;
   for (int i = 1; i < n; ++i) {
     const SkyPatch& patch = patches[i];
-    const double zeta = std::numbers::pi / 2 - patch.altitude_rad;
+    const Vec3d& d = patch.direction;
     const double cos_gamma =
-        cos_z * std::cos(zeta) +
-        sin_z * std::sin(zeta) * std::cos(std::fabs(patch.azimuth_rad - sun.azimuth_rad));
-    const double gamma = std::acos(std::clamp(cos_gamma, -1.0, 1.0));
-    const double lv = std::max(0.0, PerezRelativeLuminance(params, gamma, zeta));
+        std::clamp(cos_z * d.z + sin_z * (d.x * sin_azimuth + d.y * cos_azimuth), -1.0, 1.0);
+    const double lv =
+        std::max(0.0, RelativeLuminance(params, std::acos(cos_gamma), cos_gamma, d.z));
     radiance[i] = std::isfinite(lv) ? lv : 0.0;
-    horizontal += radiance[i] * std::sin(patch.altitude_rad) * patch.solid_angle_sr;
+    horizontal += radiance[i] * d.z * patch.solid_angle_sr;
   }
 
   // Normalize to the diffuse horizontal illuminance (uniform sky if the model vanishes)
