@@ -421,26 +421,46 @@ __global__ void IntersectKernel(BvhIntersector scene, const Vec3f* origins, cons
       scene.Intersect(origin, directions[ray], &hit) ? Length(hit.position - origin) : INFINITY;
 }
 
-// Runs `launch` (kernel launches) and waits for it; *seconds gets its time on the device.
-template <class Launch>
-cudaError_t TimeKernels(Launch launch, double* seconds) {
-  cudaEvent_t start = nullptr, stop = nullptr;
-  cudaError_t e = cudaEventCreate(&start);
-  if (e == cudaSuccess) e = cudaEventCreate(&stop);
-  if (e == cudaSuccess) e = cudaEventRecord(start);
-  if (e == cudaSuccess) {
-    launch();
-    e = cudaGetLastError();
+// Times kernel launches on this thread's stream with two events made once.
+class KernelTimer {
+ public:
+  KernelTimer() = default;
+  ~KernelTimer() {
+    if (start_ != nullptr) cudaEventDestroy(start_);
+    if (stop_ != nullptr) cudaEventDestroy(stop_);
   }
-  if (e == cudaSuccess) e = cudaEventRecord(stop);
-  if (e == cudaSuccess) e = cudaEventSynchronize(stop);
-  float ms = 0;
-  if (e == cudaSuccess) e = cudaEventElapsedTime(&ms, start, stop);
-  if (start != nullptr) cudaEventDestroy(start);
-  if (stop != nullptr) cudaEventDestroy(stop);
-  *seconds = ms / 1000.0;
-  return e;
-}
+  KernelTimer(const KernelTimer&) = delete;
+  KernelTimer& operator=(const KernelTimer&) = delete;
+
+  // Runs `launch` (kernel launches), then `after` (copies queued behind them), and waits for
+  // this thread's stream only: a device-wide wait would also wait for the kernels of other
+  // lanes and jobs on the GPU. *seconds gets the launches' time on the device.
+  template <class Launch, class After>
+  cudaError_t Run(Launch launch, After after, double* seconds) {
+    cudaError_t e = start_ != nullptr ? cudaSuccess : cudaEventCreate(&start_);
+    if (e == cudaSuccess && stop_ == nullptr) e = cudaEventCreate(&stop_);
+    if (e == cudaSuccess) e = cudaEventRecord(start_);
+    if (e == cudaSuccess) {
+      launch();
+      e = cudaGetLastError();
+    }
+    if (e == cudaSuccess) e = cudaEventRecord(stop_);
+    if (e == cudaSuccess) e = after();
+    if (e == cudaSuccess) e = cudaStreamSynchronize(cudaStreamPerThread);
+    float ms = 0;
+    if (e == cudaSuccess) e = cudaEventElapsedTime(&ms, start_, stop_);
+    *seconds = ms / 1000.0;
+    return e;
+  }
+  template <class Launch>
+  cudaError_t Run(Launch launch, double* seconds) {
+    return Run(
+        launch, [] { return cudaSuccess; }, seconds);
+  }
+
+ private:
+  cudaEvent_t start_ = nullptr, stop_ = nullptr;
+};
 
 // Lets `kernel` keep a row of `columns` doubles in shared memory (beside its basis and
 // counters), opting in to more than the default where needed. "" or the error.
@@ -487,8 +507,10 @@ struct CudaTracer::Impl {
   DeviceBuffer<float> ray_distances;
   DeviceBuffer<double> sum, sum_squares;
   DeviceBuffer<unsigned long long> counters;
-  DeviceBuffer<unsigned long long> next_path;  // per row: paths taken so far
-  PinnedBuffer staging;                        // large transfers
+  DeviceBuffer<unsigned long long> next_path;                  // per row: paths taken so far
+  PinnedBuffer staging;                                        // large transfers
+  Allocation<unsigned long long, PinnedMemory> host_counters;  // downloaded with the launch
+  KernelTimer timer;
   bool has_scene = false, has_outdoor = false;
   // The indoor replay: the records, their fixed light, and what they were recorded for;
   // the blind of the design replayed
@@ -605,10 +627,15 @@ struct CudaTracer::Impl {
     FENESTRA_CUDA_RETURN_IF_ERROR(counters.Zero(kCounters));
     FENESTRA_CUDA_RETURN_IF_ERROR(next_path.Zero(rows));
     double seconds = 0;
-    // Waits for this thread's stream only (TimeKernels): a device-wide wait would also wait
-    // for the kernels of other lanes and jobs on the GPU
-    FENESTRA_CUDA_RETURN_IF_ERROR(TimeKernels(launch, &seconds));
-    unsigned long long host_counters[kCounters] = {};
+    FENESTRA_CUDA_RETURN_IF_ERROR(host_counters.Reserve(kCounters));
+    FENESTRA_CUDA_RETURN_IF_ERROR(timer.Run(
+        launch,
+        [&] {
+          return cudaMemcpyAsync(host_counters.get(), counters.get(),
+                                 kCounters * sizeof(unsigned long long), cudaMemcpyDeviceToHost,
+                                 cudaStreamPerThread);
+        },
+        &seconds));
     if (host_sum != nullptr) {
       FENESTRA_CUDA_RETURN_IF_ERROR(staging.Download(sum.get(), host_sum, sum_size));
     }
@@ -616,9 +643,8 @@ struct CudaTracer::Impl {
       FENESTRA_CUDA_RETURN_IF_ERROR(
           staging.Download(sum_squares.get(), host_sum_squares, sum_size));
     }
-    FENESTRA_CUDA_RETURN_IF_ERROR(counters.Download(host_counters, kCounters));
-    out->rays = host_counters[0];
-    for (int i = 0; i < 6; ++i) out->ends[i] = host_counters[1 + i];
+    out->rays = host_counters.get()[0];
+    for (int i = 0; i < 6; ++i) out->ends[i] = host_counters.get()[1 + i];
     out->kernel_seconds = seconds;
     return "";
   }
@@ -690,7 +716,7 @@ std::string CudaTracer::IntersectRays(const Vec3f* origins, const Vec3f* directi
   FENESTRA_CUDA_RETURN_IF_ERROR(d.ray_directions.Upload(directions, count));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.ray_distances.Reserve(count));
   const unsigned int blocks = static_cast<unsigned int>((count + kThreads - 1) / kThreads);
-  FENESTRA_CUDA_RETURN_IF_ERROR(TimeKernels(
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.timer.Run(
       [&] {
         IntersectKernel<<<std::max(1u, blocks), kThreads>>>(
             d.Scene(), d.ray_origins.get(), d.ray_directions.get(), count, same_ray_per_warp,
