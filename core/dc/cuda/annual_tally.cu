@@ -366,6 +366,7 @@ std::string CudaAnnualTally::TallySums(const double* device_sums, size_t design_
                                        const TallyRequest* requests) {
   Impl& d = *impl_;
   if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
+  if (designs < 1) return "CUDA annual product: " + std::to_string(designs) + " designs to tally";
   BatchPaths paths{};
   for (int b = 0; b < batches; ++b) paths.paths[b] = static_cast<double>(batch_paths[b]);
   const int rows = designs * batches * sensors;

@@ -49,8 +49,8 @@ class CudaAnnualTally {
   // The same for `designs` designs at once from indoor sums on this device (a tracer's,
   // CudaTracer::DeviceSums): design k's row (b, s) at device_sums + k * design_sums +
   // (b * sensors + s) * cells, divided by batch_paths[b], the paths summed into batch b; its
-  // tallies into requests[k]. Their products read each O_b once for all the designs, and
-  // their tallies come back in one download.
+  // tallies into requests[k]. One product takes every design's rows (a batch's rows
+  // together), and the tallies come back in one download. 1 <= designs.
   std::string TallySums(const double* device_sums, size_t design_sums, int designs, int batches,
                         int sensors, const uint64_t* batch_paths, const TallyRequest* requests);
 
