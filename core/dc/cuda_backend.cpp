@@ -431,7 +431,6 @@ class CudaDesignTallies : public DesignTallies {
     const int sensor_count = static_cast<int>(scene_.sensors.size());
     const std::vector<uint64_t> batch_paths = PartPaths(
         static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, kDesignParts, 0, parts);
-    CudaCounters counters;
     if (replay_ != nullptr) {
       // The parts not traced yet: all of them for another design, or where the sums of the
       // earlier ones are gone
@@ -441,18 +440,17 @@ class CudaDesignTallies : public DesignTallies {
         held_parts_ = 0;
         FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind_));
       }
+      CudaCounters counters;
       FENESTRA_RETURN_IF_ERROR(
           Check(tracer_->ReplayIndoor(blind_, held_parts_, parts, nullptr, &counters)));
       rays_ += counters.rays;
       held_design_ = design;
       held_parts_ = parts;
-      return std::move(
-          product_->TallySums(tracer_->DeviceSums(), 0, 1, sensor_count, batch_paths, options)[0]);
-    }
-    if (parts != kDesignParts) {
+    } else if (parts != kDesignParts) {
       return absl::UnimplementedError("designs traced in full are traced in one round");
+    } else {
+      FENESTRA_RETURN_IF_ERROR(TraceInFull(design, nullptr));
     }
-    FENESTRA_RETURN_IF_ERROR(TraceInFull(design, nullptr));
     return std::move(
         product_->TallySums(tracer_->DeviceSums(), 0, 1, sensor_count, batch_paths, options)[0]);
   }
