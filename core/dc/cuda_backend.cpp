@@ -661,25 +661,31 @@ class CudaBackend : public DcBackend {
     return result;
   }
 
-  absl::StatusOr<OutdoorTally> Outdoor(const TraceGeometry& geometry, const TraceWindow& window,
-                                       const HemisphereBasis& basis, uint64_t paths_per_cell,
-                                       int batches, uint64_t seed, const PathSettings& path,
-                                       int) override {
-    const auto start = std::chrono::steady_clock::now();
+  absl::StatusOr<OutdoorBatches> Outdoor(const TraceGeometry& geometry, const TraceWindow& window,
+                                         const HemisphereBasis& basis, uint64_t paths_per_cell,
+                                         int batches, uint64_t seed, const PathSettings& path,
+                                         int) override {
     FENESTRA_RETURN_IF_ERROR(Upload(geometry));
-    OutdoorTally tally;
-    tally.cells = WindowCellCount(window, basis);
-    tally.batches = batches;
-    tally.paths_per_cell = paths_per_cell;
-    tally.batch_paths = BatchSizes(paths_per_cell, batches);
-    tally.sum.resize(static_cast<size_t>(batches) * tally.cells * kOutdoorRowSize);
+    const int cells = WindowCellCount(window, basis);
+    OutdoorBatches o;
+    o.paths_per_cell = paths_per_cell;
+    CudaTracer::OutdoorOutput out;
+    o.batches.reserve(batches);
+    for (int b = 0; b < batches; ++b) {
+      o.batches.emplace_back(cells + kDaylightBins, kDaylightBins);
+      out.batches.push_back(o.batches.back().data());
+    }
+    o.mean.resize(cells + kDaylightBins, kDaylightBins);
+    o.standard_error.resize(o.mean.rows(), o.mean.cols());
+    o.first_escapes.resize(cells);
+    out.mean = o.mean.data();
+    out.standard_error = o.standard_error.data();
+    out.first_escapes = o.first_escapes.data();
     CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(
-        Check(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,
-                               WithoutImportance(path), tally.sum.data(), &counters)));
-    Count(counters, &tally.counters);
-    tally.wall_seconds = SecondsSince(start);
-    return tally;
+    FENESTRA_RETURN_IF_ERROR(Check(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,
+                                                    WithoutImportance(path), out, &counters)));
+    Count(counters, &o.counters);
+    return o;
   }
 
   absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry, const TraceGeometry& outdoor,

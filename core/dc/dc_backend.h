@@ -23,6 +23,23 @@ struct IndoorOptions;
 // Number of daylight-coefficient columns: bin 0 = ground, 1..145 = Tregenza sky patches.
 inline constexpr int kDaylightBins = 146;
 
+// The outdoor stage's matrix O in batches, as a backend forms it from its sums
+// (FormOutdoorBatches): per batch (window cells + 146) x 146, the reflected light per window
+// cell over its paths whose first segment met a surface, then the identity for the direct
+// columns; their mean and its standard error.
+struct OutdoorBatches {
+  std::vector<Matrix> batches;
+  Matrix mean;
+  Matrix standard_error;
+  // Per window cell: its paths (of all batches) whose first segment reached the sky.
+  Eigen::VectorXd first_escapes;
+  uint64_t paths_per_cell = 0;  // in all batches
+  TraceCounters counters;
+};
+
+// O's batches from the outdoor sums on the host.
+OutdoorBatches FormOutdoorBatches(const OutdoorTally& tally);
+
 // How to trace the one-stage daylight coefficients.
 struct OneStageOptions {
   int64_t paths_per_sensor = 100000;  // at least 2
@@ -159,12 +176,14 @@ class DcBackend {
   // The two-stage method's stages (core/dc/two_stage.h) over prepared geometry: outdoor
   // paths from each window cell, indoor paths from each sensor, both in batches; the indoor
   // stage tests its window connections against `outdoor` (the outdoor stage's geometry).
-  // `threads` applies to CPU backends.
-  virtual absl::StatusOr<OutdoorTally> Outdoor(const TraceGeometry& geometry,
-                                               const TraceWindow& window,
-                                               const HemisphereBasis& basis,
-                                               uint64_t paths_per_cell, int batches, uint64_t seed,
-                                               const PathSettings& path, int threads) = 0;
+  // The outdoor stage comes back as O's batches, formed where its sums lie. `threads`
+  // applies to CPU backends.
+  virtual absl::StatusOr<OutdoorBatches> Outdoor(const TraceGeometry& geometry,
+                                                 const TraceWindow& window,
+                                                 const HemisphereBasis& basis,
+                                                 uint64_t paths_per_cell, int batches,
+                                                 uint64_t seed, const PathSettings& path,
+                                                 int threads) = 0;
   virtual absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry,
                                              const TraceGeometry& outdoor,
                                              const std::vector<TraceSensor>& sensors,

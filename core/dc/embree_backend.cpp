@@ -67,13 +67,13 @@ class EmbreeBackend : public DcBackend {
     return result;
   }
 
-  absl::StatusOr<OutdoorTally> Outdoor(const TraceGeometry& geometry, const TraceWindow& window,
-                                       const HemisphereBasis& basis, uint64_t paths_per_cell,
-                                       int batches, uint64_t seed, const PathSettings& path,
-                                       int threads) override {
+  absl::StatusOr<OutdoorBatches> Outdoor(const TraceGeometry& geometry, const TraceWindow& window,
+                                         const HemisphereBasis& basis, uint64_t paths_per_cell,
+                                         int batches, uint64_t seed, const PathSettings& path,
+                                         int threads) override {
     FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
-    return TraceOutdoorCpu(scene->Intersector(), geometry.Surfaces(), window, basis, paths_per_cell,
-                           batches, seed, path, threads);
+    return FormOutdoorBatches(TraceOutdoorCpu(scene->Intersector(), geometry.Surfaces(), window,
+                                              basis, paths_per_cell, batches, seed, path, threads));
   }
 
   // Record the paths once, replay them per design; without a blind there is nothing to vary

@@ -8,11 +8,13 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
+#include "core/common/batch_mean.h"
 #include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
 #include "core/trace/trace_geometry.h"
 #include "core/trace/two_stage_cpu.h"
+#include "core/trace/two_stage_modes.h"
 #include "core/trace/window_cells.h"
 
 namespace fenestra {
@@ -58,40 +60,39 @@ absl::Status CheckBatches(int batches) {
 }
 
 // Mean and standard error of the mean of B >= 2 equally shaped batch matrices.
+// One pass over the entries: O's batches are tens of MB.
 void MeanAndError(const std::vector<Matrix>& batches, Matrix* mean, Matrix* standard_error) {
-  const double count = static_cast<double>(batches.size());
-  *mean = Matrix::Zero(batches[0].rows(), batches[0].cols());
-  for (const Matrix& b : batches) *mean += b / count;
-  Matrix variance = Matrix::Zero(mean->rows(), mean->cols());
-  for (const Matrix& b : batches) variance += (b - *mean).cwiseAbs2();
-  *standard_error = (variance / (count * (count - 1))).cwiseSqrt();
-}
-
-// O's batches from the outdoor sums: per window cell the reflected light over the paths
-// whose first segment met a surface (0 where none did), then the identity.
-OutdoorResult OutdoorResultFromTally(const OutdoorTally& tally) {
-  OutdoorResult result;
-  const int cells = tally.cells;
-  result.sky_view = Eigen::VectorXd::Zero(cells);
-  for (int b = 0; b < tally.batches; ++b) {
-    Matrix o = Matrix::Zero(cells + kDaylightBins, kDaylightBins);
-    const double paths = static_cast<double>(tally.batch_paths[b]);
-    for (int k = 0; k < cells; ++k) {
-      const double* row = &tally.sum[(static_cast<size_t>(b) * cells + k) * kOutdoorRowSize];
-      const double met = paths - row[kFirstEscapeEntry];
-      for (int j = 0; met > 0 && j < kDaylightBins; ++j) o(k, j) = row[j] / met;
-      result.sky_view(k) += row[kFirstEscapeEntry];
-    }
-    o.bottomRows(kDaylightBins).setIdentity();
-    result.batches.push_back(std::move(o));
+  mean->resize(batches[0].rows(), batches[0].cols());
+  standard_error->resize(mean->rows(), mean->cols());
+  for (Eigen::Index i = 0; i < mean->size(); ++i) {
+    BatchMeanAndError(
+        static_cast<int>(batches.size()), [&](int b) { return batches[b].data()[i]; },
+        &mean->data()[i], &standard_error->data()[i]);
   }
-  result.sky_view /= static_cast<double>(tally.paths_per_cell);
-  MeanAndError(result.batches, &result.coefficients, &result.standard_error);
-  result.paths_per_cell = static_cast<int64_t>(tally.paths_per_cell);
-  return result;
 }
 
 }  // namespace
+
+OutdoorBatches FormOutdoorBatches(const OutdoorTally& tally) {
+  OutdoorBatches o;
+  const int cells = tally.cells;
+  o.first_escapes = Eigen::VectorXd::Zero(cells);
+  for (int b = 0; b < tally.batches; ++b) {
+    Matrix batch(cells + kDaylightBins, kDaylightBins);
+    const double paths = static_cast<double>(tally.batch_paths[b]);
+    for (int k = 0; k < cells; ++k) {
+      const double* row = &tally.sum[(static_cast<size_t>(b) * cells + k) * kOutdoorRowSize];
+      for (int j = 0; j < kDaylightBins; ++j) batch(k, j) = OutdoorCoefficient(row, paths, j);
+      o.first_escapes(k) += row[kFirstEscapeEntry];
+    }
+    batch.bottomRows(kDaylightBins).setIdentity();
+    o.batches.push_back(std::move(batch));
+  }
+  MeanAndError(o.batches, &o.mean, &o.standard_error);
+  o.paths_per_cell = tally.paths_per_cell;
+  o.counters = tally.counters;
+  return o;
+}
 
 WindowParts AutomaticWindowParts(const Window& window) {
   static constexpr double kPartSize = 0.5;  // [m]
@@ -164,18 +165,23 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const Outd
   std::unique_ptr<DcBackend> fallback;
   if (backend == nullptr) backend = (fallback = MakeEmbreeBackend()).get();
 
-  // Trace, then O_b = reflected sums / paths whose first segment met a surface
+  // Trace and form O_b (FormOutdoorBatches; a GPU backend forms them where its sums lie)
   const uint64_t per_cell = static_cast<uint64_t>(options.paths / window_cells);
   FENESTRA_ASSIGN_OR_RETURN(
-      tally, backend->Outdoor(geometry, LocalWindow(geometry, scene.window, options.parts), basis,
-                              per_cell, options.batches, options.seed,
-                              Settings(options.max_bounces, options.russian_roulette,
-                                       options.roulette_threshold),
-                              options.threads));
-  OutdoorResult result = OutdoorResultFromTally(tally);
+      formed, backend->Outdoor(geometry, LocalWindow(geometry, scene.window, options.parts), basis,
+                               per_cell, options.batches, options.seed,
+                               Settings(options.max_bounces, options.russian_roulette,
+                                        options.roulette_threshold),
+                               options.threads));
+  OutdoorResult result;
+  result.coefficients = std::move(formed.mean);
+  result.standard_error = std::move(formed.standard_error);
+  result.batches = std::move(formed.batches);
+  result.sky_view = formed.first_escapes / static_cast<double>(formed.paths_per_cell);
+  result.paths_per_cell = static_cast<int64_t>(formed.paths_per_cell);
   result.basis_cells = basis.cell_count;
   result.parts = options.parts;
-  result.rays_traced = tally.counters.rays;
+  result.rays_traced = formed.counters.rays;
   result.triangles = geometry.TriangleCount();
   result.backend = backend->Name();
   result.wall_seconds = SecondsSince(start);

@@ -142,6 +142,14 @@ FENESTRA_CPU_GPU inline int WindowCellCount(const TraceWindow& window,
 inline constexpr int kOutdoorRowSize = kTregenzaBinCount + 1;
 inline constexpr int kFirstEscapeEntry = kTregenzaBinCount;
 
+// O_b's entry for sky bin `bin` from a window cell's row of outdoor sums over the batch's
+// `paths`: the reflected light over the paths whose first segment met a surface, 0 where none
+// did.
+FENESTRA_CPU_GPU inline double OutdoorCoefficient(const double* row, double paths, int bin) {
+  const double met = paths - row[kFirstEscapeEntry];
+  return met > 0 ? row[bin] / met : 0.0;
+}
+
 // Columns of the indoor matrix: the window cells, then the sky bins' direct columns.
 FENESTRA_CPU_GPU inline int IndoorColumnCount(const TraceWindow& window,
                                               const HemisphereBasis& basis) {

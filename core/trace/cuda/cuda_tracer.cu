@@ -10,6 +10,7 @@
 #include <cstring>
 #include <vector>
 
+#include "core/common/batch_mean.h"
 #include "core/trace/bvh_intersector.h"
 #include "core/trace/cuda/cuda_tracer.h"
 #include "core/trace/cuda/device_buffer.cuh"
@@ -42,11 +43,25 @@ struct SharedSink {
 #endif
   }
   FENESTRA_CPU_GPU void EndPath() {}
-  // OutdoorMode's count of first segments that reached the sky
-  FENESTRA_CPU_GPU void AddFirstEscape() {
-#if defined(__CUDA_ARCH__)
-    atomicAdd(&sum[kFirstEscapeEntry], 1.0);
-#endif
+};
+
+// OutdoorMode's sink on the device: adds into the shared row of the current path's batch, and
+// counts the first segments that reached the sky per thread, added to that row when the
+// thread moves to another batch or ends (one shared atomic per thread and batch instead of
+// one per path, all of a block's on the same entry).
+struct OutdoorSink {
+  double* row;
+  unsigned int first_escapes = 0;
+  __device__ void Add(int bin, double value) { atomicAdd(&row[bin], value); }
+  __device__ void AddFirstEscape() { ++first_escapes; }
+  __device__ void Flush() {
+    if (first_escapes != 0) atomicAdd(&row[kFirstEscapeEntry], static_cast<double>(first_escapes));
+    first_escapes = 0;
+  }
+  __device__ void SetRow(double* next) {
+    if (next == row) return;
+    Flush();
+    row = next;
   }
 };
 
@@ -171,31 +186,82 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   }
 }
 
-// Rows are (batch, window cell), from first_row on: row b * cells + cell holds the paths
-// [b N / batches, (b + 1) N / batches) of the cell.
+// The batch of path i when `paths` are split into `batches` contiguous batches (BatchFirst).
+__device__ int BatchOf(uint64_t paths, int batches, uint64_t i) {
+  uint64_t b = i * static_cast<uint64_t>(batches) / paths;
+  while (b > 0 && BatchFirst(paths, batches, b) > i) --b;
+  while (b + 1 < static_cast<uint64_t>(batches) && BatchFirst(paths, batches, b + 1) <= i) ++b;
+  return static_cast<int>(b);
+}
+
+// The blocks along y take window cells first_cell + blockIdx.y, each with all its paths, so
+// that a block's lanes share thousands of short paths rather than one batch's hundreds (a
+// block lasts as long as its longest path). The block holds a row per batch; row
+// b * cells + cell of the sums holds the cell's paths [b N / batches, (b + 1) N / batches).
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     OutdoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
                   TraceWindow window, HemisphereBasis basis, uint64_t paths_per_cell, int batches,
-                  uint64_t seed, unsigned int first_row, double* sum, unsigned long long* counters,
+                  uint64_t seed, unsigned int first_cell, double* sum, unsigned long long* counters,
                   unsigned long long* next_path) {
-  __shared__ double row[kOutdoorRowSize];
+  extern __shared__ double rows[];  // per batch, kOutdoorRowSize
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
   if (threadIdx.x == 0) shared_basis = basis;
-  BeginRow(row, kOutdoorRowSize, block_counters);
-  const unsigned int r = first_row + blockIdx.y;
-  const int cells = WindowCellCount(window, basis);
-  const int cell = static_cast<int>(r % cells);
-  const uint64_t b = r / cells;
-  SharedSink sink{row, nullptr};
-  OutdoorMode<SharedSink> mode{window, &shared_basis, cell, &sink};
+  const int size = batches * kOutdoorRowSize;
+  BeginRow(rows, size, block_counters);
+  const unsigned int cell = first_cell + blockIdx.y;
+  OutdoorSink sink{rows};
+  OutdoorMode<OutdoorSink> mode{window, &shared_basis, static_cast<int>(cell), &sink};
   ThreadCounts counts;
-  TracePaths(scene, surfaces, settings, mode, seed, kOutdoorStreamBase + cell,
-             BatchFirst(paths_per_cell, batches, b), BatchFirst(paths_per_cell, batches, b + 1),
-             next_path + r, counts);
+  TraceItems(scene, surfaces, settings, mode, paths_per_cell, next_path + cell, counts,
+             [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
+               sink.SetRow(rows + BatchOf(paths_per_cell, batches, i) * kOutdoorRowSize);
+               *random = PathRandom(seed, kOutdoorStreamBase + cell, i);
+               *path = path_internal::StartPath(scene, *random, mode, stats);
+             });
+  sink.Flush();
   counts.Flush(block_counters);
-  EndRow(row, kOutdoorRowSize, sum + static_cast<size_t>(r) * kOutdoorRowSize, block_counters,
-         counters);
+  __syncthreads();
+  const int cells = WindowCellCount(window, basis);
+  for (int i = threadIdx.x; i < size; i += blockDim.x) {
+    const size_t b = static_cast<size_t>(i / kOutdoorRowSize);
+    if (rows[i] != 0.0) {
+      atomicAdd(&sum[(b * cells + cell) * kOutdoorRowSize + i % kOutdoorRowSize], rows[i]);
+    }
+  }
+  if (threadIdx.x < kCounters) atomicAdd(&counters[threadIdx.x], block_counters[threadIdx.x]);
+}
+
+// O from the outdoor sums (CudaTracer::Outdoor), one thread per entry (row k, bin j) of the
+// row-major (cells + kTregenzaBinCount) x kTregenzaBinCount matrices of `entries` values:
+// each batch's at formed + b * entries, then their mean and its standard error, then per
+// window cell its first segments that reached the sky, over all batches.
+__global__ void FormOutdoorKernel(const double* sum, int cells, uint64_t paths_per_cell,
+                                  int batches, double* formed) {
+  const int rows = cells + kTregenzaBinCount;
+  const size_t entries = static_cast<size_t>(rows) * kTregenzaBinCount;
+  const size_t e = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
+  if (e >= entries) return;
+  const int k = static_cast<int>(e / kTregenzaBinCount);
+  const int j = static_cast<int>(e % kTregenzaBinCount);
+  // A window cell's row of batch b; below the cells, the identity
+  const auto value = [&](int b) {
+    if (k >= cells) return k - cells == j ? 1.0 : 0.0;
+    const double paths = static_cast<double>(BatchFirst(paths_per_cell, batches, b + 1) -
+                                             BatchFirst(paths_per_cell, batches, b));
+    return OutdoorCoefficient(sum + (static_cast<size_t>(b) * cells + k) * kOutdoorRowSize, paths,
+                              j);
+  };
+  for (int b = 0; b < batches; ++b) formed[b * entries + e] = value(b);
+  BatchMeanAndError(batches, value, &formed[batches * entries + e],
+                    &formed[(batches + 1) * entries + e]);
+  if (j == 0 && k < cells) {
+    double escapes = 0;
+    for (int b = 0; b < batches; ++b) {
+      escapes += sum[(static_cast<size_t>(b) * cells + k) * kOutdoorRowSize + kFirstEscapeEntry];
+    }
+    formed[(batches + 2) * entries + k] = escapes;
+  }
 }
 
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
@@ -463,9 +529,12 @@ class KernelTimer {
 };
 
 // Lets `kernel` keep a row of `columns` doubles in shared memory (beside its basis and
-// counters), opting in to more than the default where needed. "" or the error.
+// counters), opting in to more than the default where needed. "" or the error, which names
+// what the columns hold and what to change where they do not fit.
 template <class Kernel>
-std::string AllowSharedRow(Kernel kernel, int columns) {
+std::string AllowSharedRow(Kernel kernel, int columns,
+                           const char* held = "columns of the indoor matrix",
+                           const char* remedy = "use fewer window parts or the 288-cell basis") {
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
   if (shared <= kDefaultShared) return "";
   int device = 0, limit = 0;
@@ -475,10 +544,9 @@ std::string AllowSharedRow(Kernel kernel, int columns) {
   const size_t available =
       static_cast<size_t>(limit) - sizeof(HemisphereBasis) - kCounters * sizeof(unsigned long long);
   if (shared > available) {
-    return "CUDA: " + std::to_string(columns) +
-           " columns of the indoor matrix do not fit the indoor kernel's shared memory (at most " +
-           std::to_string(available / sizeof(double)) +
-           " on this device): use fewer window parts or the 288-cell basis";
+    return "CUDA: " + std::to_string(columns) + " " + held +
+           " do not fit the kernel's shared memory (at most " +
+           std::to_string(available / sizeof(double)) + " on this device): " + remedy;
   }
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaFuncSetAttribute(
       kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(shared)));
@@ -506,6 +574,7 @@ struct CudaTracer::Impl {
   DeviceBuffer<Vec3f> ray_origins, ray_directions;
   DeviceBuffer<float> ray_distances;
   DeviceBuffer<double> sum, sum_squares;
+  DeviceBuffer<double> formed;  // O formed from the outdoor sums
   DeviceBuffer<unsigned long long> counters;
   DeviceBuffer<unsigned long long> next_path;                  // per row: paths taken so far
   PinnedBuffer staging;                                        // large transfers
@@ -747,22 +816,53 @@ std::string CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
 
 std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
                                 uint64_t paths_per_cell, int batches, uint64_t seed,
-                                const PathSettings& path, double* sum, CudaCounters* counters) {
+                                const PathSettings& path, const OutdoorOutput& out,
+                                CudaCounters* counters) {
   Impl& d = *impl_;
-  const unsigned int rows = static_cast<unsigned int>(WindowCellCount(window, basis) * batches);
-  const unsigned int per_row = d.BlocksPerRow(OutdoorKernel, 0, paths_per_cell / batches + 1, rows);
+  const int cells = WindowCellCount(window, basis);
+  const int row_size = batches * kOutdoorRowSize;
+  if (std::string error = AllowSharedRow(
+          OutdoorKernel, row_size, "outdoor sums (the batches of a cell)", "use fewer batches");
+      !error.empty()) {
+    return error;
+  }
+  const size_t shared = static_cast<size_t>(row_size) * sizeof(double);
+  const unsigned int per_cell =
+      d.BlocksPerRow(OutdoorKernel, shared, paths_per_cell, static_cast<unsigned int>(cells));
   constexpr unsigned int kMaxGridRows = 65535;
-  return d.Run(
-      rows, static_cast<size_t>(rows) * kOutdoorRowSize, false,
-      [&] {
-        for (unsigned int first = 0; first < rows; first += kMaxGridRows) {
-          const dim3 grid(per_row, std::min(kMaxGridRows, rows - first));
-          OutdoorKernel<<<grid, kThreads>>>(d.Scene(), d.Surfaces(), path, window, basis,
-                                            paths_per_cell, batches, seed, first, d.sum.get(),
-                                            d.counters.get(), d.next_path.get());
-        }
-      },
-      sum, nullptr, counters);
+  if (std::string error = d.Run(
+          cells, static_cast<size_t>(cells) * batches * kOutdoorRowSize, false,
+          [&] {
+            for (unsigned int first = 0; first < static_cast<unsigned int>(cells);
+                 first += kMaxGridRows) {
+              const dim3 grid(per_cell,
+                              std::min(kMaxGridRows, static_cast<unsigned int>(cells) - first));
+              OutdoorKernel<<<grid, kThreads, shared>>>(
+                  d.Scene(), d.Surfaces(), path, window, basis, paths_per_cell, batches, seed,
+                  first, d.sum.get(), d.counters.get(), d.next_path.get());
+            }
+          },
+          nullptr, nullptr, counters);
+      !error.empty()) {
+    return error;
+  }
+  // O formed where the sums lie; each part downloaded straight to its place
+  const size_t entries = static_cast<size_t>(cells + kTregenzaBinCount) * kTregenzaBinCount;
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.formed.Reserve((batches + 2) * entries + cells));
+  FormOutdoorKernel<<<static_cast<unsigned int>((entries + kThreads - 1) / kThreads), kThreads>>>(
+      d.sum.get(), cells, paths_per_cell, batches, d.formed.get());
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
+  const auto download = [&](double* host, size_t offset, size_t count) {
+    return cudaMemcpy(host, d.formed.get() + offset, count * sizeof(double),
+                      cudaMemcpyDeviceToHost);
+  };
+  for (int b = 0; b < batches; ++b) {
+    FENESTRA_CUDA_RETURN_IF_ERROR(download(out.batches[b], b * entries, entries));
+  }
+  FENESTRA_CUDA_RETURN_IF_ERROR(download(out.mean, batches * entries, entries));
+  FENESTRA_CUDA_RETURN_IF_ERROR(download(out.standard_error, (batches + 1) * entries, entries));
+  FENESTRA_CUDA_RETURN_IF_ERROR(download(out.first_escapes, (batches + 2) * entries, cells));
+  return "";
 }
 
 std::string CudaTracer::SetOutdoorScene(const BvhLayout& bvh, const std::vector<uint8_t>& met) {

@@ -73,11 +73,20 @@ class CudaTracer {
                        int batches, uint64_t seed, const PathSettings& path, double* sum,
                        double* sum_squares, CudaCounters* counters);
 
+  // Where Outdoor puts O: each batch, their mean and its standard error, row-major
+  // (window cells + kTregenzaBinCount) x kTregenzaBinCount as FormOutdoorBatches makes them
+  // (core/dc/dc_backend.h), and per window cell its paths whose first segment reached the sky.
+  struct OutdoorOutput {
+    std::vector<double*> batches;
+    double* mean;
+    double* standard_error;
+    double* first_escapes;
+  };
   // Outdoor paths, paths_per_cell from each window cell in `batches` batches, the same
-  // streams as TraceOutdoorCpu; sum gets its layout (kOutdoorRowSize per batch and cell).
+  // streams as TraceOutdoorCpu; O formed from their sums on the device, then downloaded.
   std::string Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
                       uint64_t paths_per_cell, int batches, uint64_t seed, const PathSettings& path,
-                      double* sum, CudaCounters* counters);
+                      const OutdoorOutput& out, CudaCounters* counters);
 
   // Uploads the outdoor surfaces' BVH, which the indoor stage tests its window connections
   // against (OutdoorView), and per window cell whether all its views meet them
