@@ -10,6 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/strip.h"
 #include "core/common/atomic_file.h"
+#include "core/common/batch_mean.h"
 
 namespace fenestra {
 
@@ -211,6 +212,16 @@ absl::StatusOr<Matrix> ReadRadianceMatrix(const std::string& path) {
                                                    " (only one-component matrices are supported)"));
   }
   return std::move(components->front());
+}
+
+void MeanAndError(const std::vector<Matrix>& batches, Matrix* mean, Matrix* standard_error) {
+  mean->resize(batches[0].rows(), batches[0].cols());
+  standard_error->resize(mean->rows(), mean->cols());
+  for (Eigen::Index i = 0; i < mean->size(); ++i) {
+    BatchMeanAndError(
+        static_cast<int>(batches.size()), [&](int b) { return batches[b].data()[i]; },
+        &mean->data()[i], &standard_error->data()[i]);
+  }
 }
 
 }  // namespace fenestra

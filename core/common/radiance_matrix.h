@@ -21,6 +21,10 @@ enum class MatrixFormat { kAscii, kFloat };
 absl::Status WriteRadianceMatrix(const std::string& path, const Matrix& m,
                                  MatrixFormat format = MatrixFormat::kAscii, int components = 1);
 
+// The mean of B >= 2 equally shaped batch matrices and its standard error from their spread,
+// entry by entry (BatchMeanAndError), in one pass over the entries.
+void MeanAndError(const std::vector<Matrix>& batches, Matrix* mean, Matrix* standard_error);
+
 // Mean of standard_error / value over the entries above `min_fraction` of their row's
 // maximum (of the whole matrix's maximum when !per_row); 0 when there are none.
 double MeanRelativeError(const Matrix& value, const Matrix& standard_error,

@@ -8,7 +8,6 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
-#include "core/common/batch_mean.h"
 #include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
@@ -57,18 +56,6 @@ absl::Status CheckBatches(int batches) {
         absl::StrCat("batches must be 2 to ", kMaxBatches, ", got ", batches));
   }
   return absl::OkStatus();
-}
-
-// Mean and standard error of the mean of B >= 2 equally shaped batch matrices.
-// One pass over the entries: O's batches are tens of MB.
-void MeanAndError(const std::vector<Matrix>& batches, Matrix* mean, Matrix* standard_error) {
-  mean->resize(batches[0].rows(), batches[0].cols());
-  standard_error->resize(mean->rows(), mean->cols());
-  for (Eigen::Index i = 0; i < mean->size(); ++i) {
-    BatchMeanAndError(
-        static_cast<int>(batches.size()), [&](int b) { return batches[b].data()[i]; },
-        &mean->data()[i], &standard_error->data()[i]);
-  }
 }
 
 }  // namespace

@@ -49,13 +49,8 @@ absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
                             product.ApplyToSky(indoor_batches, SkyColumnsInLux(sky.radiance, lit)));
 
   // Their mean, and its standard error from the spread of the batches
-  const double count = static_cast<double>(batches.size());
-  Matrix mean = Matrix::Zero(sensors, static_cast<Eigen::Index>(lit.size()));
-  for (const Matrix& e : batches) mean += e;
-  mean /= count;
-  Matrix squares = Matrix::Zero(mean.rows(), mean.cols());
-  for (const Matrix& e : batches) squares.array() += (e - mean).array().square();
-  const Matrix standard_error = (squares / (count * (count - 1))).cwiseSqrt();
+  Matrix mean, standard_error;
+  MeanAndError(batches, &mean, &standard_error);
   for (int64_t i = 0; i < sensors; ++i) {
     for (size_t c = 0; c < lit.size(); ++c) {
       const int k = static_cast<int>(i * steps + lit[c]);
