@@ -315,6 +315,17 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
   ASSERT_TRUE(traced.ok()) << traced.status();
   ExpectIndoorBatchesAreTheTrace(**on_device, tilted, *traced);
   ExpectIndoorBatchesAreTheTrace(**in_turn, tilted, *traced);
+  // Without a blind there is nothing to replay: the design is traced in full, and its I is
+  // still the indoor stage's (the outdoor stage never sees the blind, so O stays)
+  Scene bare = scene;
+  bare.blind.reset();
+  absl::StatusOr<std::unique_ptr<DesignTallies>> in_full =
+      gpu->MakeDesignTallies(bare, indoor, o->batches, sky);
+  ASSERT_TRUE(in_full.ok()) << in_full.status();
+  absl::StatusOr<IndoorResult> bare_traced =
+      ComputeIndoorStage(bare, BlindDesign{}, indoor, gpu.get());
+  ASSERT_TRUE(bare_traced.ok()) << bare_traced.status();
+  ExpectIndoorBatchesAreTheTrace(**in_full, BlindDesign{}, *bare_traced);
   // In rounds (racing), each round replays only the parts it adds
   ExpectRoundsEndAsOneCall(**on_device, *DesignWithOverrides(scene, {{"alpha", 0.2}}),
                            *DesignWithOverrides(scene, {{"alpha", 1.0}, {"width", 0.05}}), options);
