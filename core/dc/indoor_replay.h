@@ -8,11 +8,11 @@
 // meet the blind of any design within the scene's ranges (the blind's envelope,
 // EnvelopeOfBlind). Until then the path does not depend on the design, except for the
 // shadow rays of its next-event estimates, which all run towards the window and so past
-// the blind. Per design, those recorded shadow rays are tested against the blind alone (here
-// its triangles, 16 rays at a time; the GPU's replay tests them against the slats' layout,
-// LocalSlatsOfBlind), and the paths that reached the envelope are traced on from there
-// through the room and the blind (on the GPU, the room's BVH recorded once with the slats'
-// put beside it per design, BvhWithSlats).
+// the blind. Per design, those recorded shadow rays are tested against the slats' layout
+// alone (LocalSlatsOfBlind; here each kept as its line across the envelope, a few flops per
+// design), and the paths that reached the envelope are traced on from there through the
+// room and the blind (on the GPU, the room's BVH recorded once with the slats' put beside it
+// per design, BvhWithSlats).
 #include <memory>
 #include <vector>
 
@@ -27,11 +27,10 @@ namespace fenestra {
 // The envelope of the blinds of `scene`'s ranges (with room to spare) in `geometry`'s frame.
 LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& scene);
 
-// The slats of `scene`'s blind at `design` in `geometry`'s frame, for the GPU replay's shadow
-// rays: a few box tests per ray instead of a traversal of the blind's triangles, which on the
-// GPU is faster (replay kernel 1.08 ms against 1.44 ms) and on the CPU slower than Embree's
-// packets of 16 rays (bench/README.md, "Racing"). A ray that grazes a slat's edge within
-// float rounding, about one in a million, may be answered otherwise than by the triangles.
+// The slats of `scene`'s blind at `design` in `geometry`'s frame, for the replays' shadow
+// rays: one test of the ray's line or a few box tests instead of a traversal of the blind's
+// triangles (bench/README.md, "Racing"). A ray that grazes a slat's edge within float
+// rounding, about one in a million, may be answered otherwise than by the triangles.
 LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
                              const BlindDesign& design);
 

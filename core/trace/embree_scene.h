@@ -41,35 +41,6 @@ struct EmbreeIntersector {
     return ray.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
   }
 
-  // Up to kPacketRays shadow rays at once (rtcOccluded16, SIMD across the rays): for each
-  // ray i < count, whether a surface lies on it for t in (0, distances[i]), as Occluded.
-  static constexpr int kPacketRays = 16;
-  void OccludedPacket(const Vec3f* origins, const Vec3f* directions, const float* distances,
-                      int count, bool* blocked) const {
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    alignas(64) RTCRay16 rays;
-    alignas(64) int valid[kPacketRays];
-    for (int i = 0; i < kPacketRays; ++i) {
-      const int k = i < count ? i : 0;  // lanes past count repeat ray 0, masked off
-      valid[i] = i < count ? -1 : 0;
-      rays.org_x[i] = origins[k].x;
-      rays.org_y[i] = origins[k].y;
-      rays.org_z[i] = origins[k].z;
-      rays.tnear[i] = 0.0f;
-      rays.dir_x[i] = directions[k].x;
-      rays.dir_y[i] = directions[k].y;
-      rays.dir_z[i] = directions[k].z;
-      rays.time[i] = 0.0f;
-      rays.tfar[i] = distances[k];
-      rays.mask[i] = 0xFFFFFFFFu;
-      rays.id[i] = 0;
-      rays.flags[i] = 0;
-    }
-    rtcOccluded16(valid, scene, &context, &rays);
-    for (int i = 0; i < count; ++i) blocked[i] = rays.tfar[i] < 0.0f;
-  }
-
   bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);

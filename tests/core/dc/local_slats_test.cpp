@@ -48,7 +48,9 @@ class AroundWindow {
 // points towards the window (the replays' shadow rays) and every other way, across designs
 // at the ends of the city office's ranges (slats touching, in the window plane,
 // perpendicular to it, the thinnest and widest), horizontal and vertical, the answers agree
-// but for segments that graze an edge within float rounding.
+// but for segments that graze an edge within float rounding. So do the answers the CPU
+// replay gets from segments kept in the envelope's frame: by their line for those that cross
+// the envelope's depth, else by the whole segment.
 TEST(LocalSlatsTest, AgreesWithTheTriangles) {
   Scene scene = LoadExample("city_office");
   for (const bool vertical : {false, true})
@@ -63,9 +65,14 @@ TEST(LocalSlatsTest, AgreesWithTheTriangles) {
       absl::StatusOr<std::unique_ptr<EmbreeScene>> triangles = EmbreeScene::Build(*geometry);
       ASSERT_TRUE(triangles.ok()) << triangles.status();
       const LocalSlats slats = LocalSlatsOfBlind(*geometry, scene, *design);
+      // The CPU replay's frame: the envelope of every design's slats, and this design's shift
+      const LocalEnvelope e = LocalEnvelopeOfBlind(*geometry, scene);
+      const Vec3f moved = slats.center - e.center;
+      const Vec3f shift{Dot(moved, slats.stack), Dot(moved, slats.length),
+                        Dot(moved, slats.into_room)};
       // Segments between points of a box around the window, inside the room and outside
       AroundWindow around(geometry->ToLocal(scene.window.center - 0.2 * scene.window.normal), 7);
-      int blocked = 0, differ = 0;
+      int blocked = 0, differ = 0, crossing_count = 0, crossings_differ = 0;
       const int segments = 200'000;
       for (int i = 0; i < segments; ++i) {
         const Vec3f a = around.Point();
@@ -75,12 +82,26 @@ TEST(LocalSlatsTest, AgreesWithTheTriangles) {
         const bool by_mesh = (*triangles)->Intersector().Occluded(a, direction, distance);
         blocked += by_mesh ? 1 : 0;
         differ += by_mesh != slats.Occluded(a, direction, distance) ? 1 : 0;
+        // As the CPU replay tests them: by the line of a segment that crosses the envelope
+        const StackSegment in_envelope =
+            SegmentInFrame(e.center, e.axis[0], e.axis[1], e.axis[2], a, direction, distance);
+        SlabCrossing crossing;
+        if (SlabCrossing::Of(in_envelope, e.half[2], &crossing)) {
+          ++crossing_count;
+          crossings_differ += by_mesh != slats.Occluded(crossing, shift, e.half[2]) ? 1 : 0;
+        } else {
+          differ += by_mesh != slats.Occluded(in_envelope.MovedBy(shift)) ? 1 : 0;
+        }
       }
-      std::printf("%s, alpha %.2f: %d of %d segments blocked, %d answers differ\n",
-                  vertical ? "vertical" : "horizontal", design->tilt_rad, blocked, segments,
-                  differ);
+      std::printf(
+          "%s, alpha %.2f: %d of %d segments blocked, %d answers differ; %d cross the "
+          "envelope, %d of those differ by their line\n",
+          vertical ? "vertical" : "horizontal", design->tilt_rad, blocked, segments, differ,
+          crossing_count, crossings_differ);
       EXPECT_GT(blocked, segments / 50);
+      EXPECT_GT(crossing_count, segments / 10);
       EXPECT_LE(differ, segments / 100'000);
+      EXPECT_LE(crossings_differ, segments / 100'000);
     }
 }
 

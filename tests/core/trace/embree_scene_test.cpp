@@ -69,44 +69,6 @@ TEST(EmbreeSceneTest, AgreesWithBruteForce) {
   EXPECT_EQ(hits, 20000);
 }
 
-// Shadow rays in packets get Occluded's answers, ray by ray, for every packet size: rays
-// from a room to points in and beyond a table, some blocked, some clear, some ending short.
-TEST(EmbreeSceneTest, PacketsOfShadowRaysAnswerAsSingleRays) {
-  TriangleMesh mesh;
-  AddBox(mesh, {-1.5, -6.25, 0}, {1.5, 0, 3}, 0);
-  AddBox(mesh, {-0.5, -2, 0.5}, {0.5, -1, 0.8}, 0);
-  const TraceGeometry geometry = *PrepareTraceGeometry(mesh, kMaterials);
-  const auto scene = EmbreeScene::Build(geometry);
-  ASSERT_TRUE(scene.ok()) << scene.status();
-  const EmbreeIntersector embree = (*scene)->Intersector();
-  constexpr int kPacket = EmbreeIntersector::kPacketRays;
-  int blocked_count = 0, rays = 0;
-  for (int count = 1; count <= kPacket; ++count) {
-    for (int packet = 0; packet < 200; ++packet) {
-      Vec3f origins[kPacket], directions[kPacket];
-      float distances[kPacket];
-      for (int i = 0; i < count; ++i) {
-        const Uniform4 u = PathRandom(13, count, packet * kPacket + i).Draw(0, 0);
-        origins[i] = geometry.ToLocal({-1.4 + 2.8 * u.u[0], -6.2 + 6.1 * u.u[1], 2.5});
-        const Vec3f target = geometry.ToLocal({-0.6 + 1.2 * u.u[2], -2.1 + 1.2 * u.u[3], 0.4});
-        const Vec3f to_target = target - origins[i];
-        directions[i] = Normalize(to_target);
-        distances[i] = Length(to_target) * (packet % 2 == 0 ? 1.0f : 0.5f);
-      }
-      bool blocked[kPacket];
-      embree.OccludedPacket(origins, directions, distances, count, blocked);
-      for (int i = 0; i < count; ++i) {
-        EXPECT_EQ(blocked[i], embree.Occluded(origins[i], directions[i], distances[i]))
-            << "packet of " << count << ", ray " << i;
-        blocked_count += blocked[i];
-        ++rays;
-      }
-    }
-  }
-  EXPECT_GT(blocked_count, rays / 10);
-  EXPECT_LT(blocked_count, rays - rays / 10);
-}
-
 TEST(EmbreeSceneTest, LeavesDegenerateTrianglesOut) {
   TriangleMesh mesh;
   AddBox(mesh, {0, 0, 0}, {1, 1, 1}, 0);
