@@ -21,37 +21,24 @@ namespace {
 // Room to spare around the blind's envelope: far above float rounding at room scale [m]
 constexpr double kEnvelopeMargin = 1e-3;
 
-// A recorded shadow ray in the frame of the blind's envelope (LocalEnvelope: the centre and
-// axes of every design's slat stack but for a shift along them): the line of one that crosses
-// the envelope's depth, as nearly all do, or else the whole segment.
-template <class Shape>
-struct SlatConnection {
-  Shape shape;
-  int32_t column;  // of I
-  double value;
-};
-
 // The recorded paths of one sensor, one batch, one range of path indices.
 struct Chunk {
   uint32_t sensor = 0;
   int batch = 0;
   std::vector<double> fixed;  // per column of I: what no blind can change
   const LocalEnvelope* envelope = nullptr;
-  std::vector<SlatConnection<SlabCrossing>> crossings;
-  std::vector<SlatConnection<StackSegment>> others;
+  std::vector<ReplayCrossing> crossings;
+  std::vector<ReplayConnection> others;  // connections that do not cross the envelope
   std::vector<ReplayResume> resumes;
   uint64_t paths = 0;
 
   void AddFixed(int column, double value) { fixed[column] += value; }
   void AddConnection(const ReplayConnection& c) {
-    const LocalEnvelope& e = *envelope;
-    const StackSegment segment = SegmentInFrame(e.center, e.axis[0], e.axis[1], e.axis[2], c.origin,
-                                                c.direction, c.distance);
-    SlabCrossing crossing;
-    if (SlabCrossing::Of(segment, e.half[2], &crossing)) {
-      crossings.push_back({crossing, c.column, c.value});
+    ReplayCrossing crossing;
+    if (CrossingOf(*envelope, c, &crossing)) {
+      crossings.push_back(crossing);
     } else {
-      others.push_back({segment, c.column, c.value});
+      others.push_back(c);
     }
   }
   void AddResume(const PathState& state, uint64_t path) { resumes.push_back({state, path}); }
@@ -61,18 +48,17 @@ using OutdoorEmbreeView = OutdoorView<EmbreeIntersector>;
 using Recording = RecordingIntersector<EmbreeIntersector>;
 
 // Adds the value of every connection of `chunk` that `slats` leave clear to its column of
-// `sum`; `shift` is where the slats' centre lies in the envelope's frame, along its axes. A
+// `sum`; `shift` is where the slats' centre lies in the envelope's frame (ShiftFrom). A
 // crossing's test is a few flops without a branch (LocalSlats::LineOccluded): 5-6 times
 // faster than Embree's packets of 16 rays against the blind's triangles (bench/README.md,
 // "Racing").
 void TestConnections(const LocalSlats& slats, Vec3f shift, const Chunk& chunk,
                      std::vector<double>& sum) {
-  const float half_depth = chunk.envelope->half[2];
-  for (const SlatConnection<SlabCrossing>& k : chunk.crossings) {
-    sum[k.column] += slats.Occluded(k.shape, shift, half_depth) ? 0.0 : k.value;
+  for (const ReplayCrossing& k : chunk.crossings) {
+    sum[k.column] += Clear(slats, shift, *chunk.envelope, k) ? k.value : 0.0;
   }
-  for (const SlatConnection<StackSegment>& k : chunk.others) {
-    if (!slats.Occluded(k.shape.MovedBy(shift))) sum[k.column] += k.value;
+  for (const ReplayConnection& k : chunk.others) {
+    if (!slats.Occluded(k.origin, k.direction, k.distance)) sum[k.column] += k.value;
   }
 }
 
@@ -247,8 +233,7 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
   FENESTRA_ASSIGN_OR_RETURN(full_scene, EmbreeScene::Build(full_geometry));
   const EmbreeIntersector full_view = full_scene->Intersector();
   const LocalSlats slats = LocalSlatsOfBlind(full_geometry, d.scene, design);
-  const Vec3f moved = slats.center - d.envelope.center;
-  const Vec3f shift{Dot(moved, slats.stack), Dot(moved, slats.length), Dot(moved, slats.into_room)};
+  const Vec3f shift = slats.ShiftFrom(d.envelope.center);
   const SurfaceTable surfaces = full_geometry.Surfaces();
   const PathSettings settings = IndoorPathSettings(d.options);
 

@@ -12,6 +12,7 @@
 #include <cstdint>
 
 #include "core/common/cpu_gpu.h"
+#include "core/trace/local_slats.h"
 #include "core/trace/path.h"
 #include "core/trace/two_stage_modes.h"
 
@@ -56,6 +57,31 @@ struct ReplayConnection {
   int32_t column;  // of I: a window cell or a direct column (decided when recorded)
   double value;
 };
+
+// A connection whose shadow ray crosses the envelope's depth from face to face, as nearly all
+// do: its line across the envelope (in the envelope's frame) stands for the ray.
+struct ReplayCrossing {
+  SlabCrossing line;
+  int32_t column;
+  double value;
+};
+
+// `c` as a crossing of `envelope` (axes: along the stack, along the slats, into the room),
+// when its shadow ray crosses it.
+FENESTRA_CPU_GPU inline bool CrossingOf(const LocalEnvelope& envelope, const ReplayConnection& c,
+                                        ReplayCrossing* crossing) {
+  const StackSegment s = SegmentInFrame(envelope.center, envelope.axis[0], envelope.axis[1],
+                                        envelope.axis[2], c.origin, c.direction, c.distance);
+  crossing->column = c.column;
+  crossing->value = c.value;
+  return SlabCrossing::Of(s, envelope.half[2], &crossing->line);
+}
+
+// Whether `slats` leave crossing `k` of `envelope` clear; `shift` is ShiftFrom(envelope.center).
+FENESTRA_CPU_GPU inline bool Clear(const LocalSlats& slats, Vec3f shift,
+                                   const LocalEnvelope& envelope, const ReplayCrossing& k) {
+  return !slats.Occluded(k.line, shift, envelope.half[2]);
+}
 
 // A path that reached the envelope: its state there and its index (random stream).
 struct ReplayResume {

@@ -103,6 +103,12 @@ struct LocalSlats {
     return *t0 <= *t1;
   }
 
+  // Where the slats' centre lies from `frame_center`, along the slats' axes.
+  FENESTRA_CPU_GPU Vec3f ShiftFrom(Vec3f frame_center) const {
+    const Vec3f moved = center - frame_center;
+    return {Dot(moved, stack), Dot(moved, length), Dot(moved, into_room)};
+  }
+
   // Whether the segment from `origin` along the unit `direction` meets a slat before
   // `distance`.
   FENESTRA_CPU_GPU bool Occluded(Vec3f origin, Vec3f direction, float distance) const {

@@ -292,14 +292,17 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
 }
 
 // The records of the indoor replay on the device: per row (sensor, batch; the indoor
-// kernel's rows) a region of `connection_capacity` connections and `resume_capacity`
-// resumes, and how many of each the row made (more than the capacity: they did not fit).
+// kernel's rows) a region of `crossing_capacity` connections that cross the envelope,
+// `connection_capacity` others and `resume_capacity` resumes, and how many of each the row
+// made (more than the capacity: they did not fit).
 struct DeviceRecords {
+  ReplayCrossing* crossings;
   ReplayConnection* connections;
   ReplayResume* resumes;
+  unsigned long long* crossing_count;    // per row
   unsigned long long* connection_count;  // per row
   unsigned long long* resume_count;      // per row
-  uint64_t connection_capacity, resume_capacity;
+  uint64_t crossing_capacity, connection_capacity, resume_capacity;
 };
 
 __device__ uint64_t Smaller(uint64_t a, uint64_t b) { return a < b ? a : b; }
@@ -310,6 +313,7 @@ struct DeviceRecorder {
   double* fixed;
   DeviceRecords records;
   unsigned int row;
+  LocalEnvelope envelope;
   FENESTRA_CPU_GPU void AddFixed(int column, double value) {
 #if defined(__CUDA_ARCH__)
     atomicAdd(&fixed[column], value);
@@ -317,6 +321,14 @@ struct DeviceRecorder {
   }
   FENESTRA_CPU_GPU void AddConnection(const ReplayConnection& c) {
 #if defined(__CUDA_ARCH__)
+    ReplayCrossing crossing;
+    if (CrossingOf(envelope, c, &crossing)) {
+      const uint64_t i = atomicAdd(&records.crossing_count[row], 1ull);
+      if (i < records.crossing_capacity) {
+        records.crossings[row * records.crossing_capacity + i] = crossing;
+      }
+      return;
+    }
     const uint64_t i = atomicAdd(&records.connection_count[row], 1ull);
     if (i < records.connection_capacity) {
       records.connections[row * records.connection_capacity + i] = c;
@@ -351,7 +363,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   const int s = static_cast<int>(blockIdx.y) / batches;
   const int b = static_cast<int>(blockIdx.y) % batches;
   RecordingIntersector<BvhIntersector> scene{room, envelope};
-  DeviceRecorder recorder{row, records, blockIdx.y};
+  DeviceRecorder recorder{row, records, blockIdx.y, envelope};
   RecordingSink<BvhIntersector, DeviceRecorder> sink{&scene, &recorder};
   RecordingMode<BvhIntersector, DeviceRecorder, OutdoorView<BvhIntersector>> mode{
       {sensors[s].position, sensors[s].normal, window, &shared_basis, settings.max_bounces,
@@ -373,12 +385,13 @@ struct ReplayParts {
 };
 
 // A design of a replay on the device: the room with its blind (BVH, and per triangle its
-// material) and its slats alone.
+// material), its slats alone, and their centre from the recorded envelope's (ShiftFrom).
 struct DeviceDesign {
   const BvhNode* nodes;
   const BvhTriangle* triangles;
   const uint32_t* triangle_material;
   LocalSlats blind;
+  Vec3f shift;
 };
 
 // The designs one replay launch traces, passed by value.
@@ -397,8 +410,8 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     ReplayKernel(ReplayDesigns designs, const TraceMaterial* materials, PathSettings settings,
                  OutdoorView<BvhIntersector> outdoor, const TraceSensor* sensors, int sensor_count,
                  TraceWindow window, HemisphereBasis basis, ReplayParts parts, uint64_t seed,
-                 DeviceRecords records, const unsigned int* row_blocks, const double* fixed,
-                 double* sum, size_t design_sums, unsigned long long* counters,
+                 LocalEnvelope envelope, DeviceRecords records, const unsigned int* row_blocks,
+                 const double* fixed, double* sum, size_t design_sums, unsigned long long* counters,
                  unsigned long long* next_item) {
   extern __shared__ double row[];  // columns of I
   __shared__ unsigned long long block_counters[kCounters];
@@ -437,13 +450,22 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   __syncthreads();
   ThreadCounts counts;
   uint64_t resume_count = 0;
+  const uint64_t stride = static_cast<uint64_t>(blocks) * blockDim.x;
   for (int p = 0; p < count; ++p) {
     const unsigned int r = first_row + p;
+    const uint64_t crossing_count = Smaller(records.crossing_count[r], records.crossing_capacity);
+    const ReplayCrossing* crossings = records.crossings + r * records.crossing_capacity;
+    for (uint64_t i = block * static_cast<uint64_t>(blockDim.x) + threadIdx.x; i < crossing_count;
+         i += stride) {
+      const ReplayCrossing k = crossings[i];
+      ++counts.values[0];
+      if (Clear(design.blind, design.shift, envelope, k)) atomicAdd(&row[k.column], k.value);
+    }
     const uint64_t connection_count =
         Smaller(records.connection_count[r], records.connection_capacity);
     const ReplayConnection* connections = records.connections + r * records.connection_capacity;
     for (uint64_t i = block * static_cast<uint64_t>(blockDim.x) + threadIdx.x; i < connection_count;
-         i += static_cast<uint64_t>(blocks) * blockDim.x) {
+         i += stride) {
       const ReplayConnection c = connections[i];
       ++counts.values[0];
       if (!design.blind.Occluded(c.origin, c.direction, c.distance)) {
@@ -583,9 +605,10 @@ struct CudaTracer::Impl {
   bool has_scene = false, has_outdoor = false;
   // The indoor replay: the records, their fixed light, and what they were recorded for;
   // the blind of the design replayed
+  DeviceBuffer<ReplayCrossing> crossings;
   DeviceBuffer<ReplayConnection> connections;
   DeviceBuffer<ReplayResume> resumes;
-  DeviceBuffer<unsigned long long> record_counts;  // per row: connections, then resumes
+  DeviceBuffer<unsigned long long> record_counts;  // per row: see Recorded::counts
   DeviceBuffer<double> fixed;
   DeviceBuffer<TraceSensor> replay_sensors;
   DeviceBuffer<unsigned int> row_blocks;          // each row's first block, for row_blocks_key
@@ -600,8 +623,11 @@ struct CudaTracer::Impl {
   struct Recorded {
     bool valid = false;
     int sensor_count = 0, batches = 0, parts = 0;  // rows: sensors x batches x parts
-    uint64_t paths_per_sensor = 0, seed = 0, connection_capacity = 0, resume_capacity = 0;
-    std::vector<unsigned long long> counts;  // per row: connections, then resumes
+    uint64_t paths_per_sensor = 0, seed = 0, crossing_capacity = 0, connection_capacity = 0,
+             resume_capacity = 0;
+    // Per row: the other connections, then the resumes, then the crossings
+    std::vector<unsigned long long> counts;
+    LocalEnvelope envelope;
     TraceWindow window;
     HemisphereBasis basis;
     Vec3f outdoor_offset;
@@ -628,10 +654,13 @@ struct CudaTracer::Impl {
   DeviceRecords Records() {
     const size_t rows =
         static_cast<size_t>(recorded.sensor_count) * recorded.batches * recorded.parts;
-    return {connections.get(),
+    return {crossings.get(),
+            connections.get(),
             resumes.get(),
+            record_counts.get() + 2 * rows,
             record_counts.get(),
             record_counts.get() + rows,
+            recorded.crossing_capacity,
             recorded.connection_capacity,
             recorded.resume_capacity};
   }
@@ -641,13 +670,15 @@ struct CudaTracer::Impl {
   // them.
   std::vector<double> ReplayRowWork(int first, int last, int designs) const {
     const Recorded& r = recorded;
-    const size_t record_rows = r.counts.size() / 2;
+    const size_t record_rows = r.counts.size() / 3;
     const size_t design_rows = static_cast<size_t>(r.sensor_count) * r.batches;
     std::vector<double> work(design_rows, 0.0);
     for (size_t y = 0; y < design_rows; ++y) {
       for (int p = first; p < last; ++p) {
         const size_t i = y * r.parts + p;
-        work[y] += static_cast<double>(std::min<uint64_t>(r.counts[i], r.connection_capacity)) +
+        work[y] += static_cast<double>(
+                       std::min<uint64_t>(r.counts[i], r.connection_capacity) +
+                       std::min<uint64_t>(r.counts[2 * record_rows + i], r.crossing_capacity)) +
                    kResumeWork * static_cast<double>(std::min<uint64_t>(r.counts[record_rows + i],
                                                                         r.resume_capacity));
       }
@@ -935,23 +966,39 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   const uint64_t row_paths = paths_per_sensor / row_batches + 1;
   Impl::Recorded& r = d.recorded;
   d.row_blocks_key = {-1, -1, -1};
-  r = {false,     sensor_count, batches, parts, paths_per_sensor, seed, 3 * row_paths + 64,
-       row_paths, {},           window,  basis, outdoor_offset,   path};
-  std::vector<unsigned long long> counts(2 * static_cast<size_t>(rows));
+  // Room for about 3 connections per path, nearly all of which cross the envelope
+  r = {false,
+       sensor_count,
+       batches,
+       parts,
+       paths_per_sensor,
+       seed,
+       3 * row_paths + 64,
+       row_paths / 16 + 64,
+       row_paths,
+       {},
+       envelope,
+       window,
+       basis,
+       outdoor_offset,
+       path};
+  std::vector<unsigned long long> counts(3 * static_cast<size_t>(rows));
   CudaCounters counters;
   // Connections per row are not known in advance: a row that made more than there was room
   // for is traced again with room for all (the same paths make the same records)
   for (int attempt = 0;; ++attempt) {
     const size_t bytes =
-        rows * (r.connection_capacity * sizeof(ReplayConnection) +
+        rows * (r.crossing_capacity * sizeof(ReplayCrossing) +
+                r.connection_capacity * sizeof(ReplayConnection) +
                 r.resume_capacity * sizeof(ReplayResume) + 2 * columns * sizeof(double));
     if (bytes > max_bytes) {
       return std::string(kReplayTooLarge) + " (" + std::to_string(bytes >> 20) + " MiB, at most " +
              std::to_string(max_bytes >> 20) + " MiB)";
     }
+    FENESTRA_CUDA_RETURN_IF_ERROR(d.crossings.Reserve(rows * r.crossing_capacity));
     FENESTRA_CUDA_RETURN_IF_ERROR(d.connections.Reserve(rows * r.connection_capacity));
     FENESTRA_CUDA_RETURN_IF_ERROR(d.resumes.Reserve(rows * r.resume_capacity));
-    FENESTRA_CUDA_RETURN_IF_ERROR(d.record_counts.Zero(2 * static_cast<size_t>(rows)));
+    FENESTRA_CUDA_RETURN_IF_ERROR(d.record_counts.Zero(3 * static_cast<size_t>(rows)));
     const DeviceRecords records = d.Records();
     const dim3 grid(d.BlocksPerRow(RecordKernel, shared, row_paths, rows), rows);
     std::string error = d.Run(
@@ -966,9 +1013,12 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
     if (!error.empty()) return error;
     FENESTRA_CUDA_RETURN_IF_ERROR(d.record_counts.Download(counts.data(), counts.size()));
     const unsigned long long most = *std::max_element(counts.begin(), counts.begin() + rows);
-    if (most <= r.connection_capacity) break;
+    const unsigned long long most_crossing =
+        *std::max_element(counts.begin() + 2 * rows, counts.end());
+    if (most <= r.connection_capacity && most_crossing <= r.crossing_capacity) break;
     if (attempt > 0) return "CUDA tracer: the indoor paths' records changed between two traces";
-    r.connection_capacity = most;
+    r.connection_capacity = std::max<uint64_t>(most, r.connection_capacity);
+    r.crossing_capacity = std::max<uint64_t>(most_crossing, r.crossing_capacity);
   }
   FENESTRA_CUDA_RETURN_IF_ERROR(d.fixed.Reserve(static_cast<size_t>(rows) * columns));
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaMemcpy(d.fixed.get(), d.sum.get(),
@@ -979,7 +1029,7 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   stats->paths = paths_per_sensor * sensor_count;
   stats->connections = stats->resumes = 0;
   for (unsigned int i = 0; i < rows; ++i) {
-    stats->connections += counts[i];
+    stats->connections += counts[i] + counts[2 * rows + i];
     stats->resumes += counts[rows + i];
   }
   stats->rays = counters.rays;
@@ -1023,8 +1073,9 @@ std::string CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceMa
       [&] {
         ReplayKernel<<<d.row_blocks_total, kThreads, shared>>>(
             designs, materials, r.path, d.Outdoor(r.outdoor_offset), d.replay_sensors.get(),
-            r.sensor_count, r.window, r.basis, parts, r.seed, records, d.row_blocks.get(),
-            d.fixed.get(), d.sum.get(), d.DesignSums(), d.counters.get(), d.next_path.get());
+            r.sensor_count, r.window, r.basis, parts, r.seed, r.envelope, records,
+            d.row_blocks.get(), d.fixed.get(), d.sum.get(), d.DesignSums(), d.counters.get(),
+            d.next_path.get());
       },
       host_sum, nullptr, out, first > 0);
   d.replayed_parts = error.empty() && designs.count == 1 ? last : 0;
@@ -1037,7 +1088,8 @@ std::string CudaTracer::ReplayIndoor(const LocalSlats& blind, int first, int las
                                      CudaCounters* counters) {
   Impl& d = *impl_;
   ReplayDesigns designs{};
-  designs.design[0] = {d.nodes.get(), d.triangles.get(), d.triangle_material.get(), blind};
+  designs.design[0] = {d.nodes.get(), d.triangles.get(), d.triangle_material.get(), blind,
+                       blind.ShiftFrom(d.recorded.envelope.center)};
   designs.count = 1;
   return d.Replay(designs, d.materials.get(), first, last, sum, counters);
 }
@@ -1082,7 +1134,8 @@ std::string CudaTracer::ReplayIndoorDesigns(const std::vector<DesignScene>& scen
   for (size_t k = 0; k < scenes.size(); ++k) {
     designs.design[k] = {d.design_nodes.get() + starts[k][0],
                          d.design_triangles.get() + starts[k][1],
-                         d.design_triangle_material.get() + starts[k][2], scenes[k].blind};
+                         d.design_triangle_material.get() + starts[k][2], scenes[k].blind,
+                         scenes[k].blind.ShiftFrom(d.recorded.envelope.center)};
   }
   return d.Replay(designs, d.design_materials.get(), 0, d.recorded.parts, nullptr, counters);
 }

@@ -48,9 +48,8 @@ class AroundWindow {
 // points towards the window (the replays' shadow rays) and every other way, across designs
 // at the ends of the city office's ranges (slats touching, in the window plane,
 // perpendicular to it, the thinnest and widest), horizontal and vertical, the answers agree
-// but for segments that graze an edge within float rounding. So do the answers the CPU
-// replay gets from segments kept in the envelope's frame: by their line for those that cross
-// the envelope's depth, else by the whole segment.
+// but for segments that graze an edge within float rounding. So do the answers the replays
+// get for segments that cross the envelope's depth, from their line across it.
 TEST(LocalSlatsTest, AgreesWithTheTriangles) {
   Scene scene = LoadExample("city_office");
   for (const bool vertical : {false, true})
@@ -65,11 +64,9 @@ TEST(LocalSlatsTest, AgreesWithTheTriangles) {
       absl::StatusOr<std::unique_ptr<EmbreeScene>> triangles = EmbreeScene::Build(*geometry);
       ASSERT_TRUE(triangles.ok()) << triangles.status();
       const LocalSlats slats = LocalSlatsOfBlind(*geometry, scene, *design);
-      // The CPU replay's frame: the envelope of every design's slats, and this design's shift
+      // The replays' frame: the envelope of every design's slats, and this design's shift
       const LocalEnvelope e = LocalEnvelopeOfBlind(*geometry, scene);
-      const Vec3f moved = slats.center - e.center;
-      const Vec3f shift{Dot(moved, slats.stack), Dot(moved, slats.length),
-                        Dot(moved, slats.into_room)};
+      const Vec3f shift = slats.ShiftFrom(e.center);
       // Segments between points of a box around the window, inside the room and outside
       AroundWindow around(geometry->ToLocal(scene.window.center - 0.2 * scene.window.normal), 7);
       int blocked = 0, differ = 0, crossing_count = 0, crossings_differ = 0;
@@ -82,15 +79,11 @@ TEST(LocalSlatsTest, AgreesWithTheTriangles) {
         const bool by_mesh = (*triangles)->Intersector().Occluded(a, direction, distance);
         blocked += by_mesh ? 1 : 0;
         differ += by_mesh != slats.Occluded(a, direction, distance) ? 1 : 0;
-        // As the CPU replay tests them: by the line of a segment that crosses the envelope
-        const StackSegment in_envelope =
-            SegmentInFrame(e.center, e.axis[0], e.axis[1], e.axis[2], a, direction, distance);
-        SlabCrossing crossing;
-        if (SlabCrossing::Of(in_envelope, e.half[2], &crossing)) {
+        // As the replays test them: by the line of a segment that crosses the envelope
+        ReplayCrossing crossing;
+        if (CrossingOf(e, ReplayConnection{a, direction, distance, 0, 0.0}, &crossing)) {
           ++crossing_count;
-          crossings_differ += by_mesh != slats.Occluded(crossing, shift, e.half[2]) ? 1 : 0;
-        } else {
-          differ += by_mesh != slats.Occluded(in_envelope.MovedBy(shift)) ? 1 : 0;
+          crossings_differ += by_mesh == Clear(slats, shift, e, crossing) ? 1 : 0;
         }
       }
       std::printf(
