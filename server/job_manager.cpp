@@ -14,7 +14,7 @@
 #include "absl/strings/str_join.h"
 #include "core/common/seconds.h"
 #include "core/optimize/job.h"
-#include "core/sky/epw.h"
+#include "server/checksum.h"
 #include "server/limits.h"
 #include "server/log_safe.h"
 
@@ -165,7 +165,8 @@ absl::StatusOr<v1::JobInfo> JobManager::Submit(const v1::SubmitJobRequest& reque
 absl::StatusOr<JobManager::Admission> JobManager::Admit(const v1::SubmitJobRequest& request,
                                                         const Caller& caller) {
   // Everything checked before anything is stored
-  absl::StatusOr<CheckedJob> checked = CheckJobRequest(request, config_);
+  absl::StatusOr<CheckedJob> checked = CheckJobRequest(
+      request, config_, [this](const std::string& epw) { return weather_.Holds(Sha256Hex(epw)); });
   if (!checked.ok()) return checked.status();
   const PreparedJob& prepared = checked->prepared;
   Admission admitted;
@@ -467,13 +468,13 @@ absl::StatusOr<PreparedJob> JobManager::Prepare(Record& r) {
                         absl::StrCat("cannot read the job: ", job.status().message()));
   }
   r.weather = job->weather_file();
-  absl::StatusOr<std::string> weather = store_.ReadWeather(r.weather);
-  if (!weather.ok()) return weather.status();
   absl::StatusOr<PreparedJob> prepared = ValidateJob(*job, "");
   if (!prepared.ok()) return prepared.status();
-  absl::StatusOr<EpwData> parsed = ParseEpw(*weather, "weather_epw");
-  if (!parsed.ok()) return parsed.status();
-  prepared->weather = *std::move(parsed);
+  absl::StatusOr<WeatherCache::Entry> weather = weather_.Get(
+      r.weather, JobSkyOptions(*prepared), [&] { return store_.ReadWeather(r.weather); });
+  if (!weather.ok()) return weather.status();
+  prepared->weather = *weather->weather;
+  prepared->sky = weather->sky;
   prepared->job.clear_scene();  // needed only built
   return prepared;
 }

@@ -23,6 +23,7 @@
 #include "server/site_manager.h"
 #include "server/store/store.h"
 #include "server/users.h"
+#include "server/weather_cache.h"
 
 namespace fenestra {
 
@@ -137,9 +138,9 @@ class JobManager {
   bool Start(Record& record);
   // Runs a started job to its end.
   void RunStarted(Record& record);
-  // The job as submitted, read back from the store, with its weather file parsed and its
-  // scene built (left out of the message). DataLoss "the stored job ..." when its record
-  // does not parse.
+  // The job as submitted, read back from the store, with its weather file parsed, its sky
+  // matrix (both from weather_ when held there) and its scene built (left out of the
+  // message). DataLoss "the stored job ..." when its record does not parse.
   absl::StatusOr<PreparedJob> Prepare(Record& record);
   // What RunJob reports, stored as the record's events (and checkpoints).
   JobCallbacks Callbacks(Record& record);
@@ -152,6 +153,7 @@ class JobManager {
   const DataDir* const data_dir_;
   Store& store_;
   OutdoorCache& cache_;
+  WeatherCache weather_;
   SiteManager& sites_;
   HeavyRequests& heavy_;
   Scheduler& scheduler_;

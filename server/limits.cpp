@@ -134,8 +134,9 @@ absl::StatusOr<CheckedSite> CheckSiteRequest(const v1::RegisterSiteRequest& requ
   return site;
 }
 
-absl::StatusOr<CheckedJob> CheckJobRequest(const v1::SubmitJobRequest& request,
-                                           const v1::DaemonConfig& config) {
+absl::StatusOr<CheckedJob> CheckJobRequest(
+    const v1::SubmitJobRequest& request, const v1::DaemonConfig& config,
+    const std::function<bool(const std::string&)>& parsed_before) {
   FENESTRA_RETURN_IF_ERROR(CheckMessageText(request, ""));
   const v1::Limits& limits = config.limits();
   CheckedJob checked;
@@ -168,7 +169,7 @@ absl::StatusOr<CheckedJob> CheckJobRequest(const v1::SubmitJobRequest& request,
   without_paths.mutable_scene()->mutable_site()->clear_weather_file();
   FENESTRA_ASSIGN_OR_RETURN(prepared, ValidateJob(without_paths, ""));
   checked.prepared = std::move(prepared);
-  if (!request.weather_epw().empty()) {
+  if (!request.weather_epw().empty() && !(parsed_before && parsed_before(request.weather_epw()))) {
     FENESTRA_RETURN_IF_ERROR(CheckUploadedWeather(request.weather_epw(), request.weather_name()));
   }
   return checked;

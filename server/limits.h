@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include "absl/status/status.h"
@@ -55,9 +56,11 @@ struct CheckedJob {
 };
 // The door for JobService.Submit: every string of the request, the scene (inline, within
 // the limits), the budget and sampling within the limits, ValidateJob, the uploaded weather
-// parsed. Where the weather comes from (upload or site) is Submit's to decide.
-// InvalidArgument naming the field or the limit.
-absl::StatusOr<CheckedJob> CheckJobRequest(const v1::SubmitJobRequest& request,
-                                           const v1::DaemonConfig& config);
+// parsed (but where `parsed_before`, given its bytes, says it parsed already). Where the
+// weather comes from (upload or site) is Submit's to decide. InvalidArgument naming the
+// field or the limit.
+absl::StatusOr<CheckedJob> CheckJobRequest(
+    const v1::SubmitJobRequest& request, const v1::DaemonConfig& config,
+    const std::function<bool(const std::string&)>& parsed_before = nullptr);
 
 }  // namespace fenestra

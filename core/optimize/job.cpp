@@ -148,7 +148,7 @@ v1::Metrics ToProto(const AnnualMetricsEstimate& m) {
 // the lit analysed ones (the rest are dark or not counted), the metric settings and the
 // objective's metric.
 struct AnnualSetting {
-  SkyMatrix sky;
+  std::shared_ptr<const SkyMatrix> sky;
   std::vector<bool> occupied;
   std::vector<int> columns;  // lit analysed steps, ascending
   int analysed_hours = 0;
@@ -159,17 +159,18 @@ struct AnnualSetting {
 absl::StatusOr<AnnualSetting> MakeAnnualSetting(const PreparedJob& job) {
   const v1::MetricSettings& m = job.job.metrics();
   AnnualSetting setting;
-  SkyMatrixOptions sky_options;
-  sky_options.ground_reflectance = job.scene.site.ground_reflectance;
-  FENESTRA_ASSIGN_OR_RETURN(sky, BuildSkyMatrix(job.weather, sky_options));
-  setting.sky = std::move(sky);
+  setting.sky = job.sky;
+  if (!setting.sky) {
+    FENESTRA_ASSIGN_OR_RETURN(sky, JobSkyMatrix(job));
+    setting.sky = std::move(sky);
+  }
   std::vector<double> hours;
-  for (const SkyStep& step : setting.sky.steps) hours.push_back(step.hour);
+  for (const SkyStep& step : setting.sky->steps) hours.push_back(step.hour);
   FENESTRA_ASSIGN_OR_RETURN(occupied,
                             OccupiedSteps(hours, {m.occupied_start_h(), m.occupied_end_h()}));
   setting.occupied = std::move(occupied);
   const HourBasis hour_basis = m.all_hours() ? HourBasis::kAllHours : HourBasis::kOccupied;
-  for (const int c : LitColumns(setting.sky.radiance)) {
+  for (const int c : LitColumns(setting.sky->radiance)) {
     if (hour_basis == HourBasis::kAllHours || setting.occupied[c]) setting.columns.push_back(c);
   }
   setting.analysed_hours = AnalysedHours(setting.occupied, hour_basis);
@@ -193,7 +194,7 @@ absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualS
       [&](std::span<const Matrix> dc_batches) -> absl::StatusOr<Evaluation> {
     FENESTRA_ASSIGN_OR_RETURN(
         metrics,
-        AnnualMetricsWithErrors(dc_batches, std::span<const Matrix>(&setting.sky.radiance, 1),
+        AnnualMetricsWithErrors(dc_batches, std::span<const Matrix>(&setting.sky->radiance, 1),
                                 setting.columns, setting.occupied, setting.options));
     return MetricEvaluation(std::move(metrics), setting.metric);
   };
@@ -606,6 +607,17 @@ absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1:
   return matrix;
 }
 
+SkyMatrixOptions JobSkyOptions(const PreparedJob& job) {
+  SkyMatrixOptions options;
+  options.ground_reflectance = job.scene.site.ground_reflectance;
+  return options;
+}
+
+absl::StatusOr<std::shared_ptr<const SkyMatrix>> JobSkyMatrix(const PreparedJob& job) {
+  FENESTRA_ASSIGN_OR_RETURN(sky, BuildSkyMatrix(job.weather, JobSkyOptions(job)));
+  return std::make_shared<const SkyMatrix>(std::move(sky));
+}
+
 std::string JobContentHash(const PreparedJob& job) {
   // The job with its scene inline (a scene_file, or the scene left out, says nothing of the
   // scene's content), serialized deterministically
@@ -701,7 +713,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
     return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
   }
   // S over the lit analysed hours, in lux
-  const Matrix lit_sky = SkyColumnsInLux(setting.sky.radiance, columns);
+  const Matrix lit_sky = SkyColumnsInLux(setting.sky->radiance, columns);
 
   // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O_b) S, as
   // the backend does it best (on the CPU the paths recorded once, then replayed per design;
@@ -740,13 +752,13 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   // The best design's hourly illuminance, for reports and other tools: by the search's replay
   // and annual product (its O_b already on the device)
   if (search.evaluations > 0 && search.stop_reason != StopReason::kCancelled &&
-      static_cast<int64_t>(job.scene.sensors.size() * setting.sky.steps.size()) <=
+      static_cast<int64_t>(job.scene.sensors.size() * setting.sky->steps.size()) <=
           kMaxHourlyIlluminanceValues) {
     const auto hourly_start = std::chrono::steady_clock::now();
     DesignTallies& tallies = *lanes.tallies.front();
     FENESTRA_ASSIGN_OR_RETURN(indoor, tallies.IndoorBatches(DesignAt(job, search.best_x)));
     FENESTRA_ASSIGN_OR_RETURN(
-        hourly, DesignHourlyIlluminance(job.scene, indoor, tallies.Product(), setting.sky));
+        hourly, DesignHourlyIlluminance(job.scene, indoor, tallies.Product(), *setting.sky));
     *result.mutable_best_hourly() = std::move(hourly);
     result.mutable_timings()->set_best_hourly_seconds(SecondsSince(hourly_start));
   }

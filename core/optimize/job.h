@@ -15,6 +15,7 @@
 #include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
 #include "core/sky/epw.h"
+#include "core/sky/sky_matrix.h"
 #include "fenestra/v1/job.pb.h"
 
 namespace fenestra {
@@ -47,7 +48,16 @@ struct PreparedJob {
   Scene scene;
   std::string weather_file;
   EpwData weather;  // parsed (PrepareJob only)
+  // The sky matrix of `weather` for this job (JobSkyMatrix) where the caller holds it already
+  // (fenestrad keeps those of recent weather files); null: RunJob builds it.
+  std::shared_ptr<const SkyMatrix> sky;
 };
+
+// The options of a job's sky matrix: the site's ground reflectance, the rest the defaults.
+SkyMatrixOptions JobSkyOptions(const PreparedJob& job);
+
+// The sky matrix of a job's weather (BuildSkyMatrix with JobSkyOptions).
+absl::StatusOr<std::shared_ptr<const SkyMatrix>> JobSkyMatrix(const PreparedJob& job);
 
 // Reads a job file (the JSON form of fenestra.v1.Job; unknown fields are errors).
 absl::StatusOr<v1::Job> ReadJobFile(const std::string& path);

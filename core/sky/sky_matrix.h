@@ -26,6 +26,8 @@ struct SkyMatrixOptions {
   double ground_reflectance = 0.2;  // grey, in [0, 1]
   bool include_sky = true;          // false: sun only, ground 0 (gendaymtx -d)
   bool include_sun = true;          // false: no sun patches; the ground keeps it (gendaymtx -s)
+
+  bool operator==(const SkyMatrixOptions&) const = default;
 };
 
 // What one column of the matrix stands for.
