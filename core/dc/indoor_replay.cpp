@@ -55,7 +55,8 @@ using Recording = RecordingIntersector<EmbreeIntersector>;
 void TestConnections(const LocalSlats& slats, Vec3f shift, const Chunk& chunk,
                      std::vector<double>& sum) {
   for (const ReplayCrossing& k : chunk.crossings) {
-    sum[k.column] += Clear(slats, shift, *chunk.envelope, k) ? k.value : 0.0;
+    // Times 0 or 1 rather than a branch the CPU would mispredict for a third of the rays
+    sum[k.column] += k.value * static_cast<int>(Clear(slats, shift, *chunk.envelope, k));
   }
   for (const ReplayConnection& k : chunk.others) {
     if (!slats.Occluded(k.origin, k.direction, k.distance)) sum[k.column] += k.value;
