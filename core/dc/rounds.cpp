@@ -120,9 +120,9 @@ std::string LimitPlan(Plan& plan, double remaining_seconds) {
 
 // The growth of the (indoor, outdoor) paths that brings every sensor's variance, split into
 // x_i (indoor) and y_i (outdoor) in units of its aimed variance, to x_i / a + y_i / b <= 1 at
-// the least time a * indoor_seconds + b * outdoor_seconds; a, b >= 1.
+// the least cost a * indoor_cost + b * outdoor_cost; a, b >= 1.
 std::pair<double, double> CheapestGrowth(const Eigen::VectorXd& x, const Eigen::VectorXd& y,
-                                         double indoor_seconds, double outdoor_seconds) {
+                                         double indoor_cost, double outdoor_cost) {
   // For a given b the least a is fixed; search b on a fine logarithmic grid
   const auto least_a = [&](double b) {
     double a = 1;
@@ -131,10 +131,10 @@ std::pair<double, double> CheapestGrowth(const Eigen::VectorXd& x, const Eigen::
   };
   const double b_min = std::max(1.0, y.size() > 0 ? y.maxCoeff() * (1 + 1e-6) : 1.0);
   std::pair<double, double> best{least_a(b_min), b_min};
-  double best_cost = best.first * indoor_seconds + best.second * outdoor_seconds;
+  double best_cost = best.first * indoor_cost + best.second * outdoor_cost;
   for (double b = b_min; b < b_min * 1e6; b *= 1.01) {
     const double a = least_a(b);
-    const double cost = a * indoor_seconds + b * outdoor_seconds;
+    const double cost = a * indoor_cost + b * outdoor_cost;
     if (cost < best_cost) {
       best_cost = cost;
       best = {a, b};
@@ -357,8 +357,10 @@ absl::StatusOr<TwoStageToTarget> TraceTwoStageToTarget(
       x(s) = aim > 0 ? in / aim : 0;
       y(s) = aim > 0 ? (variance(s) - in) / aim : 0;
     }
-    const auto [a, b] =
-        CheapestGrowth(x, y, run.indoor.wall_seconds, std::max(run.outdoor.wall_seconds, 1e-9));
+    // Each stage priced in the rays it traced so far rather than in seconds, so that the split
+    // (and with it the result) is the same for a seed on any machine and under any load
+    const auto [a, b] = CheapestGrowth(x, y, static_cast<double>(run.indoor.rays_traced),
+                                       std::max(static_cast<double>(run.outdoor.rays_traced), 1.0));
     Plan plan{{a, b},
               {run.indoor.wall_seconds, run.outdoor.wall_seconds},
               {0, 0},

@@ -107,8 +107,9 @@ struct TwoStageToTarget {
 // each later round multiplies each stage's paths by the factor that reaches kTargetAim x the
 // target for every sensor at the least tracing time, from each stage's share of each sensor's
 // variance (the indoor share from the batches, the outdoor share the rest of the combined
-// error) and its seconds per path so far (Neyman allocation: paths of stage s in proportion
-// to sqrt(variance_s / seconds_s)). A stage whose error is already small is not traced again.
+// error) and its cost per path so far, in closest-hit rays, which unlike seconds are the same
+// for a seed on any machine and load (Neyman allocation: paths of stage s in proportion to
+// sqrt(variance_s / rays_s)). A stage whose error is already small is not traced again.
 absl::StatusOr<TwoStageToTarget> TraceTwoStageToTarget(
     const Scene& scene, const BlindDesign& design, const OutdoorOptions& first_outdoor,
     const IndoorOptions& first_indoor, const TargetErrorOptions& target, DcBackend* backend,

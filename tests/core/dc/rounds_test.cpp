@@ -242,9 +242,8 @@ TEST(TargetErrorTest, TwoStageReachesTheTargetAndSplitsTheVariance) {
 }
 
 // With the indoor stage already precise (many paths, cheap) and the outdoor stage coarse, the
-// outdoor stage is traced again and the indoor stage hardly: the allocation weighs the
-// stages' measured seconds per path, which a loaded machine (or a sanitizer) skews, so the
-// indoor stage may get a few percent more paths, not a round of its own size.
+// outdoor stage is traced again and the indoor stage hardly: the indoor stage may get a few
+// percent more paths, not a round of its own size.
 TEST(TargetErrorTest, TwoStageRefinesOnlyTheStageThatNeedsIt) {
   const Scene scene = LoadExample("lightwell");
   TargetErrorOptions target;
