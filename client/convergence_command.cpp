@@ -1,6 +1,7 @@
 // fenestra convergence: error against run time, from runs at doubling path counts.
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
 #include <cstdio>

@@ -2,6 +2,7 @@
 // two-stage, for a number of paths or until a target error.
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>

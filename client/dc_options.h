@@ -2,7 +2,6 @@
 
 // The tracing flags that `fenestra dc` and `fenestra convergence` share: the method, the
 // design, the backend and each method's sampling, and the stage options they give.
-#include <CLI/CLI.hpp>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -12,6 +11,10 @@
 #include "core/dc/dc_backend.h"
 #include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
+
+namespace CLI {
+class App;
+}  // namespace CLI
 
 namespace fenestra {
 

@@ -1,5 +1,6 @@
 #include "client/grpc_client.h"
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdlib>
 #include <iostream>

@@ -2,7 +2,6 @@
 
 #include <grpcpp/grpcpp.h>
 
-#include <CLI/CLI.hpp>
 #include <memory>
 #include <optional>
 #include <string>
@@ -11,6 +10,10 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "fenestra/v1/service.grpc.pb.h"
+
+namespace CLI {
+class App;
+}  // namespace CLI
 
 namespace fenestra {
 

@@ -1,6 +1,7 @@
 // fenestra job submit/watch/list/show/cancel/result: optimization jobs run by fenestrad.
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <ctime>
 #include <memory>
 #include <optional>

@@ -1,6 +1,7 @@
 // fenestra optimize --local JOB.json
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -8,8 +9,8 @@
 #include "client/cli_util.h"
 #include "client/commands.h"
 #include "client/progress_display.h"
-#include "client/report/html_report.h"
 #include "client/report/annual_outputs.h"
+#include "client/report/html_report.h"
 #include "core/common/atomic_file.h"
 #include "core/optimize/job.h"
 

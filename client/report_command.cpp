@@ -1,6 +1,7 @@
 // fenestra report RESULT.json -o REPORT.html: the report page of a result file.
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <memory>
 
 #include "client/cli_util.h"

@@ -1,6 +1,7 @@
 // fenestra scene check|export
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <iostream>
 #include <limits>

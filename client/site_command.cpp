@@ -2,6 +2,7 @@
 // the daemon computes once and caches.
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <filesystem>
 #include <memory>
 #include <thread>

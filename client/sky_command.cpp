@@ -1,6 +1,7 @@
 // fenestra sky: the annual sky matrix of a weather file (gendaymtx's Perez sky).
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <iostream>
 #include <memory>

@@ -3,11 +3,14 @@
 // Annual results of a job for other tools, from its result (job.proto, JobResult): the best
 // design's hourly illuminance as CSV and as a Radiance matrix, and the best design's
 // assembled scene as OBJ. `fenestra optimize --local` and `fenestra job result` write them.
-#include <CLI/CLI.hpp>
 #include <string>
 
 #include "absl/status/status.h"
 #include "fenestra/v1/job.pb.h"
+
+namespace CLI {
+class App;
+}  // namespace CLI
 
 namespace fenestra {
 
