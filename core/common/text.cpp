@@ -3,6 +3,8 @@
 #include <google/protobuf/descriptor.h>
 
 #include <cstdint>
+#include <string>
+#include <vector>
 
 #include "absl/strings/escaping.h"
 #include "absl/strings/str_cat.h"
@@ -57,36 +59,60 @@ bool IsPathField(const FieldDescriptor& field) {
   return name == "path" || (name.size() > 5 && name.compare(name.size() - 5, 5, "_file") == 0);
 }
 
-absl::Status CheckField(const Message& message, const FieldDescriptor& field,
-                        const std::string& name);
+// Where a field lies in the message checked: its parent's place, its name and its index in
+// a repeated field (-1 otherwise). Written out ("a.b[3].c") only for an error, so that a large
+// request's many fields cost no strings.
+struct FieldPlace {
+  const FieldPlace* parent;
+  const FieldDescriptor* field;
+  int index;
+};
 
-absl::Status CheckMessage(const Message& message, const std::string& path) {
+std::string Written(const FieldPlace* place) {
+  if (place == nullptr) return "";
+  std::string text = Written(place->parent);
+  if (!text.empty()) text += '.';
+  absl::StrAppend(&text, place->field->name());
+  if (place->index >= 0) absl::StrAppend(&text, "[", place->index, "]");
+  return text;
+}
+
+absl::Status CheckField(const Message& message, const FieldDescriptor& field,
+                        const FieldPlace* parent);
+
+absl::Status CheckMessage(const Message& message, const FieldPlace* place) {
   const Reflection& reflection = *message.GetReflection();
   std::vector<const FieldDescriptor*> fields;
   reflection.ListFields(message, &fields);
   for (const FieldDescriptor* field : fields) {
-    const std::string name = path.empty() ? field->name() : absl::StrCat(path, ".", field->name());
-    if (absl::Status s = CheckField(message, *field, name); !s.ok()) return s;
+    if (absl::Status s = CheckField(message, *field, place); !s.ok()) return s;
   }
   return absl::OkStatus();
 }
 
 absl::Status CheckField(const Message& message, const FieldDescriptor& field,
-                        const std::string& name) {
+                        const FieldPlace* parent) {
   const Reflection& reflection = *message.GetReflection();
   const size_t max_bytes = IsPathField(field) ? kMaxPathBytes : kMaxNameBytes;
   const bool text = field.type() == FieldDescriptor::TYPE_STRING;
   const bool nested = field.cpp_type() == FieldDescriptor::CPPTYPE_MESSAGE;
-  if (!field.is_repeated()) {
-    if (text) return CheckText(reflection.GetString(message, &field), name, max_bytes);
-    if (nested) return CheckMessage(reflection.GetMessage(message, &field), name);
-    return absl::OkStatus();
-  }
-  for (int i = 0; i < reflection.FieldSize(message, &field); ++i) {
-    const std::string item = absl::StrCat(name, "[", i, "]");
+  const int count = field.is_repeated() ? reflection.FieldSize(message, &field) : 1;
+  for (int i = 0; i < count; ++i) {
+    const FieldPlace place{parent, &field, field.is_repeated() ? i : -1};
     absl::Status s = absl::OkStatus();
-    if (text) s = CheckText(reflection.GetRepeatedString(message, &field, i), item, max_bytes);
-    if (nested) s = CheckMessage(reflection.GetRepeatedMessage(message, &field, i), item);
+    if (text) {
+      std::string scratch;
+      const std::string& value =
+          field.is_repeated() ? reflection.GetRepeatedStringReference(message, &field, i, &scratch)
+                              : reflection.GetStringReference(message, &field, &scratch);
+      s = CheckText(value, "", max_bytes);
+      if (!s.ok()) s = CheckText(value, Written(&place), max_bytes);  // again, naming the field
+    }
+    if (nested) {
+      s = CheckMessage(field.is_repeated() ? reflection.GetRepeatedMessage(message, &field, i)
+                                           : reflection.GetMessage(message, &field),
+                       &place);
+    }
     if (!s.ok()) return s;
   }
   return absl::OkStatus();
@@ -118,7 +144,7 @@ absl::Status CheckText(absl::string_view text, absl::string_view field, size_t m
 }
 
 absl::Status CheckMessageText(const Message& message, absl::string_view prefix) {
-  absl::Status status = CheckMessage(message, "");
+  absl::Status status = CheckMessage(message, nullptr);
   if (status.ok()) return status;
   return absl::Status(status.code(), absl::StrCat(prefix, status.message()));
 }
