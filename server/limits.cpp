@@ -124,9 +124,8 @@ absl::StatusOr<CheckedSite> CheckSiteRequest(const v1::RegisterSiteRequest& requ
   FENESTRA_ASSIGN_OR_RETURN(resolved, ResolveSampling(sampling));
   FENESTRA_RETURN_IF_ERROR(CheckSamplingLimits(resolved, config.limits(), /*indoor=*/false));
   site.sampling = resolved;
-  v1::Scene scene = request.scene();
-  scene.mutable_site()->clear_weather_file();
-  FENESTRA_ASSIGN_OR_RETURN(built, ValidateScene(scene, "scene"));
+  FENESTRA_ASSIGN_OR_RETURN(built, ValidateScene(request.scene(), "scene"));
+  built.site.weather_file.clear();  // a path on the client, never read here
   site.scene = std::move(built);
   if (!request.weather_epw().empty()) {
     FENESTRA_RETURN_IF_ERROR(CheckUploadedWeather(request.weather_epw(), request.weather_name()));
