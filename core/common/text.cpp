@@ -4,7 +4,6 @@
 
 #include <cstdint>
 #include <string>
-#include <vector>
 
 #include "absl/strings/escaping.h"
 #include "absl/strings/str_cat.h"
@@ -80,12 +79,16 @@ std::string Written(const FieldPlace* place) {
 absl::Status CheckField(const Message& message, const FieldDescriptor& field,
                         const FieldPlace* parent);
 
+// The fields that are set (as Reflection::ListFields has them, without its list).
 absl::Status CheckMessage(const Message& message, const FieldPlace* place) {
   const Reflection& reflection = *message.GetReflection();
-  std::vector<const FieldDescriptor*> fields;
-  reflection.ListFields(message, &fields);
-  for (const FieldDescriptor* field : fields) {
-    if (absl::Status s = CheckField(message, *field, place); !s.ok()) return s;
+  const google::protobuf::Descriptor& descriptor = *message.GetDescriptor();
+  for (int i = 0; i < descriptor.field_count(); ++i) {
+    const FieldDescriptor& field = *descriptor.field(i);
+    const bool set = field.is_repeated() ? reflection.FieldSize(message, &field) > 0
+                                         : reflection.HasField(message, &field);
+    if (!set) continue;
+    if (absl::Status s = CheckField(message, field, place); !s.ok()) return s;
   }
   return absl::OkStatus();
 }
@@ -93,8 +96,8 @@ absl::Status CheckMessage(const Message& message, const FieldPlace* place) {
 absl::Status CheckField(const Message& message, const FieldDescriptor& field,
                         const FieldPlace* parent) {
   const Reflection& reflection = *message.GetReflection();
-  const size_t max_bytes = IsPathField(field) ? kMaxPathBytes : kMaxNameBytes;
   const bool text = field.type() == FieldDescriptor::TYPE_STRING;
+  const size_t max_bytes = text && IsPathField(field) ? kMaxPathBytes : kMaxNameBytes;
   const bool nested = field.cpp_type() == FieldDescriptor::CPPTYPE_MESSAGE;
   const int count = field.is_repeated() ? reflection.FieldSize(message, &field) : 1;
   for (int i = 0; i < count; ++i) {
