@@ -27,6 +27,14 @@ class Checker {
     return absl::InvalidArgumentError(absl::StrCat(path_, ": ", field, ": ", reason));
   }
 
+  // Whether Point would take `v`: a check that costs no name.
+  static bool Takes(const v1::Vec3& v) {
+    for (double c : {v.x(), v.y(), v.z()}) {
+      if (!(std::abs(c) <= kMaxCoordinateM)) return false;  // NaN and infinities too
+    }
+    return true;
+  }
+
   absl::StatusOr<Vec3d> Point(const v1::Vec3& v, const std::string& field) const {
     if (!std::isfinite(v.x()) || !std::isfinite(v.y()) || !std::isfinite(v.z())) {
       return Error(field, "coordinates must be finite numbers");
@@ -113,14 +121,21 @@ absl::StatusOr<uint32_t> FindMaterial(const std::vector<Material>& materials,
   return check.Error(field, absl::StrCat("unknown material '", name, "'"));
 }
 
-absl::Status AddPolygon(const v1::Polygon& polygon, const std::string& field, uint32_t material,
+// `surface` names the surface (surfaces[i]); the polygon's own names are made only for an
+// error, since a large site has hundreds of thousands of polygons.
+absl::Status AddPolygon(const v1::Polygon& polygon, const std::string& surface, uint32_t material,
                         Side side, uint32_t part, const Checker& check, TriangleMesh& mesh) {
-  if (polygon.vertices_size() < 3) return check.Error(field, "a polygon needs at least 3 vertices");
+  const auto field = [&] { return surface + ".polygon"; };
+  const auto vertex = [&](size_t k) { return absl::StrCat(field(), ".vertices[", k, "]"); };
+  if (polygon.vertices_size() < 3) {
+    return check.Error(field(), "a polygon needs at least 3 vertices");
+  }
   std::vector<Vec3d> v;
+  v.reserve(polygon.vertices_size());
   for (int k = 0; k < polygon.vertices_size(); ++k) {
-    FENESTRA_ASSIGN_OR_RETURN(
-        p, check.Point(polygon.vertices(k), absl::StrCat(field, ".vertices[", k, "]")));
-    v.push_back(p);
+    const v1::Vec3& q = polygon.vertices(k);
+    if (!Checker::Takes(q)) return check.Point(q, vertex(k)).status();
+    v.push_back(Vec3d{q.x(), q.y(), q.z()});
   }
   // Newell's normal: robust for any planar polygon
   Vec3d normal{0, 0, 0};
@@ -132,19 +147,19 @@ absl::Status AddPolygon(const v1::Polygon& polygon, const std::string& field, ui
   }
   const double area = 0.5 * Length(normal);
   if (!(area > kShapeTolerance * size * size)) {
-    return check.Error(field, "degenerate polygon (zero area)");
+    return check.Error(field(), "degenerate polygon (zero area)");
   }
   normal = Normalize(normal);
   for (size_t k = 1; k < v.size(); ++k) {
     if (std::abs(Dot(v[k] - v[0], normal)) > kShapeTolerance * size) {
-      return check.Error(absl::StrCat(field, ".vertices[", k, "]"), "polygon is not planar");
+      return check.Error(vertex(k), "polygon is not planar");
     }
   }
   // Convex: every corner turns the same way (the fan of triangles covers the polygon)
   for (size_t k = 0; k < v.size(); ++k) {
     const Vec3d a = v[k], b = v[(k + 1) % v.size()], c = v[(k + 2) % v.size()];
     if (Dot(Cross(b - a, c - b), normal) < -kShapeTolerance * size * size) {
-      return check.Error(absl::StrCat(field, ".vertices[", (k + 1) % v.size(), "]"),
+      return check.Error(vertex((k + 1) % v.size()),
                          "polygon is not convex (split it into convex polygons)");
     }
   }
@@ -437,8 +452,7 @@ absl::Status BuildSurfaces(const v1::Scene& proto, const Checker& check, Scene& 
     absl::Status status;
     switch (s.shape_case()) {
       case v1::Surface::kPolygon:
-        status =
-            AddPolygon(s.polygon(), field + ".polygon", material, side, part, check, scene.fixed);
+        status = AddPolygon(s.polygon(), field, material, side, part, check, scene.fixed);
         break;
       case v1::Surface::kBox:
         status = AddBox(s.box(), field + ".box", material, side, part, check, scene);
