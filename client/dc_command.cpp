@@ -268,9 +268,9 @@ void AddDcCommand(CLI::App& app) {
           "1/sqrt(paths)) to land at {:.0f}% of the target; the rounds are merged by path "
           "count. Two-stage: from each sensor's variance split into the indoor stage's (the "
           "scatter of its batches through the mean O) and the outdoor stage's (the rest), and "
-          "each stage's "
-          "seconds per path, each round grows each stage by the factor that reaches the target "
-          "in the least time (paths in proportion to sqrt(variance / seconds)); a stage whose "
+          "each stage's closest-hit rays per path, each round grows each stage by the factor "
+          "that reaches the target at the least cost (paths in proportion to sqrt(variance / "
+          "rays)); a stage whose "
           "share is already small is not traced again. Exit code {} when a limit stops it first "
           "(the matrices are still written)",
           100 * kTargetAim, kTargetNotReachedExitCode));
