@@ -27,7 +27,7 @@ class Checker {
     return absl::InvalidArgumentError(absl::StrCat(path_, ": ", field, ": ", reason));
   }
 
-  // Whether Point would take `v`: a check that costs no name.
+  // Whether Point takes `v` (the one rule for it): a check that costs no name.
   static bool Takes(const v1::Vec3& v) {
     for (double c : {v.x(), v.y(), v.z()}) {
       if (!(std::abs(c) <= kMaxCoordinateM)) return false;  // NaN and infinities too
@@ -36,6 +36,7 @@ class Checker {
   }
 
   absl::StatusOr<Vec3d> Point(const v1::Vec3& v, const std::string& field) const {
+    if (Takes(v)) return Vec3d{v.x(), v.y(), v.z()};
     if (!std::isfinite(v.x()) || !std::isfinite(v.y()) || !std::isfinite(v.z())) {
       return Error(field, "coordinates must be finite numbers");
     }
