@@ -44,7 +44,10 @@ trap 'printf "%s\n" "${timings[@]}"; rm -f "$times_file"' EXIT
 if ! command -v nvcc >/dev/null && [ -x /usr/local/cuda/bin/nvcc ]; then
   export PATH="/usr/local/cuda/bin:$PATH"
 fi
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DFENESTRA_WARNINGS_AS_ERRORS=ON
+# Each target's sources are compiled as one unit (a unity build: the heavy headers parsed once
+# per target, not per file), as in the sanitizer build below.
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DFENESTRA_WARNINGS_AS_ERRORS=ON \
+  -DCMAKE_UNITY_BUILD=ON
 cmake --build "$build" -j"$jobs"
 end_phase "build"
 ctest --test-dir "$build" --output-on-failure -j"$test_jobs"
@@ -52,9 +55,8 @@ end_phase "tests"
 
 # 2. The suite under AddressSanitizer + UndefinedBehaviorSanitizer. The same build holds
 # the fuzz targets, so its libraries carry libFuzzer's coverage instrumentation too. The
-# benchmarks, built and so checked above, are left out: nothing here runs them. Each
-# target's sources are compiled as one unit (a unity build: the heavy headers parsed once
-# per target, not per file); the build above compiles every source on its own.
+# benchmarks, built and so checked above, are left out: nothing here runs them. A unity
+# build, as above.
 cmake -S . -B "$sanitize_build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CUDA_COMPILER=CUDA-NOTFOUND -DFENESTRA_FUZZ=ON \
   -DFENESTRA_WARNINGS_AS_ERRORS=ON -DFENESTRA_BENCH=OFF -DCMAKE_UNITY_BUILD=ON
