@@ -9,9 +9,8 @@ packages=(
   libssl-dev openssl chromium
   postgresql-15  # the store and cluster tests start a throwaway PostgreSQL server
   python3 python3-grpcio python3-grpc-tools python3-numpy python3-yaml
-  # tests/run_all.sh's sanitizer and fuzzing builds: clang, libFuzzer, llvm-symbolizer; the
-  # linker of both its builds
-  clang libclang-rt-14-dev llvm lld
+  # tests/run_all.sh's sanitizer and fuzzing builds: clang, libFuzzer, llvm-symbolizer
+  clang libclang-rt-14-dev llvm
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -45,10 +45,9 @@ if ! command -v nvcc >/dev/null && [ -x /usr/local/cuda/bin/nvcc ]; then
   export PATH="/usr/local/cuda/bin:$PATH"
 fi
 # Each target's sources are compiled as one unit (a unity build: the heavy headers parsed once
-# per target, not per file), as in the sanitizer build below. Both link with lld, which takes
-# a fifth of ld.bfd's time for a test binary.
+# per target, not per file), as in the sanitizer build below.
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DFENESTRA_WARNINGS_AS_ERRORS=ON \
-  -DCMAKE_UNITY_BUILD=ON -DCMAKE_EXE_LINKER_FLAGS=-fuse-ld=lld
+  -DCMAKE_UNITY_BUILD=ON
 cmake --build "$build" -j"$jobs"
 end_phase "build"
 ctest --test-dir "$build" --output-on-failure -j"$test_jobs"
@@ -60,8 +59,7 @@ end_phase "tests"
 # build, as above.
 cmake -S . -B "$sanitize_build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CUDA_COMPILER=CUDA-NOTFOUND -DFENESTRA_FUZZ=ON \
-  -DFENESTRA_WARNINGS_AS_ERRORS=ON -DFENESTRA_BENCH=OFF -DCMAKE_UNITY_BUILD=ON \
-  -DCMAKE_EXE_LINKER_FLAGS=-fuse-ld=lld
+  -DFENESTRA_WARNINGS_AS_ERRORS=ON -DFENESTRA_BENCH=OFF -DCMAKE_UNITY_BUILD=ON
 cmake --build "$sanitize_build" -j"$jobs"
 end_phase "sanitizer build (clang, ASan+UBSan)"
 symbolizer="$(command -v llvm-symbolizer || command -v llvm-symbolizer-14 || true)"
