@@ -221,16 +221,13 @@ absl::Status CheckPairs(const std::vector<Matrix>& indoor_batches,
 Matrix ThroughWindow(const std::vector<Matrix>& indoor_batches,
                      const std::vector<Matrix>& outdoor_batches) {
   const Eigen::Index sensors = indoor_batches.empty() ? 0 : indoor_batches[0].rows();
-  Matrix through = Matrix::Zero(sensors * static_cast<Eigen::Index>(indoor_batches.size()),
-                                outdoor_batches.empty() ? 0 : outdoor_batches[0].cols());
+  Matrix through(sensors * static_cast<Eigen::Index>(indoor_batches.size()),
+                 outdoor_batches.empty() ? 0 : outdoor_batches[0].cols());
+  // One blocked product per batch: six times faster than a rank-one update per column of
+  // I that skips the empty ones (bench/README.md, "The four city-office experiments on the CPU")
   for (size_t b = 0; b < indoor_batches.size(); ++b) {
-    const Matrix& i = indoor_batches[b];
-    const Matrix& o = outdoor_batches[b];
-    auto rows = through.middleRows(static_cast<Eigen::Index>(b) * sensors, sensors);
-    for (Eigen::Index k = 0; k < i.cols(); ++k) {
-      if (i.col(k).isZero(0)) continue;
-      rows.noalias() += i.col(k) * o.row(k);
-    }
+    through.middleRows(static_cast<Eigen::Index>(b) * sensors, sensors).noalias() =
+        indoor_batches[b] * outdoor_batches[b];
   }
   return through;
 }

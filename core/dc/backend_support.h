@@ -60,9 +60,8 @@ absl::Status CheckPairs(const std::vector<Matrix>& indoor_batches,
                         const std::vector<Matrix>& outdoor_batches);
 
 // The batches' light through the window, I_b O_b for every b, one above the other
-// ((B x sensors) x 146), for batches that pair up (CheckPairs). With a handful of sensors a
-// matrix product per batch would spend its time packing O_b; rank-one updates read each
-// row of O_b once and skip the columns of I_b that no path reached.
+// ((B x sensors) x 146), for batches that pair up (CheckPairs): a blocked matrix product per
+// batch.
 Matrix ThroughWindow(const std::vector<Matrix>& indoor_batches,
                      const std::vector<Matrix>& outdoor_batches);
 

@@ -190,12 +190,19 @@ absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualS
                                            const std::vector<double>& x,
                                            const v1::Estimate& two_stage, DcBackend* backend,
                                            const std::function<bool()>& cancelled) {
+  // E_b = D_b S and its tallies by the backend's annual product, as the search's designs (a
+  // one-stage D_b already holds the sky bins' light, so its O_b are the identity): on a GPU
+  // the check's 32 pilot batches take a product there instead of one on the host
+  const Matrix lit_sky = SkyColumnsInLux(setting.sky->radiance, setting.columns);
   const DaylightMetric metric =
       [&](std::span<const Matrix> dc_batches) -> absl::StatusOr<Evaluation> {
+    const std::vector<Matrix> identity(dc_batches.size(),
+                                       Matrix::Identity(kDaylightBins, kDaylightBins));
+    FENESTRA_ASSIGN_OR_RETURN(product, backend->MakeAnnualProduct(identity, lit_sky));
     FENESTRA_ASSIGN_OR_RETURN(
-        metrics,
-        AnnualMetricsWithErrors(dc_batches, std::span<const Matrix>(&setting.sky->radiance, 1),
-                                setting.columns, setting.occupied, setting.options));
+        versions, product->Tally({dc_batches.begin(), dc_batches.end()}, setting.options));
+    FENESTRA_ASSIGN_OR_RETURN(
+        metrics, AnnualMetricsFromTallies(versions, setting.analysed_hours, setting.options));
     return MetricEvaluation(std::move(metrics), setting.metric);
   };
   FinalCheckOptions options;

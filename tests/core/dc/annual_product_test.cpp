@@ -3,11 +3,14 @@
 #include <cmath>
 #include <cstdlib>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "core/dc/dc_backend.h"
 #include "core/dc/two_stage.h"
 #include "core/metrics/annual_metrics.h"
+#include "core/metrics/illuminance.h"
+#include "core/metrics/metric_errors.h"
 #include "tests/example_scene.h"
 
 namespace fenestra {
@@ -117,6 +120,66 @@ TEST(AnnualProductTest, TalliesTheVersionsOfE) {
   std::vector<Matrix> wrong = indoor;
   wrong[0] = Matrix::Zero(sensors, cells + 1);
   EXPECT_EQ((*product)->Tally(wrong, options).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+// One-stage coefficients through a product whose O_b are the identity (as a job's final
+// check takes them): the metrics and errors of D_b times the sky's analysed columns in lux.
+TEST(AnnualProductTest, IdentityOutdoorBatchesGiveTheMetricsOfDTimesTheSky) {
+  const int batches = 32, sensors = 4, steps = 300;
+  std::srand(11);
+  std::vector<Matrix> dc;
+  // Batches that differ by up to a factor of 3, so that the leave-one-out versions cross the
+  // thresholds at different hours
+  for (int b = 0; b < batches; ++b) {
+    dc.push_back((1.0 + std::abs(Matrix::Random(1, 1)(0, 0))) *
+                 Matrix::Random(sensors, kDaylightBins).cwiseAbs());
+  }
+  // Radiance from dim to bright, and every third step unoccupied
+  Matrix radiance = Matrix::Random(kDaylightBins, steps).cwiseAbs();
+  for (int h = 0; h < steps; ++h) radiance.col(h) *= 1e-3 * std::pow(1.03, h);
+  std::vector<bool> occupied(steps);
+  std::vector<int> columns;
+  for (int h = 0; h < steps; ++h) {
+    occupied[h] = h % 3 != 0;
+    if (occupied[h]) columns.push_back(h);
+  }
+  Matrix lit_sky(kDaylightBins, static_cast<Eigen::Index>(columns.size()));
+  for (size_t c = 0; c < columns.size(); ++c) {
+    lit_sky.col(c) = kWhiteEfficacyLumensPerWatt * radiance.col(columns[c]);
+  }
+  const MetricOptions options;
+  absl::StatusOr<AnnualMetricsEstimate> direct = AnnualMetricsWithErrors(
+      dc, std::span<const Matrix>(&radiance, 1), columns, occupied, options);
+  ASSERT_TRUE(direct.ok()) << direct.status();
+
+  std::unique_ptr<DcBackend> backend = MakeEmbreeBackend();
+  const std::vector<Matrix> identity(batches, Matrix::Identity(kDaylightBins, kDaylightBins));
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> product =
+      backend->MakeAnnualProduct(identity, lit_sky);
+  ASSERT_TRUE(product.ok()) << product.status();
+  absl::StatusOr<std::vector<HourTally>> versions = (*product)->Tally(dc, options);
+  ASSERT_TRUE(versions.ok()) << versions.status();
+  absl::StatusOr<AnnualMetricsEstimate> tallied =
+      AnnualMetricsFromTallies(*versions, AnalysedHours(occupied, options.hours), options);
+  ASSERT_TRUE(tallied.ok()) << tallied.status();
+
+  const SceneMetrics& a = direct->value.scene;
+  const SceneMetrics& b = tallied->value.scene;
+  EXPECT_GT(a.udi_mean_percent, 0);
+  EXPECT_LT(a.udi_mean_percent, 100);
+  EXPECT_GT(a.udi_mean_fell_short_percent, 0);
+  EXPECT_GT(a.udi_mean_exceeded_percent, 0);
+  EXPECT_NEAR(b.udi_mean_percent, a.udi_mean_percent, 1e-9);
+  EXPECT_NEAR(b.udi_mean_fell_short_percent, a.udi_mean_fell_short_percent, 1e-9);
+  EXPECT_NEAR(b.udi_all_percent, a.udi_all_percent, 1e-9);
+  EXPECT_NEAR(b.da_mean_percent, a.da_mean_percent, 1e-9);
+  EXPECT_NEAR(b.cda_mean_percent, a.cda_mean_percent, 1e-9);
+  EXPECT_NEAR(b.mean_illuminance_lux, a.mean_illuminance_lux, 1e-9 * a.mean_illuminance_lux);
+  const SceneMetrics& ea = direct->standard_error.scene;
+  const SceneMetrics& eb = tallied->standard_error.scene;
+  EXPECT_GT(ea.udi_mean_percent, 0);
+  EXPECT_NEAR(eb.udi_mean_percent, ea.udi_mean_percent, 1e-9);
+  EXPECT_NEAR(eb.cda_mean_percent, ea.cda_mean_percent, 1e-9);
 }
 
 }  // namespace
