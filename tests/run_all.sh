@@ -18,9 +18,6 @@ jobs="$(nproc)"
 # Tests run one more at a time than there are cores: many daemon tests wait on sockets and
 # child processes, and with exactly one per core the cores idle 10-20% of the time
 test_jobs=$((jobs + 1))
-# Eigen's OpenMP threads sleep between products instead of spinning: the tests, their daemons
-# and PostgreSQL share the cores (a cluster test took 21.3 CPU s with spinning, 16.1 without)
-export OMP_WAIT_POLICY=passive
 timings=()
 times_file="$(mktemp)"
 phase_start=$SECONDS

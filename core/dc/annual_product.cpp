@@ -1,4 +1,4 @@
-// The annual product E_b = (I_b O_b) S on the CPU (Eigen, on all cores with OpenMP); the
+// The annual product E_b = (I_b O_b) S on the CPU (Eigen, on all cores); the
 // default tallies of E for the metrics.
 #include <utility>
 
@@ -24,7 +24,8 @@ class CpuAnnualProduct : public AnnualProduct {
     FENESTRA_RETURN_IF_ERROR(CheckPairs(indoor_batches, outdoor_));
     FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
     // Every batch's light through the window, then all batches' E in one product
-    return SplitBatches(ThroughWindow(indoor_batches, outdoor_) * sky, indoor_batches.size());
+    return SplitBatches(ProductOnAllCores(ThroughWindow(indoor_batches, outdoor_), sky),
+                        indoor_batches.size());
   }
 
  private:

@@ -61,9 +61,14 @@ absl::Status CheckPairs(const std::vector<Matrix>& indoor_batches,
 
 // The batches' light through the window, I_b O_b for every b, one above the other
 // ((B x sensors) x 146), for batches that pair up (CheckPairs): a blocked matrix product per
-// batch.
+// batch, the batches on all cores.
 Matrix ThroughWindow(const std::vector<Matrix>& indoor_batches,
                      const std::vector<Matrix>& outdoor_batches);
+
+// a b, parts of b's columns on all cores. Eigen's own products are single-threaded here: its
+// OpenMP threads, forking and joining for every small product, stalled whenever other
+// processes held the cores (bench/README.md, "The annual products on the CPU").
+Matrix ProductOnAllCores(const Matrix& a, const Matrix& b);
 
 // The inverse: `count` batches of equal rows from a stacked matrix.
 std::vector<Matrix> SplitBatches(const Matrix& stacked, size_t count);
