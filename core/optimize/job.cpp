@@ -151,6 +151,7 @@ struct AnnualSetting {
   std::shared_ptr<const SkyMatrix> sky;
   std::vector<bool> occupied;
   std::vector<int> columns;  // lit analysed steps, ascending
+  Matrix lit_sky;            // S over those steps, in lux (146 x columns)
   int analysed_hours = 0;
   MetricOptions options;
   SceneMetric metric = SceneMetric::kUdiMean;
@@ -174,6 +175,7 @@ absl::StatusOr<AnnualSetting> MakeAnnualSetting(const PreparedJob& job) {
     if (hour_basis == HourBasis::kAllHours || setting.occupied[c]) setting.columns.push_back(c);
   }
   setting.analysed_hours = AnalysedHours(setting.occupied, hour_basis);
+  setting.lit_sky = SkyColumnsInLux(setting.sky->radiance, setting.columns);
   setting.options.udi_lower_lux = m.udi_lower_lux();
   setting.options.udi_upper_lux = m.udi_upper_lux();
   setting.options.da_threshold_lux = m.da_threshold_lux();
@@ -193,12 +195,11 @@ absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualS
   // E_b = D_b S and its tallies by the backend's annual product, as the search's designs (a
   // one-stage D_b already holds the sky bins' light, so its O_b are the identity): on a GPU
   // the check's 32 pilot batches take a product there instead of one on the host
-  const Matrix lit_sky = SkyColumnsInLux(setting.sky->radiance, setting.columns);
   const DaylightMetric metric =
       [&](std::span<const Matrix> dc_batches) -> absl::StatusOr<Evaluation> {
     const std::vector<Matrix> identity(dc_batches.size(),
                                        Matrix::Identity(kDaylightBins, kDaylightBins));
-    FENESTRA_ASSIGN_OR_RETURN(product, backend->MakeAnnualProduct(identity, lit_sky));
+    FENESTRA_ASSIGN_OR_RETURN(product, backend->MakeAnnualProduct(identity, setting.lit_sky));
     FENESTRA_ASSIGN_OR_RETURN(
         versions, product->Tally({dc_batches.begin(), dc_batches.end()}, setting.options));
     FENESTRA_ASSIGN_OR_RETURN(
@@ -690,7 +691,6 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   // Sky matrix, the occupied hours and the lit analysed ones, the metric settings
   if (callbacks.stage) callbacks.stage("sky");
   FENESTRA_ASSIGN_OR_RETURN(setting, MakeAnnualSetting(job));
-  const std::vector<int>& columns = setting.columns;
   const MetricOptions& metric_options = setting.options;
   result.mutable_timings()->set_sky_seconds(SecondsSince(start));
 
@@ -719,8 +719,6 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (static_cast<int>(outdoor->batches.size()) != indoor_options.batches) {
     return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
   }
-  // S over the lit analysed hours, in lux
-  const Matrix lit_sky = SkyColumnsInLux(setting.sky->radiance, columns);
 
   // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O_b) S, as
   // the backend does it best (on the CPU the paths recorded once, then replayed per design;
@@ -730,7 +728,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (callbacks.stage) callbacks.stage("indoor paths");
   const Scene ranged = WithJobRanges(job.scene, spec);
   FENESTRA_ASSIGN_OR_RETURN(lanes, MakeLanes(spec.sampling(), *backend, ranged, indoor_options,
-                                             outdoor->batches, lit_sky));
+                                             outdoor->batches, setting.lit_sky));
   Racer racer({.lanes = lanes.Tallies(),
                .options = metric_options,
                .analysed_hours = setting.analysed_hours,
