@@ -115,12 +115,14 @@ __device__ uint64_t NextPath(unsigned long long* next_path) {
 // turn of the loop: begin(i, &random, &path, &stats) sets up item i (a path from its start,
 // or one resumed); a lane whose path ends takes the row's next item at once (path
 // regeneration), so lanes and blocks stay busy until the row runs out of paths rather than
-// wait for the longest path of their warp or the longest list of a thread. No splitting
-// (no weight windows on the GPU): small per-lane state.
-template <class Scene, class Mode, class Begin>
+// wait for the longest path of their warp or the longest list of a thread; end(stats) is
+// told of each item's path as it ends. No splitting (no weight windows on the GPU): small
+// per-lane state.
+template <class Scene, class Mode, class Begin, class End>
 __device__ void TraceItems(const Scene& scene, const SurfaceTable& surfaces,
                            const PathSettings& settings, Mode& mode, uint64_t count,
-                           unsigned long long* next_item, ThreadCounts& counts, Begin begin) {
+                           unsigned long long* next_item, ThreadCounts& counts, Begin begin,
+                           End end_item) {
   PathRandom random(0, 0, 0);
   PathState path;
   PathStats stats;
@@ -140,9 +142,19 @@ __device__ void TraceItems(const Scene& scene, const SurfaceTable& surfaces,
       path_internal::EndBranch(end, &stats);
       mode.Finish(stats);
       counts.Add(stats);
+      end_item(stats);
       live = false;
     }
   }
+}
+
+// TraceItems without telling of the items' ends.
+template <class Scene, class Mode, class Begin>
+__device__ void TraceItems(const Scene& scene, const SurfaceTable& surfaces,
+                           const PathSettings& settings, Mode& mode, uint64_t count,
+                           unsigned long long* next_item, ThreadCounts& counts, Begin begin) {
+  TraceItems(scene, surfaces, settings, mode, count, next_item, counts, begin,
+             [](const PathStats&) {});
 }
 
 // Traces paths first + i of random stream `stream`, i below last - first (TraceItems).
@@ -303,9 +315,29 @@ struct DeviceRecords {
   unsigned long long* connection_count;  // per row
   unsigned long long* resume_count;      // per row
   uint64_t crossing_capacity, connection_capacity, resume_capacity;
+  // The order in which a replay of all parts takes a batch's resumed paths, longest first:
+  // per (sensor, batch), entry i is the slot part * resume_capacity + k of its i-th path
+  // (entries from the batch's first part's slot on). Null: as recorded, part after part.
+  const uint32_t* order;
+  // Where a replay of all parts writes the rays of design 0's resumed paths, per slot (at
+  // most 255), to make `order` from; null: not written.
+  uint8_t* lengths;
 };
 
 __device__ uint64_t Smaller(uint64_t a, uint64_t b) { return a < b ? a : b; }
+
+// The slot of item i of the resumed paths of the record rows from `first_row` on: in `order`
+// (of a replay of all parts, from the batch's first slot), else one part after the other.
+__device__ size_t ResumeSlot(const DeviceRecords& records, const uint32_t* order,
+                             unsigned int first_row, uint64_t i) {
+  const size_t first_slot = static_cast<size_t>(first_row) * records.resume_capacity;
+  if (order != nullptr) return first_slot + order[first_slot + i];
+  unsigned int r = first_row;
+  for (uint64_t n; i >= (n = Smaller(records.resume_count[r], records.resume_capacity)); ++r) {
+    i -= n;
+  }
+  return static_cast<size_t>(r) * records.resume_capacity + i;
+}
 
 // Takes the records of a path of row `row` (core/trace/indoor_replay_modes.h): fixed light
 // into the block's shared row, connections and resumes into the row's regions.
@@ -394,6 +426,41 @@ struct DeviceDesign {
   Vec3f shift;
 };
 
+// Adds the window connections of record rows [first_row, first_row + count) that `design`'s
+// blind leaves clear to `row`, this block's share of them (block of `blocks`); returns how
+// many paths of those rows resume at the envelope.
+__device__ uint64_t TestConnections(const DeviceDesign& design, const LocalEnvelope& envelope,
+                                    const DeviceRecords& records, unsigned int first_row, int count,
+                                    unsigned int block, unsigned int blocks, double* row,
+                                    ThreadCounts& counts) {
+  uint64_t resume_count = 0;
+  const uint64_t stride = static_cast<uint64_t>(blocks) * blockDim.x;
+  for (int p = 0; p < count; ++p) {
+    const unsigned int r = first_row + p;
+    const uint64_t crossing_count = Smaller(records.crossing_count[r], records.crossing_capacity);
+    const ReplayCrossing* crossings = records.crossings + r * records.crossing_capacity;
+    for (uint64_t i = block * static_cast<uint64_t>(blockDim.x) + threadIdx.x; i < crossing_count;
+         i += stride) {
+      const ReplayCrossing k = crossings[i];
+      ++counts.values[0];
+      if (Clear(design.blind, design.shift, envelope, k)) atomicAdd(&row[k.column], k.value);
+    }
+    const uint64_t connection_count =
+        Smaller(records.connection_count[r], records.connection_capacity);
+    const ReplayConnection* connections = records.connections + r * records.connection_capacity;
+    for (uint64_t i = block * static_cast<uint64_t>(blockDim.x) + threadIdx.x; i < connection_count;
+         i += stride) {
+      const ReplayConnection c = connections[i];
+      ++counts.values[0];
+      if (!design.blind.Occluded(c.origin, c.direction, c.distance)) {
+        atomicAdd(&row[c.column], c.value);
+      }
+    }
+    resume_count += Smaller(records.resume_count[r], records.resume_capacity);
+  }
+  return resume_count;
+}
+
 // The designs one replay launch traces, passed by value.
 struct ReplayDesigns {
   DeviceDesign design[CudaTracer::kMaxReplayDesigns];
@@ -449,50 +516,30 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   }
   __syncthreads();
   ThreadCounts counts;
-  uint64_t resume_count = 0;
-  const uint64_t stride = static_cast<uint64_t>(blocks) * blockDim.x;
-  for (int p = 0; p < count; ++p) {
-    const unsigned int r = first_row + p;
-    const uint64_t crossing_count = Smaller(records.crossing_count[r], records.crossing_capacity);
-    const ReplayCrossing* crossings = records.crossings + r * records.crossing_capacity;
-    for (uint64_t i = block * static_cast<uint64_t>(blockDim.x) + threadIdx.x; i < crossing_count;
-         i += stride) {
-      const ReplayCrossing k = crossings[i];
-      ++counts.values[0];
-      if (Clear(design.blind, design.shift, envelope, k)) atomicAdd(&row[k.column], k.value);
-    }
-    const uint64_t connection_count =
-        Smaller(records.connection_count[r], records.connection_capacity);
-    const ReplayConnection* connections = records.connections + r * records.connection_capacity;
-    for (uint64_t i = block * static_cast<uint64_t>(blockDim.x) + threadIdx.x; i < connection_count;
-         i += stride) {
-      const ReplayConnection c = connections[i];
-      ++counts.values[0];
-      if (!design.blind.Occluded(c.origin, c.direction, c.distance)) {
-        atomicAdd(&row[c.column], c.value);
-      }
-    }
-    resume_count += Smaller(records.resume_count[r], records.resume_capacity);
-  }
+  const uint64_t resume_count =
+      TestConnections(design, envelope, records, first_row, count, block, blocks, row, counts);
   const BvhIntersector scene{design.nodes, design.triangles};
   const SurfaceTable surfaces{materials, design.triangle_material};
+  const bool all_parts = parts.first == 0 && parts.last == parts.parts;
+  const uint32_t* order = all_parts ? records.order : nullptr;
+  uint8_t* lengths = all_parts && y < design_rows ? records.lengths : nullptr;
   SharedSink sink{row, nullptr};
   IndoorMode<SharedSink, OutdoorView<BvhIntersector>> mode{
       sensors[s].position,  sensors[s].normal, window, &shared_basis,
       settings.max_bounces, &outdoor,          &sink};
-  TraceItems(scene, surfaces, settings, mode, resume_count, next_item + y, counts,
-             [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
-               // Item i of the parts' resumes, one part after the other
-               unsigned int r = first_row;
-               for (uint64_t n;
-                    i >= (n = Smaller(records.resume_count[r], records.resume_capacity)); ++r) {
-                 i -= n;
-               }
-               const ReplayResume resume = records.resumes[r * records.resume_capacity + i];
-               *random = PathRandom(seed, static_cast<uint32_t>(s), resume.path);
-               *path = resume.state;
-               *stats = ResumedStats(resume.state);
-             });
+  size_t slot = 0;  // the lane's resumed path
+  TraceItems(
+      scene, surfaces, settings, mode, resume_count, next_item + y, counts,
+      [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
+        slot = ResumeSlot(records, order, first_row, i);
+        const ReplayResume resume = records.resumes[slot];
+        *random = PathRandom(seed, static_cast<uint32_t>(s), resume.path);
+        *path = resume.state;
+        *stats = ResumedStats(resume.state);
+      },
+      [&](const PathStats& stats) {
+        if (lengths != nullptr) lengths[slot] = static_cast<uint8_t>(Smaller(stats.rays, 255));
+      });
   counts.Flush(block_counters);
   EndRow(row, columns, sum + offset, block_counters, counters);
 }
@@ -611,6 +658,11 @@ struct CudaTracer::Impl {
   DeviceBuffer<unsigned long long> record_counts;  // per row: see Recorded::counts
   DeviceBuffer<double> fixed;
   DeviceBuffer<TraceSensor> replay_sensors;
+  // The resumed paths' order (DeviceRecords::order), made from their lengths in the first
+  // replay of all parts after recording
+  DeviceBuffer<uint32_t> resume_order;
+  DeviceBuffer<uint8_t> resume_lengths;
+  bool resume_order_made = false;
   DeviceBuffer<unsigned int> row_blocks;          // each row's first block, for row_blocks_key
   std::array<int, 3> row_blocks_key{-1, -1, -1};  // parts [first, last) of this many designs
   // The scenes of ReplayIndoorDesigns' designs, one after the other
@@ -663,6 +715,38 @@ struct CudaTracer::Impl {
             recorded.crossing_capacity,
             recorded.connection_capacity,
             recorded.resume_capacity};
+  }
+
+  // Per (sensor, batch), its resumed paths longest first (DeviceRecords::order) from the
+  // lengths the last replay wrote: a counting sort by length, ties as recorded.
+  std::string OrderResumes() {
+    const Recorded& r = recorded;
+    const size_t record_rows = r.counts.size() / 3;
+    const size_t slots = record_rows * r.resume_capacity;
+    std::vector<uint8_t> lengths(slots);
+    FENESTRA_CUDA_RETURN_IF_ERROR(resume_lengths.Download(lengths.data(), slots));
+    std::vector<uint32_t> order(slots, 0);
+    for (size_t y = 0; y < record_rows / r.parts; ++y) {
+      const size_t first_slot = y * r.parts * r.resume_capacity;
+      // Paths per length, then where each length's paths begin (the longest first)
+      std::array<uint32_t, 257> start{};
+      const auto each_path = [&](const auto& visit) {
+        for (int p = 0; p < r.parts; ++p) {
+          const size_t count =
+              std::min<uint64_t>(r.counts[record_rows + y * r.parts + p], r.resume_capacity);
+          for (size_t k = 0; k < count; ++k) {
+            const uint32_t slot = static_cast<uint32_t>(p * r.resume_capacity + k);
+            visit(slot, 255 - lengths[first_slot + slot]);
+          }
+        }
+      };
+      each_path([&](uint32_t, int key) { ++start[key + 1]; });
+      for (size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+      each_path([&](uint32_t slot, int key) { order[first_slot + start[key]++] = slot; });
+    }
+    FENESTRA_CUDA_RETURN_IF_ERROR(resume_order.Upload(order.data(), slots));
+    resume_order_made = true;
+    return "";
   }
 
   // The replay's work per row (design, sensor, batch) over parts [first, last) of the
@@ -951,6 +1035,7 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   Impl& d = *impl_;
   if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
   d.recorded.valid = false;
+  d.resume_order_made = false;
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.replay_sensors.Upload(sensors, sensor_count));
   const int columns = IndoorColumnCount(window, basis);
@@ -1067,7 +1152,18 @@ std::string CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceMa
     d.row_blocks_key = {first, last, designs.count};
     d.row_blocks_total = blocks.back();
   }
-  const DeviceRecords records = d.Records();
+  // The first replay of all parts measures how long the resumed paths are; the later ones
+  // take the longest first, so that the launch does not wait for paths begun at its end
+  DeviceRecords records = d.Records();
+  const bool all_parts = first == 0 && last == r.parts;
+  const bool measure = all_parts && !d.resume_order_made;
+  if (measure) {
+    FENESTRA_CUDA_RETURN_IF_ERROR(
+        d.resume_lengths.Reserve(r.counts.size() / 3 * r.resume_capacity));
+    records.lengths = d.resume_lengths.get();
+  } else if (all_parts) {
+    records.order = d.resume_order.get();
+  }
   std::string error = d.Run(
       rows, d.DesignSums() * designs.count, false,
       [&] {
@@ -1078,6 +1174,7 @@ std::string CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceMa
             d.next_path.get());
       },
       host_sum, nullptr, out, first > 0);
+  if (measure && error.empty()) error = d.OrderResumes();
   d.replayed_parts = error.empty() && designs.count == 1 ? last : 0;
   return error;
 }
