@@ -9,7 +9,6 @@
 #include <fcntl.h>
 #include <grpcpp/grpcpp.h>
 #include <signal.h>
-#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -24,6 +23,7 @@
 
 #include "core/common/seconds.h"
 #include "fenestra/v1/service.grpc.pb.h"
+#include "tests/child_process.h"
 #include "tests/server/large_registration.h"
 
 namespace fenestra {
@@ -71,16 +71,12 @@ int Main(int argc, char** argv) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string port_file = dir + "/port";
-  const pid_t pid = fork();
-  if (pid == 0) {
-    prctl(PR_SET_PDEATHSIG, SIGKILL);
-    const int log = open((dir + "/fenestrad.log").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(log, STDERR_FILENO);
-    execl(fenestrad.c_str(), fenestrad.c_str(), "--listen", "127.0.0.1:0", "--data-dir",
-          (dir + "/data").c_str(), "--port-file", port_file.c_str(), "--workers", "1", "--backend",
-          "cpu", "--auth", "none", nullptr);
-    _exit(127);
-  }
+  const int log = OpenForChild(dir + "/fenestrad.log", /*append=*/false);
+  const pid_t pid =
+      Spawn({fenestrad, "--listen", "127.0.0.1:0", "--data-dir", dir + "/data", "--port-file",
+             port_file, "--workers", "1", "--backend", "cpu", "--auth", "none"},
+            {{log, STDERR_FILENO}}, /*die_with_parent=*/true);
+  close(log);
   while (!fs::exists(port_file)) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   int port = 0;
   std::ifstream(port_file) >> port;

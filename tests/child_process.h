@@ -2,17 +2,19 @@
 // fenestrad on a free loopback port with a data directory of its own.
 #pragma once
 
-#include <algorithm>
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -40,6 +42,62 @@ inline int ExitCode(int status) {
 
 }  // namespace child_process_internal
 
+// Starts `argv` (argv[0] a path); its pid (exit code 127: it could not be executed).
+// `redirects`: dup2(first, second) in the child, in order; no source may be an earlier
+// target. `die_with_parent`: SIGKILL when the test process ends. `environment`: the whole
+// environment ("NAME=value"), none for this process's. `close_from` >= 0: descriptors from
+// that one on are closed.
+//
+// Everything the child needs is made before the fork: a test process has gRPC, database and
+// sanitizer threads, one of which may hold the allocator's lock at the fork, so between fork
+// and exec the child calls only async-signal-safe functions.
+inline pid_t Spawn(std::vector<std::string> argv, const std::vector<std::pair<int, int>>& redirects,
+                   bool die_with_parent = false,
+                   std::optional<std::vector<std::string>> environment = std::nullopt,
+                   int close_from = -1) {
+  std::vector<char*> args = child_process_internal::Pointers(argv);
+  std::vector<char*> env;
+  if (environment) env = child_process_internal::Pointers(*environment);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (die_with_parent) prctl(PR_SET_PDEATHSIG, SIGKILL);
+    for (const auto& [from, to] : redirects) dup2(from, to);
+    if (close_from >= 0) close_range(close_from, ~0U, 0);
+    if (environment) {
+      execve(args[0], args.data(), env.data());
+    } else {
+      execv(args[0], args.data());
+    }
+    _exit(127);
+  }
+  return pid;
+}
+
+// A file opened for a child's output (appended or truncated), closed on exec so that only
+// the dup2 copies reach the child.
+inline int OpenForChild(const std::string& path, bool append) {
+  return open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | (append ? O_APPEND : O_TRUNC), 0644);
+}
+
+// How long a command may run before it counts as hung (the sanitizer build is slow).
+inline constexpr std::chrono::seconds kCommandTimeout{600};
+
+// Waits for `pid` to end, killing it after `timeout`; its exit code (128 + signal when
+// killed, so a child that hung reads 137).
+inline int WaitExit(pid_t pid, std::chrono::seconds timeout = kCommandTimeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  int status = 0;
+  while (waitpid(pid, &status, WNOHANG) == 0) {
+    if (std::chrono::steady_clock::now() > deadline) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return child_process_internal::ExitCode(status);
+}
+
 // Runs `argv` (argv[0] a path) with this process's environment plus `environment`
 // ("NAME=value"; a name given there replaces the inherited one) and waits for it.
 inline CommandResult RunCommand(std::vector<std::string> argv,
@@ -54,25 +112,26 @@ inline CommandResult RunCommand(std::vector<std::string> argv,
   }
   env.insert(env.end(), environment.begin(), environment.end());
   int fds[2];
-  if (pipe(fds) != 0) return {-1, "pipe failed"};
-  const pid_t pid = fork();
-  if (pid == 0) {
-    dup2(fds[1], STDOUT_FILENO);
-    dup2(fds[1], STDERR_FILENO);
-    close(fds[0]);
-    close(fds[1]);
-    execve(argv[0].c_str(), child_process_internal::Pointers(argv).data(),
-           child_process_internal::Pointers(env).data());
-    _exit(127);
-  }
+  if (pipe2(fds, O_CLOEXEC) != 0) return {-1, "pipe failed"};
+  const pid_t pid = Spawn(std::move(argv), {{fds[1], STDOUT_FILENO}, {fds[1], STDERR_FILENO}},
+                          /*die_with_parent=*/false, std::move(env));
   close(fds[1]);
+  // Read until the output ends or the time is up; a child that hangs is killed by WaitExit
+  const auto deadline = std::chrono::steady_clock::now() + kCommandTimeout;
   std::string output;
   char chunk[4096];
-  for (ssize_t n; (n = read(fds[0], chunk, sizeof chunk)) > 0;) output.append(chunk, n);
+  for (pollfd p{fds[0], POLLIN, 0};;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0 || poll(&p, 1, static_cast<int>(left.count())) <= 0) break;
+    const ssize_t n = read(fds[0], chunk, sizeof chunk);
+    if (n <= 0) break;
+    output.append(chunk, n);
+  }
   close(fds[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return {child_process_internal::ExitCode(status), output};
+  const auto left =
+      std::chrono::duration_cast<std::chrono::seconds>(deadline - std::chrono::steady_clock::now());
+  return {WaitExit(pid, std::max(left, std::chrono::seconds(1))), output};
 }
 
 // fenestrad on 127.0.0.1 (a free port, read from its --port-file) with `data_dir`; its log
@@ -91,15 +150,10 @@ class FenestradProcess {
       argv.insert(argv.end(), {"--auth", "none"});
     }
     argv.insert(argv.end(), flags.begin(), flags.end());
-    pid_ = fork();
-    if (pid_ == 0) {
-      prctl(PR_SET_PDEATHSIG, SIGKILL);  // no daemon outlives a crashed test
-      const int log = open(log_path_.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-      dup2(log, STDOUT_FILENO);
-      dup2(log, STDERR_FILENO);
-      execv(argv[0].c_str(), child_process_internal::Pointers(argv).data());
-      _exit(127);
-    }
+    const int log = OpenForChild(log_path_, /*append=*/true);
+    pid_ = Spawn(std::move(argv), {{log, STDOUT_FILENO}, {log, STDERR_FILENO}},
+                 /*die_with_parent=*/true);  // no daemon outlives a crashed test
+    close(log);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
     while (!std::filesystem::exists(port_file) && std::chrono::steady_clock::now() < deadline) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));

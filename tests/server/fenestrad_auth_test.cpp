@@ -171,6 +171,7 @@ grpc::Status CallWithoutToken(const std::shared_ptr<grpc::Channel>& channel,
                               const std::string& method, std::string* response_bytes) {
   grpc::GenericStub stub(channel);
   grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
   grpc::Slice empty(std::string{});
   grpc::ByteBuffer request(&empty, 1), response;
   std::promise<grpc::Status> done;
@@ -218,6 +219,7 @@ TEST_F(FenestradAuthTest, EveryCallNeedsAValidTokenButTheHealthCheck) {
       grpc::CompositeChannelCredentials(TlsCredentials(), grpc::AccessTokenCredentials(ann)));
   v1::ListSitesResponse sites;
   grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
   EXPECT_TRUE(
       v1::SiteService::NewStub(channel)->List(&context, v1::ListSitesRequest(), &sites).ok());
 

@@ -12,7 +12,6 @@
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
-#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -27,6 +26,7 @@
 #include <vector>
 
 #include "fenestra/v1/service.grpc.pb.h"
+#include "tests/child_process.h"
 
 namespace fenestra::testing_fenestrad {
 
@@ -40,29 +40,15 @@ std::string ReadFile(const std::string& path) {
   return s.str();
 }
 
-std::vector<char*> Argv(std::vector<std::string>& args) {
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  return argv;
-}
-
 // A child process; its stdout is read line by line through a pipe.
 class Process {
  public:
   Process(std::vector<std::string> args, const std::string& stderr_path) {
     int fds[2];
-    EXPECT_EQ(pipe(fds), 0);
-    pid_ = fork();
-    if (pid_ == 0) {
-      dup2(fds[1], STDOUT_FILENO);
-      const int err = open(stderr_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-      dup2(err, STDERR_FILENO);
-      close(fds[0]);
-      std::vector<char*> argv = Argv(args);
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
+    EXPECT_EQ(pipe2(fds, O_CLOEXEC), 0);
+    const int err = OpenForChild(stderr_path, /*append=*/true);
+    pid_ = Spawn(std::move(args), {{fds[1], STDOUT_FILENO}, {err, STDERR_FILENO}});
+    close(err);
     close(fds[1]);
     out_ = fds[0];
   }
@@ -96,10 +82,9 @@ class Process {
   void Signal(int signal) { kill(pid_, signal); }
   // The exit code (128 + signal when killed).
   int Wait() {
-    int status = 0;
-    waitpid(pid_, &status, 0);
+    const int code = WaitExit(pid_);
     pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return code;
   }
 
  private:
@@ -152,9 +137,11 @@ class Daemon {
   const std::string& address() const { return address_; }
   // The token Context() sends ("" = none).
   void set_token(std::string token) { token_ = std::move(token); }
-  // A context for one call, with "authorization: Bearer <token>" when a token is set.
+  // A context for one call, with "authorization: Bearer <token>" when a token is set. Its
+  // deadline turns a daemon that stopped answering into a failed call.
   std::unique_ptr<grpc::ClientContext> Context() const {
     auto context = std::make_unique<grpc::ClientContext>();
+    context->set_deadline(std::chrono::system_clock::now() + kCommandTimeout);
     if (!token_.empty()) context->AddMetadata("authorization", "Bearer " + token_);
     return context;
   }
@@ -175,20 +162,14 @@ class Daemon {
   static CliResult RunCli(std::vector<std::string> args) {
     const std::string base =
         testing::TempDir() + "/cli." + std::to_string(getpid()) + "." + std::to_string(counter_++);
-    const pid_t pid = fork();
-    if (pid == 0) {
-      const int out = open((base + ".out").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      const int err = open((base + ".err").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      dup2(out, STDOUT_FILENO);
-      dup2(err, STDERR_FILENO);
-      std::vector<char*> argv = Argv(args);
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
-    int status = 0;
-    waitpid(pid, &status, 0);
-    CliResult result{WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status),
-                     ReadFile(base + ".out"), ReadFile(base + ".err")};
+    const int out = OpenForChild(base + ".out", /*append=*/false);
+    const int err = OpenForChild(base + ".err", /*append=*/false);
+    const pid_t pid =
+        fenestra::Spawn(std::move(args), {{out, STDOUT_FILENO}, {err, STDERR_FILENO}});
+    close(out);
+    close(err);
+    const int code = WaitExit(pid);
+    CliResult result{code, ReadFile(base + ".out"), ReadFile(base + ".err")};
     fs::remove(base + ".out");
     fs::remove(base + ".err");
     return result;
@@ -209,25 +190,18 @@ class Daemon {
     std::vector<std::string> args = {FENESTRAD, "--listen",    "127.0.0.1:0", "--data-dir",
                                      data_dir_, "--port-file", port_file};
     args.insert(args.end(), flags_.begin(), flags_.end());
-    pid_ = fork();
-    if (pid_ == 0) {
-      prctl(PR_SET_PDEATHSIG, SIGKILL);  // no daemon outlives a crashed test
-      const int log = open(log_path().c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-      dup2(log, STDERR_FILENO);
-      dup2(log, STDOUT_FILENO);
-      std::vector<char*> argv = Argv(args);
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
+    const int log = OpenForChild(log_path(), /*append=*/true);
+    pid_ = fenestra::Spawn(std::move(args), {{log, STDERR_FILENO}, {log, STDOUT_FILENO}},
+                           /*die_with_parent=*/true);  // no daemon outlives a crashed test
+    close(log);
   }
   // Sends `signal` (0: none) and waits for the exit; the exit code.
   int Signal(int signal) {
     if (pid_ <= 0) return -1;
     if (signal != 0) kill(pid_, signal);
-    int status = 0;
-    waitpid(pid_, &status, 0);
+    const int code = WaitExit(pid_);
     pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return code;
   }
 
   std::string data_dir_;

@@ -13,6 +13,7 @@
 
 #include "absl/strings/escaping.h"
 #include "absl/strings/str_cat.h"
+#include "tests/child_process.h"
 
 namespace fenestra {
 namespace {
@@ -64,25 +65,24 @@ absl::StatusOr<std::unique_ptr<HeadlessChromium>> HeadlessChromium::Start(
     const std::string& executable, const std::string& profile_dir) {
   signal(SIGPIPE, SIG_IGN);  // a browser that died must not take the test with it
   int commands[2], replies[2];
-  if (pipe(commands) != 0 || pipe(replies) != 0) return absl::InternalError("pipe failed");
-  const pid_t pid = fork();
-  if (pid == 0) {
-    prctl(PR_SET_PDEATHSIG, SIGKILL);
-    // The browser reads commands on fd 3 and writes replies on fd 4
-    const int in = dup(commands[0]), out = dup(replies[1]);
-    dup2(in, 3);
-    dup2(out, 4);
-    const int log = open((profile_dir + ".log").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(log, STDOUT_FILENO);
-    dup2(log, STDERR_FILENO);
-    for (int fd = 5; fd < 1024; ++fd) close(fd);
-    execl(executable.c_str(), executable.c_str(), "--headless", "--no-sandbox", "--disable-gpu",
-          "--disable-quic", "--no-first-run", "--disable-background-networking",
-          "--disable-component-update", "--disable-sync", "--hide-scrollbars",
-          "--remote-debugging-pipe", ("--user-data-dir=" + profile_dir).c_str(), "about:blank",
-          static_cast<char*>(nullptr));
-    _exit(127);
+  if (pipe2(commands, O_CLOEXEC) != 0 || pipe2(replies, O_CLOEXEC) != 0) {
+    return absl::InternalError("pipe failed");
   }
+  // The browser reads commands on fd 3 and writes replies on fd 4; the copies made here lie
+  // above both, so that no redirect overwrites another's source
+  const int in = fcntl(commands[0], F_DUPFD_CLOEXEC, 10),
+            out = fcntl(replies[1], F_DUPFD_CLOEXEC, 10);
+  const int opened = OpenForChild(profile_dir + ".log", /*append=*/false);
+  const int log = fcntl(opened, F_DUPFD_CLOEXEC, 10);
+  close(opened);
+  const pid_t pid =
+      Spawn({executable, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+             "--no-first-run", "--disable-background-networking", "--disable-component-update",
+             "--disable-sync", "--hide-scrollbars", "--remote-debugging-pipe",
+             "--user-data-dir=" + profile_dir, "about:blank"},
+            {{in, 3}, {out, 4}, {log, STDOUT_FILENO}, {log, STDERR_FILENO}},
+            /*die_with_parent=*/true, std::nullopt, /*close_from=*/5);
+  for (const int fd : {in, out, log}) close(fd);
   close(commands[0]);
   close(replies[1]);
   std::unique_ptr<HeadlessChromium> browser(new HeadlessChromium(pid, commands[1], replies[0]));
