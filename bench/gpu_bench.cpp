@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 
+#include "absl/strings/str_format.h"
 #include "bench/bench_util.h"
 #include "core/common/seconds.h"
 #include "core/dc/backend_support.h"
@@ -254,7 +255,12 @@ int main(int argc, char** argv) {
   job.mutable_sampling()->set_backend("cuda");
   const PreparedJob prepared = ValueOrExit(PrepareJob(job, kRoot + "/examples/city_office"));
   const auto start = std::chrono::steady_clock::now();
-  const v1::JobResult result = ValueOrExit(RunJob(prepared, nullptr));
+  std::string stage_starts;  // when each stage began [s]
+  JobCallbacks callbacks;
+  callbacks.stage = [&](const std::string& stage) {
+    stage_starts += absl::StrFormat(" %s %.3f", stage, SecondsSince(start));
+  };
+  const v1::JobResult result = ValueOrExit(RunJob(prepared, nullptr, callbacks));
   const v1::Timings& t = result.timings();
   const v1::FinalCheck& check = result.final_check();
   std::printf(
@@ -275,7 +281,8 @@ int main(int argc, char** argv) {
   for (const char* name : {"alpha", "width", "spacing", "thickness"}) {
     std::printf(" %s=%.4f", name, result.best_design().at(name));
   }
-  std::printf("\nfinal check: difference %+.2f ± %.2f %%%s\n", check.difference().value(),
+  std::printf("\nstages began at (s):%s; ended %.3f\n", stage_starts.c_str(), SecondsSince(start));
+  std::printf("final check: difference %+.2f ± %.2f %%%s\n", check.difference().value(),
               check.difference().standard_error(), check.disagrees() ? " DISAGREES" : "");
   return 0;
 }

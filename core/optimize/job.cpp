@@ -5,6 +5,7 @@
 #include <climits>
 #include <cmath>
 #include <filesystem>
+#include <future>
 #include <map>
 #include <optional>
 #include <span>
@@ -688,27 +689,42 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   v1::SearchCheckpoint& checkpoint = from.checkpoint;
   const JobClock clock{start, from.resumed_seconds};
 
-  // Sky matrix, the occupied hours and the lit analysed ones, the metric settings
+  // Sky matrix, the occupied hours and the lit analysed ones, the metric settings: on the host
+  // while the outdoor stage traces, where it is traced now (its errors then come after it)
   if (callbacks.stage) callbacks.stage("sky");
-  FENESTRA_ASSIGN_OR_RETURN(setting, MakeAnnualSetting(job));
-  const MetricOptions& metric_options = setting.options;
-  result.mutable_timings()->set_sky_seconds(SecondsSince(start));
+  double sky_seconds = 0;
+  std::future<absl::StatusOr<AnnualSetting>> sky_setting = std::async(std::launch::async, [&] {
+    const auto sky_start = std::chrono::steady_clock::now();
+    absl::StatusOr<AnnualSetting> made = MakeAnnualSetting(job);
+    sky_seconds = SecondsSince(sky_start);
+    return made;
+  });
 
   // Outdoor matrix: the cached one, or traced now
   const std::string key = OutdoorMatrixKey(job.scene, spec.sampling());
   OutdoorMatrix computed;
+  absl::Status outdoor_status;
   if (outdoor != nullptr) {
     if (outdoor->key != key) {
-      return absl::InvalidArgumentError("the cached outdoor matrix belongs to another site");
+      outdoor_status =
+          absl::InvalidArgumentError("the cached outdoor matrix belongs to another site");
     }
   } else {
     if (callbacks.stage) callbacks.stage("outdoor");
-    FENESTRA_ASSIGN_OR_RETURN(
-        matrix, ComputeOutdoorMatrix(job.scene, spec.sampling(), callbacks.cancelled));
-    computed = std::move(matrix);
-    outdoor = &computed;
-    result.mutable_timings()->set_outdoor_seconds(computed.wall_seconds);
+    absl::StatusOr<OutdoorMatrix> matrix =
+        ComputeOutdoorMatrix(job.scene, spec.sampling(), callbacks.cancelled);
+    if (matrix.ok()) {
+      computed = *std::move(matrix);
+      outdoor = &computed;
+      result.mutable_timings()->set_outdoor_seconds(computed.wall_seconds);
+    } else {
+      outdoor_status = matrix.status();
+    }
   }
+  FENESTRA_ASSIGN_OR_RETURN(setting, sky_setting.get());
+  FENESTRA_RETURN_IF_ERROR(outdoor_status);
+  const MetricOptions& metric_options = setting.options;
+  result.mutable_timings()->set_sky_seconds(sky_seconds);
 
   // The designs' indoor stage, with the same random streams for every design
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));

@@ -117,6 +117,7 @@ struct JobProgress {
 
 struct JobCallbacks {
   // A stage starts: "sky", "outdoor", "indoor paths", "search", "check" (the final check).
+  // The sky matrix is made while the outdoor stage traces, so "outdoor" follows "sky" at once.
   std::function<void(const std::string& stage)> stage;
   std::function<void(const JobProgress&)> progress;
   // Polled between evaluations; true stops the search there.
