@@ -1,0 +1,15 @@
+// Transparent huge pages for large host buffers written once.
+#pragma once
+
+#include <cstddef>
+
+namespace fenestra {
+
+// Asks the kernel to back the 2 MiB-aligned pages inside [data, data + bytes) with
+// transparent huge pages (madvise MADV_HUGEPAGE) before the buffer is first written: a
+// buffer of many MiB filled at once (a GPU download, say) then takes one page fault per
+// 2 MiB instead of one per 4 KiB. Where the kernel offers no huge pages, or the range holds
+// no whole one, nothing changes. The buffer's content is never touched.
+void AdviseHugePages(void* data, size_t bytes);
+
+}  // namespace fenestra
