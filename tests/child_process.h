@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -83,19 +84,24 @@ inline int OpenForChild(const std::string& path, bool append) {
 inline constexpr std::chrono::seconds kCommandTimeout{600};
 
 // Waits for `pid` to end, killing it after `timeout`; its exit code (128 + signal when
-// killed, so a child that hung reads 137).
+// killed, so a child that hung reads 137), or -1 where there is no such child to wait for.
 inline int WaitExit(pid_t pid, std::chrono::seconds timeout = kCommandTimeout) {
+  if (pid <= 0) return -1;
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   int status = 0;
-  while (waitpid(pid, &status, WNOHANG) == 0) {
+  while (true) {
+    const pid_t waited = waitpid(pid, &status, WNOHANG);
+    if (waited == pid) return child_process_internal::ExitCode(status);
+    if (waited < 0 && errno != EINTR) return -1;
     if (std::chrono::steady_clock::now() > deadline) {
       kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      break;
+      pid_t killed;
+      while ((killed = waitpid(pid, &status, 0)) < 0 && errno == EINTR) {
+      }
+      return killed == pid ? child_process_internal::ExitCode(status) : -1;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
-  return child_process_internal::ExitCode(status);
 }
 
 // Runs `argv` (argv[0] a path) with this process's environment plus `environment`
@@ -123,8 +129,12 @@ inline CommandResult RunCommand(std::vector<std::string> argv,
   for (pollfd p{fds[0], POLLIN, 0};;) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
         deadline - std::chrono::steady_clock::now());
-    if (left.count() <= 0 || poll(&p, 1, static_cast<int>(left.count())) <= 0) break;
+    if (left.count() <= 0) break;
+    const int ready = poll(&p, 1, static_cast<int>(left.count()));
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready <= 0) break;
     const ssize_t n = read(fds[0], chunk, sizeof chunk);
+    if (n < 0 && errno == EINTR) continue;
     if (n <= 0) break;
     output.append(chunk, n);
   }
