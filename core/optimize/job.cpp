@@ -676,6 +676,51 @@ absl::StatusOr<v1::SearchCheckpoint> ParseSearchCheckpoint(std::string_view byte
   return checkpoint;
 }
 
+namespace {
+
+// The job's annual setting (sky matrix, occupied and lit hours, metric settings), made on the
+// host while the outdoor stage traces where `outdoor` is null: `computed` then holds the
+// traced matrix and `outdoor` points at it, and the setting's errors come after the outdoor
+// stage's. Their times go to `timings`.
+absl::StatusOr<AnnualSetting> SettingAndOutdoor(const PreparedJob& job,
+                                                const JobCallbacks& callbacks,
+                                                const OutdoorMatrix*& outdoor,
+                                                OutdoorMatrix& computed, v1::Timings& timings) {
+  if (callbacks.stage) callbacks.stage("sky");
+  double sky_seconds = 0;
+  std::future<absl::StatusOr<AnnualSetting>> setting = std::async(std::launch::async, [&] {
+    const auto start = std::chrono::steady_clock::now();
+    absl::StatusOr<AnnualSetting> made = MakeAnnualSetting(job);
+    sky_seconds = SecondsSince(start);
+    return made;
+  });
+  absl::Status outdoor_status;
+  if (outdoor != nullptr) {
+    if (outdoor->key != OutdoorMatrixKey(job.scene, job.job.sampling())) {
+      outdoor_status =
+          absl::InvalidArgumentError("the cached outdoor matrix belongs to another site");
+    }
+  } else {
+    if (callbacks.stage) callbacks.stage("outdoor");
+    absl::StatusOr<OutdoorMatrix> matrix =
+        ComputeOutdoorMatrix(job.scene, job.job.sampling(), callbacks.cancelled);
+    if (matrix.ok()) {
+      computed = *std::move(matrix);
+      outdoor = &computed;
+      timings.set_outdoor_seconds(computed.wall_seconds);
+    } else {
+      outdoor_status = matrix.status();
+    }
+  }
+  absl::StatusOr<AnnualSetting> made = setting.get();
+  timings.set_sky_seconds(sky_seconds);
+  if (!made.ok()) return made.status();
+  FENESTRA_RETURN_IF_ERROR(outdoor_status);
+  return made;
+}
+
+}  // namespace
+
 absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix* outdoor,
                                      const JobCallbacks& callbacks,
                                      const v1::SearchCheckpoint* resume) {
@@ -689,42 +734,12 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   v1::SearchCheckpoint& checkpoint = from.checkpoint;
   const JobClock clock{start, from.resumed_seconds};
 
-  // Sky matrix, the occupied hours and the lit analysed ones, the metric settings: on the host
-  // while the outdoor stage traces, where it is traced now (its errors then come after it)
-  if (callbacks.stage) callbacks.stage("sky");
-  double sky_seconds = 0;
-  std::future<absl::StatusOr<AnnualSetting>> sky_setting = std::async(std::launch::async, [&] {
-    const auto sky_start = std::chrono::steady_clock::now();
-    absl::StatusOr<AnnualSetting> made = MakeAnnualSetting(job);
-    sky_seconds = SecondsSince(sky_start);
-    return made;
-  });
-
-  // Outdoor matrix: the cached one, or traced now
-  const std::string key = OutdoorMatrixKey(job.scene, spec.sampling());
+  // Sky matrix, the occupied hours and the lit analysed ones, the metric settings; the outdoor
+  // matrix: the cached one, or traced now
   OutdoorMatrix computed;
-  absl::Status outdoor_status;
-  if (outdoor != nullptr) {
-    if (outdoor->key != key) {
-      outdoor_status =
-          absl::InvalidArgumentError("the cached outdoor matrix belongs to another site");
-    }
-  } else {
-    if (callbacks.stage) callbacks.stage("outdoor");
-    absl::StatusOr<OutdoorMatrix> matrix =
-        ComputeOutdoorMatrix(job.scene, spec.sampling(), callbacks.cancelled);
-    if (matrix.ok()) {
-      computed = *std::move(matrix);
-      outdoor = &computed;
-      result.mutable_timings()->set_outdoor_seconds(computed.wall_seconds);
-    } else {
-      outdoor_status = matrix.status();
-    }
-  }
-  FENESTRA_ASSIGN_OR_RETURN(setting, sky_setting.get());
-  FENESTRA_RETURN_IF_ERROR(outdoor_status);
+  FENESTRA_ASSIGN_OR_RETURN(
+      setting, SettingAndOutdoor(job, callbacks, outdoor, computed, *result.mutable_timings()));
   const MetricOptions& metric_options = setting.options;
-  result.mutable_timings()->set_sky_seconds(sky_seconds);
 
   // The designs' indoor stage, with the same random streams for every design
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
