@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <span>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
@@ -21,46 +22,115 @@ namespace {
 // Room to spare around the blind's envelope: far above float rounding at room scale [m]
 constexpr double kEnvelopeMargin = 1e-3;
 
+// Light no blind can change, once a path has gone beyond the envelope.
+struct FixedLight {
+  int32_t column;
+  double value;
+};
+
+// Where a recorded path reached the envelope, and what it did after in the room without the
+// blind (RecordPath): its records in the chunk's `after_*` from these indices on, up to the
+// next touch's, count for a design that leaves this touch's line, and the path's earlier
+// ones, clear.
+struct Touch {
+  ReplayTouch touch;
+  bool first;  // the path's first touch
+  uint32_t crossings, others, fixed;
+};
+
 // The recorded paths of one sensor, one batch, one range of path indices.
 struct Chunk {
   uint32_t sensor = 0;
   int batch = 0;
   std::vector<double> fixed;  // per column of I: what no blind can change
   const LocalEnvelope* envelope = nullptr;
+  // Connections before a path reaches the envelope
   std::vector<ReplayCrossing> crossings;
   std::vector<ReplayConnection> others;  // connections that do not cross the envelope
-  std::vector<ReplayResume> resumes;
+  std::vector<Touch> touches;
+  // What paths did beyond the envelope, in the order of their touches
+  std::vector<ReplayCrossing> after_crossings;
+  std::vector<ReplayConnection> after_others;
+  std::vector<FixedLight> after_fixed;
   uint64_t paths = 0;
+  bool beyond = false;  // the path being recorded has reached the envelope
 
-  void AddFixed(int column, double value) { fixed[column] += value; }
+  void BeginPath() { beyond = false; }
+  void AddFixed(int column, double value) {
+    if (beyond) {
+      after_fixed.push_back({column, value});
+    } else {
+      fixed[column] += value;
+    }
+  }
   void AddConnection(const ReplayConnection& c) {
     ReplayCrossing crossing;
     if (CrossingOf(*envelope, c, &crossing)) {
-      crossings.push_back(crossing);
+      (beyond ? after_crossings : crossings).push_back(crossing);
     } else {
-      others.push_back(c);
+      (beyond ? after_others : others).push_back(c);
     }
   }
-  void AddResume(const PathState& state, uint64_t path) { resumes.push_back({state, path}); }
+  void AddTouch(const ReplayTouch& touch) {
+    touches.push_back({touch, !beyond, static_cast<uint32_t>(after_crossings.size()),
+                       static_cast<uint32_t>(after_others.size()),
+                       static_cast<uint32_t>(after_fixed.size())});
+    beyond = true;
+  }
 };
 
 using OutdoorEmbreeView = OutdoorView<EmbreeIntersector>;
 using Recording = RecordingIntersector<EmbreeIntersector>;
 
-// Adds the value of every connection of `chunk` that `slats` leave clear to its column of
-// `sum`; `shift` is where the slats' centre lies in the envelope's frame (ShiftFrom). A
-// crossing's test is a few flops without a branch (LocalSlats::LineOccluded): 5-6 times
-// faster than Embree's packets of 16 rays against the blind's triangles (bench/README.md,
-// "Racing").
-void TestConnections(const LocalSlats& slats, Vec3f shift, const Chunk& chunk,
-                     std::vector<double>& sum) {
-  for (const ReplayCrossing& k : chunk.crossings) {
+// Adds the value of every connection that `slats` leave clear to its column of `sum`;
+// `shift` is where the slats' centre lies in the envelope's frame (ShiftFrom). A crossing's
+// test is a few flops without a branch (LocalSlats::LineOccluded): 5-6 times faster than
+// Embree's packets of 16 rays against the blind's triangles (bench/README.md, "Racing").
+void TestConnections(const LocalSlats& slats, Vec3f shift, const LocalEnvelope& envelope,
+                     std::span<const ReplayCrossing> crossings,
+                     std::span<const ReplayConnection> others, std::vector<double>& sum) {
+  for (const ReplayCrossing& k : crossings) {
     // Times 0 or 1 rather than a branch the CPU would mispredict for a third of the rays
-    sum[k.column] += k.value * static_cast<int>(Clear(slats, shift, *chunk.envelope, k));
+    sum[k.column] += k.value * static_cast<int>(Clear(slats, shift, envelope, k));
   }
-  for (const ReplayConnection& k : chunk.others) {
+  for (const ReplayConnection& k : others) {
     if (!slats.Occluded(k.origin, k.direction, k.distance)) sum[k.column] += k.value;
   }
+}
+
+// Follows each path of `chunk` beyond the envelope while `slats` leave its lines clear,
+// adding what it did there to `sum`; a path whose line they block, or whose ray does not
+// cross the envelope, goes to `resume` from that touch. The tests made.
+template <class Resume>
+uint64_t FollowTouches(const LocalSlats& slats, Vec3f shift, const Chunk& chunk,
+                       std::vector<double>& sum, Resume resume) {
+  uint64_t tests = 0;
+  bool following = false;
+  const size_t count = chunk.touches.size();
+  for (size_t t = 0; t < count; ++t) {
+    const Touch& touch = chunk.touches[t];
+    following = following || touch.first;
+    if (!following) continue;
+    ++tests;
+    if (!Clear(slats, shift, *chunk.envelope, touch.touch)) {
+      resume(touch.touch);
+      following = false;
+      continue;
+    }
+    const bool last = t + 1 == count;
+    const size_t crossings = last ? chunk.after_crossings.size() : chunk.touches[t + 1].crossings;
+    const size_t others = last ? chunk.after_others.size() : chunk.touches[t + 1].others;
+    const size_t fixed = last ? chunk.after_fixed.size() : chunk.touches[t + 1].fixed;
+    TestConnections(
+        slats, shift, *chunk.envelope,
+        std::span(chunk.after_crossings).subspan(touch.crossings, crossings - touch.crossings),
+        std::span(chunk.after_others).subspan(touch.others, others - touch.others), sum);
+    tests += crossings - touch.crossings + others - touch.others;
+    for (size_t k = touch.fixed; k < fixed; ++k) {
+      sum[chunk.after_fixed[k].column] += chunk.after_fixed[k].value;
+    }
+  }
+  return tests;
 }
 
 bool WithinRange(double value, const ParameterRange& range) {
@@ -199,11 +269,13 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
                  &data->outdoor_view, &sink},
                 &scene_view,
                 &chunk};
-      TracePath<Recording, Mode, 0>(scene_view, geometry.Surfaces(), settings,
-                                    PathRandom(options.seed, chunk.sensor, p), mode);
+      RecordPath(scene_view, geometry.Surfaces(), settings,
+                 PathRandom(options.seed, chunk.sensor, p), mode);
     }
   });
-  for (const Chunk& chunk : data->chunks) data->resumed += chunk.resumes.size();
+  for (const Chunk& chunk : data->chunks) {
+    for (const Touch& touch : chunk.touches) data->resumed += touch.first;
+  }
   data->record_seconds = SecondsSince(start);
   return std::unique_ptr<IndoorReplay>(new IndoorReplay(std::move(data)));
 }
@@ -262,22 +334,23 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
       [&](uint64_t i, Slot& slot) {
         const Chunk& chunk = chunk_of(i);
         slot.sum = chunk.fixed;
-        TestConnections(slats, shift, chunk, slot.sum);
+        TestConnections(slats, shift, *chunk.envelope, chunk.crossings, chunk.others, slot.sum);
         slot.counters.rays += chunk.crossings.size() + chunk.others.size();
         const TraceSensor& sensor = d.sensors[chunk.sensor];
         IndoorMode<Slot, OutdoorEmbreeView> mode{
             sensor.position,      sensor.normal,   d.window, &d.basis,
             settings.max_bounces, &d.outdoor_view, &slot};
-        for (const ReplayResume& r : chunk.resumes) {
-          PathStats stats = ResumedStats(r.state);
-          PathState pending[1];
-          int pending_count = 0;
-          uint32_t interactions = r.state.vertex;
-          stats.end = path_internal::FollowBranch(
-              full_view, surfaces, settings, PathRandom(d.options.seed, chunk.sensor, r.path), mode,
-              r.state, &interactions, pending, 0, &pending_count, &stats);
-          slot.counters.Add(stats);
-        }
+        slot.counters.rays +=
+            FollowTouches(slats, shift, chunk, slot.sum, [&](const ReplayTouch& r) {
+              PathStats stats = ResumedStats(r.state);
+              PathState pending[1];
+              int pending_count = 0;
+              uint32_t interactions = r.state.vertex;
+              stats.end = path_internal::FollowBranch(
+                  full_view, surfaces, settings, PathRandom(d.options.seed, chunk.sensor, r.path),
+                  mode, r.state, &interactions, pending, 0, &pending_count, &stats);
+              slot.counters.Add(stats);
+            });
       },
       [&](uint64_t i, const Slot& slot) {
         const Chunk& chunk = chunk_of(i);

@@ -12,7 +12,8 @@
 // alone (LocalSlatsOfBlind; here each kept as its line across the envelope, a few flops per
 // design), and the paths that reached the envelope are traced on from there through the
 // room and the blind (on the GPU, the room's BVH recorded once with the slats' put beside it
-// per design, BvhWithSlats).
+// per design, BvhWithSlats). Here the records follow each path on as if there were no blind
+// (RecordPath), and a design traces it on only from the first ray its slats block.
 #include <memory>
 #include <vector>
 
@@ -63,7 +64,8 @@ class IndoorReplay : public IndoorStages {
                                          int last) const override;
   bool TracesInParts() const override { return true; }
 
-  // Of all paths, the fraction that reached the envelope and is traced per design.
+  // Of all paths, the fraction that reached the envelope (a design traces on those whose rays
+  // there its slats block).
   double ResumedFraction() const;
   // Wall time of Record [s].
   double RecordSeconds() const;

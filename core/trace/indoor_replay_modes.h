@@ -5,9 +5,16 @@
 // path, and the intersector, sink and mode that make them while IndoorMode traces.
 //
 // A Recorder takes the records:
+//   void BeginPath();                                a path starts
 //   void AddFixed(int column, double value);        light no blind can change
 //   void AddConnection(const ReplayConnection& c);   counts unless the blind blocks c
-//   void AddResume(const PathState& state, uint64_t path);  traced on per design
+//   void AddTouch(ReplayTouch touch);               the path reached the envelope
+// A path that reaches the envelope is traced on per design from there, unless its ray
+// crosses the envelope from face to face and the design's slats leave that line clear: then
+// it goes on as in the room without the blind. RecordPath follows it on (the CPU's replay),
+// and what it records after a touch counts only for the designs that leave the path's lines
+// up to there clear. The GPU's records end at the first touch: the path is traced on from
+// there at every design.
 #include <cmath>
 #include <cstdint>
 
@@ -83,30 +90,57 @@ FENESTRA_CPU_GPU inline bool Clear(const LocalSlats& slats, Vec3f shift,
   return !slats.Occluded(k.line, shift, envelope.half[2]);
 }
 
-// A path that reached the envelope: its state there and its index (random stream).
+// A path that reached the envelope, as the GPU keeps it: its state there and its index
+// (random stream).
 struct ReplayResume {
   PathState state;
   uint64_t path;
 };
 
-// The room without the blind, stopping rays that touch the envelope and remembering the
-// shadow ray a next-event estimate is about to score. One per thread: it holds the state
-// of the path being traced.
+// Where a recorded path reached the envelope: its state there, its index (random stream)
+// and, when its ray crosses the envelope from face to face, that ray's line there.
+struct ReplayTouch {
+  PathState state;
+  uint64_t path;
+  SlabCrossing line;
+  bool crosses;
+};
+
+// Whether `slats` leave the line of `touch` clear, so that the path goes on as recorded.
+FENESTRA_CPU_GPU inline bool Clear(const LocalSlats& slats, Vec3f shift,
+                                   const LocalEnvelope& envelope, const ReplayTouch& touch) {
+  return touch.crosses && !slats.Occluded(touch.line, shift, envelope.half[2]);
+}
+
+// The room without the blind, stopping rays that touch the envelope (unless told to let the
+// next one pass) and remembering the shadow ray a next-event estimate is about to score. One
+// per thread: it holds the state of the path being traced.
 template <class Room>
 struct RecordingIntersector {
   Room room;
   LocalEnvelope envelope;
   mutable bool diverged = false;
+  mutable bool crosses = false;  // the stopped ray crosses the envelope from face to face
+  mutable SlabCrossing line{};   // then its line there
+  mutable bool pass = false;     // the next ray goes on through the envelope
   mutable bool connection_pending = false;
   mutable ReplayConnection pending{};
 
   FENESTRA_CPU_GPU bool Intersect(Vec3f origin, Vec3f direction, SurfaceHit* hit) const {
     connection_pending = false;
     const bool found = room.Intersect(origin, direction, hit);
+    if (pass) {
+      pass = false;
+      return found;
+    }
     const Vec3f to_hit = found ? hit->position - origin : Vec3f{0, 0, 0};
     const float extent = found ? sqrtf(Dot(to_hit, to_hit)) : INFINITY;
     if (envelope.Touches(origin, direction, extent)) {
       diverged = true;
+      ReplayCrossing crossing;
+      crosses =
+          CrossingOf(envelope, ReplayConnection{origin, direction, extent, 0, 0.0}, &crossing);
+      line = crossing.line;
       return false;
     }
     return found;
@@ -154,6 +188,8 @@ struct RecordingMode {
   template <class Intersector>
   FENESTRA_CPU_GPU PathState Start(const Intersector& s, const PathRandom& random) {
     path = random.path();
+    touched = false;
+    recorder->BeginPath();
     return inner.Start(s, random);
   }
   template <class Intersector>
@@ -161,18 +197,56 @@ struct RecordingMode {
                                      const ReflectionVertex& vertex, const PathRandom& random) {
     inner.AtReflection(s, state, vertex, random);
   }
+  // A ray stopped at the envelope: recorded, and let through when the path is followed on
+  // (RecordPath steps it again).
   FENESTRA_CPU_GPU void Escape(const PathState& state) {
     if (scene->diverged) {
       scene->diverged = false;
-      recorder->AddResume(state, path);
+      recorder->AddTouch(ReplayTouch{state, path, scene->line, scene->crosses});
+      // A ray that does not cross is traced on at every design: nothing after it counts
+      touched = scene->crosses;
     } else {
       inner.Escape(state);
     }
   }
   FENESTRA_CPU_GPU void Finish(const PathStats& stats) { inner.Finish(stats); }
+
+  // After a step that ended: whether the path goes on through the envelope (step it again
+  // from the same state).
+  FENESTRA_CPU_GPU bool GoesOn() {
+    if (!touched) return false;
+    touched = false;
+    scene->pass = true;
+    return true;
+  }
+
+  bool touched = false;  // the last step stopped at the envelope, and the path goes on
 };
 
-// A resumed path's stats before its first step.
+// Follows one path through the room without the blind to its end (no splitting), as
+// TracePath does, recording through `mode` (RecordingMode): each ray that reaches the
+// envelope is recorded, then let through, so what the path does beyond the envelope is
+// recorded as well.
+template <class Room, class Mode>
+FENESTRA_CPU_GPU inline PathStats RecordPath(const RecordingIntersector<Room>& scene,
+                                             const SurfaceTable& surfaces,
+                                             const PathSettings& settings, const PathRandom& random,
+                                             Mode& mode) {
+  PathStats stats;
+  PathState path = path_internal::StartPath(scene, random, mode, &stats);
+  uint32_t interactions = path.vertex;
+  int pending_count = 0;
+  PathEnd end = PathEnd::kEscaped;
+  while (path_internal::StepBranch(scene, surfaces, settings, random, mode, path, &interactions,
+                                   nullptr, 0, &pending_count, &stats, &end) ||
+         mode.GoesOn()) {
+  }
+  path_internal::EndBranch(end, &stats);
+  mode.Finish(stats);
+  return stats;
+}
+
+// A path's stats before its first step from a touch.
 FENESTRA_CPU_GPU inline PathStats ResumedStats(const PathState& state) {
   return PathStats{0, state.weight, PathEnd::kEscaped, 0, {0, 0, 0, 0, 0, 0}};
 }

@@ -367,11 +367,14 @@ struct DeviceRecorder {
     }
 #endif
   }
-  FENESTRA_CPU_GPU void AddResume(const PathState& state, uint64_t path) {
+  FENESTRA_CPU_GPU void BeginPath() {}
+  // RecordKernel does not follow a path beyond the envelope: it is traced on from its touch
+  // at every design (following paths on did not pay on the GPU: bench/README.md)
+  FENESTRA_CPU_GPU void AddTouch(const ReplayTouch& touch) {
 #if defined(__CUDA_ARCH__)
     const uint64_t i = atomicAdd(&records.resume_count[row], 1ull);
     if (i < records.resume_capacity) {
-      records.resumes[row * records.resume_capacity + i] = ReplayResume{state, path};
+      records.resumes[row * records.resume_capacity + i] = ReplayResume{touch.state, touch.path};
     }
 #endif
   }
