@@ -34,6 +34,16 @@ TEST(IndoorReplayTest, EqualsTheIndoorStage) {
     ASSERT_TRUE(traced.ok() && replayed.ok()) << replayed.status();
     ASSERT_EQ(traced->coefficients.cols(), replayed->coefficients.cols());
     ExpectReplayEqualsTrace(*traced, *replayed);
+    // A path whose ray the slats leave clear goes on as recorded: a design traces on fewer
+    // paths than reached the envelope (at closed slats about three quarters of them)
+    absl::StatusOr<IndoorTally> tally = (*replay)->TraceParts(*design, 0, kDesignParts);
+    ASSERT_TRUE(tally.ok()) << tally.status();
+    uint64_t traced_on = 0;
+    for (uint64_t paths : tally->counters.ends) traced_on += paths;
+    const double reached = (*replay)->ResumedFraction() *
+                           static_cast<double>(options.paths_per_sensor * scene.sensors.size());
+    EXPECT_GT(traced_on, 0u);
+    EXPECT_LT(static_cast<double>(traced_on), 0.95 * reached);
   }
   // Outside the recorded ranges the replay would be wrong, so it refuses
   BlindDesign wide = DefaultDesign(scene);
