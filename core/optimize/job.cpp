@@ -786,19 +786,24 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   result.set_evaluations_discarded(search.discarded);
 
   // The best design's hourly illuminance, for reports and other tools: by the search's replay
-  // and annual product (its O_b already on the device)
+  // and annual product (its O_b already on the device), beside the final check
+  double hourly_seconds = 0;
+  std::future<absl::StatusOr<v1::HourlyIlluminance>> hourly;
   if (search.evaluations > 0 && search.stop_reason != StopReason::kCancelled &&
       static_cast<int64_t>(job.scene.sensors.size() * setting.sky->steps.size()) <=
           kMaxHourlyIlluminanceValues) {
-    const auto hourly_start = std::chrono::steady_clock::now();
-    DesignTallies& tallies = *lanes.tallies.front();
-    FENESTRA_ASSIGN_OR_RETURN(indoor, tallies.IndoorBatches(DesignAt(job, search.best_x)));
-    FENESTRA_ASSIGN_OR_RETURN(
-        hourly, DesignHourlyIlluminance(job.scene, indoor, tallies.Product(), *setting.sky));
-    *result.mutable_best_hourly() = std::move(hourly);
-    result.mutable_timings()->set_best_hourly_seconds(SecondsSince(hourly_start));
+    hourly = std::async(
+        std::launch::async,
+        [&, design = DesignAt(job, search.best_x)]() -> absl::StatusOr<v1::HourlyIlluminance> {
+          const auto hourly_start = std::chrono::steady_clock::now();
+          DesignTallies& tallies = *lanes.tallies.front();
+          FENESTRA_ASSIGN_OR_RETURN(indoor, tallies.IndoorBatches(design));
+          absl::StatusOr<v1::HourlyIlluminance> values =
+              DesignHourlyIlluminance(job.scene, indoor, tallies.Product(), *setting.sky);
+          hourly_seconds = SecondsSince(hourly_start);
+          return values;
+        });
   }
-  lanes.tallies.clear();  // the search's paths are no longer needed
   DescribeRun(spec, ranged, job.weather.location, result);
 
   // The result
@@ -806,11 +811,19 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   result.set_outdoor_mean_relative_standard_error(OutdoorMeanRelativeError(*outdoor));
   result.set_backend(backend->Name());
 
-  // The final check: the best design by the one-stage method
+  // The final check: the best design by the one-stage method, on a backend of its own (the
+  // search's is busy with the hourly illuminance)
   if (spec.sampling().final_check() && search.stop_reason != StopReason::kCancelled) {
+    FENESTRA_ASSIGN_OR_RETURN(check_backend, MakeBackend(spec.sampling().backend()));
     FENESTRA_RETURN_IF_ERROR(
-        CheckBestDesign(job, setting, search, backend.get(), callbacks, clock, result));
+        CheckBestDesign(job, setting, search, check_backend.get(), callbacks, clock, result));
   }
+  if (hourly.valid()) {
+    FENESTRA_ASSIGN_OR_RETURN(values, hourly.get());
+    *result.mutable_best_hourly() = std::move(values);
+    result.mutable_timings()->set_best_hourly_seconds(hourly_seconds);
+  }
+  lanes.tallies.clear();  // the search's paths are no longer needed
   result.mutable_timings()->set_total_seconds(clock.Seconds());
   return result;
 }
