@@ -257,6 +257,43 @@ absl::Status CheckBestDesign(const PreparedJob& job, const AnnualSetting& settin
   return absl::OkStatus();
 }
 
+// The best design's hourly illuminance, for reports and other tools, by the search's replay
+// and annual product (`tallies`, its O_b already on the device), on a thread of its own; beside
+// it, on a backend of its own, the final check of the best design by the one-stage method.
+absl::Status HourlyAndCheck(const PreparedJob& job, const AnnualSetting& setting,
+                            const VnsResult& search, DesignTallies& tallies,
+                            const JobCallbacks& callbacks, const JobClock& clock,
+                            v1::JobResult& result) {
+  if (search.stop_reason == StopReason::kCancelled) return absl::OkStatus();
+  double hourly_seconds = 0;
+  std::future<absl::StatusOr<v1::HourlyIlluminance>> hourly;
+  if (search.evaluations > 0 &&
+      static_cast<int64_t>(job.scene.sensors.size() * setting.sky->steps.size()) <=
+          kMaxHourlyIlluminanceValues) {
+    hourly = std::async(
+        std::launch::async,
+        [&, design = DesignAt(job, search.best_x)]() -> absl::StatusOr<v1::HourlyIlluminance> {
+          const auto hourly_start = std::chrono::steady_clock::now();
+          FENESTRA_ASSIGN_OR_RETURN(indoor, tallies.IndoorBatches(design));
+          absl::StatusOr<v1::HourlyIlluminance> values =
+              DesignHourlyIlluminance(job.scene, indoor, tallies.Product(), *setting.sky);
+          hourly_seconds = SecondsSince(hourly_start);
+          return values;
+        });
+  }
+  if (job.job.sampling().final_check()) {
+    FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(job.job.sampling().backend()));
+    FENESTRA_RETURN_IF_ERROR(
+        CheckBestDesign(job, setting, search, backend.get(), callbacks, clock, result));
+  }
+  if (hourly.valid()) {
+    FENESTRA_ASSIGN_OR_RETURN(values, hourly.get());
+    *result.mutable_best_hourly() = std::move(values);
+    result.mutable_timings()->set_best_hourly_seconds(hourly_seconds);
+  }
+  return absl::OkStatus();
+}
+
 // The search of a job: its variables, in the job's order, and its options.
 struct SearchSettings {
   std::vector<DesignVariable> variables;
@@ -785,44 +822,14 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   result.set_candidates_at_once(search_settings.options.lookahead);
   result.set_evaluations_discarded(search.discarded);
 
-  // The best design's hourly illuminance, for reports and other tools: by the search's replay
-  // and annual product (its O_b already on the device), beside the final check
-  double hourly_seconds = 0;
-  std::future<absl::StatusOr<v1::HourlyIlluminance>> hourly;
-  if (search.evaluations > 0 && search.stop_reason != StopReason::kCancelled &&
-      static_cast<int64_t>(job.scene.sensors.size() * setting.sky->steps.size()) <=
-          kMaxHourlyIlluminanceValues) {
-    hourly = std::async(
-        std::launch::async,
-        [&, design = DesignAt(job, search.best_x)]() -> absl::StatusOr<v1::HourlyIlluminance> {
-          const auto hourly_start = std::chrono::steady_clock::now();
-          DesignTallies& tallies = *lanes.tallies.front();
-          FENESTRA_ASSIGN_OR_RETURN(indoor, tallies.IndoorBatches(design));
-          absl::StatusOr<v1::HourlyIlluminance> values =
-              DesignHourlyIlluminance(job.scene, indoor, tallies.Product(), *setting.sky);
-          hourly_seconds = SecondsSince(hourly_start);
-          return values;
-        });
-  }
   DescribeRun(spec, ranged, job.weather.location, result);
 
   // The result
   AddSearch(search_settings, search, checkpoint, result);
   result.set_outdoor_mean_relative_standard_error(OutdoorMeanRelativeError(*outdoor));
   result.set_backend(backend->Name());
-
-  // The final check: the best design by the one-stage method, on a backend of its own (the
-  // search's is busy with the hourly illuminance)
-  if (spec.sampling().final_check() && search.stop_reason != StopReason::kCancelled) {
-    FENESTRA_ASSIGN_OR_RETURN(check_backend, MakeBackend(spec.sampling().backend()));
-    FENESTRA_RETURN_IF_ERROR(
-        CheckBestDesign(job, setting, search, check_backend.get(), callbacks, clock, result));
-  }
-  if (hourly.valid()) {
-    FENESTRA_ASSIGN_OR_RETURN(values, hourly.get());
-    *result.mutable_best_hourly() = std::move(values);
-    result.mutable_timings()->set_best_hourly_seconds(hourly_seconds);
-  }
+  FENESTRA_RETURN_IF_ERROR(
+      HourlyAndCheck(job, setting, search, *lanes.tallies.front(), callbacks, clock, result));
   lanes.tallies.clear();  // the search's paths are no longer needed
   result.mutable_timings()->set_total_seconds(clock.Seconds());
   return result;
