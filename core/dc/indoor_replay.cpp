@@ -38,6 +38,25 @@ struct Touch {
   uint32_t crossings, others, fixed;
 };
 
+// Connections that cross the envelope, kept as columns so that a design's tests of their
+// lines run several at a time (SIMD).
+struct Crossings {
+  std::vector<float> intercept, slope, l_enter, l_leave;
+  std::vector<int32_t> column;
+  std::vector<double> value;
+
+  void Add(const ReplayCrossing& k) {
+    intercept.push_back(k.line.intercept);
+    slope.push_back(k.line.slope);
+    l_enter.push_back(k.line.l_enter);
+    l_leave.push_back(k.line.l_leave);
+    column.push_back(k.column);
+    value.push_back(k.value);
+  }
+  size_t size() const { return column.size(); }
+  SlabCrossing Line(size_t i) const { return {intercept[i], slope[i], l_enter[i], l_leave[i]}; }
+};
+
 // The recorded paths of one sensor, one batch, one range of path indices.
 struct Chunk {
   uint32_t sensor = 0;
@@ -45,11 +64,11 @@ struct Chunk {
   std::vector<double> fixed;  // per column of I: what no blind can change
   const LocalEnvelope* envelope = nullptr;
   // Connections before a path reaches the envelope
-  std::vector<ReplayCrossing> crossings;
+  Crossings crossings;
   std::vector<ReplayConnection> others;  // connections that do not cross the envelope
   std::vector<Touch> touches;
   // What paths did beyond the envelope, in the order of their touches
-  std::vector<ReplayCrossing> after_crossings;
+  Crossings after_crossings;
   std::vector<ReplayConnection> after_others;
   std::vector<FixedLight> after_fixed;
   uint64_t paths = 0;
@@ -66,7 +85,7 @@ struct Chunk {
   void AddConnection(const ReplayConnection& c) {
     ReplayCrossing crossing;
     if (CrossingOf(*envelope, c, &crossing)) {
-      (beyond ? after_crossings : crossings).push_back(crossing);
+      (beyond ? after_crossings : crossings).Add(crossing);
     } else {
       (beyond ? after_others : others).push_back(c);
     }
@@ -82,16 +101,33 @@ struct Chunk {
 using OutdoorEmbreeView = OutdoorView<EmbreeIntersector>;
 using Recording = RecordingIntersector<EmbreeIntersector>;
 
-// Adds the value of every connection that `slats` leave clear to its column of `sum`;
-// `shift` is where the slats' centre lies in the envelope's frame (ShiftFrom). A crossing's
-// test is a few flops without a branch (LocalSlats::LineOccluded): 5-6 times faster than
-// Embree's packets of 16 rays against the blind's triangles (bench/README.md, "Racing").
+// Adds the value of every connection that `slats` leave clear to its column of `sum`: the
+// crossings [first, last) of `crossings`, then `others`; `shift` is where the slats' centre
+// lies in the envelope's frame (ShiftFrom). A crossing's test is a few flops without a branch
+// (LocalSlats::LineOccluded), run over a block of lines at a time, then added times 0 or 1
+// rather than by a branch the CPU would mispredict for a third of the rays.
 void TestConnections(const LocalSlats& slats, Vec3f shift, const LocalEnvelope& envelope,
-                     std::span<const ReplayCrossing> crossings,
+                     const Crossings& crossings, size_t first, size_t last,
                      std::span<const ReplayConnection> others, std::vector<double>& sum) {
-  for (const ReplayCrossing& k : crossings) {
-    // Times 0 or 1 rather than a branch the CPU would mispredict for a third of the rays
-    sum[k.column] += k.value * static_cast<int>(Clear(slats, shift, envelope, k));
+  constexpr size_t kBlock = 256;
+  float clear[kBlock];  // 1 or 0, or -1 where the line does not answer for the crossing
+  const float half_depth = envelope.half[2];
+  for (size_t begin = first; begin < last; begin += kBlock) {
+    const size_t count = std::min(kBlock, last - begin);
+    const float* intercept = crossings.intercept.data() + begin;
+    const float* slope = crossings.slope.data() + begin;
+    const float* l_enter = crossings.l_enter.data() + begin;
+    const float* l_leave = crossings.l_leave.data() + begin;
+    for (size_t i = 0; i < count; ++i) {
+      const SlabCrossing line{intercept[i], slope[i], l_enter[i], l_leave[i]};
+      const bool occluded = slats.LineOccludedAt(line, shift);
+      clear[i] = slats.LineAnswers(line, shift, half_depth) ? (occluded ? 0.0f : 1.0f) : -1.0f;
+    }
+    for (size_t i = 0; i < count; ++i) {
+      float c = clear[i];
+      if (c < 0.0f) c = slats.Occluded(crossings.Line(begin + i), shift, half_depth) ? 0.0f : 1.0f;
+      sum[crossings.column[begin + i]] += crossings.value[begin + i] * c;
+    }
   }
   for (const ReplayConnection& k : others) {
     if (!slats.Occluded(k.origin, k.direction, k.distance)) sum[k.column] += k.value;
@@ -122,8 +158,7 @@ uint64_t FollowTouches(const LocalSlats& slats, Vec3f shift, const Chunk& chunk,
     const size_t others = last ? chunk.after_others.size() : chunk.touches[t + 1].others;
     const size_t fixed = last ? chunk.after_fixed.size() : chunk.touches[t + 1].fixed;
     TestConnections(
-        slats, shift, *chunk.envelope,
-        std::span(chunk.after_crossings).subspan(touch.crossings, crossings - touch.crossings),
+        slats, shift, *chunk.envelope, chunk.after_crossings, touch.crossings, crossings,
         std::span(chunk.after_others).subspan(touch.others, others - touch.others), sum);
     tests += crossings - touch.crossings + others - touch.others;
     for (size_t k = touch.fixed; k < fixed; ++k) {
@@ -334,7 +369,8 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
       [&](uint64_t i, Slot& slot) {
         const Chunk& chunk = chunk_of(i);
         slot.sum = chunk.fixed;
-        TestConnections(slats, shift, *chunk.envelope, chunk.crossings, chunk.others, slot.sum);
+        TestConnections(slats, shift, *chunk.envelope, chunk.crossings, 0, chunk.crossings.size(),
+                        chunk.others, slot.sum);
         slot.counters.rays += chunk.crossings.size() + chunk.others.size();
         const TraceSensor& sensor = d.sensors[chunk.sensor];
         IndoorMode<Slot, OutdoorEmbreeView> mode{

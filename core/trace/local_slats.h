@@ -167,15 +167,28 @@ struct LocalSlats {
     return first <= (to < last ? to : last);
   }
 
+  // Whether `crossing` of a slab of half depth `half_depth` that holds the slats, with their
+  // centre at `shift` (along stack, length, into_room) in its frame, stays within their length
+  // and crosses their whole depth, so that its line answers for it (LineOccludedAt).
+  FENESTRA_CPU_GPU bool LineAnswers(const SlabCrossing& crossing, Vec3f shift,
+                                    float half_depth) const {
+    const float enter = fabsf(crossing.l_enter), leave = fabsf(crossing.l_leave);
+    const float reach_l = (enter > leave ? enter : leave) + fabsf(shift.y);
+    // Both compared, without a branch: SIMD code tests many crossings at once
+    return (static_cast<int>(reach_l <= half_length) &
+            static_cast<int>(fabsf(shift.z) + depth <= half_depth)) != 0;
+  }
+
+  // LineOccluded for the line of `crossing`, the slats' centre at `shift` in its frame.
+  FENESTRA_CPU_GPU bool LineOccludedAt(const SlabCrossing& crossing, Vec3f shift) const {
+    return LineOccluded(crossing.intercept - shift.x + crossing.slope * shift.z, crossing.slope);
+  }
+
   // Whether the slats, with their centre at `shift` (along stack, length, into_room) in the
   // frame of `crossing` (a slab of half depth `half_depth` that holds them), meet it.
   FENESTRA_CPU_GPU bool Occluded(const SlabCrossing& crossing, Vec3f shift,
                                  float half_depth) const {
-    const float enter = fabsf(crossing.l_enter), leave = fabsf(crossing.l_leave);
-    const float reach_l = (enter > leave ? enter : leave) + fabsf(shift.y);
-    if (reach_l <= half_length && fabsf(shift.z) + depth <= half_depth) {
-      return LineOccluded(crossing.intercept - shift.x + crossing.slope * shift.z, crossing.slope);
-    }
+    if (LineAnswers(crossing, shift, half_depth)) return LineOccludedAt(crossing, shift);
     return Occluded(crossing.Segment(half_depth).MovedBy(shift));
   }
 };
