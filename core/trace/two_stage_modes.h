@@ -293,13 +293,14 @@ struct IndoorMode {
     const float cos_vertex = Dot(normal, omega);
     const float cos_window = Dot(window.normal, omega);
     if (!(cos_vertex > 0.0f) || !(cos_window > 0.0f)) return;
-    const int cell =
-        BasisCell(*basis, Vec3f{Dot(omega, window.across), Dot(omega, window.up), cos_window});
-    if (cell < 0) return;
     // The window point itself lies in the opening, where there is no surface: anything
     // short of it (less a relative margin) blocks the segment
     const float distance = sqrtf(distance_squared);
     if (scene.Occluded(origin, omega, distance * 0.9999995f)) return;
+    // The direction's cell only for light that arrives (omega is above the window's plane)
+    const int cell =
+        BasisCell(*basis, Vec3f{Dot(omega, window.across), Dot(omega, window.up), cos_window});
+    if (cell < 0) return;
     const float mis =
         PowerHeuristic(WindowDensity(distance_squared, cos_window), cos_vertex * kInvPiF);
     Score(point, omega, window.PartOf(u.u[0], u.u[1]) * basis->cell_count + cell,
