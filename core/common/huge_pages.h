@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <span>
 
 namespace fenestra {
 
@@ -11,5 +12,17 @@ namespace fenestra {
 // 2 MiB instead of one per 4 KiB. Where the kernel offers no huge pages, or the range holds
 // no whole one, nothing changes. The buffer's content is never touched.
 void AdviseHugePages(void* data, size_t bytes);
+
+// A fresh buffer whose content is not yet set.
+struct FreshBuffer {
+  void* data;
+  size_t bytes;
+};
+
+// Writes zeros over `buffers` from every core, 2 MiB per task, so that their page faults
+// (and the zeroing of their pages by the kernel) run on all cores at once instead of on the
+// one thread that fills them later (a GPU download, say). Only for buffers about to be
+// overwritten whole.
+void TouchPagesOnAllCores(std::span<const FreshBuffer> buffers);
 
 }  // namespace fenestra

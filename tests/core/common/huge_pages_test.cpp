@@ -4,9 +4,11 @@
 #include <sys/mman.h>
 
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace fenestra {
 namespace {
@@ -90,6 +92,50 @@ TEST(HugePagesTest, RangesWithoutAWholeHugePageAreLeftAlone) {
   AdviseHugePages(reinterpret_cast<void*>(UINTPTR_MAX - 100), 1000);  // would wrap around
   EXPECT_EQ(VmFlagsAt(m.aligned).find(" hg"), std::string::npos) << VmFlagsAt(m.aligned);
   EXPECT_EQ(VmFlagsAt(m.aligned + kHugePage).find(" hg"), std::string::npos);
+}
+
+// Every byte of each buffer becomes 0, whatever its size and alignment, and nothing around
+// them changes; the pages are then resident (mincore).
+TEST(HugePagesTest, TouchPagesZeroesTheBuffersAndFaultsThemIn) {
+  Mapping m(8 * kHugePage);
+  ASSERT_NE(m.base, MAP_FAILED);
+  char* const a = m.aligned + 100;
+  const size_t a_bytes = 5 * kHugePage + 12345;  // pieces of 2 MiB and a last short one
+  char* const b = a + a_bytes + 64;
+  const size_t b_bytes = 777;
+  std::memset(m.aligned, 0x5a, 7 * kHugePage);
+  const FreshBuffer buffers[] = {{a, a_bytes}, {b, b_bytes}, {b, 0}};
+  TouchPagesOnAllCores(buffers);
+  const auto count_if = [](const char* from, const char* to, auto pred) {
+    size_t n = 0;
+    for (const char* p = from; p < to; ++p) n += pred(*p);
+    return n;
+  };
+  const auto zero = [](char c) { return c == 0; };
+  const auto kept = [](char c) { return c == 0x5a; };
+  EXPECT_EQ(count_if(a, a + a_bytes, zero), a_bytes);
+  EXPECT_EQ(count_if(b, b + b_bytes, zero), b_bytes);
+  EXPECT_EQ(count_if(m.aligned, a, kept), 100u);
+  EXPECT_EQ(count_if(a + a_bytes, b, kept), 64u);
+  EXPECT_EQ(count_if(b + b_bytes, m.aligned + 7 * kHugePage, kept),
+            static_cast<size_t>(m.aligned + 7 * kHugePage - (b + b_bytes)));
+}
+
+TEST(HugePagesTest, TouchPagesFaultsInFreshMemory) {
+  Mapping m(4 * kHugePage);
+  ASSERT_NE(m.base, MAP_FAILED);
+  const size_t pages = 4 * kHugePage / 4096;
+  std::vector<unsigned char> resident(pages);
+  ASSERT_EQ(mincore(m.aligned, 4 * kHugePage, resident.data()), 0);
+  size_t before = 0;
+  for (unsigned char r : resident) before += r & 1;
+  EXPECT_EQ(before, 0u);  // a fresh anonymous mapping has no pages yet
+  const FreshBuffer buffer[] = {{m.aligned, 4 * kHugePage}};
+  TouchPagesOnAllCores(buffer);
+  ASSERT_EQ(mincore(m.aligned, 4 * kHugePage, resident.data()), 0);
+  size_t after = 0;
+  for (unsigned char r : resident) after += r & 1;
+  EXPECT_EQ(after, pages);
 }
 
 }  // namespace
