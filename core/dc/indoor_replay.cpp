@@ -29,9 +29,9 @@ struct FixedLight {
 };
 
 // Where a recorded path reached the envelope, and what it did after in the room without the
-// blind (RecordPath): its records in the chunk's `after_*` from these indices on, up to the
-// next touch's, count for a design that leaves this touch's line, and the path's earlier
-// ones, clear.
+// blind (RecordingMode::GoesOn): its records in the chunk's `after_*` from these indices on, up to
+// the next touch's, count for a design that leaves this touch's line, and the path's earlier ones,
+// clear.
 struct Touch {
   ReplayTouch touch;
   bool first;  // the path's first touch
@@ -304,8 +304,9 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
                  &data->outdoor_view, &sink},
                 &scene_view,
                 &chunk};
-      RecordPath(scene_view, geometry.Surfaces(), settings,
-                 PathRandom(options.seed, chunk.sensor, p), mode);
+      // Without splitting, so that a path's records are one sequence
+      TracePath<Recording, Mode, 0>(scene_view, geometry.Surfaces(), settings,
+                                    PathRandom(options.seed, chunk.sensor, p), mode);
     }
   });
   for (const Chunk& chunk : data->chunks) {

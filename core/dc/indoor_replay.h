@@ -13,7 +13,7 @@
 // design), and the paths that reached the envelope are traced on from there through the
 // room and the blind (on the GPU, the room's BVH recorded once with the slats' put beside it
 // per design, BvhWithSlats). Here the records follow each path on as if there were no blind
-// (RecordPath), and a design traces it on only from the first ray its slats block.
+// (RecordingMode::GoesOn), and a design traces it on only from the first ray its slats block.
 #include <memory>
 #include <vector>
 

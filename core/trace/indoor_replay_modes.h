@@ -11,10 +11,10 @@
 //   void AddTouch(ReplayTouch touch);               the path reached the envelope
 // A path that reaches the envelope is traced on per design from there, unless its ray
 // crosses the envelope from face to face and the design's slats leave that line clear: then
-// it goes on as in the room without the blind. RecordPath follows it on (the CPU's replay),
-// and what it records after a touch counts only for the designs that leave the path's lines
-// up to there clear. The GPU's records end at the first touch: the path is traced on from
-// there at every design.
+// it goes on as in the room without the blind. RecordingMode follows it on (GoesOn: the
+// CPU's replay), and what it records after a touch counts only for the designs that leave the
+// path's lines up to there clear. The GPU's records end at the first touch: the path is traced on
+// from there at every design.
 #include <cmath>
 #include <cstdint>
 
@@ -198,13 +198,13 @@ struct RecordingMode {
     inner.AtReflection(s, state, vertex, random);
   }
   // A ray stopped at the envelope: recorded, and let through when the path is followed on
-  // (RecordPath steps it again).
+  // (TracePath steps it again, GoesOn).
   FENESTRA_CPU_GPU void Escape(const PathState& state) {
     if (scene->diverged) {
       scene->diverged = false;
       recorder->AddTouch(ReplayTouch{state, path, scene->line, scene->crosses});
       // A ray that does not cross is traced on at every design: nothing after it counts
-      touched = scene->crosses;
+      touched = follow && scene->crosses;
     } else {
       inner.Escape(state);
     }
@@ -221,30 +221,11 @@ struct RecordingMode {
   }
 
   bool touched = false;  // the last step stopped at the envelope, and the path goes on
+  // Whether a path goes on past the envelope, so that its records say what it did beyond
+  // (the CPU's); else its records end at its first touch (the GPU's: bench/README.md,
+  // "Paths followed beyond the envelope")
+  bool follow = true;
 };
-
-// Follows one path through the room without the blind to its end (no splitting), as
-// TracePath does, recording through `mode` (RecordingMode): each ray that reaches the
-// envelope is recorded, then let through, so what the path does beyond the envelope is
-// recorded as well.
-template <class Room, class Mode>
-FENESTRA_CPU_GPU inline PathStats RecordPath(const RecordingIntersector<Room>& scene,
-                                             const SurfaceTable& surfaces,
-                                             const PathSettings& settings, const PathRandom& random,
-                                             Mode& mode) {
-  PathStats stats;
-  PathState path = path_internal::StartPath(scene, random, mode, &stats);
-  uint32_t interactions = path.vertex;
-  int pending_count = 0;
-  PathEnd end = PathEnd::kEscaped;
-  while (path_internal::StepBranch(scene, surfaces, settings, random, mode, path, &interactions,
-                                   nullptr, 0, &pending_count, &stats, &end) ||
-         mode.GoesOn()) {
-  }
-  path_internal::EndBranch(end, &stats);
-  mode.Finish(stats);
-  return stats;
-}
 
 // A path's stats before its first step from a touch.
 FENESTRA_CPU_GPU inline PathStats ResumedStats(const PathState& state) {

@@ -17,6 +17,10 @@
 //                       const PathRandom&)                      before each reflection
 //     void Escape(const PathState&)                              the ray left the scene
 //     void Finish(const PathStats&)                              once, at the end
+//     bool GoesOn()                                              optional: after a step
+//                       that ended the branch, whether it steps again from the same state
+//                       (the indoor replay's records let a ray stopped at the blinds'
+//                       envelope through, core/trace/indoor_replay_modes.h)
 //
 // With weight windows a path may split into branches (a tree): Start and Finish are called
 // once per path, AtReflection and Escape once per event of any branch. PathState::vertex
@@ -34,6 +38,9 @@
 
 #include <math.h>
 #include <stdint.h>
+
+#include <type_traits>
+#include <utility>
 
 #include "core/common/cpu_gpu.h"
 #include "core/common/vec3.h"
@@ -247,6 +254,21 @@ FENESTRA_CPU_GPU inline void EndBranch(PathEnd end, PathStats* stats) {
   ++stats->ends[static_cast<int>(end)];
 }
 
+template <class Mode, class = void>
+struct HasGoesOn : std::false_type {};
+template <class Mode>
+struct HasGoesOn<Mode, std::void_t<decltype(std::declval<Mode&>().GoesOn())>> : std::true_type {};
+
+// mode.GoesOn() where the mode has it, else false.
+template <class Mode>
+FENESTRA_CPU_GPU inline bool GoesOn(Mode& mode) {
+  if constexpr (HasGoesOn<Mode>::value) {
+    return mode.GoesOn();
+  } else {
+    return false;
+  }
+}
+
 // Follows one branch until it ends; pushes the copies of any split onto `pending`.
 template <class Intersector, class Mode>
 FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const SurfaceTable& surfaces,
@@ -256,7 +278,8 @@ FENESTRA_CPU_GPU inline PathEnd FollowBranch(const Intersector& scene, const Sur
                                              int* pending_count, PathStats* stats) {
   PathEnd end = PathEnd::kEscaped;
   while (StepBranch(scene, surfaces, settings, random, mode, path, interactions, pending,
-                    pending_capacity, pending_count, stats, &end)) {
+                    pending_capacity, pending_count, stats, &end) ||
+         GoesOn(mode)) {
   }
   return end;
 }

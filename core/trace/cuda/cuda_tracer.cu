@@ -138,7 +138,8 @@ __device__ void TraceItems(const Scene& scene, const SurfaceTable& surfaces,
     int pending_count = 0;
     PathEnd end;
     if (!path_internal::StepBranch(scene, surfaces, settings, random, mode, path, &interactions,
-                                   nullptr, 0, &pending_count, &stats, &end)) {
+                                   nullptr, 0, &pending_count, &stats, &end) &&
+        !path_internal::GoesOn(mode)) {
       path_internal::EndBranch(end, &stats);
       mode.Finish(stats);
       counts.Add(stats);
@@ -405,6 +406,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
        &outdoor, &sink},
       &scene,
       &recorder};
+  mode.follow = false;  // the records end at a path's first touch of the envelope
   ThreadCounts counts;
   TracePaths(scene, surfaces, settings, mode, seed, s, BatchFirst(paths_per_sensor, batches, b),
              BatchFirst(paths_per_sensor, batches, b + 1), next_path + blockIdx.y, counts);
