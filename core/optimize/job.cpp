@@ -716,12 +716,12 @@ absl::StatusOr<v1::SearchCheckpoint> ParseSearchCheckpoint(std::string_view byte
 namespace {
 
 // The job's annual setting (sky matrix, occupied and lit hours, metric settings), made on the
-// host while the outdoor stage traces where `outdoor` is null: `computed` then holds the
-// traced matrix and `outdoor` points at it, and the setting's errors come after the outdoor
-// stage's. Their times go to `timings`.
+// host while the outdoor stage traces into `computed` where `cached` is null (else `cached`
+// is checked against the job); the setting's errors come after the outdoor stage's. Their
+// times go to `timings`.
 absl::StatusOr<AnnualSetting> SettingAndOutdoor(const PreparedJob& job,
                                                 const JobCallbacks& callbacks,
-                                                const OutdoorMatrix*& outdoor,
+                                                const OutdoorMatrix* cached,
                                                 OutdoorMatrix& computed, v1::Timings& timings) {
   if (callbacks.stage) callbacks.stage("sky");
   double sky_seconds = 0;
@@ -732,8 +732,8 @@ absl::StatusOr<AnnualSetting> SettingAndOutdoor(const PreparedJob& job,
     return made;
   });
   absl::Status outdoor_status;
-  if (outdoor != nullptr) {
-    if (outdoor->key != OutdoorMatrixKey(job.scene, job.job.sampling())) {
+  if (cached != nullptr) {
+    if (cached->key != OutdoorMatrixKey(job.scene, job.job.sampling())) {
       outdoor_status =
           absl::InvalidArgumentError("the cached outdoor matrix belongs to another site");
     }
@@ -743,7 +743,6 @@ absl::StatusOr<AnnualSetting> SettingAndOutdoor(const PreparedJob& job,
         ComputeOutdoorMatrix(job.scene, job.job.sampling(), callbacks.cancelled);
     if (matrix.ok()) {
       computed = *std::move(matrix);
-      outdoor = &computed;
       timings.set_outdoor_seconds(computed.wall_seconds);
     } else {
       outdoor_status = matrix.status();
@@ -776,15 +775,16 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   OutdoorMatrix computed;
   FENESTRA_ASSIGN_OR_RETURN(
       setting, SettingAndOutdoor(job, callbacks, outdoor, computed, *result.mutable_timings()));
+  const OutdoorMatrix& matrix = outdoor != nullptr ? *outdoor : computed;
   const MetricOptions& metric_options = setting.options;
 
   // The designs' indoor stage, with the same random streams for every design
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
   const IndoorOptions indoor_options = JobIndoorOptions(job);
-  if (!(outdoor->parts == indoor_options.parts)) {
+  if (!(matrix.parts == indoor_options.parts)) {
     return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
   }
-  if (static_cast<int>(outdoor->batches.size()) != indoor_options.batches) {
+  if (static_cast<int>(matrix.batches.size()) != indoor_options.batches) {
     return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
   }
 
@@ -796,7 +796,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (callbacks.stage) callbacks.stage("indoor paths");
   const Scene ranged = WithJobRanges(job.scene, spec);
   FENESTRA_ASSIGN_OR_RETURN(lanes, MakeLanes(spec.sampling(), *backend, ranged, indoor_options,
-                                             outdoor->batches, setting.lit_sky));
+                                             matrix.batches, setting.lit_sky));
   Racer racer({.lanes = lanes.Tallies(),
                .options = metric_options,
                .analysed_hours = setting.analysed_hours,
@@ -826,7 +826,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
 
   // The result
   AddSearch(search_settings, search, checkpoint, result);
-  result.set_outdoor_mean_relative_standard_error(OutdoorMeanRelativeError(*outdoor));
+  result.set_outdoor_mean_relative_standard_error(OutdoorMeanRelativeError(matrix));
   result.set_backend(backend->Name());
   FENESTRA_RETURN_IF_ERROR(
       HourlyAndCheck(job, setting, search, *lanes.tallies.front(), callbacks, clock, result));
