@@ -3,6 +3,7 @@
 // importance map) are CPU-only: on the GPU the one-stage method uses plain roulette.
 #include <algorithm>
 #include <chrono>
+#include <future>
 #include <memory>
 
 #include "absl/strings/str_cat.h"
@@ -592,9 +593,13 @@ class CudaBackend : public DcBackend {
           "the outdoor matrix has ", outdoor_batches[0].rows(), " rows in ", outdoor_batches.size(),
           " batches, the indoor stage ", columns, " columns in ", options.batches));
     }
+    // The product's upload (O_b and S from host memory) on a thread of its own, beside the
+    // outdoor scene and the records
+    std::future<absl::StatusOr<std::unique_ptr<CudaAnnualProduct>>> made = std::async(
+        std::launch::async, [&] { return CudaAnnualProduct::Make(device_, outdoor_batches, sky); });
     FENESTRA_ASSIGN_OR_RETURN(outdoor, MakeOutdoor(scene, options.parts, basis));
     FENESTRA_ASSIGN_OR_RETURN(replay, MaybeReplay(scene, options, basis, outdoor.get()));
-    FENESTRA_ASSIGN_OR_RETURN(product, CudaAnnualProduct::Make(device_, outdoor_batches, sky));
+    FENESTRA_ASSIGN_OR_RETURN(product, made.get());
     return std::make_unique<CudaDesignTallies>(tracer_.get(), scene, options, basis,
                                                std::move(outdoor), std::move(replay),
                                                std::move(product));

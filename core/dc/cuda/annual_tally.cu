@@ -324,6 +324,9 @@ std::string CudaAnnualTally::SetProduct(const std::vector<const double*>& outdoo
                                                 cells, kTregenzaBinCount);
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
   FENESTRA_CUDA_RETURN_IF_ERROR(d.sky.Upload(sky, static_cast<size_t>(kTregenzaBinCount) * steps));
+  // Done before it returns (a pageable upload may return before its copy lands), so that
+  // any host thread's stream may use the product
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaStreamSynchronize(cudaStreamPerThread));
   d.cells = cells;
   d.steps = steps;
   d.batches = batches;
