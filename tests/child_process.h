@@ -144,33 +144,48 @@ inline CommandResult RunCommand(std::vector<std::string> argv,
   return {WaitExit(pid, std::max(left, std::chrono::seconds(1))), output};
 }
 
-// fenestrad on 127.0.0.1 (a free port, read from its --port-file) with `data_dir`; its log
-// goes to data_dir + ".log". Killed when destroyed.
+// Starts fenestrad (path `fenestrad`) on 127.0.0.1, a free port it writes to
+// data_dir + ".port", with `data_dir` and `flags`, its output appended to `log_path`; the
+// daemon is killed when the test process ends (none outlives a crashed test). Its pid.
+inline pid_t LaunchFenestrad(const std::string& fenestrad, const std::string& data_dir,
+                             const std::vector<std::string>& flags, const std::string& log_path) {
+  const std::string port_file = data_dir + ".port";
+  std::filesystem::remove(port_file);
+  std::vector<std::string> argv = {fenestrad, "--listen",    "127.0.0.1:0", "--data-dir",
+                                   data_dir,  "--port-file", port_file};
+  argv.insert(argv.end(), flags.begin(), flags.end());
+  const int log = OpenForChild(log_path, /*append=*/true);
+  const pid_t pid = Spawn(std::move(argv), {{log, STDOUT_FILENO}, {log, STDERR_FILENO}},
+                          /*die_with_parent=*/true);
+  close(log);
+  return pid;
+}
+
+// "127.0.0.1:PORT" once the daemon LaunchFenestrad started on `data_dir` has written its
+// port (waiting up to 20 s); empty when it has not.
+inline std::string FenestradAddress(const std::string& data_dir) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  do {
+    std::ifstream port(data_dir + ".port");
+    if (int number = 0; port >> number) return "127.0.0.1:" + std::to_string(number);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  } while (std::chrono::steady_clock::now() < deadline);
+  return "";
+}
+
+// fenestrad on 127.0.0.1 (LaunchFenestrad) with `data_dir`, one local user unless `flags`
+// ask for tokens (loopback only, as the daemon requires); its log goes to data_dir + ".log".
+// Killed when destroyed.
 class FenestradProcess {
  public:
   FenestradProcess(const std::string& fenestrad, const std::string& data_dir,
                    std::vector<std::string> flags = {})
       : log_path_(data_dir + ".log") {
-    const std::string port_file = data_dir + ".port";
-    std::filesystem::remove(port_file);
-    std::vector<std::string> argv = {fenestrad, "--listen",    "127.0.0.1:0", "--data-dir",
-                                     data_dir,  "--port-file", port_file};
-    // One local user unless the test asks for tokens (loopback only, as the daemon requires)
     if (std::find(flags.begin(), flags.end(), "--auth") == flags.end()) {
-      argv.insert(argv.end(), {"--auth", "none"});
+      flags.insert(flags.begin(), {"--auth", "none"});
     }
-    argv.insert(argv.end(), flags.begin(), flags.end());
-    const int log = OpenForChild(log_path_, /*append=*/true);
-    pid_ = Spawn(std::move(argv), {{log, STDOUT_FILENO}, {log, STDERR_FILENO}},
-                 /*die_with_parent=*/true);  // no daemon outlives a crashed test
-    close(log);
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-    while (!std::filesystem::exists(port_file) && std::chrono::steady_clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    std::ifstream port(port_file);
-    int number = 0;
-    if (port >> number) address_ = "127.0.0.1:" + std::to_string(number);
+    pid_ = LaunchFenestrad(fenestrad, data_dir, flags, log_path_);
+    address_ = FenestradAddress(data_dir);
   }
   ~FenestradProcess() {
     kill(pid_, SIGKILL);

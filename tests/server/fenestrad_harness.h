@@ -112,21 +112,16 @@ class Daemon {
   }
 
   void Start() {
-    Launch();
-    const std::string port_file = data_dir_ + ".port";
-    const auto deadline = Clock::now() + std::chrono::seconds(20);
-    while (!fs::exists(port_file) && Clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    ASSERT_TRUE(fs::exists(port_file)) << "fenestrad did not start:\n" << Log();
-    address_ = "127.0.0.1:" + std::to_string(std::stoi(ReadFile(port_file)));
+    pid_ = LaunchFenestrad(FENESTRAD, data_dir_, flags_, log_path());
+    address_ = FenestradAddress(data_dir_);
+    ASSERT_FALSE(address_.empty()) << "fenestrad did not start:\n" << Log();
     channel_ = grpc::CreateChannel(address_, credentials_);
     sites_ = v1::SiteService::NewStub(channel_);
     jobs_ = v1::JobService::NewStub(channel_);
   }
   // Starts a daemon that is expected to stop by itself (a failed start); its exit code.
   int RunToExit() {
-    Launch();
+    pid_ = LaunchFenestrad(FENESTRAD, data_dir_, flags_, log_path());
     return Signal(0);
   }
   // SIGTERM; the exit code.
@@ -183,18 +178,6 @@ class Daemon {
   }
 
  private:
-  // Forks and runs fenestrad, its output appended to the log.
-  void Launch() {
-    const std::string port_file = data_dir_ + ".port";
-    fs::remove(port_file);
-    std::vector<std::string> args = {FENESTRAD, "--listen",    "127.0.0.1:0", "--data-dir",
-                                     data_dir_, "--port-file", port_file};
-    args.insert(args.end(), flags_.begin(), flags_.end());
-    const int log = OpenForChild(log_path(), /*append=*/true);
-    pid_ = fenestra::Spawn(std::move(args), {{log, STDERR_FILENO}, {log, STDOUT_FILENO}},
-                           /*die_with_parent=*/true);  // no daemon outlives a crashed test
-    close(log);
-  }
   // Sends `signal` (0: none) and waits for the exit; the exit code.
   int Signal(int signal) {
     if (pid_ <= 0) return -1;
