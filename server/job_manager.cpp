@@ -92,6 +92,8 @@ bool EndsStream(const v1::JobEvent& e) {
 // waits after the store could not be reached.
 constexpr auto kWatchPoll = std::chrono::seconds(1);
 constexpr auto kWatchRetry = std::chrono::milliseconds(500);
+// How often a job that met the store out of reach asks whether it answers again
+constexpr auto kStoreRetry = std::chrono::milliseconds(250);
 
 // The least time between two stored steps of a search (progress and checkpoint): steps that
 // come sooner are not stored, and the next step due carries theirs. Storing each step of a
@@ -572,8 +574,27 @@ void JobManager::RunStarted(Record& r) {
            cancelled() ? "" : error);
   };
 
+  // A step that failed for a shared store out of reach (PostgreSQL restarting, say) runs
+  // again once the store answers, rather than failing the job; a failure while the store
+  // answers is the step's own
+  const auto store_away = [&] {
+    return store_.GetJob(r.info.id(), /*position=*/false).status().code() ==
+           absl::StatusCode::kUnavailable;
+  };
+  const auto retried = [&](auto step) {
+    auto result = step();
+    while (!result.ok() && result.status().code() == absl::StatusCode::kUnavailable &&
+           store_.shared() && !cancelled() && store_away()) {
+      spdlog::warn("job {}: the store cannot be reached; it goes on once the store answers",
+                   r.info.id());
+      while (store_away() && !cancelled()) std::this_thread::sleep_for(kStoreRetry);
+      result = step();
+    }
+    return result;
+  };
+
   // The job as submitted, read back from the store, with its weather file
-  absl::StatusOr<PreparedJob> prepared = Prepare(r);
+  absl::StatusOr<PreparedJob> prepared = retried([&] { return Prepare(r); });
   if (prepared.status().code() == absl::StatusCode::kDataLoss &&
       absl::StartsWith(prepared.status().message(), "the stored job")) {
     const absl::Status moved =
@@ -586,7 +607,8 @@ void JobManager::RunStarted(Record& r) {
     return;
   }
   if (!prepared.ok()) return fail(std::string(prepared.status().message()));
-  absl::StatusOr<OutdoorCache::Lookup> lookup = Outdoor(r, *prepared, cancelled);
+  absl::StatusOr<OutdoorCache::Lookup> lookup =
+      retried([&] { return Outdoor(r, *prepared, cancelled); });
   if (!lookup.ok()) return fail(absl::StrCat("outdoor stage: ", lookup.status().message()));
 
   // The search

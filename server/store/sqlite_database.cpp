@@ -7,6 +7,10 @@
 #include "server/data_dir.h"
 
 namespace fenestra {
+
+// How long a transaction waits for another connection's lock on a shared file [ms]
+constexpr int kSqliteBusyMs = 5000;
+
 namespace {
 
 // What a failed SQLite call means for a client: a full disk, a unique key taken, or an
@@ -111,6 +115,8 @@ absl::StatusOr<std::unique_ptr<SqliteDatabase>> SqliteDatabase::Open(const std::
     return absl::FailedPreconditionError(
         absl::StrCat(path, ": the job store is read-only (not writable)"));
   }
+  // Short while the open finds out whether another process holds the file, then longer:
+  // a transaction waits for another's lock rather than fail under load
   sqlite3_busy_timeout(db, 500);
   // Exclusive: a lock held from the first access keeps other processes out and the WAL
   // index in memory (no -shm file, so a full disk still lets it read)
@@ -130,6 +136,7 @@ absl::StatusOr<std::unique_ptr<SqliteDatabase>> SqliteDatabase::Open(const std::
       return absl::Status(s.code(), absl::StrCat(path, ": ", s.message()));
     }
   }
+  sqlite3_busy_timeout(db, kSqliteBusyMs);
   return database;
 }
 
