@@ -88,12 +88,14 @@ bool EndsStream(const v1::JobEvent& e) {
              : e.has_finished() || e.has_failed() || e.has_cancelled() || e.has_interrupted();
 }
 
-// How long a Watch waits for news before it looks at the store again; and how long it
-// waits after the store could not be reached.
+// How long a Watch waits for news before it looks at the store again; and how often it
+// asks whether the store answers after it could not be reached.
 constexpr auto kWatchPoll = std::chrono::seconds(1);
 constexpr auto kWatchRetry = std::chrono::milliseconds(500);
-// How often a job that met the store out of reach asks whether it answers again
+// How often a job that met the store out of reach asks whether it answers again, and how
+// many times in a row one step of it may meet the store out of reach
 constexpr auto kStoreRetry = std::chrono::milliseconds(250);
+constexpr int kStoreAttempts = 5;
 
 // The least time between two stored steps of a search (progress and checkpoint): steps that
 // come sooner are not stored, and the next step due carries theirs. Storing each step of a
@@ -297,9 +299,9 @@ absl::Status JobManager::Watch(const std::string& id, const Caller& caller,
       absl::StatusOr<std::vector<v1::JobEvent>> events = store_.LoadEvents(id, sent);
       if (!events.ok()) {
         // The store is away: the stream waits for it
+        store_.AwaitAnswer(kWatchRetry, [&] { return client_gone() || closing_; });
         if (client_gone()) return absl::OkStatus();
         if (closing_) return absl::UnavailableError("fenestrad is shutting down");
-        std::this_thread::sleep_for(kWatchRetry);
         continue;
       }
       pending = *std::move(events);
@@ -548,6 +550,30 @@ absl::StatusOr<OutdoorCache::Lookup> JobManager::Outdoor(Record& r, const Prepar
   return lookup;
 }
 
+template <typename Step>
+std::invoke_result_t<Step> JobManager::WhileStoreAway(const std::string& id,
+                                                      const std::function<bool()>& stopped,
+                                                      Step step) {
+  std::invoke_result_t<Step> result = step();
+  for (int attempt = 1; attempt <= kStoreAttempts && store_.shared() && !result.ok() &&
+                        result.status().code() == absl::StatusCode::kUnavailable;
+       ++attempt) {
+    spdlog::warn("job {}: the store cannot be reached; it goes on once the store answers", id);
+    if (!store_.AwaitAnswer(kStoreRetry, stopped)) break;
+    result = step();
+  }
+  return result;
+}
+
+void JobManager::Quarantine(Record& r, const absl::Status& unreadable) {
+  const std::string why(unreadable.message());
+  const absl::Status moved = store_.Quarantine("jobs", r.info.id(), why);
+  spdlog::error("job {}: {}; {}, the daemon goes on without it", r.info.id(), why,
+                moved.ok() ? "moved to the quarantine table"
+                           : absl::StrCat("not moved (", moved.message(), ")"));
+  r.held->done = true;
+}
+
 void JobManager::RunStarted(Record& r) {
   const auto start = std::chrono::steady_clock::now();
   Scheduler::Held& held = *r.held;
@@ -574,41 +600,17 @@ void JobManager::RunStarted(Record& r) {
            cancelled() ? "" : error);
   };
 
-  // A step that failed for a shared store out of reach (PostgreSQL restarting, say) runs
-  // again once the store answers, rather than failing the job; a failure while the store
-  // answers is the step's own
-  const auto store_away = [&] {
-    return store_.GetJob(r.info.id(), /*position=*/false).status().code() ==
-           absl::StatusCode::kUnavailable;
-  };
-  const auto retried = [&](auto step) {
-    auto result = step();
-    while (!result.ok() && result.status().code() == absl::StatusCode::kUnavailable &&
-           store_.shared() && !cancelled() && store_away()) {
-      spdlog::warn("job {}: the store cannot be reached; it goes on once the store answers",
-                   r.info.id());
-      while (store_away() && !cancelled()) std::this_thread::sleep_for(kStoreRetry);
-      result = step();
-    }
-    return result;
-  };
-
   // The job as submitted, read back from the store, with its weather file
-  absl::StatusOr<PreparedJob> prepared = retried([&] { return Prepare(r); });
+  absl::StatusOr<PreparedJob> prepared =
+      WhileStoreAway(r.info.id(), cancelled, [&] { return Prepare(r); });
   if (prepared.status().code() == absl::StatusCode::kDataLoss &&
       absl::StartsWith(prepared.status().message(), "the stored job")) {
-    const absl::Status moved =
-        store_.Quarantine("jobs", r.info.id(), std::string(prepared.status().message()));
-    spdlog::error("job {}: {}; {}, the daemon goes on without it", r.info.id(),
-                  std::string(prepared.status().message()),
-                  moved.ok() ? "moved to the quarantine table"
-                             : absl::StrCat("not moved (", moved.message(), ")"));
-    held.done = true;
+    Quarantine(r, prepared.status());
     return;
   }
   if (!prepared.ok()) return fail(std::string(prepared.status().message()));
   absl::StatusOr<OutdoorCache::Lookup> lookup =
-      retried([&] { return Outdoor(r, *prepared, cancelled); });
+      WhileStoreAway(r.info.id(), cancelled, [&] { return Outdoor(r, *prepared, cancelled); });
   if (!lookup.ok()) return fail(absl::StrCat("outdoor stage: ", lookup.status().message()));
 
   // The search

@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -138,6 +139,15 @@ class JobManager {
   bool Start(Record& record);
   // Runs a started job to its end.
   void RunStarted(Record& record);
+  // step() (Prepare or Outdoor), and while it fails because a shared store cannot be
+  // reached (PostgreSQL restarting, say), again once the store answers, up to
+  // kStoreAttempts times; `stopped` ends the wait.
+  template <typename Step>
+  std::invoke_result_t<Step> WhileStoreAway(const std::string& id,
+                                            const std::function<bool()>& stopped, Step step);
+  // A job whose stored record does not parse (`unreadable`): moved to the quarantine table,
+  // and the run ends without it.
+  void Quarantine(Record& record, const absl::Status& unreadable);
   // The job as submitted, read back from the store, with its weather file parsed, its sky
   // matrix (both from weather_ when held there) and its scene built (left out of the
   // message). DataLoss "the stored job ..." when its record does not parse.

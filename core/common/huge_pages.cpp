@@ -25,6 +25,7 @@ void TouchPagesOnAllCores(std::span<const FreshBuffer> buffers) {
   constexpr size_t kPiece = size_t{2} << 20;
   std::vector<FreshBuffer> pieces;
   for (const FreshBuffer& b : buffers) {
+    AdviseHugePages(b.data, b.bytes);
     for (size_t at = 0; at < b.bytes; at += kPiece) {
       pieces.push_back({static_cast<char*>(b.data) + at, std::min(kPiece, b.bytes - at)});
     }

@@ -697,7 +697,6 @@ class CudaBackend : public DcBackend {
     for (Matrix& m : o.batches) {
       fresh.push_back({m.data(), static_cast<size_t>(m.size()) * sizeof(double)});
     }
-    for (const FreshBuffer& b : fresh) AdviseHugePages(b.data, b.bytes);
     TouchPagesOnAllCores(fresh);
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(Check(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,

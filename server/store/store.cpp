@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "absl/cleanup/cleanup.h"
 #include "absl/strings/match.h"
@@ -306,6 +307,17 @@ void FillFromRow(v1::JobInfo& info, const std::string& owner, bool cancel_reques
 }
 
 }  // namespace
+
+bool Store::AwaitAnswer(std::chrono::milliseconds poll, const std::function<bool()>& stop) {
+  const TransactionOptions read{.write = false, .durable = false};
+  while (true) {
+    std::this_thread::sleep_for(poll);
+    if (stop()) return false;
+    const absl::Status answer =
+        db_->Transact(read, [](SqlSession& session) { return session.Run("SELECT 1").status(); });
+    if (answer.ok()) return true;
+  }
+}
 
 absl::StatusOr<v1::JobInfo> Store::GetJob(const std::string& id, bool position) {
   v1::JobInfo info;

@@ -20,6 +20,7 @@
 // Errors carry no paths or host names: a full disk is StorageFullError
 // (RESOURCE_EXHAUSTED), a database that cannot be reached Unavailable, a limit
 // ResourceExhausted naming it, anything else Internal. Thread-safe.
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -96,6 +97,9 @@ class Store final : public UserStore {
   Database& database() { return *db_; }
   // True when several processes may share the store (PostgreSQL).
   bool shared() const { return db_->dialect() == Dialect::kPostgres; }
+  // Waits `poll`, then on until the database answers a query (one out of reach, such as a
+  // restarting PostgreSQL, answers again) or `stop()` is true; true when it answers.
+  bool AwaitAnswer(std::chrono::milliseconds poll, const std::function<bool()>& stop);
 
   // ---- Jobs
 

@@ -758,8 +758,19 @@ TEST(PostgresStoreTest, AServerThatGoesAwayIsUnavailableThenReconnected) {
   EXPECT_EQ(away.message(),
             "the server's job store (PostgreSQL) cannot be reached; try again in a few seconds");
   EXPECT_THAT(std::string(away.message()), testing::Not(HasSubstr("127.0.0.1")));
+  // Waiting for an answer: none while it is away, until the wait is stopped
+  int polls = 0;
+  EXPECT_FALSE((*store)->AwaitAnswer(std::chrono::milliseconds(10), [&] { return ++polls > 3; }));
+  EXPECT_EQ(polls, 4);
 
-  ASSERT_TRUE(server.Start()) << server.Log();
+  // An answer once it is back
+  bool restarted = false;
+  std::thread restart([&] { restarted = server.Start(); });
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  EXPECT_TRUE((*store)->AwaitAnswer(std::chrono::milliseconds(50),
+                                    [&] { return std::chrono::steady_clock::now() > deadline; }));
+  restart.join();
+  ASSERT_TRUE(restarted) << server.Log();
   absl::StatusOr<std::vector<UserRecord>> users = (*store)->LoadUsers();
   ASSERT_TRUE(users.ok()) << users.status();
   EXPECT_EQ(users->size(), 1u);
