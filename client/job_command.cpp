@@ -1,4 +1,4 @@
-// fenestra job submit/watch/list/show/cancel/result: optimization jobs run by fenestrad.
+// fenestra job submit/watch/list/show/cancel/result/report: optimization jobs run by fenestrad.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -162,13 +162,8 @@ const v1::JobResult& ResultOrFail(const v1::JobInfo& info) {
   return info.result();
 }
 
-}  // namespace
-
-void AddJobCommand(CLI::App& app) {
-  CLI::App* job = app.add_subcommand("job", "Optimization jobs run by fenestrad");
-  job->require_subcommand(1);
-
-  // job submit
+// fenestra job submit
+void AddJobSubmit(CLI::App* job) {
   struct SubmitArgs {
     ServerOptions server;
     std::string file, site, backend;
@@ -203,8 +198,10 @@ void AddJobCommand(CLI::App& app) {
       if (code != 0) throw CLI::RuntimeError(code);
     }
   });
+}
 
-  // job watch
+// fenestra job watch
+void AddJobWatch(CLI::App* job) {
   struct WatchArgs {
     ServerOptions server;
     std::string id;
@@ -221,8 +218,10 @@ void AddJobCommand(CLI::App& app) {
     const int code = Watch(client, watch->id, watch->json);
     if (code != 0) throw CLI::RuntimeError(code);
   });
+}
 
-  // job list
+// fenestra job list
+void AddJobList(CLI::App* job) {
   struct ListArgs {
     ServerOptions server;
     std::string state;
@@ -260,8 +259,10 @@ void AddJobCommand(CLI::App& app) {
           j.name());
     }
   });
+}
 
-  // job show
+// fenestra job show
+void AddJobShow(CLI::App* job) {
   struct ShowArgs {
     ServerOptions server;
     std::string id;
@@ -280,8 +281,10 @@ void AddJobCommand(CLI::App& app) {
       PrintJob(info);
     }
   });
+}
 
-  // job cancel
+// fenestra job cancel
+void AddJobCancel(CLI::App* job) {
   struct CancelArgs {
     ServerOptions server;
     std::string id;
@@ -299,8 +302,10 @@ void AddJobCommand(CLI::App& app) {
       fmt::print("{}: {}\n", info.id(), StateName(info.state()));
     }
   });
+}
 
-  // job result
+// fenestra job result
+void AddJobResult(CLI::App* job) {
   struct ResultArgs {
     ServerOptions server;
     std::string id, output;
@@ -329,8 +334,10 @@ void AddJobCommand(CLI::App& app) {
                  FormatResult(info.result()), AnnualOutputLines(result->annual));
     }
   });
+}
 
-  // job report
+// fenestra job report
+void AddJobReport(CLI::App* job) {
   struct ReportArgs {
     ServerOptions server;
     std::string id, output, sensor;
@@ -349,6 +356,20 @@ void AddJobCommand(CLI::App& app) {
     if (!written.ok()) Fail(written);
     fmt::print("report: {}\n", report->output);
   });
+}
+
+}  // namespace
+
+void AddJobCommand(CLI::App& app) {
+  CLI::App* job = app.add_subcommand("job", "Optimization jobs run by fenestrad");
+  job->require_subcommand(1);
+  AddJobSubmit(job);
+  AddJobWatch(job);
+  AddJobList(job);
+  AddJobShow(job);
+  AddJobCancel(job);
+  AddJobResult(job);
+  AddJobReport(job);
 }
 
 }  // namespace fenestra

@@ -49,22 +49,58 @@ void PrintSite(const v1::SiteInfo& s) {
   if (s.state() == v1::SITE_STATE_FAILED) fmt::print("  error: {}\n", s.error());
 }
 
-}  // namespace
+// The arguments of `fenestra site add`.
+struct SiteAddArgs {
+  ServerOptions server;
+  std::string scene, job, name, backend, window_parts;
+  int64_t outdoor_paths = 0;
+  int outdoor_bounces = 0, basis_cells = 0;
+  uint64_t seed = 0;
+  bool wait = false, json = false;
+};
 
-void AddSiteCommand(CLI::App& app) {
-  CLI::App* site = app.add_subcommand("site", "Sites registered with fenestrad (outdoor matrices)");
-  site->require_subcommand(1);
+// The registration `fenestra site add` sends: the scene (with its OBJ meshes) and weather
+// file of a scene file or a job file, and the sampling options given.
+v1::RegisterSiteRequest SiteAddRequest(const SiteAddArgs& args) {
+  if (args.scene.empty() == args.job.empty()) {
+    Fail(absl::InvalidArgumentError("give a scene file or --job JOB.json (one of them)"));
+  }
+  v1::RegisterSiteRequest request;
+  if (!args.job.empty()) {
+    v1::SubmitJobRequest job = ValueOrFail(SubmitRequestFromJobFile(args.job));
+    *request.mutable_scene() = job.job().scene();
+    *request.mutable_sampling() = job.job().sampling();
+    request.set_weather_epw(job.weather_epw());
+    request.set_weather_name(job.weather_name());
+  } else {
+    const v1::Scene scene = ValueOrFail(ReadSceneProto(args.scene));
+    const fs::path dir = fs::path(args.scene).parent_path();
+    *request.mutable_scene() = ValueOrFail(InlineObjMeshes(scene, dir.string()));
+    if (!scene.site().weather_file().empty()) {
+      const fs::path weather = dir / scene.site().weather_file();
+      request.set_weather_epw(ValueOrFail(ReadFileBytes(weather.string())));
+      request.set_weather_name(weather.filename().string());
+    }
+  }
+  request.mutable_scene()->mutable_site()->clear_weather_file();
+  if (!args.name.empty()) request.set_name(args.name);
+  v1::Sampling& s = *request.mutable_sampling();
+  if (args.outdoor_paths) s.set_outdoor_paths(args.outdoor_paths);
+  if (args.outdoor_bounces) s.set_outdoor_bounces(args.outdoor_bounces);
+  if (args.seed) s.set_seed(args.seed);
+  if (args.basis_cells) s.set_basis_cells(args.basis_cells);
+  if (!args.window_parts.empty()) {
+    const WindowParts parts = ValueOrFail(ParseWindowParts(args.window_parts));
+    s.set_window_columns(parts.columns);
+    s.set_window_rows(parts.rows);
+  }
+  if (!args.backend.empty()) s.set_backend(args.backend);
+  return request;
+}
 
-  // site add
-  struct AddArgs {
-    ServerOptions server;
-    std::string scene, job, name, backend, window_parts;
-    int64_t outdoor_paths = 0;
-    int outdoor_bounces = 0, basis_cells = 0;
-    uint64_t seed = 0;
-    bool wait = false, json = false;
-  };
-  auto add = std::make_shared<AddArgs>();
+// fenestra site add
+void AddSiteAdd(CLI::App* site) {
+  auto add = std::make_shared<SiteAddArgs>();
   CLI::App* add_cmd = site->add_subcommand(
       "add", "Register a site: its outdoor matrix is computed in the background and cached");
   add_cmd->add_option("SCENE", add->scene, "Scene file (JSON)");
@@ -83,40 +119,7 @@ void AddSiteCommand(CLI::App& app) {
   add_cmd->add_flag("--json", add->json, "Print the site as JSON");
   AddServerOptions(add_cmd, add->server);
   add_cmd->callback([add] {
-    if (add->scene.empty() == add->job.empty()) {
-      Fail(absl::InvalidArgumentError("give a scene file or --job JOB.json (one of them)"));
-    }
-    v1::RegisterSiteRequest request;
-    if (!add->job.empty()) {
-      v1::SubmitJobRequest job = ValueOrFail(SubmitRequestFromJobFile(add->job));
-      *request.mutable_scene() = job.job().scene();
-      *request.mutable_sampling() = job.job().sampling();
-      request.set_weather_epw(job.weather_epw());
-      request.set_weather_name(job.weather_name());
-    } else {
-      const v1::Scene scene = ValueOrFail(ReadSceneProto(add->scene));
-      const fs::path dir = fs::path(add->scene).parent_path();
-      *request.mutable_scene() = ValueOrFail(InlineObjMeshes(scene, dir.string()));
-      if (!scene.site().weather_file().empty()) {
-        const fs::path weather = dir / scene.site().weather_file();
-        request.set_weather_epw(ValueOrFail(ReadFileBytes(weather.string())));
-        request.set_weather_name(weather.filename().string());
-      }
-    }
-    request.mutable_scene()->mutable_site()->clear_weather_file();
-    if (!add->name.empty()) request.set_name(add->name);
-    v1::Sampling& s = *request.mutable_sampling();
-    if (add->outdoor_paths) s.set_outdoor_paths(add->outdoor_paths);
-    if (add->outdoor_bounces) s.set_outdoor_bounces(add->outdoor_bounces);
-    if (add->seed) s.set_seed(add->seed);
-    if (add->basis_cells) s.set_basis_cells(add->basis_cells);
-    if (!add->window_parts.empty()) {
-      const WindowParts parts = ValueOrFail(ParseWindowParts(add->window_parts));
-      s.set_window_columns(parts.columns);
-      s.set_window_rows(parts.rows);
-    }
-    if (!add->backend.empty()) s.set_backend(add->backend);
-
+    const v1::RegisterSiteRequest request = SiteAddRequest(*add);
     FenestraClient client = ConnectOrFail(add->server);
     v1::SiteInfo info = ValueOrFail(client.RegisterSite(request));
     if (!add->json) {
@@ -139,8 +142,10 @@ void AddSiteCommand(CLI::App& app) {
       Fail(absl::InternalError(absl::StrCat(info.id(), " failed: ", info.error())));
     }
   });
+}
 
-  // site list
+// fenestra site list
+void AddSiteList(CLI::App* site) {
   auto list_server = std::make_shared<ServerOptions>();
   CLI::App* list_cmd = site->add_subcommand("list", "List the sites");
   AddServerOptions(list_cmd, *list_server);
@@ -153,8 +158,10 @@ void AddSiteCommand(CLI::App& app) {
                  s.sampling().outdoor_paths(), s.compute_seconds(), s.jobs_reused(), s.name());
     }
   });
+}
 
-  // site show
+// fenestra site show
+void AddSiteShow(CLI::App* site) {
   struct ShowArgs {
     ServerOptions server;
     std::string id;
@@ -174,8 +181,10 @@ void AddSiteCommand(CLI::App& app) {
       PrintSite(info);
     }
   });
+}
 
-  // site rm
+// fenestra site rm
+void AddSiteRm(CLI::App* site) {
   struct RmArgs {
     ServerOptions server;
     std::string id;
@@ -188,6 +197,17 @@ void AddSiteCommand(CLI::App& app) {
     if (absl::Status st = ConnectOrFail(rm->server).DeleteSite(rm->id); !st.ok()) Fail(st);
     fmt::print("{} deleted\n", rm->id);
   });
+}
+
+}  // namespace
+
+void AddSiteCommand(CLI::App& app) {
+  CLI::App* site = app.add_subcommand("site", "Sites registered with fenestrad (outdoor matrices)");
+  site->require_subcommand(1);
+  AddSiteAdd(site);
+  AddSiteList(site);
+  AddSiteShow(site);
+  AddSiteRm(site);
 }
 
 }  // namespace fenestra

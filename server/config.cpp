@@ -69,102 +69,15 @@ absl::Status CheckExposure(const v1::DaemonConfig& config) {
   return absl::OkStatus();
 }
 
-}  // namespace
-
-bool IsLoopbackAddress(const std::string& listen_address) {
-  absl::string_view address = listen_address;
-  if (absl::StartsWith(address, "unix:") || absl::StartsWith(address, "unix-abstract:")) {
-    return true;
-  }
-  for (absl::string_view scheme : {"ipv4:", "ipv6:"}) absl::ConsumePrefix(&address, scheme);
-  std::string host;
-  if (absl::StartsWith(address, "[")) {
-    const size_t end = address.find(']');
-    if (end == absl::string_view::npos) return false;
-    host = std::string(address.substr(1, end - 1));
-  } else {
-    host = std::string(address.substr(0, address.rfind(':')));
-  }
-  if (absl::AsciiStrToLower(host) == "localhost") return true;
-  in_addr v4{};
-  if (inet_pton(AF_INET, host.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;
-  in6_addr v6{};
-  if (inet_pton(AF_INET6, host.c_str(), &v6) == 1) {
-    if (IN6_IS_ADDR_LOOPBACK(&v6)) return true;
-    return IN6_IS_ADDR_V4MAPPED(&v6) && v6.s6_addr[12] == 127;
-  }
-  return false;
+// InvalidArgument "configuration: FIELD WHY".
+absl::Status Invalid(const std::string& field, const std::string& why) {
+  return absl::InvalidArgumentError(absl::StrCat("configuration: ", field, " ", why));
 }
 
-absl::StatusOr<v1::DaemonConfig> ReadConfigFile(const std::string& path) {
-  v1::DaemonConfig config;
-  absl::Status status = ReadJsonProtoFile(path, "configuration", &config);
-  if (!status.ok()) return status;
-  return config;
-}
-
-absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
-  auto invalid = [](const std::string& field, const std::string& why) {
-    return absl::InvalidArgumentError(absl::StrCat("configuration: ", field, " ", why));
-  };
-  if (config.listen_address().empty()) config.set_listen_address("localhost:50051");
-  if (config.data_dir().empty()) config.set_data_dir("fenestra-data");
-  if (!config.health_listen().empty() && config.health_listen() == config.listen_address() &&
-      !absl::EndsWith(config.listen_address(), ":0")) {
-    return invalid("health_listen", absl::StrCat("must be another address than listen_address ('",
-                                                 config.listen_address(),
-                                                 "'): the health port serves only "
-                                                 "health checks, in plaintext"));
-  }
-  if (config.worker_threads() < 0) return invalid("worker_threads", "must be >= 0");
-  if (config.backend().empty()) config.set_backend("auto");
-  if (config.gpus().empty()) config.set_gpus("all");
-  absl::StatusOr<std::vector<int>> gpus = ParseGpuList(config.gpus(), CudaDevices());
-  if (!gpus.ok()) {
-    return absl::InvalidArgumentError(absl::StrCat("configuration: ", gpus.status().message()));
-  }
-  // By default one worker per GPU (jobs spread over the GPUs), else one
-  if (config.worker_threads() == 0) {
-    config.set_worker_threads(
-        config.backend() == "cpu" ? 1 : std::max(1, static_cast<int>(gpus->size())));
-  }
-  if (config.backend() != "cpu" && config.backend() != "cuda" && config.backend() != "auto") {
-    return invalid("backend",
-                   absl::StrCat("must be cpu, cuda or auto, got '", config.backend(), "'"));
-  }
-  if (config.shutdown_grace_seconds() < 0) {
-    return invalid("shutdown_grace_seconds", "must be >= 0");
-  }
-  if (config.shutdown_grace_seconds() == 0) config.set_shutdown_grace_seconds(10);
-  if (config.log_level().empty()) config.set_log_level("info");
-  if (config.auth().empty()) config.set_auth(kDefaultAuth);
-  if (!config.store().empty() && !IsPostgresUrl(config.store())) {
-    return invalid("store",
-                   "must be empty (SQLite in data_dir) or a PostgreSQL URL "
-                   "postgresql://user@host:port/database");
-  }
-  if (config.lease_seconds() < 0 || !std::isfinite(config.lease_seconds())) {
-    return invalid("lease_seconds", "must be a finite number >= 0");
-  }
-  if (config.lease_seconds() == 0) config.set_lease_seconds(kDefaultLeaseSeconds);
-  if (config.lease_seconds() < kMinLeaseSeconds) {
-    return invalid("lease_seconds", absl::StrCat("must be at least ", kMinLeaseSeconds, " s"));
-  }
-  if (config.outdoor_memory_bytes() < 0) return invalid("outdoor_memory_bytes", "must be >= 0");
-  if (config.outdoor_memory_bytes() == 0) {
-    config.set_outdoor_memory_bytes(kDefaultOutdoorMemoryBytes);
-  }
-  if (absl::Status s = CheckExposure(config); !s.ok()) return s;
-  static const char* kLevels[] = {"trace", "debug", "info", "warn", "error", "critical", "off"};
-  if (std::find(std::begin(kLevels), std::end(kLevels), config.log_level()) == std::end(kLevels)) {
-    return invalid("log_level", absl::StrCat("must be trace, debug, info, warn, error, critical or "
-                                             "off, got '",
-                                             config.log_level(), "'"));
-  }
-
-  v1::Limits& limits = *config.mutable_limits();
+// Fills the limits left 0 with their defaults; InvalidArgument naming a negative one.
+absl::Status ResolveLimits(v1::Limits& limits) {
   auto fill = [&](auto value, auto fallback, const char* field, auto set) -> absl::Status {
-    if (value < 0) return invalid(absl::StrCat("limits.", field), "must be >= 0");
+    if (value < 0) return Invalid(absl::StrCat("limits.", field), "must be >= 0");
     if (value == 0) set(fallback);
     return absl::OkStatus();
   };
@@ -202,6 +115,100 @@ absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
        }) {
     if (!s.ok()) return s;
   }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+bool IsLoopbackAddress(const std::string& listen_address) {
+  absl::string_view address = listen_address;
+  if (absl::StartsWith(address, "unix:") || absl::StartsWith(address, "unix-abstract:")) {
+    return true;
+  }
+  for (absl::string_view scheme : {"ipv4:", "ipv6:"}) absl::ConsumePrefix(&address, scheme);
+  std::string host;
+  if (absl::StartsWith(address, "[")) {
+    const size_t end = address.find(']');
+    if (end == absl::string_view::npos) return false;
+    host = std::string(address.substr(1, end - 1));
+  } else {
+    host = std::string(address.substr(0, address.rfind(':')));
+  }
+  if (absl::AsciiStrToLower(host) == "localhost") return true;
+  in_addr v4{};
+  if (inet_pton(AF_INET, host.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;
+  in6_addr v6{};
+  if (inet_pton(AF_INET6, host.c_str(), &v6) == 1) {
+    if (IN6_IS_ADDR_LOOPBACK(&v6)) return true;
+    return IN6_IS_ADDR_V4MAPPED(&v6) && v6.s6_addr[12] == 127;
+  }
+  return false;
+}
+
+absl::StatusOr<v1::DaemonConfig> ReadConfigFile(const std::string& path) {
+  v1::DaemonConfig config;
+  absl::Status status = ReadJsonProtoFile(path, "configuration", &config);
+  if (!status.ok()) return status;
+  return config;
+}
+
+absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
+  if (config.listen_address().empty()) config.set_listen_address("localhost:50051");
+  if (config.data_dir().empty()) config.set_data_dir("fenestra-data");
+  if (!config.health_listen().empty() && config.health_listen() == config.listen_address() &&
+      !absl::EndsWith(config.listen_address(), ":0")) {
+    return Invalid("health_listen", absl::StrCat("must be another address than listen_address ('",
+                                                 config.listen_address(),
+                                                 "'): the health port serves only "
+                                                 "health checks, in plaintext"));
+  }
+  if (config.worker_threads() < 0) return Invalid("worker_threads", "must be >= 0");
+  if (config.backend().empty()) config.set_backend("auto");
+  if (config.gpus().empty()) config.set_gpus("all");
+  absl::StatusOr<std::vector<int>> gpus = ParseGpuList(config.gpus(), CudaDevices());
+  if (!gpus.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("configuration: ", gpus.status().message()));
+  }
+  // By default one worker per GPU (jobs spread over the GPUs), else one
+  if (config.worker_threads() == 0) {
+    config.set_worker_threads(
+        config.backend() == "cpu" ? 1 : std::max(1, static_cast<int>(gpus->size())));
+  }
+  if (config.backend() != "cpu" && config.backend() != "cuda" && config.backend() != "auto") {
+    return Invalid("backend",
+                   absl::StrCat("must be cpu, cuda or auto, got '", config.backend(), "'"));
+  }
+  if (config.shutdown_grace_seconds() < 0) {
+    return Invalid("shutdown_grace_seconds", "must be >= 0");
+  }
+  if (config.shutdown_grace_seconds() == 0) config.set_shutdown_grace_seconds(10);
+  if (config.log_level().empty()) config.set_log_level("info");
+  if (config.auth().empty()) config.set_auth(kDefaultAuth);
+  if (!config.store().empty() && !IsPostgresUrl(config.store())) {
+    return Invalid("store",
+                   "must be empty (SQLite in data_dir) or a PostgreSQL URL "
+                   "postgresql://user@host:port/database");
+  }
+  if (config.lease_seconds() < 0 || !std::isfinite(config.lease_seconds())) {
+    return Invalid("lease_seconds", "must be a finite number >= 0");
+  }
+  if (config.lease_seconds() == 0) config.set_lease_seconds(kDefaultLeaseSeconds);
+  if (config.lease_seconds() < kMinLeaseSeconds) {
+    return Invalid("lease_seconds", absl::StrCat("must be at least ", kMinLeaseSeconds, " s"));
+  }
+  if (config.outdoor_memory_bytes() < 0) return Invalid("outdoor_memory_bytes", "must be >= 0");
+  if (config.outdoor_memory_bytes() == 0) {
+    config.set_outdoor_memory_bytes(kDefaultOutdoorMemoryBytes);
+  }
+  if (absl::Status s = CheckExposure(config); !s.ok()) return s;
+  static const char* kLevels[] = {"trace", "debug", "info", "warn", "error", "critical", "off"};
+  if (std::find(std::begin(kLevels), std::end(kLevels), config.log_level()) == std::end(kLevels)) {
+    return Invalid("log_level", absl::StrCat("must be trace, debug, info, warn, error, critical or "
+                                             "off, got '",
+                                             config.log_level(), "'"));
+  }
+
+  if (absl::Status s = ResolveLimits(*config.mutable_limits()); !s.ok()) return s;
   return config;
 }
 

@@ -111,7 +111,6 @@ absl::Status Daemon::OpenStore() {
 
 absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& config) {
   std::unique_ptr<Daemon> d(new Daemon(config));
-  const v1::Limits& limits = config.limits();
   // The health port first, so that probes find the process alive while the store opens
   if (!config.health_listen().empty()) {
     absl::StatusOr<std::unique_ptr<HealthServer>> health =
@@ -140,26 +139,34 @@ absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& co
   if (!gpus.ok()) return gpus.status();
   UseCudaDevices(*gpus);
 
-  // Sites and jobs, and what they keep from being dropped
-  d->heavy_ = std::make_unique<HeavyRequests>(limits.max_concurrent_heavy_requests());
-  d->auth_ = std::make_unique<Authenticator>(config.auth(), *d->store_);
-  d->scheduler_ = std::make_unique<Scheduler>(
-      *d->store_, *d->cache_, ReplicaName(), config.worker_threads(), config.lease_seconds(),
-      std::min(kMaxPollSeconds, config.lease_seconds() / 4));
-  d->sites_ = std::make_unique<SiteManager>(config, d->data_dir_.get(), *d->store_, *d->cache_,
-                                            *d->heavy_, *d->scheduler_);
-  d->jobs_ = std::make_unique<JobManager>(config, d->data_dir_.get(), *d->store_, *d->cache_,
-                                          *d->sites_, *d->heavy_, *d->scheduler_);
-  Store* store = d->store_.get();
-  d->cache_->SetInUse([store](const std::string& key) {
+  d->MakeManagers();
+  if (absl::Status s = d->Recover(); !s.ok()) return s;
+  if (absl::Status s = d->Serve(*credentials); !s.ok()) return s;
+  d->server_->GetHealthCheckService()->SetServingStatus(kReadinessService, true);
+  if (d->health_) d->health_->SetReady(true);
+  return d;
+}
+
+void Daemon::MakeManagers() {
+  const v1::Limits& limits = config_.limits();
+  heavy_ = std::make_unique<HeavyRequests>(limits.max_concurrent_heavy_requests());
+  auth_ = std::make_unique<Authenticator>(config_.auth(), *store_);
+  scheduler_ = std::make_unique<Scheduler>(*store_, *cache_, ReplicaName(),
+                                           config_.worker_threads(), config_.lease_seconds(),
+                                           std::min(kMaxPollSeconds, config_.lease_seconds() / 4));
+  sites_ = std::make_unique<SiteManager>(config_, data_dir_.get(), *store_, *cache_, *heavy_,
+                                         *scheduler_);
+  jobs_ = std::make_unique<JobManager>(config_, data_dir_.get(), *store_, *cache_, *sites_, *heavy_,
+                                       *scheduler_);
+  cache_->SetInUse([store = store_.get()](const std::string& key) {
     absl::StatusOr<bool> used = store->KeyInUse(key);
     return !used.ok() || *used;
   });
-  if (d->data_dir_)
-    d->data_dir_->SetEvictor([cache = d->cache_.get()] { return cache->EvictOne(); });
+  if (data_dir_) data_dir_->SetEvictor([cache = cache_.get()] { return cache->EvictOne(); });
+}
 
-  // What the last run left
-  absl::StatusOr<std::vector<Store::Quarantined>> quarantined = store->QuarantineUnparsable();
+absl::Status Daemon::Recover() {
+  absl::StatusOr<std::vector<Store::Quarantined>> quarantined = store_->QuarantineUnparsable();
   if (!quarantined.ok()) return quarantined.status();
   for (const Store::Quarantined& q : *quarantined) {
     spdlog::error(
@@ -167,57 +174,58 @@ absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& co
         "daemon goes on without it",
         q.id.starts_with("job-") ? "job" : "site", LogSafe(q.id), q.reason);
   }
-  if (absl::Status s = d->sites_->Recover(); !s.ok()) return s;
-  absl::StatusOr<int> removed = store->CountWeatherReferences();
+  if (absl::Status s = sites_->Recover(); !s.ok()) return s;
+  absl::StatusOr<int> removed = store_->CountWeatherReferences();
   if (!removed.ok()) return removed.status();
   if (*removed > 0) {
     spdlog::info("removed {} weather file(s) no site or unfinished job uses", *removed);
   }
-  JobManager* jobs = d->jobs_.get();
-  SiteManager* sites = d->sites_.get();
-  d->scheduler_->Start(
-      [jobs](std::shared_ptr<Scheduler::Held> held) { jobs->Run(std::move(held)); },
-      [sites](std::shared_ptr<Scheduler::Held> held) { sites->Compute(std::move(held)); });
+  scheduler_->Start(
+      [jobs = jobs_.get()](std::shared_ptr<Scheduler::Held> held) { jobs->Run(std::move(held)); },
+      [sites = sites_.get()](std::shared_ptr<Scheduler::Held> held) {
+        sites->Compute(std::move(held));
+      });
+  return absl::OkStatus();
+}
 
-  // The gRPC server. The standard health service answers without a token, so that load
-  // balancers' and orchestrators' probes can use it: it tells only SERVING or NOT_SERVING.
-  // Reflection would answer without a token too, so it is served only with auth none.
+absl::Status Daemon::Serve(const std::shared_ptr<grpc::ServerCredentials>& credentials) {
+  const v1::Limits& limits = config_.limits();
+  // The standard health service answers without a token, so that load balancers' and
+  // orchestrators' probes can use it: it tells only SERVING or NOT_SERVING. Reflection
+  // would answer without a token too, so it is served only with auth none.
   grpc::EnableDefaultHealthCheckService(true);
-  d->site_service_ = std::make_unique<SiteServiceImpl>(*d->sites_, *d->auth_);
-  d->job_service_ = std::make_unique<JobServiceImpl>(*d->jobs_, *d->auth_);
+  site_service_ = std::make_unique<SiteServiceImpl>(*sites_, *auth_);
+  job_service_ = std::make_unique<JobServiceImpl>(*jobs_, *auth_);
   grpc::ServerBuilder builder;
-  builder.SetOption(std::make_unique<ReflectionOption>(config.auth() == "none"));
-  builder.AddListeningPort(config.listen_address(), *credentials, &d->port_);
+  builder.SetOption(std::make_unique<ReflectionOption>(config_.auth() == "none"));
+  builder.AddListeningPort(config_.listen_address(), credentials, &port_);
   builder.SetMaxReceiveMessageSize(limits.max_message_bytes());
   builder.SetMaxSendMessageSize(limits.max_message_bytes());
   // Accept the clients' keepalive pings (every 30 s), also while no call is open
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 10'000);
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
-  builder.RegisterService(d->site_service_.get());
-  builder.RegisterService(d->job_service_.get());
-  d->server_ = builder.BuildAndStart();
-  if (!d->server_ || d->port_ == 0) {
-    d->server_.reset();
+  builder.RegisterService(site_service_.get());
+  builder.RegisterService(job_service_.get());
+  server_ = builder.BuildAndStart();
+  if (!server_ || port_ == 0) {
+    server_.reset();
     return absl::UnavailableError(
-        absl::StrCat("cannot listen on ", config.listen_address(), " (address in use?)"));
+        absl::StrCat("cannot listen on ", config_.listen_address(), " (address in use?)"));
   }
   spdlog::info(
       "fenestrad listening on {} (port {}, {}, auth {}), {}, {} worker thread(s), backend {} "
       "(gpus {}), replica {}",
-      config.listen_address(), d->port_,
-      config.tls_cert_file().empty()        ? "plaintext"
-      : config.tls_client_ca_file().empty() ? "TLS"
-                                            : "TLS with client certificates",
-      config.auth(),
-      d->data_dir_
-          ? absl::StrCat("data in ", d->data_dir_->root().string(), " (", d->data_dir_->UsedBytes(),
-                         " of ", d->data_dir_->max_bytes(), " bytes used)")
-          : absl::StrCat("store ", store->database().Describe(), " (lease ", config.lease_seconds(),
-                         " s)"),
-      config.worker_threads(), config.backend(), config.gpus(), d->scheduler_->replica());
-  d->server_->GetHealthCheckService()->SetServingStatus(kReadinessService, true);
-  if (d->health_) d->health_->SetReady(true);
-  return d;
+      config_.listen_address(), port_,
+      config_.tls_cert_file().empty()        ? "plaintext"
+      : config_.tls_client_ca_file().empty() ? "TLS"
+                                             : "TLS with client certificates",
+      config_.auth(),
+      data_dir_ ? absl::StrCat("data in ", data_dir_->root().string(), " (", data_dir_->UsedBytes(),
+                               " of ", data_dir_->max_bytes(), " bytes used)")
+                : absl::StrCat("store ", store_->database().Describe(), " (lease ",
+                               config_.lease_seconds(), " s)"),
+      config_.worker_threads(), config_.backend(), config_.gpus(), scheduler_->replica());
+  return absl::OkStatus();
 }
 
 void Daemon::Shutdown() {

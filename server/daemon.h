@@ -1,5 +1,6 @@
 #pragma once
 
+#include <grpcpp/security/server_credentials.h>
 #include <grpcpp/server.h>
 
 #include <memory>
@@ -51,6 +52,13 @@ class Daemon {
 
   // Opens the store and the cache: SQLite in the data directory, or PostgreSQL.
   absl::Status OpenStore();
+  // The managers of sites and jobs, the scheduler and what they share.
+  void MakeManagers();
+  // What the last run left: records that no longer parse quarantined, sites recovered,
+  // unused weather files removed; then the workers start.
+  absl::Status Recover();
+  // The gRPC server on config_.listen_address.
+  absl::Status Serve(const std::shared_ptr<grpc::ServerCredentials>& credentials);
 
   v1::DaemonConfig config_;
   std::unique_ptr<HealthServer> health_;
