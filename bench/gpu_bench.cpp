@@ -122,110 +122,129 @@ void TraversalAlone(const std::string& name, const BlindDesign* design) {
       origins.size() / seconds[1] / 1e9);
 }
 
-}  // namespace
-}  // namespace fenestra
-
-int main(int argc, char** argv) {
-  const bool quick = argc > 1 && std::string(argv[1]) == "quick";
-  using namespace fenestra;
-  std::unique_ptr<DcBackend> gpu = ValueOrExit(MakeCudaBackend(0));
-  std::printf("device: %s\n", gpu->Name().c_str());
-
-  // Rays per second and the lightwell reference case (Radiance -ab 30 = 29 reflections)
-  OneStage(*gpu, "lightwell", nullptr, 10'000'000, 29);
-  OneStage(*gpu, "lightwell", nullptr, 10'000'000, 4);
-  const Scene office = ValueOrExit(LoadScene(kRoot + "/examples/city_office/scene.json"));
-  const BlindDesign open =
-      ValueOrExit(DesignWithOverrides(office, {{"alpha", 0.6}, {"spacing", 0.05}}));
-  OneStage(*gpu, "city_office", &open, 2'000'000, 30);
-  TraversalAlone("lightwell", nullptr);
-  TraversalAlone("city_office", &open);
-
-  // The city-office outdoor stage with the jobs' sampling (core/dc/two_stage.h)
-  // The window in its default parts (4 x 3), as jobs trace it
-  OutdoorOptions outdoor;
-  outdoor.parts = AutomaticWindowParts(office.window);
-  ValueOrExit(ComputeOutdoorStage(office, outdoor, gpu.get()));
-  const OutdoorResult o = ValueOrExit(ComputeOutdoorStage(office, outdoor, gpu.get()));
+// The city-office outdoor stage with the jobs' sampling (core/dc/two_stage.h), after a
+// warm-up: prints its paths, time and rays per second.
+OutdoorResult TimeOutdoorStage(DcBackend& gpu, const Scene& office, const OutdoorOptions& outdoor) {
+  ValueOrExit(ComputeOutdoorStage(office, outdoor, &gpu));
+  const OutdoorResult o = ValueOrExit(ComputeOutdoorStage(office, outdoor, &gpu));
   std::printf(
       "outdoor stage: %lld paths, %d bounces (-1: unlimited), %dx%d window parts: %.4f s, "
       "%.3e rays, %.2f G rays/s\n",
       static_cast<long long>(o.paths_per_cell * o.sky_view.size()), outdoor.max_bounces,
       outdoor.parts.columns, outdoor.parts.rows, o.wall_seconds, static_cast<double>(o.rays_traced),
       o.rays_traced / o.wall_seconds / 1e9);
+  return o;
+}
 
-  // One candidate as a job evaluates it: the indoor stage, then the tallies of
-  // E_b = (I_b O_b) S over the lit occupied hours (formed and reduced on the GPU), then UDI with
-  // its jackknife error
+// Montevideo's sky over the lit occupied hours, as a job analyses it.
+struct AnalysedSky {
+  std::vector<bool> occupied;  // per sky step
+  size_t hours = 0;            // the lit occupied hours
+  Matrix matrix;               // kDaylightBins x hours: each hour's radiance x white efficacy
+};
+
+// Reads the weather and builds the analysed sky.
+AnalysedSky MontevideoAnalysedSky() {
   const EpwData weather =
       ValueOrExit(ReadEpw(kRoot + "/examples/weather/URY_Montevideo.865800_IWEC.epw"));
   const SkyMatrix sky = ValueOrExit(BuildSkyMatrix(weather));
   std::vector<double> hours;
   for (const SkyStep& step : sky.steps) hours.push_back(step.hour);
-  const std::vector<bool> occupied = ValueOrExit(OccupiedSteps(hours));
+  AnalysedSky a;
+  a.occupied = ValueOrExit(OccupiedSteps(hours));
   std::vector<int> analysed;
   for (const int c : LitColumns(sky.radiance)) {
-    if (occupied[c]) analysed.push_back(c);
+    if (a.occupied[c]) analysed.push_back(c);
   }
-  IndoorOptions indoor;
-  indoor.parts = outdoor.parts;
-  Matrix analysed_sky(kDaylightBins, static_cast<Eigen::Index>(analysed.size()));
+  a.hours = analysed.size();
+  a.matrix = Matrix(kDaylightBins, static_cast<Eigen::Index>(analysed.size()));
   for (size_t c = 0; c < analysed.size(); ++c) {
-    analysed_sky.col(c) = kWhiteEfficacyLumensPerWatt * sky.radiance.col(analysed[c]);
+    a.matrix.col(c) = kWhiteEfficacyLumensPerWatt * sky.radiance.col(analysed[c]);
   }
-  const MetricOptions metric_options;
-  const int analysed_hours = AnalysedHours(occupied, metric_options.hours);
-  auto recording = std::chrono::steady_clock::now();
-  const std::unique_ptr<DesignTallies> design_tallies =
-      ValueOrExit(gpu->MakeDesignTallies(office, indoor, o.batches, analysed_sky));
-  const double record_seconds = SecondsSince(recording);
-  double kernel = 0, total = 0, prepare = 0, full_kernel = 0;
-  const int candidates = 20;
+  return a;
+}
+
+constexpr int kCandidates = 20;
+
+// Candidate c of the timed evaluations (0 is the warm-up).
+BlindDesign Candidate(const Scene& office, int c) {
+  return ValueOrExit(DesignWithOverrides(
+      office, {{"alpha", 0.05 * c}, {"width", 0.10 + 0.002 * c}, {"spacing", 0.002 * c}}));
+}
+
+// The candidate evaluation's times [s] summed over the candidates, its parts' rays, and the
+// last candidate's UDI [%].
+struct CandidateTimes {
+  double record = 0;  // the room's paths recorded once per job
+  double total = 0, kernel = 0, prepare = 0, build = 0, full_kernel = 0;
   uint64_t rays = 0, full_rays = 0;
   double udi = 0, udi_se = 0;
-  auto candidate = [&](int c) {
-    return ValueOrExit(DesignWithOverrides(
-        office, {{"alpha", 0.05 * c}, {"width", 0.10 + 0.002 * c}, {"spacing", 0.002 * c}}));
-  };
-  for (int c = 0; c <= candidates; ++c) {
-    const BlindDesign design = candidate(c);
+};
+
+// The room's paths recorded once, as a job does for its candidates; the seconds that took.
+std::unique_ptr<DesignTallies> RecordDesignTallies(DcBackend& gpu, const Scene& office,
+                                                   const IndoorOptions& indoor,
+                                                   const OutdoorResult& o, const AnalysedSky& sky,
+                                                   double* seconds) {
+  auto recording = std::chrono::steady_clock::now();
+  std::unique_ptr<DesignTallies> design_tallies =
+      ValueOrExit(gpu.MakeDesignTallies(office, indoor, o.batches, sky.matrix));
+  *seconds = SecondsSince(recording);
+  return design_tallies;
+}
+
+// One candidate as a job evaluates it: the indoor stage, then the tallies of
+// E_b = (I_b O_b) S over the lit occupied hours (formed and reduced on the GPU), then UDI with
+// its jackknife error; timed over the candidates after a warm-up.
+void TimeCandidates(DesignTallies& design_tallies, const Scene& office, const AnalysedSky& sky,
+                    CandidateTimes* times) {
+  const MetricOptions metric_options;
+  const int analysed_hours = AnalysedHours(sky.occupied, metric_options.hours);
+  for (int c = 0; c <= kCandidates; ++c) {
+    const BlindDesign design = Candidate(office, c);
     const auto start = std::chrono::steady_clock::now();
     const std::vector<HourTally> tallies =
-        ValueOrExit(design_tallies->Tally(design, metric_options));
+        ValueOrExit(design_tallies.Tally(design, metric_options));
     const AnnualMetricsEstimate m =
         ValueOrExit(AnnualMetricsFromTallies(tallies, analysed_hours, metric_options));
     if (c == 0) continue;  // warm-up
-    total += SecondsSince(start);
-    udi = m.value.scene.udi_mean_percent;
-    udi_se = m.standard_error.scene.udi_mean_percent;
+    times->total += SecondsSince(start);
+    times->udi = m.value.scene.udi_mean_percent;
+    times->udi_se = m.standard_error.scene.udi_mean_percent;
   }
-  // Their parts, after the candidates as a job evaluates them: the replay kernel (the
-  // indoor stage alone, from the records), the design's slats put beside the room's BVH (and
-  // what a build of the room with the blind's mesh would take instead); and the kernel of the
-  // same stage traced in full
-  const std::unique_ptr<IndoorStages> stages = ValueOrExit(gpu->MakeIndoorStages(office, indoor));
+}
+
+// The candidates' parts, after the candidates as a job evaluates them: the replay kernel (the
+// indoor stage alone, from the records), the design's slats put beside the room's BVH (and
+// what a build of the room with the blind's mesh would take instead); and the kernel of the
+// same stage traced in full
+void TimeCandidateParts(DcBackend& gpu, IndoorStages& stages, const Scene& office,
+                        const IndoorOptions& indoor, CandidateTimes* times) {
   const TraceGeometry room =
       ValueOrExit(PrepareTraceGeometry(SelectSide(office.fixed, Side::kIndoor), office.materials));
   const BvhLayout room_bvh = ValueOrExit(BuildBvh(room));
-  double build = 0;
-  for (int c = 1; c <= candidates; ++c) {
-    const BlindDesign design = candidate(c);
-    const IndoorResult i = ValueOrExit(stages->Compute(design));
-    const IndoorResult full = ValueOrExit(ComputeIndoorStage(office, design, indoor, gpu.get()));
+  for (int c = 1; c <= kCandidates; ++c) {
+    const BlindDesign design = Candidate(office, c);
+    const IndoorResult i = ValueOrExit(stages.Compute(design));
+    const IndoorResult full = ValueOrExit(ComputeIndoorStage(office, design, indoor, &gpu));
     const auto host = std::chrono::steady_clock::now();
     BvhWithSlats(room_bvh, LocalSlatCorners(room, office, design),
                  static_cast<uint32_t>(room.TriangleCount()));
-    prepare += SecondsSince(host);
+    times->prepare += SecondsSince(host);
     const auto built = std::chrono::steady_clock::now();
     const TraceGeometry geometry = ValueOrExit(PrepareTraceGeometry(
         SelectSide(AssembleMesh(office, design), Side::kIndoor), office.materials));
     ValueOrExit(BuildBvh(geometry, BvhQuality::kMedium));
-    build += SecondsSince(built);
-    kernel += i.trace_seconds;
-    rays += i.rays_traced;
-    full_kernel += full.trace_seconds;
-    full_rays += full.rays_traced;
+    times->build += SecondsSince(built);
+    times->kernel += i.trace_seconds;
+    times->rays += i.rays_traced;
+    times->full_kernel += full.trace_seconds;
+    times->full_rays += full.rays_traced;
   }
+}
+
+// Prints the candidate evaluation's time per candidate, its parts', and the last UDI.
+void PrintCandidateTimes(const CandidateTimes& t, const IndoorOptions& indoor, size_t hours) {
   std::printf(
       "candidate evaluation (9 sensors x 2e5 paths, %d bounces (-1: unlimited), D S over %zu "
       "hours, UDI): %.2f ms (the replay kernel %.2f ms, %.2f G queries/s: closest hits and "
@@ -234,33 +253,30 @@ int main(int argc, char** argv) {
       "E = (I_b O_b) S, its tallies and the metrics); last UDI %.2f ± %.2f %%\n"
       "  the room's paths recorded once per job: %.1f ms; traced in full, a candidate's kernel "
       "would take %.2f ms (%.2f G closest-hit rays/s)\n",
-      indoor.max_bounces, analysed.size(), 1e3 * total / candidates, 1e3 * kernel / candidates,
-      rays / kernel / 1e9, 1e3 * prepare / candidates, 1e3 * build / candidates, udi, udi_se,
-      1e3 * record_seconds, 1e3 * full_kernel / candidates, full_rays / full_kernel / 1e9);
+      indoor.max_bounces, hours, 1e3 * t.total / kCandidates, 1e3 * t.kernel / kCandidates,
+      t.rays / t.kernel / 1e9, 1e3 * t.prepare / kCandidates, 1e3 * t.build / kCandidates, t.udi,
+      t.udi_se, 1e3 * t.record, 1e3 * t.full_kernel / kCandidates,
+      t.full_rays / t.full_kernel / 1e9);
+}
 
-  // Is one candidate enough to fill the GPU? The same design with 4 and 16 times the paths
-  // (as if that many candidates shared a launch)
+// Is one candidate enough to fill the GPU? The same design with 4 and 16 times the paths
+// (as if that many candidates shared a launch)
+void IndoorAtMorePaths(DcBackend& gpu, const Scene& office, const BlindDesign& open,
+                       const IndoorOptions& indoor) {
   for (const int64_t scale : {4, 16}) {
     IndoorOptions more = indoor;
     more.paths_per_sensor = indoor.paths_per_sensor * scale;
-    const IndoorResult i = ValueOrExit(ComputeIndoorStage(office, open, more, gpu.get()));
+    const IndoorResult i = ValueOrExit(ComputeIndoorStage(office, open, more, &gpu));
     std::printf("indoor stage at %lld x the paths: kernel %.2f ms, %.2f G closest-hit rays/s\n",
                 static_cast<long long>(scale), 1e3 * i.trace_seconds,
                 i.rays_traced / i.trace_seconds / 1e9);
   }
+}
 
-  // The 500-evaluation four-variable optimization, end to end
-  if (quick) return 0;
-  v1::Job job = ValueOrExit(ReadJobFile(kRoot + "/examples/city_office/four_variables.json"));
-  job.mutable_sampling()->set_backend("cuda");
-  const PreparedJob prepared = ValueOrExit(PrepareJob(job, kRoot + "/examples/city_office"));
-  const auto start = std::chrono::steady_clock::now();
-  std::string stage_starts;  // when each stage began [s]
-  JobCallbacks callbacks;
-  callbacks.stage = [&](const std::string& stage) {
-    stage_starts += absl::StrFormat(" %s %.3f", stage, SecondsSince(start));
-  };
-  const v1::JobResult result = ValueOrExit(RunJob(prepared, nullptr, callbacks));
+// Prints the optimization's result: evaluations, the time of each stage, the best design
+// with its UDI and the final check; `start` is when the job began.
+void PrintOptimization(const v1::JobResult& result, const std::string& stage_starts,
+                       std::chrono::steady_clock::time_point start) {
   const v1::Timings& t = result.timings();
   const v1::FinalCheck& check = result.final_check();
   std::printf(
@@ -284,5 +300,64 @@ int main(int argc, char** argv) {
   std::printf("\nstages began at (s):%s; ended %.3f\n", stage_starts.c_str(), SecondsSince(start));
   std::printf("final check: difference %+.2f ± %.2f %%%s\n", check.difference().value(),
               check.difference().standard_error(), check.disagrees() ? " DISAGREES" : "");
+}
+
+// The 500-evaluation four-variable optimization, end to end, with the time each of its
+// stages began.
+void FourVariableOptimization() {
+  v1::Job job = ValueOrExit(ReadJobFile(kRoot + "/examples/city_office/four_variables.json"));
+  job.mutable_sampling()->set_backend("cuda");
+  const PreparedJob prepared = ValueOrExit(PrepareJob(job, kRoot + "/examples/city_office"));
+  const auto start = std::chrono::steady_clock::now();
+  std::string stage_starts;  // when each stage began [s]
+  JobCallbacks callbacks;
+  callbacks.stage = [&](const std::string& stage) {
+    stage_starts += absl::StrFormat(" %s %.3f", stage, SecondsSince(start));
+  };
+  const v1::JobResult result = ValueOrExit(RunJob(prepared, nullptr, callbacks));
+  PrintOptimization(result, stage_starts, start);
+}
+
+}  // namespace
+}  // namespace fenestra
+
+int main(int argc, char** argv) {
+  const bool quick = argc > 1 && std::string(argv[1]) == "quick";
+  using namespace fenestra;
+  std::unique_ptr<DcBackend> gpu = ValueOrExit(MakeCudaBackend(0));
+  std::printf("device: %s\n", gpu->Name().c_str());
+
+  // Rays per second and the lightwell reference case (Radiance -ab 30 = 29 reflections)
+  OneStage(*gpu, "lightwell", nullptr, 10'000'000, 29);
+  OneStage(*gpu, "lightwell", nullptr, 10'000'000, 4);
+  const Scene office = ValueOrExit(LoadScene(kRoot + "/examples/city_office/scene.json"));
+  const BlindDesign open =
+      ValueOrExit(DesignWithOverrides(office, {{"alpha", 0.6}, {"spacing", 0.05}}));
+  OneStage(*gpu, "city_office", &open, 2'000'000, 30);
+  TraversalAlone("lightwell", nullptr);
+  TraversalAlone("city_office", &open);
+
+  // The window in its default parts (4 x 3), as jobs trace it
+  OutdoorOptions outdoor;
+  outdoor.parts = AutomaticWindowParts(office.window);
+  const OutdoorResult o = TimeOutdoorStage(*gpu, office, outdoor);
+
+  // The candidates, then their parts (the recorded paths and the replayed stages are held
+  // until the program ends)
+  const AnalysedSky sky = MontevideoAnalysedSky();
+  IndoorOptions indoor;
+  indoor.parts = outdoor.parts;
+  CandidateTimes times;
+  const std::unique_ptr<DesignTallies> design_tallies =
+      RecordDesignTallies(*gpu, office, indoor, o, sky, &times.record);
+  TimeCandidates(*design_tallies, office, sky, &times);
+  const std::unique_ptr<IndoorStages> stages = ValueOrExit(gpu->MakeIndoorStages(office, indoor));
+  TimeCandidateParts(*gpu, *stages, office, indoor, &times);
+  PrintCandidateTimes(times, indoor, sky.hours);
+
+  IndoorAtMorePaths(*gpu, office, open, indoor);
+
+  if (quick) return 0;
+  FourVariableOptimization();
   return 0;
 }

@@ -264,57 +264,33 @@ int Ring(const HemisphereBasis& basis, int cell) {
   return ring;
 }
 
-}  // namespace
-}  // namespace fenestra
-
-int main(int argc, char** argv) {
-  using namespace fenestra;
-  const Args args = Parse(argc, argv);
+// The city office's scene, with the city's reflectance 0 for --black-city.
+Scene LoadCityOffice(bool black_city) {
   Scene scene =
       ValueOrExit(LoadScene(std::string(FENESTRA_SOURCE_DIR) + "/examples/city_office/scene.json"));
-  if (args.black_city) {
+  if (black_city) {
     for (Material& m : scene.materials) {
       if (m.name == "city") m.reflectance = 0;
     }
   }
-  const BlindDesign design =
-      ValueOrExit(DesignWithOverrides(scene, {{"alpha", args.alpha},
-                                              {"width", args.width},
-                                              {"spacing", args.spacing},
-                                              {"thickness", args.thickness}}));
-  const WindowParts parts =
-      args.parts.columns > 0 ? args.parts : AutomaticWindowParts(scene.window);
-  const HemisphereBasis basis = ValueOrExit(BasisFor(args.cells));
-  std::printf(
-      "city office, design alpha=%.3f w=%.3f s=%.3f t=%.3f, city reflectance %s, %d direction "
-      "cells x %dx%d window parts, bounces unlimited (roulette) in both stages\n",
-      args.alpha, args.width, args.spacing, args.thickness, args.black_city ? "0" : "0.2",
-      basis.cell_count, parts.columns, parts.rows);
+  return scene;
+}
 
-  // The outdoor stage, both direction densities
-  const TraceGeometry outdoor = ValueOrExit(OutdoorGeometry(scene));
-  const auto outdoor_scene = ValueOrExit(EmbreeScene::Build(outdoor));
-  const TraceWindow outdoor_window = LocalWindow(outdoor, scene.window, parts);
-  const int cells = WindowCellCount(outdoor_window, basis);
-  const uint64_t per_cell = static_cast<uint64_t>(args.outdoor_paths / cells);
-  const OutdoorSums projected =
-      TraceOutdoor(outdoor_scene->Intersector(), outdoor, outdoor_window, basis, per_cell, true);
-  const OutdoorSums solid =
-      TraceOutdoor(outdoor_scene->Intersector(), outdoor, outdoor_window, basis, per_cell, false);
-  std::printf("outdoor: %llu paths per window cell (%d cells), each density\n",
-              static_cast<unsigned long long>(per_cell), cells);
-
-  // The indoor paths, every score continued outdoors
+// Traces the indoor paths of every sensor in kBatches batches, every score continued
+// outdoors, and prints their count; the tallies per (sensor, batch), sensor-major.
+std::vector<Tally> TraceIndoor(const Scene& scene, const BlindDesign& design,
+                               const WindowParts& parts, const HemisphereBasis& basis,
+                               const TraceGeometry& outdoor, EmbreeIntersector outdoor_scene,
+                               const TraceWindow& outdoor_window, int cells, int64_t indoor_paths) {
   const TriangleMesh room = SelectSide(AssembleMesh(scene, design), Side::kIndoor);
   const TraceGeometry indoor = ValueOrExit(PrepareTraceGeometry(room, scene.materials));
   const auto indoor_scene = ValueOrExit(EmbreeScene::Build(indoor));
   const std::vector<TraceSensor> sensors = LocalSensors(indoor, scene.sensors);
   const TraceWindow window = LocalWindow(indoor, scene.window, parts);
-  const WatchingOutdoor prototype{
-      {outdoor_scene->Intersector(), OutdoorOffset(indoor, outdoor), nullptr}};
+  const WatchingOutdoor prototype{{outdoor_scene, OutdoorOffset(indoor, outdoor), nullptr}};
   const int sensor_count = static_cast<int>(sensors.size());
   const PathSettings settings{-1, true, 1.0f, 1u << 20};
-  const uint64_t paths = static_cast<uint64_t>(args.indoor_paths);
+  const uint64_t paths = static_cast<uint64_t>(indoor_paths);
   struct Slot {
     Tally tally;
     uint64_t continuations = 0;
@@ -347,12 +323,122 @@ int main(int argc, char** argv) {
         continuations += slot.continuations - BatchStart(paths, kBatches, c % kBatches) * 64;
       });
   std::printf("indoor: %d sensors x %lld paths in %d batches, %llu outdoor continuations\n\n",
-              sensor_count, static_cast<long long>(args.indoor_paths), kBatches,
+              sensor_count, static_cast<long long>(indoor_paths), kBatches,
               static_cast<unsigned long long>(continuations));
-  const double n = static_cast<double>(per_cell);
-  const double inv_paths = kBatches / static_cast<double>(paths);  // per batch
+  return tallies;
+}
 
-  // Per sensor: one-stage with the same paths against both uses of the cells
+// One sensor's sky sums per batch (one-stage; two-stage through the cells with either
+// density; split; the bias through the cells of the direct and the reflected light) and
+// the sky-bin distributions of one-stage, cells and split, averaged over the batches.
+struct SensorBatches {
+  std::vector<double> exact, old_projected, old_solid, split, direct_bias, reflected_bias;
+  std::vector<double> d_exact, d_old, d_split;
+};
+
+// Sums sensor s's tallies against the outdoor sums, batch by batch.
+SensorBatches SumSensorBatches(const std::vector<Tally>& tallies, int s,
+                               const OutdoorSums& projected, const OutdoorSums& solid,
+                               uint64_t paths) {
+  const int cells = projected.cells;
+  const double n = static_cast<double>(projected.paths);
+  const double inv_paths = kBatches / static_cast<double>(paths);  // per batch
+  SensorBatches r;
+  r.d_exact.assign(kSkyBins, 0.0), r.d_old.assign(kSkyBins, 0.0), r.d_split.assign(kSkyBins, 0.0);
+  for (int b = 0; b < kBatches; ++b) {
+    const Tally& t = tallies[s * kBatches + b];
+    double e = 0, op = 0, os = 0, sp = 0, db = 0, rb = 0;
+    for (int j = 1; j < kSkyBins; ++j) sp += t.direct_bins[j];
+    for (int c = 0; c < cells; ++c) {
+      e += t.exact[c];
+      const double first = projected.Sky(projected.first, c) / n;
+      const double reflected = projected.Sky(projected.reflected, c) / n;
+      op += t.all[c] * (first + reflected);
+      os += t.all[c] * (solid.Sky(solid.first, c) + solid.Sky(solid.reflected, c)) / n;
+      const double met = n - projected.first_count[c];
+      if (met > 0) sp += t.met[c] * projected.Sky(projected.reflected, c) / met;
+      db += t.all[c] * first - t.exact_direct[c];
+      rb += t.all[c] * reflected - (t.exact[c] - t.exact_direct[c]);
+    }
+    for (int j = 0; j < kSkyBins; ++j) {
+      r.d_exact[j] += t.exact_bins[j] * inv_paths / kBatches;
+      r.d_split[j] += t.direct_bins[j] * inv_paths / kBatches;
+      for (int c = 0; c < cells; ++c) {
+        const double met = n - projected.first_count[c];
+        r.d_old[j] += t.all[c] *
+                      (projected.first[c * kSkyBins + j] + projected.reflected[c * kSkyBins + j]) /
+                      n * inv_paths / kBatches;
+        if (met > 0) {
+          r.d_split[j] +=
+              t.met[c] * projected.reflected[c * kSkyBins + j] / met * inv_paths / kBatches;
+        }
+      }
+    }
+    r.exact.push_back(e * inv_paths), r.old_projected.push_back(op * inv_paths);
+    r.old_solid.push_back(os * inv_paths), r.split.push_back(sp * inv_paths);
+    r.direct_bias.push_back(db * inv_paths), r.reflected_bias.push_back(rb * inv_paths);
+  }
+  return r;
+}
+
+// O's noise in sensor s's two-stage sky sum, through the cells and split: per cell, the
+// variance of its sky row sum times the cell's weight squared.
+std::pair<double, double> OutdoorVariances(const std::vector<Tally>& tallies, int s,
+                                           const OutdoorSums& projected, uint64_t paths) {
+  const int cells = projected.cells;
+  const double n = static_cast<double>(projected.paths);
+  const double inv_paths = kBatches / static_cast<double>(paths);  // per batch
+  double old_var = 0, split_var = 0;
+  for (int c = 0; c < cells; ++c) {
+    double all = 0, met_weight = 0;
+    for (int b = 0; b < kBatches; ++b) {
+      all += tallies[s * kBatches + b].all[c] * inv_paths / kBatches;
+      met_weight += tallies[s * kBatches + b].met[c] * inv_paths / kBatches;
+    }
+    const double mean =
+        (projected.Sky(projected.first, c) + projected.Sky(projected.reflected, c)) / n;
+    old_var += all * all * std::max(0.0, projected.all_squares[c] / n - mean * mean) / n;
+    const double met = n - projected.first_count[c];
+    if (met > 1) {
+      const double m = projected.Sky(projected.reflected, c) / met;
+      split_var += met_weight * met_weight *
+                   std::max(0.0, projected.reflected_squares[c] / met - m * m) / met;
+    }
+  }
+  return {old_var, split_var};
+}
+
+// Prints sensor s's row: the one-stage sky sum, each two-stage sum's difference from it in
+// % and in standard errors, the bias's direct and reflected parts, and the L1 distances of
+// the sky-bin distributions.
+void PrintSensorRow(int s, const SensorBatches& r, double old_var, double split_var) {
+  auto difference = [&](const std::vector<double>& two, double outdoor_var) {
+    std::vector<double> d(kBatches);
+    for (int b = 0; b < kBatches; ++b) d[b] = two[b] - r.exact[b];
+    const double se = std::sqrt(std::pow(StandardErrorOfMean(d), 2) + outdoor_var);
+    return std::pair{Mean(d), se};
+  };
+  const double one = Mean(r.exact);
+  const auto [dp, sep] = difference(r.old_projected, old_var);
+  const auto [dsplit, sesplit] = difference(r.split, split_var);
+  const auto [dsolid, sesolid] = difference(r.old_solid, old_var);
+  double l1_old = 0, l1_split = 0, total = 0;
+  for (int j = 0; j < kSkyBins; ++j) {
+    l1_old += std::abs(r.d_old[j] - r.d_exact[j]);
+    l1_split += std::abs(r.d_split[j] - r.d_exact[j]);
+    total += r.d_exact[j];
+  }
+  std::printf(
+      "S%-5d %.4e ± %.1e    %+6.2f%% (%+5.1f SE)            %+6.2f%% (%+5.1f SE)            "
+      "%+6.2f%% (%+5.1f SE)    %+6.2f%% %+6.2f%%; %5.1f%% / %5.1f%%\n",
+      s + 1, one, StandardErrorOfMean(r.exact), 100 * dp / one, dp / sep, 100 * dsplit / one,
+      dsplit / sesplit, 100 * dsolid / one, dsolid / sesolid, 100 * Mean(r.direct_bias) / one,
+      100 * Mean(r.reflected_bias) / one, 100 * l1_old / total, 100 * l1_split / total);
+}
+
+// Per sensor: one-stage with the same paths against both uses of the cells.
+void PrintSensorSums(const std::vector<Tally>& tallies, const OutdoorSums& projected,
+                     const OutdoorSums& solid, uint64_t paths) {
   std::printf(
       "sky sums [sr] per sensor: one-stage with the same indoor paths (exact outdoors), two-stage "
       "through the cells and split; differences relative to the one-stage value, in standard "
@@ -360,137 +446,141 @@ int main(int argc, char** argv) {
   std::printf("%-6s %-22s %-30s %-30s %-22s %s\n", "sensor", "one-stage", "cells (projected O)",
               "split (projected O)", "cells (solid-angle O)",
               "cells bias: direct + reflected; L1 cells / split");
+  const int sensor_count = static_cast<int>(tallies.size()) / kBatches;
   for (int s = 0; s < sensor_count; ++s) {
-    std::vector<double> exact, old_projected, old_solid, split, direct_bias, reflected_bias;
-    double old_var = 0, split_var = 0;
-    std::vector<double> d_exact(kSkyBins, 0.0), d_old(kSkyBins, 0.0), d_split(kSkyBins, 0.0);
-    for (int b = 0; b < kBatches; ++b) {
-      const Tally& t = tallies[s * kBatches + b];
-      double e = 0, op = 0, os = 0, sp = 0, db = 0, rb = 0;
-      for (int j = 1; j < kSkyBins; ++j) sp += t.direct_bins[j];
-      for (int c = 0; c < cells; ++c) {
-        e += t.exact[c];
-        const double first = projected.Sky(projected.first, c) / n;
-        const double reflected = projected.Sky(projected.reflected, c) / n;
-        op += t.all[c] * (first + reflected);
-        os += t.all[c] * (solid.Sky(solid.first, c) + solid.Sky(solid.reflected, c)) / n;
-        const double met = n - projected.first_count[c];
-        if (met > 0) sp += t.met[c] * projected.Sky(projected.reflected, c) / met;
-        db += t.all[c] * first - t.exact_direct[c];
-        rb += t.all[c] * reflected - (t.exact[c] - t.exact_direct[c]);
-      }
-      for (int j = 0; j < kSkyBins; ++j) {
-        d_exact[j] += t.exact_bins[j] * inv_paths / kBatches;
-        d_split[j] += t.direct_bins[j] * inv_paths / kBatches;
-        for (int c = 0; c < cells; ++c) {
-          const double met = n - projected.first_count[c];
-          d_old[j] += t.all[c] *
-                      (projected.first[c * kSkyBins + j] + projected.reflected[c * kSkyBins + j]) /
-                      n * inv_paths / kBatches;
-          if (met > 0) {
-            d_split[j] +=
-                t.met[c] * projected.reflected[c * kSkyBins + j] / met * inv_paths / kBatches;
-          }
-        }
-      }
-      exact.push_back(e * inv_paths), old_projected.push_back(op * inv_paths);
-      old_solid.push_back(os * inv_paths), split.push_back(sp * inv_paths);
-      direct_bias.push_back(db * inv_paths), reflected_bias.push_back(rb * inv_paths);
-    }
-    // O's noise: per cell, the variance of its sky row sum times the cell's weight squared
-    for (int c = 0; c < cells; ++c) {
-      double all = 0, met_weight = 0;
-      for (int b = 0; b < kBatches; ++b) {
-        all += tallies[s * kBatches + b].all[c] * inv_paths / kBatches;
-        met_weight += tallies[s * kBatches + b].met[c] * inv_paths / kBatches;
-      }
-      const double mean =
-          (projected.Sky(projected.first, c) + projected.Sky(projected.reflected, c)) / n;
-      old_var += all * all * std::max(0.0, projected.all_squares[c] / n - mean * mean) / n;
-      const double met = n - projected.first_count[c];
-      if (met > 1) {
-        const double m = projected.Sky(projected.reflected, c) / met;
-        split_var += met_weight * met_weight *
-                     std::max(0.0, projected.reflected_squares[c] / met - m * m) / met;
-      }
-    }
-    auto difference = [&](const std::vector<double>& two, double outdoor_var) {
-      std::vector<double> d(kBatches);
-      for (int b = 0; b < kBatches; ++b) d[b] = two[b] - exact[b];
-      const double se = std::sqrt(std::pow(StandardErrorOfMean(d), 2) + outdoor_var);
-      return std::pair{Mean(d), se};
-    };
-    const double one = Mean(exact);
-    const auto [dp, sep] = difference(old_projected, old_var);
-    const auto [dsplit, sesplit] = difference(split, split_var);
-    const auto [dsolid, sesolid] = difference(old_solid, old_var);
-    double l1_old = 0, l1_split = 0, total = 0;
-    for (int j = 0; j < kSkyBins; ++j) {
-      l1_old += std::abs(d_old[j] - d_exact[j]);
-      l1_split += std::abs(d_split[j] - d_exact[j]);
-      total += d_exact[j];
-    }
-    std::printf(
-        "S%-5d %.4e ± %.1e    %+6.2f%% (%+5.1f SE)            %+6.2f%% (%+5.1f SE)            "
-        "%+6.2f%% (%+5.1f SE)    %+6.2f%% %+6.2f%%; %5.1f%% / %5.1f%%\n",
-        s + 1, one, StandardErrorOfMean(exact), 100 * dp / one, dp / sep, 100 * dsplit / one,
-        dsplit / sesplit, 100 * dsolid / one, dsolid / sesolid, 100 * Mean(direct_bias) / one,
-        100 * Mean(reflected_bias) / one, 100 * l1_old / total, 100 * l1_split / total);
+    const SensorBatches r = SumSensorBatches(tallies, s, projected, solid, paths);
+    const auto [old_var, split_var] = OutdoorVariances(tallies, s, projected, paths);
+    PrintSensorRow(s, r, old_var, split_var);
   }
+}
+
+// One sensor's scores per window cell over all its paths (every score, those whose view
+// met a surface, score x continuation and its direct part), its one-stage sky sum, and the
+// bias of the two-stage sum per cell through the cells and split.
+struct SensorCells {
+  std::vector<double> all, met, exact, direct;
+  double one = 0;
+  std::vector<double> old_bias, split_bias;
+};
+
+// Sums sensor s's tallies over its batches and sets each window cell's bias against them.
+SensorCells SumSensorCells(const std::vector<Tally>& tallies, int s, const OutdoorSums& projected,
+                           uint64_t paths) {
+  const int cells = projected.cells;
+  const double n = static_cast<double>(projected.paths);
+  SensorCells r;
+  r.all.assign(cells, 0.0), r.met.assign(cells, 0.0);
+  r.exact.assign(cells, 0.0), r.direct.assign(cells, 0.0);
+  for (int b = 0; b < kBatches; ++b) {
+    const Tally& t = tallies[s * kBatches + b];
+    for (int c = 0; c < cells; ++c) {
+      r.all[c] += t.all[c] / paths, r.met[c] += t.met[c] / paths;
+      r.exact[c] += t.exact[c] / paths, r.direct[c] += t.exact_direct[c] / paths;
+    }
+  }
+  r.one = std::accumulate(r.exact.begin(), r.exact.end(), 0.0);
+  r.old_bias.resize(cells), r.split_bias.resize(cells);
+  for (int c = 0; c < cells; ++c) {
+    r.old_bias[c] =
+        r.all[c] * (projected.Sky(projected.first, c) + projected.Sky(projected.reflected, c)) / n -
+        r.exact[c];
+    const double m = n - projected.first_count[c];
+    r.split_bias[c] = r.direct[c] +
+                      (m > 0 ? r.met[c] * projected.Sky(projected.reflected, c) / m : 0.0) -
+                      r.exact[c];
+  }
+  return r;
+}
+
+// Prints the `top` window cells with the largest bias through the cells of sensor s (where
+// they look, their share of the one-stage sum, how much of their view reaches the sky, both
+// biases), then the biases summed over all cells.
+void PrintLargestCellBiases(int s, const SensorCells& r, const OutdoorSums& projected,
+                            const OutdoorSums& solid, const HemisphereBasis& basis,
+                            const Window& world_window, const WindowParts& parts, int top) {
+  const int cells = projected.cells;
+  const double n = static_cast<double>(projected.paths);
+  const double one = r.one;
+  std::vector<int> order(cells);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return std::abs(r.old_bias[a]) > std::abs(r.old_bias[b]); });
+  std::printf(
+      "\nS%d: the %d window cells with the largest bias through the cells (of the sensor's "
+      "one-stage sky sum %.4e); sky view = share of the cell's score (indoor) or paths "
+      "(outdoor, projected / solid angle) whose view reaches the sky\n",
+      s + 1, top, one);
+  std::printf("%-5s %-5s %-4s %-13s %-8s %-22s %-9s %-9s\n", "part", "cell", "ring",
+              "elev/azim deg", "share", "sky view in/out/solid", "cells", "split");
+  double shown = 0, total_abs = 0;
+  for (int c = 0; c < cells; ++c) total_abs += std::abs(r.old_bias[c]);
+  for (int k = 0; k < std::min(top, cells); ++k) {
+    const int c = order[k];
+    const int part = c / basis.cell_count, dir = c % basis.cell_count;
+    double elevation, azimuth;
+    CellDirection(basis, world_window, dir, &elevation, &azimuth);
+    shown += std::abs(r.old_bias[c]);
+    std::printf(
+        "%d,%d   %-5d %-4d %5.1f/%5.1f   %5.2f%%   %4.2f / %4.2f / %4.2f     %+6.2f%%  "
+        "%+6.2f%%\n",
+        part % parts.columns, part / parts.columns, dir, Ring(basis, dir), elevation, azimuth,
+        100 * r.exact[c] / one, r.all[c] > 0 ? (r.all[c] - r.met[c]) / r.all[c] : 0.0,
+        projected.first_count[c] / n, solid.first_count[c] / n, 100 * r.old_bias[c] / one,
+        100 * r.split_bias[c] / one);
+  }
+  double old_sum = std::accumulate(r.old_bias.begin(), r.old_bias.end(), 0.0);
+  double split_sum = std::accumulate(r.split_bias.begin(), r.split_bias.end(), 0.0);
+  std::printf(
+      "all cells: cells %+.2f%%, split %+.2f%% (sum of |bias| through the cells %.1f%%, of "
+      "which the cells above %.1f%%)\n",
+      100 * old_sum / one, 100 * split_sum / one, 100 * total_abs / one, 100 * shown / one);
+}
+
+}  // namespace
+}  // namespace fenestra
+
+int main(int argc, char** argv) {
+  using namespace fenestra;
+  const Args args = Parse(argc, argv);
+  const Scene scene = LoadCityOffice(args.black_city);
+  const BlindDesign design =
+      ValueOrExit(DesignWithOverrides(scene, {{"alpha", args.alpha},
+                                              {"width", args.width},
+                                              {"spacing", args.spacing},
+                                              {"thickness", args.thickness}}));
+  const WindowParts parts =
+      args.parts.columns > 0 ? args.parts : AutomaticWindowParts(scene.window);
+  const HemisphereBasis basis = ValueOrExit(BasisFor(args.cells));
+  std::printf(
+      "city office, design alpha=%.3f w=%.3f s=%.3f t=%.3f, city reflectance %s, %d direction "
+      "cells x %dx%d window parts, bounces unlimited (roulette) in both stages\n",
+      args.alpha, args.width, args.spacing, args.thickness, args.black_city ? "0" : "0.2",
+      basis.cell_count, parts.columns, parts.rows);
+
+  // The outdoor stage, both direction densities
+  const TraceGeometry outdoor = ValueOrExit(OutdoorGeometry(scene));
+  const auto outdoor_scene = ValueOrExit(EmbreeScene::Build(outdoor));
+  const TraceWindow outdoor_window = LocalWindow(outdoor, scene.window, parts);
+  const int cells = WindowCellCount(outdoor_window, basis);
+  const uint64_t per_cell = static_cast<uint64_t>(args.outdoor_paths / cells);
+  const OutdoorSums projected =
+      TraceOutdoor(outdoor_scene->Intersector(), outdoor, outdoor_window, basis, per_cell, true);
+  const OutdoorSums solid =
+      TraceOutdoor(outdoor_scene->Intersector(), outdoor, outdoor_window, basis, per_cell, false);
+  std::printf("outdoor: %llu paths per window cell (%d cells), each density\n",
+              static_cast<unsigned long long>(per_cell), cells);
+
+  // The indoor paths, every score continued outdoors
+  const std::vector<Tally> tallies =
+      TraceIndoor(scene, design, parts, basis, outdoor, outdoor_scene->Intersector(),
+                  outdoor_window, cells, args.indoor_paths);
+  const uint64_t paths = static_cast<uint64_t>(args.indoor_paths);
+  PrintSensorSums(tallies, projected, solid, paths);
 
   // The cells that make sensor 1's bias
   for (int s : {0, 1}) {
-    std::vector<double> all(cells, 0.0), met(cells, 0.0), exact(cells, 0.0), direct(cells, 0.0);
-    for (int b = 0; b < kBatches; ++b) {
-      const Tally& t = tallies[s * kBatches + b];
-      for (int c = 0; c < cells; ++c) {
-        all[c] += t.all[c] / paths, met[c] += t.met[c] / paths;
-        exact[c] += t.exact[c] / paths, direct[c] += t.exact_direct[c] / paths;
-      }
-    }
-    const double one = std::accumulate(exact.begin(), exact.end(), 0.0);
-    std::vector<double> old_bias(cells), split_bias(cells);
-    for (int c = 0; c < cells; ++c) {
-      old_bias[c] =
-          all[c] * (projected.Sky(projected.first, c) + projected.Sky(projected.reflected, c)) / n -
-          exact[c];
-      const double m = n - projected.first_count[c];
-      split_bias[c] =
-          direct[c] + (m > 0 ? met[c] * projected.Sky(projected.reflected, c) / m : 0.0) - exact[c];
-    }
-    std::vector<int> order(cells);
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(),
-              [&](int a, int b) { return std::abs(old_bias[a]) > std::abs(old_bias[b]); });
-    std::printf(
-        "\nS%d: the %d window cells with the largest bias through the cells (of the sensor's "
-        "one-stage sky sum %.4e); sky view = share of the cell's score (indoor) or paths "
-        "(outdoor, projected / solid angle) whose view reaches the sky\n",
-        s + 1, args.top, one);
-    std::printf("%-5s %-5s %-4s %-13s %-8s %-22s %-9s %-9s\n", "part", "cell", "ring",
-                "elev/azim deg", "share", "sky view in/out/solid", "cells", "split");
-    double shown = 0, total_abs = 0;
-    for (int c = 0; c < cells; ++c) total_abs += std::abs(old_bias[c]);
-    for (int k = 0; k < std::min(args.top, cells); ++k) {
-      const int c = order[k];
-      const int part = c / basis.cell_count, dir = c % basis.cell_count;
-      double elevation, azimuth;
-      CellDirection(basis, scene.window, dir, &elevation, &azimuth);
-      shown += std::abs(old_bias[c]);
-      std::printf(
-          "%d,%d   %-5d %-4d %5.1f/%5.1f   %5.2f%%   %4.2f / %4.2f / %4.2f     %+6.2f%%  "
-          "%+6.2f%%\n",
-          part % parts.columns, part / parts.columns, dir, Ring(basis, dir), elevation, azimuth,
-          100 * exact[c] / one, all[c] > 0 ? (all[c] - met[c]) / all[c] : 0.0,
-          projected.first_count[c] / n, solid.first_count[c] / n, 100 * old_bias[c] / one,
-          100 * split_bias[c] / one);
-    }
-    double old_sum = std::accumulate(old_bias.begin(), old_bias.end(), 0.0);
-    double split_sum = std::accumulate(split_bias.begin(), split_bias.end(), 0.0);
-    std::printf(
-        "all cells: cells %+.2f%%, split %+.2f%% (sum of |bias| through the cells %.1f%%, of "
-        "which the cells above %.1f%%)\n",
-        100 * old_sum / one, 100 * split_sum / one, 100 * total_abs / one, 100 * shown / one);
+    const SensorCells r = SumSensorCells(tallies, s, projected, paths);
+    PrintLargestCellBiases(s, r, projected, solid, basis, scene.window, parts, args.top);
   }
   return 0;
 }

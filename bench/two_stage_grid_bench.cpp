@@ -86,25 +86,205 @@ std::pair<double, double> Udi(const AnnualSky& sky, const std::vector<Matrix>& b
   return {m.value.scene.udi_mean_percent, m.standard_error.scene.udi_mean_percent};
 }
 
+// The command line's options.
+struct Args {
+  std::string backend_name = "cuda";
+  bool quick = false;
+  int seeds = 40;
+};
+
+// The command line: the backend's name, --quick, --seeds N.
+Args Parse(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--quick") {
+      a.quick = true;
+    } else if (arg == "--seeds" && i + 1 < argc) {
+      a.seeds = std::atoi(argv[++i]);
+    } else {
+      a.backend_name = arg;
+    }
+  }
+  return a;
+}
+
+// The scene's blind at design d.
+BlindDesign BlindAt(const Scene& scene, const Design& d) {
+  return ValueOrExit(DesignWithOverrides(scene, {{"alpha", d.alpha},
+                                                 {"width", d.width},
+                                                 {"spacing", d.spacing},
+                                                 {"thickness", d.thickness}}));
+}
+
+// The comparison over the designs so far: every sensor's z-score, the worst differences
+// and where, how many lie beyond the limits, and the summed times [s].
+struct GridSummary {
+  std::vector<double> z_all, udi_differences;
+  double worst_z = 0, worst_relative = 0, worst_udi = 0, worst_udi_z = 0;
+  std::string worst_z_at, worst_udi_at;
+  int beyond_3 = 0, beyond_3_plus_1 = 0, beyond_udi = 0;
+  double one_seconds = 0, two_seconds = 0;
+};
+
+// Prints design d's per-sensor columns: (two-stage / one-stage - 1) in % and in combined
+// standard errors.
+void CompareSensorSums(const Design& d, const OneStageResult& r, const TwoStageResult& t,
+                       GridSummary* g) {
+  for (Eigen::Index s = 0; s < r.sky_sum.size(); ++s) {
+    const double se = std::hypot(r.sky_sum_standard_error(s), t.sky_sum_standard_error(s));
+    const double z = (t.sky_sum(s) - r.sky_sum(s)) / se;
+    const double relative = t.sky_sum(s) / r.sky_sum(s) - 1;
+    g->z_all.push_back(z);
+    if (std::abs(z) > 3) ++g->beyond_3;
+    if (std::abs(t.sky_sum(s) - r.sky_sum(s)) > 3 * se + 0.01 * r.sky_sum(s)) {
+      ++g->beyond_3_plus_1;
+    }
+    if (std::abs(z) > std::abs(g->worst_z)) {
+      g->worst_z = z;
+      g->worst_z_at = d.name + " S" + std::to_string(s + 1);
+    }
+    g->worst_relative = std::max(g->worst_relative, std::abs(relative));
+    std::printf(" %+5.2f(%+4.1f)", 100 * relative, z);
+  }
+}
+
+// Prints the end of design d's row: the scene's UDI of both methods with jackknife errors,
+// their difference, and both methods' times [s].
+void CompareUdi(const Design& d, const AnnualSky& sky, const OneStageResult& r,
+                const TwoStageResult& t, double two_seconds, GridSummary* g) {
+  const auto [udi_one, udi_one_se] = Udi(sky, r.batch_coefficients);
+  const auto [udi_two, udi_two_se] = Udi(sky, t.batches);
+  const double difference = udi_two - udi_one;
+  const double udi_z = difference / std::hypot(udi_one_se, udi_two_se);
+  g->udi_differences.push_back(difference);
+  if (std::abs(difference) > std::abs(g->worst_udi)) {
+    g->worst_udi = difference, g->worst_udi_at = d.name;
+  }
+  g->worst_udi_z = std::max(g->worst_udi_z, std::abs(udi_z));
+  if (std::abs(difference) > 0.5) ++g->beyond_udi;
+  std::printf(" | %6.2f±%.2f %6.2f±%.2f (%+.2f, %+.1f SE) | %.3f %.3f\n", udi_one, udi_one_se,
+              udi_two, udi_two_se, difference, udi_z, r.wall_seconds, two_seconds);
+}
+
+// Computes design d with both methods (the two-stage one's indoor stage timed, with the
+// outdoor stage o) and prints its row.
+void CompareDesign(const Design& d, const Scene& scene, const AnnualSky& sky, DcBackend& backend,
+                   const WindowParts& parts, int64_t one_stage_paths, int64_t indoor_paths,
+                   const OutdoorResult& o, GridSummary* g) {
+  const BlindDesign design = BlindAt(scene, d);
+  OneStageOptions one;
+  one.paths_per_sensor = one_stage_paths;
+  one.max_bounces = 0;
+  one.seed = 1;
+  one.batches = kDefaultBatches;
+  one.weight_windows = false;  // as the GPU runs it
+  const OneStageResult r = ValueOrExit(ComputeOneStage(scene, design, one, &backend));
+  IndoorOptions indoor;
+  indoor.paths_per_sensor = indoor_paths;
+  indoor.max_bounces = -1;
+  indoor.parts = parts;
+  indoor.seed = 3;
+  const auto start = std::chrono::steady_clock::now();
+  const IndoorResult i = ValueOrExit(ComputeIndoorStage(scene, design, indoor, &backend));
+  const TwoStageResult t = ValueOrExit(CombineStages(i, o));
+  const double two = SecondsSince(start);
+  g->one_seconds += r.wall_seconds, g->two_seconds += two;
+  std::printf("%-17s %5.3f %5.3f %5.3f %6.4f |", d.name.c_str(), d.alpha, d.width, d.spacing,
+              d.thickness);
+  CompareSensorSums(d, r, t, g);
+  CompareUdi(d, sky, r, t, two, g);
+}
+
+// Prints the comparison's summary over all designs: sky sums, then UDI and the times.
+void PrintGridSummary(const GridSummary& g, size_t design_count) {
+  double squares = 0;
+  for (const double z : g.z_all) squares += z * z;
+  std::printf(
+      "\n%zu designs x 9 sensors: |two / one - 1| at most %.2f%%; largest |difference| %.2f "
+      "combined SE (%s); rms %.2f SE; beyond 3 SE: %d, beyond 3 SE + 1%%: %d\n",
+      design_count, 100 * g.worst_relative, std::abs(g.worst_z), g.worst_z_at.c_str(),
+      std::sqrt(squares / g.z_all.size()), g.beyond_3, g.beyond_3_plus_1);
+  std::printf(
+      "UDI: largest |two-stage - one-stage| %.2f points (%s), largest %.1f combined SE; beyond "
+      "0.5 points: %d of %zu; time per design: one-stage %.3f s, two-stage indoor %.3f s\n",
+      std::abs(g.worst_udi), g.worst_udi_at.c_str(), g.worst_udi_z, g.beyond_udi, design_count,
+      g.one_seconds / design_count, g.two_seconds / design_count);
+}
+
+// The two-stage sky sums of one blind design and their standard errors, per seed of both
+// stages (each seed a fresh outdoor and indoor stage at a job's sampling).
+void SeedSums(const Scene& scene, const BlindDesign& design, DcBackend& backend,
+              const OutdoorOptions& outdoor, const WindowParts& parts, bool quick, int seeds,
+              std::vector<Eigen::VectorXd>* sums, std::vector<Eigen::VectorXd>* errors) {
+  for (int k = 0; k < seeds; ++k) {
+    OutdoorOptions out = outdoor;
+    out.paths = quick ? 1'000'000 : 20'000'000;
+    out.seed = 1000 + k;
+    IndoorOptions in;
+    in.paths_per_sensor = quick ? 20'000 : 200'000;
+    in.max_bounces = -1;
+    in.parts = parts;
+    in.seed = 2000 + k;
+    const OutdoorResult ok = ValueOrExit(ComputeOutdoorStage(scene, out, &backend));
+    const IndoorResult ik = ValueOrExit(ComputeIndoorStage(scene, design, in, &backend));
+    const TwoStageResult tk = ValueOrExit(CombineStages(ik, ok));
+    sums->push_back(tk.sky_sum);
+    errors->push_back(tk.sky_sum_standard_error);
+  }
+}
+
+// Prints design d's calibration line: per sensor the SD of the seeds' z-scores against the
+// pooled SE, then over all sensors with the pooled and with each seed's own SE.
+void PrintSeedZScores(const Design& d, const std::vector<Eigen::VectorXd>& sums,
+                      const std::vector<Eigen::VectorXd>& errors, int seeds) {
+  double pooled = 0, own = 0;
+  int count = 0;
+  std::printf("%-17s per sensor z SD:", d.name.c_str());
+  for (Eigen::Index s = 0; s < sums[0].size(); ++s) {
+    double mean = 0, variance = 0, sensor = 0;
+    for (int k = 0; k < seeds; ++k) {
+      mean += sums[k](s) / seeds;
+      variance += errors[k](s) * errors[k](s) / seeds;
+    }
+    for (int k = 0; k < seeds; ++k) {
+      const double scale = std::sqrt(seeds / (seeds - 1.0));
+      const double z = (sums[k](s) - mean) / std::sqrt(variance) * scale;
+      const double z_own = (sums[k](s) - mean) / errors[k](s) * scale;
+      pooled += z * z, own += z_own * z_own, sensor += z * z;
+      ++count;
+    }
+    std::printf(" %.2f", std::sqrt(sensor / seeds));
+  }
+  std::printf("; all: %.3f (own SE: %.3f), %d z-scores\n", std::sqrt(pooled / count),
+              std::sqrt(own / count), count);
+}
+
+// Calibration: sky sums over independent seeds of both stages, at a job's sampling, for
+// three of the named designs.
+void Calibrate(const Scene& scene, const std::vector<Design>& designs, DcBackend& backend,
+               const OutdoorOptions& outdoor, const WindowParts& parts, bool quick, int seeds) {
+  std::printf(
+      "\nsky sums over %d seeds of both stages (outdoor 2e7 paths, indoor 2e5 paths per sensor, "
+      "unlimited bounces, 8 batches): z = (x_k - mean) / rms(SE_k) x sqrt(K / (K - 1)); and "
+      "with each seed's own SE\n",
+      seeds);
+  for (const Design& d : {designs[0], designs[1], designs[4]}) {
+    const BlindDesign design = BlindAt(scene, d);
+    std::vector<Eigen::VectorXd> sums, errors;
+    SeedSums(scene, design, backend, outdoor, parts, quick, seeds, &sums, &errors);
+    PrintSeedZScores(d, sums, errors, seeds);
+  }
+}
+
 }  // namespace
 }  // namespace fenestra
 
 int main(int argc, char** argv) {
   using namespace fenestra;
-  std::string backend_name = "cuda";
-  bool quick = false;
-  int seeds = 40;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--quick") {
-      quick = true;
-    } else if (arg == "--seeds" && i + 1 < argc) {
-      seeds = std::atoi(argv[++i]);
-    } else {
-      backend_name = arg;
-    }
-  }
-  std::unique_ptr<DcBackend> backend = ValueOrExit(MakeBackend(backend_name));
+  const Args args = Parse(argc, argv);
+  const bool quick = args.quick;
+  std::unique_ptr<DcBackend> backend = ValueOrExit(MakeBackend(args.backend_name));
   const Scene scene = ValueOrExit(LoadScene(kRoot + "/examples/city_office/scene.json"));
   const AnnualSky sky = CityOfficeSky();
   const WindowParts parts = AutomaticWindowParts(scene.window);
@@ -133,123 +313,13 @@ int main(int argc, char** argv) {
       "%-17s %5s %5s %5s %6s | per sensor: (two-stage / one-stage - 1) in %% and in combined SE "
       "| UDI one-stage, two-stage [%%] | s one, two\n",
       "design", "alpha", "w", "s", "t");
-  std::vector<double> z_all, udi_differences;
-  double worst_z = 0, worst_relative = 0, worst_udi = 0, worst_udi_z = 0;
-  std::string worst_z_at, worst_udi_at;
-  int beyond_3 = 0, beyond_3_plus_1 = 0, beyond_udi = 0;
-  double one_seconds = 0, two_seconds = 0;
+  GridSummary summary;
   const std::vector<Design> designs = Designs();
   for (const Design& d : designs) {
-    const BlindDesign design =
-        ValueOrExit(DesignWithOverrides(scene, {{"alpha", d.alpha},
-                                                {"width", d.width},
-                                                {"spacing", d.spacing},
-                                                {"thickness", d.thickness}}));
-    OneStageOptions one;
-    one.paths_per_sensor = one_stage_paths;
-    one.max_bounces = 0;
-    one.seed = 1;
-    one.batches = kDefaultBatches;
-    one.weight_windows = false;  // as the GPU runs it
-    const OneStageResult r = ValueOrExit(ComputeOneStage(scene, design, one, backend.get()));
-    IndoorOptions indoor;
-    indoor.paths_per_sensor = indoor_paths;
-    indoor.max_bounces = -1;
-    indoor.parts = parts;
-    indoor.seed = 3;
-    const auto start = std::chrono::steady_clock::now();
-    const IndoorResult i = ValueOrExit(ComputeIndoorStage(scene, design, indoor, backend.get()));
-    const TwoStageResult t = ValueOrExit(CombineStages(i, o));
-    const double two = SecondsSince(start);
-    one_seconds += r.wall_seconds, two_seconds += two;
-    std::printf("%-17s %5.3f %5.3f %5.3f %6.4f |", d.name.c_str(), d.alpha, d.width, d.spacing,
-                d.thickness);
-    for (Eigen::Index s = 0; s < r.sky_sum.size(); ++s) {
-      const double se = std::hypot(r.sky_sum_standard_error(s), t.sky_sum_standard_error(s));
-      const double z = (t.sky_sum(s) - r.sky_sum(s)) / se;
-      const double relative = t.sky_sum(s) / r.sky_sum(s) - 1;
-      z_all.push_back(z);
-      if (std::abs(z) > 3) ++beyond_3;
-      if (std::abs(t.sky_sum(s) - r.sky_sum(s)) > 3 * se + 0.01 * r.sky_sum(s)) ++beyond_3_plus_1;
-      if (std::abs(z) > std::abs(worst_z)) {
-        worst_z = z;
-        worst_z_at = d.name + " S" + std::to_string(s + 1);
-      }
-      worst_relative = std::max(worst_relative, std::abs(relative));
-      std::printf(" %+5.2f(%+4.1f)", 100 * relative, z);
-    }
-    const auto [udi_one, udi_one_se] = Udi(sky, r.batch_coefficients);
-    const auto [udi_two, udi_two_se] = Udi(sky, t.batches);
-    const double difference = udi_two - udi_one;
-    const double udi_z = difference / std::hypot(udi_one_se, udi_two_se);
-    udi_differences.push_back(difference);
-    if (std::abs(difference) > std::abs(worst_udi)) worst_udi = difference, worst_udi_at = d.name;
-    worst_udi_z = std::max(worst_udi_z, std::abs(udi_z));
-    if (std::abs(difference) > 0.5) ++beyond_udi;
-    std::printf(" | %6.2f±%.2f %6.2f±%.2f (%+.2f, %+.1f SE) | %.3f %.3f\n", udi_one, udi_one_se,
-                udi_two, udi_two_se, difference, udi_z, r.wall_seconds, two);
+    CompareDesign(d, scene, sky, *backend, parts, one_stage_paths, indoor_paths, o, &summary);
   }
-  double squares = 0;
-  for (const double z : z_all) squares += z * z;
-  std::printf(
-      "\n%zu designs x 9 sensors: |two / one - 1| at most %.2f%%; largest |difference| %.2f "
-      "combined SE (%s); rms %.2f SE; beyond 3 SE: %d, beyond 3 SE + 1%%: %d\n",
-      designs.size(), 100 * worst_relative, std::abs(worst_z), worst_z_at.c_str(),
-      std::sqrt(squares / z_all.size()), beyond_3, beyond_3_plus_1);
-  std::printf(
-      "UDI: largest |two-stage - one-stage| %.2f points (%s), largest %.1f combined SE; beyond "
-      "0.5 points: %d of %zu; time per design: one-stage %.3f s, two-stage indoor %.3f s\n",
-      std::abs(worst_udi), worst_udi_at.c_str(), worst_udi_z, beyond_udi, designs.size(),
-      one_seconds / designs.size(), two_seconds / designs.size());
+  PrintGridSummary(summary, designs.size());
 
-  // Calibration: sky sums over independent seeds of both stages, at a job's sampling
-  std::printf(
-      "\nsky sums over %d seeds of both stages (outdoor 2e7 paths, indoor 2e5 paths per sensor, "
-      "unlimited bounces, 8 batches): z = (x_k - mean) / rms(SE_k) x sqrt(K / (K - 1)); and "
-      "with each seed's own SE\n",
-      seeds);
-  for (const Design& d : {designs[0], designs[1], designs[4]}) {
-    const BlindDesign design =
-        ValueOrExit(DesignWithOverrides(scene, {{"alpha", d.alpha},
-                                                {"width", d.width},
-                                                {"spacing", d.spacing},
-                                                {"thickness", d.thickness}}));
-    std::vector<Eigen::VectorXd> sums, errors;
-    for (int k = 0; k < seeds; ++k) {
-      OutdoorOptions out = outdoor;
-      out.paths = quick ? 1'000'000 : 20'000'000;
-      out.seed = 1000 + k;
-      IndoorOptions in;
-      in.paths_per_sensor = quick ? 20'000 : 200'000;
-      in.max_bounces = -1;
-      in.parts = parts;
-      in.seed = 2000 + k;
-      const OutdoorResult ok = ValueOrExit(ComputeOutdoorStage(scene, out, backend.get()));
-      const IndoorResult ik = ValueOrExit(ComputeIndoorStage(scene, design, in, backend.get()));
-      const TwoStageResult tk = ValueOrExit(CombineStages(ik, ok));
-      sums.push_back(tk.sky_sum);
-      errors.push_back(tk.sky_sum_standard_error);
-    }
-    double pooled = 0, own = 0;
-    int count = 0;
-    std::printf("%-17s per sensor z SD:", d.name.c_str());
-    for (Eigen::Index s = 0; s < sums[0].size(); ++s) {
-      double mean = 0, variance = 0, sensor = 0;
-      for (int k = 0; k < seeds; ++k) {
-        mean += sums[k](s) / seeds;
-        variance += errors[k](s) * errors[k](s) / seeds;
-      }
-      for (int k = 0; k < seeds; ++k) {
-        const double scale = std::sqrt(seeds / (seeds - 1.0));
-        const double z = (sums[k](s) - mean) / std::sqrt(variance) * scale;
-        const double z_own = (sums[k](s) - mean) / errors[k](s) * scale;
-        pooled += z * z, own += z_own * z_own, sensor += z * z;
-        ++count;
-      }
-      std::printf(" %.2f", std::sqrt(sensor / seeds));
-    }
-    std::printf("; all: %.3f (own SE: %.3f), %d z-scores\n", std::sqrt(pooled / count),
-                std::sqrt(own / count), count);
-  }
+  Calibrate(scene, designs, *backend, outdoor, parts, quick, args.seeds);
   return 0;
 }
