@@ -698,6 +698,11 @@ struct CudaTracer::Impl {
                           const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
                           uint64_t seed, const PathSettings& path, double* host_sum,
                           CudaCounters* out);
+  // Runs RecordKernel for `recorded`, its record capacities grown and the kernel run once
+  // more when a row made more records than there was room for; each row's record counts
+  // into `counts` (3 per row, as Recorded::counts).
+  std::string TraceRecords(int columns, size_t max_bytes, std::vector<unsigned long long>& counts,
+                           CudaCounters* counters);
   // The designs' indoor sums of parts [first, last) from the records (CudaTracer::ReplayIndoor,
   // ReplayIndoorDesigns), added to those of parts [0, first) already in `sum` (one design).
   std::string Replay(const ReplayDesigns& designs, const TraceMaterial* materials, int first,
@@ -1052,7 +1057,6 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   // Rows (sensor, part of a batch): the indoor kernel's rows of batches x parts batches
   const int row_batches = batches * parts;
   const unsigned int rows = static_cast<unsigned int>(sensor_count * row_batches);
-  const size_t shared = static_cast<size_t>(columns) * sizeof(double);
   const uint64_t row_paths = paths_per_sensor / row_batches + 1;
   Impl::Recorded& r = d.recorded;
   d.row_blocks_key = {-1, -1, -1};
@@ -1074,6 +1078,35 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
        path};
   std::vector<unsigned long long> counts(3 * static_cast<size_t>(rows));
   CudaCounters counters;
+  if (std::string error = d.TraceRecords(columns, max_bytes, counts, &counters); !error.empty()) {
+    return error;
+  }
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.fixed.Reserve(static_cast<size_t>(rows) * columns));
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaMemcpy(d.fixed.get(), d.sum.get(),
+                                           static_cast<size_t>(rows) * columns * sizeof(double),
+                                           cudaMemcpyDeviceToDevice));
+  r.valid = true;
+  r.counts = counts;
+  stats->paths = paths_per_sensor * sensor_count;
+  stats->connections = stats->resumes = 0;
+  for (unsigned int i = 0; i < rows; ++i) {
+    stats->connections += counts[i] + counts[2 * rows + i];
+    stats->resumes += counts[rows + i];
+  }
+  stats->rays = counters.rays;
+  stats->kernel_seconds = counters.kernel_seconds;
+  return "";
+}
+
+std::string CudaTracer::Impl::TraceRecords(int columns, size_t max_bytes,
+                                           std::vector<unsigned long long>& counts,
+                                           CudaCounters* counters) {
+  Impl& d = *this;
+  Recorded& r = d.recorded;
+  const int row_batches = r.batches * r.parts;
+  const unsigned int rows = static_cast<unsigned int>(r.sensor_count * row_batches);
+  const size_t shared = static_cast<size_t>(columns) * sizeof(double);
+  const uint64_t row_paths = r.paths_per_sensor / row_batches + 1;
   // Connections per row are not known in advance: a row that made more than there was room
   // for is traced again with room for all (the same paths make the same records)
   for (int attempt = 0;; ++attempt) {
@@ -1095,36 +1128,21 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
         rows, static_cast<size_t>(rows) * columns, false,
         [&] {
           RecordKernel<<<grid, kThreads, shared>>>(
-              d.Scene(), envelope, d.Surfaces(), path, d.Outdoor(outdoor_offset),
-              d.replay_sensors.get(), sensor_count, window, basis, paths_per_sensor, row_batches,
-              seed, records, d.sum.get(), d.counters.get(), d.next_path.get());
+              d.Scene(), r.envelope, d.Surfaces(), r.path, d.Outdoor(r.outdoor_offset),
+              d.replay_sensors.get(), r.sensor_count, r.window, r.basis, r.paths_per_sensor,
+              row_batches, r.seed, records, d.sum.get(), d.counters.get(), d.next_path.get());
         },
-        nullptr, nullptr, &counters);
+        nullptr, nullptr, counters);
     if (!error.empty()) return error;
     FENESTRA_CUDA_RETURN_IF_ERROR(d.record_counts.Download(counts.data(), counts.size()));
     const unsigned long long most = *std::max_element(counts.begin(), counts.begin() + rows);
     const unsigned long long most_crossing =
         *std::max_element(counts.begin() + 2 * rows, counts.end());
-    if (most <= r.connection_capacity && most_crossing <= r.crossing_capacity) break;
+    if (most <= r.connection_capacity && most_crossing <= r.crossing_capacity) return "";
     if (attempt > 0) return "CUDA tracer: the indoor paths' records changed between two traces";
     r.connection_capacity = std::max<uint64_t>(most, r.connection_capacity);
     r.crossing_capacity = std::max<uint64_t>(most_crossing, r.crossing_capacity);
   }
-  FENESTRA_CUDA_RETURN_IF_ERROR(d.fixed.Reserve(static_cast<size_t>(rows) * columns));
-  FENESTRA_CUDA_RETURN_IF_ERROR(cudaMemcpy(d.fixed.get(), d.sum.get(),
-                                           static_cast<size_t>(rows) * columns * sizeof(double),
-                                           cudaMemcpyDeviceToDevice));
-  r.valid = true;
-  r.counts = counts;
-  stats->paths = paths_per_sensor * sensor_count;
-  stats->connections = stats->resumes = 0;
-  for (unsigned int i = 0; i < rows; ++i) {
-    stats->connections += counts[i] + counts[2 * rows + i];
-    stats->resumes += counts[rows + i];
-  }
-  stats->rays = counters.rays;
-  stats->kernel_seconds = counters.kernel_seconds;
-  return "";
 }
 
 std::string CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceMaterial* materials,
