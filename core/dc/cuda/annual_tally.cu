@@ -16,68 +16,93 @@ namespace {
 // Batches the sums' normalization takes (kMaxBatches of the two-stage method).
 constexpr int kMaxTallyBatches = 64;
 
-// C = A B for row-major A (m x k) and B (k x n), in 16 x 16 tiles through shared memory.
+// Transposes in kTile x kTile tiles through shared memory (TransposeKernel).
 constexpr int kTile = 16;
-__global__ void MultiplyKernel(const double* a, const double* b, double* c, int m, int k, int n) {
-  __shared__ double a_tile[kTile][kTile];
-  __shared__ double b_tile[kTile][kTile + 1];
-  const int row = blockIdx.y * kTile + threadIdx.y, col = blockIdx.x * kTile + threadIdx.x;
-  double sum = 0;
-  for (int t = 0; t < k; t += kTile) {
-    a_tile[threadIdx.y][threadIdx.x] =
-        row < m && t + threadIdx.x < k ? a[static_cast<size_t>(row) * k + t + threadIdx.x] : 0.0;
-    b_tile[threadIdx.y][threadIdx.x] =
-        t + threadIdx.y < k && col < n ? b[static_cast<size_t>(t + threadIdx.y) * n + col] : 0.0;
-    __syncthreads();
-    for (int i = 0; i < kTile; ++i) sum += a_tile[threadIdx.y][i] * b_tile[i][threadIdx.x];
-    __syncthreads();
+
+// C = A B for row-major A (m x kTregenzaBinCount) and B (kTregenzaBinCount x n): the sky bins'
+// light through the window times the sky, E = (I O) S. A block holds kRows rows of A in shared
+// memory; each thread takes a column of B (the warp's loads coalesced) and forms that
+// column's kRows entries of C, every entry of A read by the whole warp at once.
+constexpr int kRows = 16, kMultiplyThreads = 128;
+__global__ void MultiplyKernel(const double* a, const double* b, double* c, int m, int n) {
+  constexpr int k = kTregenzaBinCount;
+  __shared__ double a_rows[kRows * k];
+  const int first_row = static_cast<int>(blockIdx.y) * kRows;
+  const int rows = min(kRows, m - first_row);
+  for (int e = static_cast<int>(threadIdx.x); e < kRows * k; e += blockDim.x) {
+    a_rows[e] = e / k < rows ? a[static_cast<size_t>(first_row) * k + e] : 0.0;
   }
-  if (row < m && col < n) c[static_cast<size_t>(row) * n + col] = sum;
+  __syncthreads();
+  const int column = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  if (column >= n) return;
+  double sum[kRows] = {};
+  // Unrolled, so that the loads of B go out together rather than one wait each
+#pragma unroll 8
+  for (int i = 0; i < k; ++i) {
+    const double x = __ldg(b + static_cast<size_t>(i) * n + column);
+#pragma unroll
+    for (int r = 0; r < kRows; ++r) sum[r] += a_rows[r * k + i] * x;
+  }
+#pragma unroll
+  for (int r = 0; r < kRows; ++r) {
+    if (r < rows) c[static_cast<size_t>(first_row + r) * n + column] = sum[r];
+  }
 }
 
 // C = A B_g^T for row-major A (m x k) and B_g (n x k): for a long k and a small C (indoor
 // rows through the window cells). The rows of A come in groups of group_rows, group g with
 // its own B_g (the batches of the annual product), one after the other from b. A block takes
-// kRowTile rows of a group, kColumnTile columns of C (a warp per column) and kSplitChunks
-// chunks of k, whose part of C it adds to C (zeroed before): the rows' chunks wait in shared
-// memory, so each row of B_g is read once per row tile (once for up to kRowTile sensors), and
-// the split of k gives the device enough blocks to stream B at its memory's pace.
-constexpr int kRowTile = 16, kColumnTile = 8, kChunk = 128, kSplitChunks = 4;
+// up to kGroupRows rows of a group and a part of k, the group's rows' part waiting in shared
+// memory in chunks of kChunk; each thread takes a column of C (a row of B_g, read once per
+// block) and adds that column's kRows entries over the block's part of k to C (zeroed
+// before), every row of A read by the whole warp at once.
+constexpr int kChunk = 64;
+template <int kGroupRows>
 __global__ void MultiplyTransposedKernel(const double* a, const double* b, double* c, int k, int n,
-                                         int group_rows, int splits) {
-  __shared__ double a_chunk[kRowTile][kChunk];
+                                         int group_rows, int part) {
+  __shared__ double a_chunk[kGroupRows][kChunk];
   const int group = static_cast<int>(blockIdx.z);
-  const int split = static_cast<int>(blockIdx.y) % splits;
-  const int tile_row = static_cast<int>(blockIdx.y) / splits * kRowTile;
+  const int tile_row = static_cast<int>(blockIdx.y) * kGroupRows;
   const int first_row = group * group_rows + tile_row;
-  const int rows = min(kRowTile, group_rows - tile_row);
-  const int lane = static_cast<int>(threadIdx.x % 32);
-  const int column =
-      static_cast<int>(blockIdx.x) * kColumnTile + static_cast<int>(threadIdx.x / 32);
+  const int rows = min(kGroupRows, group_rows - tile_row);
+  const int column = static_cast<int>(threadIdx.x);
   const double* b_row = b + (static_cast<size_t>(group) * n + min(column, n - 1)) * k;
-  double sum[kRowTile] = {};
-  const int end = min(k, (split + 1) * kSplitChunks * kChunk);
-  for (int start = split * kSplitChunks * kChunk; start < end; start += kChunk) {
+  double sum[kGroupRows] = {};
+  const int begin = static_cast<int>(blockIdx.x) * part, end = min(k, begin + part);
+  for (int start = begin; start < end; start += kChunk) {
     const int width = min(kChunk, end - start);
     __syncthreads();
-    for (int e = static_cast<int>(threadIdx.x); e < kRowTile * kChunk; e += blockDim.x) {
+    for (int e = static_cast<int>(threadIdx.x); e < kGroupRows * kChunk; e += blockDim.x) {
       const int r = e / kChunk, i = e % kChunk;
       a_chunk[r][i] =
           r < rows && i < width ? a[static_cast<size_t>(first_row + r) * k + start + i] : 0.0;
     }
     __syncthreads();
-    for (int i = lane; i < width; i += 32) {
-      const double x = b_row[start + i];
-      for (int r = 0; r < kRowTile; ++r) sum[r] += a_chunk[r][i] * x;
+#pragma unroll 8
+    for (int i = 0; i < width; ++i) {
+      const double x = __ldg(b_row + start + i);
+#pragma unroll
+      for (int r = 0; r < kGroupRows; ++r) sum[r] += a_chunk[r][i] * x;
     }
   }
-  for (int r = 0; r < kRowTile; ++r) {
-    double v = sum[r];
-    for (int offset = 16; offset > 0; offset /= 2) v += __shfl_down_sync(0xffffffffu, v, offset);
-    if (lane == 0 && r < rows && column < n) {
-      atomicAdd(&c[static_cast<size_t>(first_row + r) * n + column], v);
-    }
+  if (column >= n) return;
+#pragma unroll
+  for (int r = 0; r < kGroupRows; ++r) {
+    if (r < rows) atomicAdd(&c[static_cast<size_t>(first_row + r) * n + column], sum[r]);
   }
+}
+
+// The parts of k per group of MultiplyTransposedKernel: enough blocks to fill the device.
+constexpr int kPartsPerGroup = 32;
+
+template <int kGroupRows>
+void LaunchMultiplyTransposed(const double* a, const double* b, double* c, int k, int n,
+                              int group_rows, int groups) {
+  const int parts = min(kPartsPerGroup, (k + kChunk - 1) / kChunk);
+  const int part = ((k + parts - 1) / parts + kChunk - 1) / kChunk * kChunk;
+  const dim3 grid((k + part - 1) / part, (group_rows + kGroupRows - 1) / kGroupRows, groups);
+  MultiplyTransposedKernel<kGroupRows>
+      <<<grid, (n + 31) / 32 * 32>>>(a, b, c, k, n, group_rows, part);
 }
 
 cudaError_t MultiplyTransposed(const double* a, const double* b, double* c, int m, int k, int n,
@@ -86,16 +111,21 @@ cudaError_t MultiplyTransposed(const double* a, const double* b, double* c, int 
       e != cudaSuccess) {
     return e;
   }
-  const int splits = (k + kSplitChunks * kChunk - 1) / (kSplitChunks * kChunk);
-  const dim3 grid((n + kColumnTile - 1) / kColumnTile,
-                  (group_rows + kRowTile - 1) / kRowTile * splits, m / group_rows);
-  MultiplyTransposedKernel<<<grid, 32 * kColumnTile>>>(a, b, c, k, n, group_rows, splits);
+  if (n > 1024) return cudaErrorInvalidValue;  // a thread per column of C
+  // A block's rows: the fewest multiple of 4 up to 32 that holds a group (32 for more)
+  using Launch = void (*)(const double*, const double*, double*, int, int, int, int);
+  constexpr Launch kLaunches[] = {LaunchMultiplyTransposed<4>,  LaunchMultiplyTransposed<8>,
+                                  LaunchMultiplyTransposed<12>, LaunchMultiplyTransposed<16>,
+                                  LaunchMultiplyTransposed<20>, LaunchMultiplyTransposed<24>,
+                                  LaunchMultiplyTransposed<28>, LaunchMultiplyTransposed<32>};
+  kLaunches[(min(group_rows, 32) + 3) / 4 - 1](a, b, c, k, n, group_rows, m / group_rows);
   return cudaGetLastError();
 }
 
-void Multiply(const double* a, const double* b, double* c, int m, int k, int n) {
-  const dim3 grid((n + kTile - 1) / kTile, (m + kTile - 1) / kTile), block(kTile, kTile);
-  MultiplyKernel<<<grid, block>>>(a, b, c, m, k, n);
+// C = A B for A of m x kTregenzaBinCount (MultiplyKernel).
+void Multiply(const double* a, const double* b, double* c, int m, int n) {
+  const dim3 grid((n + kMultiplyThreads - 1) / kMultiplyThreads, (m + kRows - 1) / kRows);
+  MultiplyKernel<<<grid, kMultiplyThreads>>>(a, b, c, m, n);
 }
 
 // Each batch's rows x columns matrix `in` (row-major, batch after batch) transposed into
@@ -249,8 +279,7 @@ struct CudaAnnualTally::Impl {
     FENESTRA_CUDA_RETURN_IF_ERROR(MultiplyTransposed(indoor.get(), outdoor_transposed.get(),
                                                      through_window.get(), rows, cells,
                                                      kTregenzaBinCount, rows / batches));
-    Multiply(through_window.get(), sky_matrix, illuminance.get(), rows, kTregenzaBinCount,
-             sky_steps);
+    Multiply(through_window.get(), sky_matrix, illuminance.get(), rows, sky_steps);
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
     return "";
   }
