@@ -7,11 +7,13 @@
 #include "server/data_dir.h"
 
 namespace fenestra {
-
-// How long a transaction waits for another connection's lock on a shared file [ms]
-constexpr int kSqliteBusyMs = 5000;
-
 namespace {
+
+// How long a call waits for another connection's lock on a shared file [ms]: briefly while
+// the open finds out whether another process holds the file, then longer, so that a
+// transaction under load waits for another's lock rather than fail
+constexpr int kOpenBusyMs = 500;
+constexpr int kSqliteBusyMs = 5000;
 
 // What a failed SQLite call means for a client: a full disk, a unique key taken, or an
 // internal failure.
@@ -115,9 +117,7 @@ absl::StatusOr<std::unique_ptr<SqliteDatabase>> SqliteDatabase::Open(const std::
     return absl::FailedPreconditionError(
         absl::StrCat(path, ": the job store is read-only (not writable)"));
   }
-  // Short while the open finds out whether another process holds the file, then longer:
-  // a transaction waits for another's lock rather than fail under load
-  sqlite3_busy_timeout(db, 500);
+  sqlite3_busy_timeout(db, kOpenBusyMs);
   // Exclusive: a lock held from the first access keeps other processes out and the WAL
   // index in memory (no -shm file, so a full disk still lets it read)
   std::lock_guard lock(database->mutex_);
