@@ -237,8 +237,8 @@ class FenestradTest : public testing::Test {
     return daemon;
   }
 
-  // The city-office tilt job with tiny sampling; `edit` changes it further. Returns its
-  // path (a job file next to nothing: the scene is referenced by absolute path).
+  // The city-office tilt job with tiny sampling (as tests/quick_job.h: the window in one
+  // part, so that its matrices are small); the scene referenced by absolute path.
   v1::Job TinyJob(int evaluations = 6) const {
     v1::Job job = FromJson<v1::Job>(
         ReadFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json"));
@@ -246,6 +246,8 @@ class FenestradTest : public testing::Test {
     job.mutable_sampling()->set_outdoor_paths(40000);
     job.mutable_sampling()->set_indoor_paths_per_sensor(2000);
     job.mutable_sampling()->set_backend("cpu");
+    job.mutable_sampling()->set_window_columns(1);
+    job.mutable_sampling()->set_window_rows(1);
     job.mutable_budget()->set_max_evaluations(evaluations);
     job.mutable_budget()->set_failed_cycles_to_stop(-1);
     return job;

@@ -869,9 +869,9 @@ TEST_F(FenestradStorageTest, UploadsAreKeptOnlyWhileASiteOrUnfinishedJobUsesThem
 }
 
 TEST_F(FenestradStorageTest, DataDirectoryLimitEvictsUnusedMatricesThenRefusesNamingTheLimit) {
-  // 45.0 MB: a weather file is 1.6 MB, a tiny job's outdoor matrix 42.1 MB (O, its standard
-  // errors and its 8 batches, each 3602 x 146 doubles)
-  auto d = StartDaemon({"--max-data-dir-bytes", "45008192"});
+  // 8.0 MB: a weather file is 1.6 MB, a tiny job's outdoor matrix 5.1 MB (O, its standard
+  // errors and its 8 batches, each 434 x 146 doubles)
+  auto d = StartDaemon({"--max-data-dir-bytes", "8005472"});
   const std::string outdoor = d->data_dir() + "/outdoor";
   v1::SiteInfo first;
   ASSERT_TRUE(Register(*d, SiteRequest(TinyJob(), Weather()), &first).ok());
@@ -897,7 +897,7 @@ TEST_F(FenestradStorageTest, DataDirectoryLimitEvictsUnusedMatricesThenRefusesNa
   request.set_weather_epw(Weather(2));
   const grpc::Status refused = SubmitRequest(*d, request);
   EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-  EXPECT_THAT(refused.error_message(), HasSubstr("max_data_dir_bytes = 45008192"));
+  EXPECT_THAT(refused.error_message(), HasSubstr("max_data_dir_bytes = 8005472"));
   EXPECT_THAT(refused.error_message(), testing::Not(HasSubstr(dir_)));
   EXPECT_EQ(FileNames(outdoor), second_matrix);
   EXPECT_EQ(FileNames(d->data_dir() + "/weather").size(), 1u);
@@ -912,7 +912,7 @@ TEST_F(FenestradStorageTest, DataDirectoryLimitEvictsUnusedMatricesThenRefusesNa
 }
 
 TEST_F(FenestradStorageTest, FullDiskKeepsReadsRefusesWritesStoresFinalStatesAndStarts) {
-  MountTmpfs(dir_ + "/data", "64m");  // a tiny job's outdoor matrix is 42 MB
+  MountTmpfs(dir_ + "/data", "64m");  // a tiny job's outdoor matrix is 5 MB
   auto d = StartDaemon();
   v1::SiteInfo site;
   ASSERT_TRUE(Register(*d, SiteRequest(TinyJob(), Weather()), &site).ok());
