@@ -107,9 +107,13 @@ void AddSiteAdd(CLI::App* site) {
   add_cmd->add_option("--job", add->job,
                       "Job file: take its scene and outdoor sampling (so its jobs match)");
   add_cmd->add_option("--name", add->name, "Label; default: the scene's name");
-  add_cmd->add_option("--outdoor-paths", add->outdoor_paths, "Outdoor paths [default 2e7]");
-  add_cmd->add_option("--outdoor-bounces", add->outdoor_bounces, "Outdoor reflections [30]");
-  add_cmd->add_option("--seed", add->seed, "Random seed [1]");
+  add_cmd->add_option("--outdoor-paths", add->outdoor_paths,
+                      absl::StrCat("Outdoor paths [default ", kDefaultOutdoorPaths, "]"));
+  add_cmd->add_option(
+      "--outdoor-bounces", add->outdoor_bounces,
+      absl::StrCat("Outdoor reflections, -1: unlimited [default ", kDefaultOutdoorBounces, "]"));
+  add_cmd->add_option("--seed", add->seed,
+                      absl::StrCat("Random seed [default ", kDefaultSeed, "]"));
   add_cmd->add_option("--basis-cells", add->basis_cells,
                       "Direction cells of each window part: 288 or 1152");
   add_cmd->add_option("--window-parts", add->window_parts,

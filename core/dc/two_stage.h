@@ -64,6 +64,7 @@ inline constexpr int64_t kDefaultOutdoorPaths = 20'000'000;
 inline constexpr int kDefaultOutdoorBounces = -1;
 inline constexpr int64_t kDefaultIndoorPathsPerSensor = 200'000;
 inline constexpr int kDefaultIndoorBounces = -1;
+inline constexpr uint64_t kDefaultSeed = 1;
 // Independent batches of each stage, by default, and at most.
 inline constexpr int kDefaultBatches = 8;
 inline constexpr int kMaxBatches = 64;

@@ -255,7 +255,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   if (s.outdoor_bounces() == 0) s.set_outdoor_bounces(kDefaultOutdoorBounces);
   if (s.indoor_paths_per_sensor() == 0) s.set_indoor_paths_per_sensor(kDefaultIndoorPathsPerSensor);
   if (s.indoor_bounces() == 0) s.set_indoor_bounces(kDefaultIndoorBounces);
-  if (s.seed() == 0) s.set_seed(1);
+  if (s.seed() == 0) s.set_seed(kDefaultSeed);
   if (s.basis_cells() == 0) s.set_basis_cells(kDefaultBasisCells);
   if (s.backend().empty()) s.set_backend("auto");
   if (s.batches() == 0) s.set_batches(kDefaultBatches);
