@@ -21,7 +21,7 @@ void AdviseHugePages(void* data, size_t bytes) {
   (void)madvise(reinterpret_cast<void*>(first), end - first, MADV_HUGEPAGE);
 }
 
-void TouchPagesOnAllCores(std::span<const FreshBuffer> buffers) {
+void ReadyFreshBuffers(std::span<const FreshBuffer> buffers) {
   constexpr size_t kPiece = size_t{2} << 20;
   std::vector<FreshBuffer> pieces;
   for (const FreshBuffer& b : buffers) {

@@ -19,10 +19,10 @@ struct FreshBuffer {
   size_t bytes;
 };
 
-// Advises huge pages for `buffers` (AdviseHugePages), then writes zeros over them from
-// every core, 2 MiB per task, so that their page faults (and the zeroing of their pages by
-// the kernel) run on all cores at once instead of on the one thread that fills them later
-// (a GPU download, say). Only for buffers about to be overwritten whole.
-void TouchPagesOnAllCores(std::span<const FreshBuffer> buffers);
+// Readies `buffers` to be overwritten whole: advises huge pages for them (AdviseHugePages),
+// then writes zeros over them from every core, 2 MiB per task, so that their page faults
+// (and the zeroing of their pages by the kernel) run on all cores at once instead of on the
+// one thread that fills them later (a GPU download, say).
+void ReadyFreshBuffers(std::span<const FreshBuffer> buffers);
 
 }  // namespace fenestra

@@ -697,7 +697,7 @@ class CudaBackend : public DcBackend {
     for (Matrix& m : o.batches) {
       fresh.push_back({m.data(), static_cast<size_t>(m.size()) * sizeof(double)});
     }
-    TouchPagesOnAllCores(fresh);
+    ReadyFreshBuffers(fresh);
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(Check(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,
                                                     WithoutImportance(path), out, &counters)));

@@ -96,7 +96,7 @@ TEST(HugePagesTest, RangesWithoutAWholeHugePageAreLeftAlone) {
 
 // Every byte of each buffer becomes 0, whatever its size and alignment, and nothing around
 // them changes; the pages are then resident (mincore).
-TEST(HugePagesTest, TouchPagesZeroesTheBuffersAndFaultsThemIn) {
+TEST(HugePagesTest, ReadyFreshBuffersZeroesThemAndFaultsThemIn) {
   Mapping m(8 * kHugePage);
   ASSERT_NE(m.base, MAP_FAILED);
   char* const a = m.aligned + 100;
@@ -105,7 +105,7 @@ TEST(HugePagesTest, TouchPagesZeroesTheBuffersAndFaultsThemIn) {
   const size_t b_bytes = 777;
   std::memset(m.aligned, 0x5a, 7 * kHugePage);
   const FreshBuffer buffers[] = {{a, a_bytes}, {b, b_bytes}, {b, 0}};
-  TouchPagesOnAllCores(buffers);
+  ReadyFreshBuffers(buffers);
   const auto count_if = [](const char* from, const char* to, auto pred) {
     size_t n = 0;
     for (const char* p = from; p < to; ++p) n += pred(*p);
@@ -121,7 +121,7 @@ TEST(HugePagesTest, TouchPagesZeroesTheBuffersAndFaultsThemIn) {
             static_cast<size_t>(m.aligned + 7 * kHugePage - (b + b_bytes)));
 }
 
-TEST(HugePagesTest, TouchPagesFaultsInFreshMemory) {
+TEST(HugePagesTest, ReadyFreshBuffersFaultsInFreshMemory) {
   Mapping m(4 * kHugePage);
   ASSERT_NE(m.base, MAP_FAILED);
   const size_t pages = 4 * kHugePage / 4096;
@@ -131,7 +131,7 @@ TEST(HugePagesTest, TouchPagesFaultsInFreshMemory) {
   for (unsigned char r : resident) before += r & 1;
   EXPECT_EQ(before, 0u);  // a fresh anonymous mapping has no pages yet
   const FreshBuffer buffer[] = {{m.aligned, 4 * kHugePage}};
-  TouchPagesOnAllCores(buffer);
+  ReadyFreshBuffers(buffer);
   ASSERT_EQ(mincore(m.aligned, 4 * kHugePage, resident.data()), 0);
   size_t after = 0;
   for (unsigned char r : resident) after += r & 1;
