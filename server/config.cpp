@@ -33,45 +33,44 @@ constexpr int64_t kDefaultOutdoorMemoryBytes = int64_t{1} << 30;
 // A lease shorter than this would be renewed too often to be worth holding [s]
 constexpr double kMinLeaseSeconds = 0.3;
 
-// Checks auth and TLS against the listen address: what leaves this machine is encrypted
-// and authenticated unless the configuration says otherwise in so many words.
-absl::Status CheckExposure(const v1::DaemonConfig& config) {
-  auto invalid = [](const std::string& text) {
-    return absl::InvalidArgumentError(absl::StrCat("configuration: ", text));
-  };
-  if (config.auth() != "token" && config.auth() != "none") {
-    return invalid(absl::StrCat("auth must be token or none, got '", config.auth(), "'"));
-  }
-  if (config.tls_cert_file().empty() != config.tls_key_file().empty()) {
-    return invalid(
-        "tls_cert_file and tls_key_file (--tls-cert, --tls-key) go together: give both or "
-        "neither");
-  }
-  if (!config.tls_client_ca_file().empty() && config.tls_cert_file().empty()) {
-    return invalid(
-        "tls_client_ca_file (--tls-client-ca) needs tls_cert_file and tls_key_file: client "
-        "certificates are checked on top of the server's TLS");
-  }
-  if (IsLoopbackAddress(config.listen_address())) return absl::OkStatus();
-  if (config.auth() == "none") {
-    return invalid(absl::StrCat(
-        "auth none makes every caller an administrator, so it is allowed only on a loopback "
-        "listen_address (localhost, 127.0.0.1, [::1]), not on '",
-        config.listen_address(), "'; use auth token with users from `fenestrad user add`"));
-  }
-  if (config.tls_cert_file().empty() && !config.allow_plaintext()) {
-    return invalid(absl::StrCat(
-        "listen_address '", config.listen_address(),
-        "' is reachable from other machines, and without TLS tokens and scenes would cross "
-        "the network in clear: give tls_cert_file and tls_key_file (--tls-cert, --tls-key), "
-        "or set allow_plaintext (--allow-plaintext) when a proxy in front terminates TLS"));
-  }
-  return absl::OkStatus();
-}
-
 // InvalidArgument "configuration: FIELD WHY".
 absl::Status Invalid(const std::string& field, const std::string& why) {
   return absl::InvalidArgumentError(absl::StrCat("configuration: ", field, " ", why));
+}
+
+// Checks auth and TLS against the listen address: what leaves this machine is encrypted
+// and authenticated unless the configuration says otherwise in so many words.
+absl::Status CheckExposure(const v1::DaemonConfig& config) {
+  if (config.auth() != "token" && config.auth() != "none") {
+    return Invalid("auth", absl::StrCat("must be token or none, got '", config.auth(), "'"));
+  }
+  if (config.tls_cert_file().empty() != config.tls_key_file().empty()) {
+    return Invalid("tls_cert_file and tls_key_file",
+                   "(--tls-cert, --tls-key) go together: give both or neither");
+  }
+  if (!config.tls_client_ca_file().empty() && config.tls_cert_file().empty()) {
+    return Invalid("tls_client_ca_file",
+                   "(--tls-client-ca) needs tls_cert_file and tls_key_file: client certificates "
+                   "are checked on top of the server's TLS");
+  }
+  if (IsLoopbackAddress(config.listen_address())) return absl::OkStatus();
+  if (config.auth() == "none") {
+    return Invalid("auth", absl::StrCat("none makes every caller an administrator, so it is "
+                                        "allowed only on a loopback listen_address (localhost, "
+                                        "127.0.0.1, [::1]), not on '",
+                                        config.listen_address(),
+                                        "'; use auth token with users from `fenestrad user add`"));
+  }
+  if (config.tls_cert_file().empty() && !config.allow_plaintext()) {
+    return Invalid(
+        "listen_address",
+        absl::StrCat("'", config.listen_address(),
+                     "' is reachable from other machines, and without TLS tokens and scenes "
+                     "would cross the network in clear: give tls_cert_file and tls_key_file "
+                     "(--tls-cert, --tls-key), or set allow_plaintext (--allow-plaintext) when "
+                     "a proxy in front terminates TLS"));
+  }
+  return absl::OkStatus();
 }
 
 // Fills the limits left 0 with their defaults; InvalidArgument naming a negative one.
