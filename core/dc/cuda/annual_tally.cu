@@ -95,6 +95,78 @@ __global__ void MultiplyTransposedKernel(const double* a, const double* b, doubl
 // The parts of k per group of MultiplyTransposedKernel: enough blocks to fill the device.
 constexpr int kPartsPerGroup = 32;
 
+// MultiplyTransposedKernel on the FP64 tensor cores (mma.sync m8n8k4, compute capability 8.0
+// and later). A block takes up to kMmaRows rows of a group (four 8-row tiles) and a part of
+// k, the rows' part waiting in shared memory in chunks of kMmaChunk (rows padded so that a
+// warp's reads of eight rows fall in different banks); each warp forms an 8-column tile of C
+// (8 rows of B_g, whose chunk it loads into registers at once) and adds it to C (zeroed
+// before). Per lane, as the instruction lays out its operands: A's row lane / 4 and k
+// lane % 4, B's column lane / 4 and k lane % 4, C's row lane / 4 and columns 2 (lane % 4)
+// and the one after.
+constexpr int kMmaRows = 32, kMmaChunk = 64, kMmaStride = kMmaChunk + 4, kMmaParts = 16;
+constexpr int kMmaMaxColumns = 256;  // a warp per 8 columns, 32 warps at most
+__global__ void MultiplyTransposedMmaKernel(const double* a, const double* b, double* c, int k,
+                                            int n, int group_rows, int part) {
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 800
+  __shared__ double a_chunk[kMmaRows * kMmaStride];
+  const int lane = static_cast<int>(threadIdx.x) % 32, warp = static_cast<int>(threadIdx.x) / 32;
+  const int quad = lane / 4, step = lane % 4;
+  const int group = static_cast<int>(blockIdx.z);
+  const int tile_row = static_cast<int>(blockIdx.y) * kMmaRows;
+  const int rows = min(kMmaRows, group_rows - tile_row), tiles = (rows + 7) / 8;
+  const size_t first_row = static_cast<size_t>(group) * group_rows + tile_row;
+  const int begin = static_cast<int>(blockIdx.x) * part, end = min(k, begin + part);
+  const int b_column = 8 * warp + quad;
+  const bool column_valid = b_column < n;
+  const double* b_row = b + (static_cast<size_t>(group) * n + min(b_column, n - 1)) * k;
+  double sum[kMmaRows / 8][2] = {};
+  for (int start = begin; start < end; start += kMmaChunk) {
+    const int width = min(kMmaChunk, end - start);
+    __syncthreads();
+    for (int e = static_cast<int>(threadIdx.x); e < kMmaRows * kMmaChunk; e += blockDim.x) {
+      const int r = e / kMmaChunk, i = e % kMmaChunk;
+      a_chunk[r * kMmaStride + i] =
+          r < rows && i < width ? a[(first_row + r) * k + start + i] : 0.0;
+    }
+    __syncthreads();
+    double x[kMmaChunk / 4];
+#pragma unroll
+    for (int s = 0; s < kMmaChunk / 4; ++s) {
+      const int i = 4 * s + step;
+      x[s] = column_valid && i < width ? __ldg(b_row + start + i) : 0.0;
+    }
+#pragma unroll
+    for (int s = 0; s < kMmaChunk / 4; ++s) {
+#pragma unroll
+      for (int t = 0; t < kMmaRows / 8; ++t) {
+        if (t >= tiles) break;  // the same for the whole block
+        const double y = a_chunk[(8 * t + quad) * kMmaStride + 4 * s + step];
+        asm("mma.sync.aligned.m8n8k4.row.col.f64.f64.f64.f64 {%0, %1}, {%2}, {%3}, {%0, %1};"
+            : "+d"(sum[t][0]), "+d"(sum[t][1])
+            : "d"(y), "d"(x[s]));
+      }
+    }
+  }
+#pragma unroll
+  for (int t = 0; t < kMmaRows / 8; ++t) {
+    const int row = 8 * t + quad;
+    if (t >= tiles || row >= rows) continue;
+    for (int v = 0; v < 2; ++v) {
+      const int column = 8 * warp + 2 * step + v;
+      if (column < n) atomicAdd(&c[(first_row + row) * n + column], sum[t][v]);
+    }
+  }
+#endif
+}
+
+// Whether MultiplyTransposedMmaKernel runs on the current device: its code there was built
+// for compute capability 8.0 or later.
+bool TensorCoresRun() {
+  cudaFuncAttributes attributes;
+  return cudaFuncGetAttributes(&attributes, MultiplyTransposedMmaKernel) == cudaSuccess &&
+         attributes.binaryVersion >= 80;
+}
+
 template <int kGroupRows>
 void LaunchMultiplyTransposed(const double* a, const double* b, double* c, int k, int n,
                               int group_rows, int groups) {
@@ -106,10 +178,16 @@ void LaunchMultiplyTransposed(const double* a, const double* b, double* c, int k
 }
 
 cudaError_t MultiplyTransposed(const double* a, const double* b, double* c, int m, int k, int n,
-                               int group_rows) {
+                               int group_rows, bool tensor_cores) {
   if (const cudaError_t e = cudaMemsetAsync(c, 0, static_cast<size_t>(m) * n * sizeof(double));
       e != cudaSuccess) {
     return e;
+  }
+  if (tensor_cores && n <= kMmaMaxColumns) {
+    const int part = ((k + kMmaParts - 1) / kMmaParts + 3) / 4 * 4;
+    const dim3 grid((k + part - 1) / part, (group_rows + kMmaRows - 1) / kMmaRows, m / group_rows);
+    MultiplyTransposedMmaKernel<<<grid, 32 * ((n + 7) / 8)>>>(a, b, c, k, n, group_rows, part);
+    return cudaGetLastError();
   }
   if (n > 1024) return cudaErrorInvalidValue;  // a thread per column of C
   // A block's rows: the fewest multiple of 4 up to 32 that holds a group (32 for more)
@@ -258,6 +336,7 @@ struct CudaAnnualTally::Impl {
   std::vector<unsigned long long> host_tallies;
   PinnedBuffer staging;
   int cells = 0, steps = 0, batches = 0;  // cells: columns of I, rows of O_b
+  bool tensor_cores = false;              // I_b O_b by MultiplyTransposedMmaKernel
 
   std::string UploadIndoor(const double* host_indoor, int rows) {
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(device));
@@ -276,9 +355,9 @@ struct CudaAnnualTally::Impl {
     FENESTRA_CUDA_RETURN_IF_ERROR(
         through_window.Reserve(static_cast<size_t>(rows) * kTregenzaBinCount));
     FENESTRA_CUDA_RETURN_IF_ERROR(illuminance.Reserve(static_cast<size_t>(rows) * sky_steps));
-    FENESTRA_CUDA_RETURN_IF_ERROR(MultiplyTransposed(indoor.get(), outdoor_transposed.get(),
-                                                     through_window.get(), rows, cells,
-                                                     kTregenzaBinCount, rows / batches));
+    FENESTRA_CUDA_RETURN_IF_ERROR(
+        MultiplyTransposed(indoor.get(), outdoor_transposed.get(), through_window.get(), rows,
+                           cells, kTregenzaBinCount, rows / batches, tensor_cores));
     Multiply(through_window.get(), sky_matrix, illuminance.get(), rows, sky_steps);
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
     return "";
@@ -327,8 +406,15 @@ std::unique_ptr<CudaAnnualTally> CudaAnnualTally::Create(int device, std::string
   }
   auto impl = std::make_unique<Impl>();
   impl->device = device;
+  impl->tensor_cores = TensorCoresRun();
   return std::unique_ptr<CudaAnnualTally>(new CudaAnnualTally(std::move(impl)));
 }
+
+void CudaAnnualTally::UseTensorCores(bool use) {
+  if (cudaSetDevice(impl_->device) == cudaSuccess) impl_->tensor_cores = use && TensorCoresRun();
+}
+
+bool CudaAnnualTally::UsesTensorCores() const { return impl_->tensor_cores; }
 
 std::string CudaAnnualTally::SetProduct(const std::vector<const double*>& outdoor, int cells,
                                         const double* sky, int steps) {

@@ -54,6 +54,12 @@ class CudaAnnualTally {
   std::string TallySums(const double* device_sums, size_t design_sums, int designs, int batches,
                         int sensors, const uint64_t* batch_paths, const TallyRequest* requests);
 
+  // Whether I_b O_b runs on the FP64 tensor cores: from Create on, where the device's code
+  // has them (compute capability 8.0 and later); false takes the kernel of the CUDA cores
+  // (the tests compare the two).
+  void UseTensorCores(bool use);
+  bool UsesTensorCores() const;
+
   // "" when the product pairs with indoor stages of `columns` columns in `batches` batches.
   std::string CheckPairs(int columns, int batches) const;
 
