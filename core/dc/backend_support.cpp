@@ -201,6 +201,13 @@ absl::Status CheckOutdoorBatches(const std::vector<Matrix>& outdoor_batches, con
   return CheckSkyRows(sky);
 }
 
+absl::Status CheckProductSet(const AnnualProduct* product) {
+  if (product == nullptr) {
+    return absl::FailedPreconditionError("the design tallies have no annual product yet");
+  }
+  return absl::OkStatus();
+}
+
 absl::Status CheckSkyRows(const Matrix& sky) {
   if (sky.rows() != kDaylightBins) {
     return absl::InvalidArgumentError(

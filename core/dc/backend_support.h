@@ -54,6 +54,9 @@ absl::Status CheckSkyRows(const Matrix& sky);
 // columns like the sky's rows; or InvalidArgument.
 absl::Status CheckOutdoorBatches(const std::vector<Matrix>& outdoor_batches, const Matrix& sky);
 
+// FailedPrecondition unless a design tallies' annual product is set (DesignTallies::SetProduct).
+absl::Status CheckProductSet(const AnnualProduct* product);
+
 // Indoor batches that pair with the outdoor ones: as many, each with the same rows and as
 // many columns as O_b has rows; or InvalidArgument.
 absl::Status CheckPairs(const std::vector<Matrix>& indoor_batches,

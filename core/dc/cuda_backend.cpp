@@ -3,7 +3,6 @@
 // importance map) are CPU-only: on the GPU the one-stage method uses plain roulette.
 #include <algorithm>
 #include <chrono>
-#include <future>
 #include <memory>
 
 #include "absl/strings/str_cat.h"
@@ -416,20 +415,28 @@ class CudaReplayStages : public IndoorStages {
 class CudaDesignTallies : public DesignTallies {
  public:
   // `replay` may be null: every design is then traced in full.
-  CudaDesignTallies(CudaTracer* tracer, Scene scene, const IndoorOptions& options,
+  CudaDesignTallies(int device, CudaTracer* tracer, Scene scene, const IndoorOptions& options,
                     const HemisphereBasis& basis, std::unique_ptr<OutdoorHolder> outdoor,
-                    std::unique_ptr<CudaReplay> replay, std::unique_ptr<CudaAnnualProduct> product)
-      : tracer_(tracer),
+                    std::unique_ptr<CudaReplay> replay)
+      : device_(device),
+        tracer_(tracer),
         scene_(std::move(scene)),
         options_(options),
         basis_(basis),
         outdoor_(std::move(outdoor)),
-        replay_(std::move(replay)),
-        product_(std::move(product)) {}
+        replay_(std::move(replay)) {}
 
+  absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
+    FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor_batches, sky));
+    FENESTRA_RETURN_IF_ERROR(CheckOutdoorFitsIndoor(outdoor_batches, options_));
+    FENESTRA_ASSIGN_OR_RETURN(product, CudaAnnualProduct::Make(device_, outdoor_batches, sky));
+    product_ = std::move(product);
+    return absl::OkStatus();
+  }
   absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
                                                const MetricOptions& options, int parts) override {
     FENESTRA_RETURN_IF_ERROR(CheckDesignParts(0, parts));
+    FENESTRA_RETURN_IF_ERROR(CheckProductSet(product_.get()));
     const int sensor_count = static_cast<int>(scene_.sensors.size());
     const std::vector<uint64_t> batch_paths = PartPaths(
         static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, kDesignParts, 0, parts);
@@ -470,7 +477,7 @@ class CudaDesignTallies : public DesignTallies {
   }
   std::vector<absl::StatusOr<std::vector<HourTally>>> TallyDesigns(
       const std::vector<BlindDesign>& designs, const MetricOptions& options) override {
-    if (replay_ == nullptr || designs.size() < 2) {
+    if (replay_ == nullptr || designs.size() < 2 || product_ == nullptr) {
       return DesignTallies::TallyDesigns(designs, options);
     }
     std::vector<absl::StatusOr<std::vector<HourTally>>> out(designs.size(),
@@ -549,6 +556,7 @@ class CudaDesignTallies : public DesignTallies {
                      kDesignParts, 0, kDesignParts);
   }
 
+  int device_;
   CudaTracer* tracer_;
   Scene scene_;
   IndoorOptions options_;
@@ -580,29 +588,13 @@ class CudaBackend : public DcBackend {
     return std::unique_ptr<AnnualProduct>(std::move(product));
   }
 
-  absl::StatusOr<std::unique_ptr<DesignTallies>> MakeDesignTallies(
-      const Scene& scene, const IndoorOptions& options, const std::vector<Matrix>& outdoor_batches,
-      const Matrix& sky) override {
+  absl::StatusOr<std::unique_ptr<DesignTallies>> StartDesignTallies(
+      const Scene& scene, const IndoorOptions& options) override {
     FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
-    FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor_batches, sky));
-    const Eigen::Index columns =
-        Eigen::Index{options.parts.columns} * options.parts.rows * basis.cell_count + kDaylightBins;
-    if (outdoor_batches[0].rows() != columns ||
-        static_cast<int>(outdoor_batches.size()) != options.batches) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "the outdoor matrix has ", outdoor_batches[0].rows(), " rows in ", outdoor_batches.size(),
-          " batches, the indoor stage ", columns, " columns in ", options.batches));
-    }
-    // The product's upload (O_b and S from host memory) on a thread of its own, beside the
-    // outdoor scene and the records
-    std::future<absl::StatusOr<std::unique_ptr<CudaAnnualProduct>>> made = std::async(
-        std::launch::async, [&] { return CudaAnnualProduct::Make(device_, outdoor_batches, sky); });
     FENESTRA_ASSIGN_OR_RETURN(outdoor, MakeOutdoor(scene, options.parts, basis));
     FENESTRA_ASSIGN_OR_RETURN(replay, MaybeReplay(scene, options, basis, outdoor.get()));
-    FENESTRA_ASSIGN_OR_RETURN(product, made.get());
-    return std::make_unique<CudaDesignTallies>(tracer_.get(), scene, options, basis,
-                                               std::move(outdoor), std::move(replay),
-                                               std::move(product));
+    return std::make_unique<CudaDesignTallies>(device_, tracer_.get(), scene, options, basis,
+                                               std::move(outdoor), std::move(replay));
   }
 
   // The replay where the scene has a blind and its records fit; else every design traced.

@@ -142,7 +142,13 @@ class DesignTallies {
   // it to rounding: by the tallies' replay where they have one, which spares building the
   // design's scene. Errors as Tally.
   virtual absl::StatusOr<std::vector<Matrix>> IndoorBatches(const BlindDesign& design) = 0;
+  // Sets the annual product the tallies form E with (DcBackend::MakeAnnualProduct's O_b and
+  // S); Tally and Product need it. InvalidArgument where O_b's rows are not the indoor
+  // stage's columns or its batches not the stage's batches.
+  virtual absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches,
+                                  const Matrix& sky) = 0;
   // The annual product the tallies form E with: their O_b, already where they are used.
+  // After SetProduct.
   virtual AnnualProduct& Product() = 0;
   // How many designs TallyDesigns takes in one pass (more only cost proportionally more).
   virtual int DesignsAtOnce() const { return 1; }
@@ -205,11 +211,15 @@ class DcBackend {
   virtual absl::StatusOr<std::unique_ptr<IndoorStages>> MakeIndoorStages(
       const Scene& scene, const IndoorOptions& options);
 
-  // A search's objective (DesignTallies) for the designs within `scene`'s blind ranges, with
-  // `outdoor_batches` and `sky` as MakeAnnualProduct takes them: by default
-  // MakeIndoorStages and MakeAnnualProduct in turn; the GPU keeps I and E on the device.
-  // Must not outlive the backend.
-  virtual absl::StatusOr<std::unique_ptr<DesignTallies>> MakeDesignTallies(
+  // A search's objective (DesignTallies) for the designs within `scene`'s blind ranges,
+  // without its annual product (DesignTallies::SetProduct), so that the indoor stage's
+  // records need not wait for the outdoor stage and the sky: by default MakeIndoorStages,
+  // then MakeAnnualProduct at SetProduct; the GPU keeps I and E on the device. Must not
+  // outlive the backend.
+  virtual absl::StatusOr<std::unique_ptr<DesignTallies>> StartDesignTallies(
+      const Scene& scene, const IndoorOptions& options);
+  // StartDesignTallies, then SetProduct with `outdoor_batches` and `sky`.
+  absl::StatusOr<std::unique_ptr<DesignTallies>> MakeDesignTallies(
       const Scene& scene, const IndoorOptions& options, const std::vector<Matrix>& outdoor_batches,
       const Matrix& sky);
 };

@@ -220,6 +220,20 @@ absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options)
   return basis;
 }
 
+absl::Status CheckOutdoorFitsIndoor(const std::vector<Matrix>& outdoor_batches,
+                                    const IndoorOptions& options) {
+  FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
+  const Eigen::Index columns =
+      Eigen::Index{options.parts.columns} * options.parts.rows * basis.cell_count + kDaylightBins;
+  const Eigen::Index rows = outdoor_batches.empty() ? 0 : outdoor_batches[0].rows();
+  if (rows != columns || static_cast<int>(outdoor_batches.size()) != options.batches) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("the outdoor matrix has ", rows, " rows in ", outdoor_batches.size(),
+                     " batches, the indoor stage ", columns, " columns in ", options.batches));
+  }
+  return absl::OkStatus();
+}
+
 PathSettings IndoorPathSettings(const IndoorOptions& options) {
   return Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold);
 }
@@ -344,13 +358,20 @@ class TracedIndoorStages : public IndoorStages {
 // The indoor stage, then the annual product's tallies; in parts where the stages trace so.
 class StagedDesignTallies : public DesignTallies {
  public:
-  StagedDesignTallies(std::unique_ptr<IndoorStages> stages, std::unique_ptr<AnnualProduct> product,
+  StagedDesignTallies(std::unique_ptr<IndoorStages> stages, DcBackend* backend,
                       const IndoorOptions& options)
-      : stages_(std::move(stages)), product_(std::move(product)), options_(options) {}
+      : stages_(std::move(stages)), backend_(backend), options_(options) {}
 
+  absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
+    FENESTRA_RETURN_IF_ERROR(CheckOutdoorFitsIndoor(outdoor_batches, options_));
+    FENESTRA_ASSIGN_OR_RETURN(product, backend_->MakeAnnualProduct(outdoor_batches, sky));
+    product_ = std::move(product);
+    return absl::OkStatus();
+  }
   absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
                                                const MetricOptions& options, int parts) override {
     FENESTRA_RETURN_IF_ERROR(CheckDesignParts(0, parts));
+    FENESTRA_RETURN_IF_ERROR(CheckProductSet(product_.get()));
     if (!stages_->TracesInParts()) {
       if (parts != kDesignParts) return stages_->TraceParts(design, 0, parts).status();
       FENESTRA_ASSIGN_OR_RETURN(indoor, stages_->Compute(design));
@@ -382,6 +403,7 @@ class StagedDesignTallies : public DesignTallies {
 
  private:
   std::unique_ptr<IndoorStages> stages_;
+  DcBackend* backend_;
   std::unique_ptr<AnnualProduct> product_;
   IndoorOptions options_;
   // The sums of the design of the last call, over its first held_parts_ parts
@@ -400,12 +422,18 @@ std::vector<absl::StatusOr<std::vector<HourTally>>> DesignTallies::TallyDesigns(
   return out;
 }
 
+absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::StartDesignTallies(
+    const Scene& scene, const IndoorOptions& options) {
+  FENESTRA_ASSIGN_OR_RETURN(stages, MakeIndoorStages(scene, options));
+  return std::make_unique<StagedDesignTallies>(std::move(stages), this, options);
+}
+
 absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::MakeDesignTallies(
     const Scene& scene, const IndoorOptions& options, const std::vector<Matrix>& outdoor_batches,
     const Matrix& sky) {
-  FENESTRA_ASSIGN_OR_RETURN(stages, MakeIndoorStages(scene, options));
-  FENESTRA_ASSIGN_OR_RETURN(product, MakeAnnualProduct(outdoor_batches, sky));
-  return std::make_unique<StagedDesignTallies>(std::move(stages), std::move(product), options);
+  FENESTRA_ASSIGN_OR_RETURN(tallies, StartDesignTallies(scene, options));
+  FENESTRA_RETURN_IF_ERROR(tallies->SetProduct(outdoor_batches, sky));
+  return tallies;
 }
 
 absl::StatusOr<std::unique_ptr<IndoorStages>> DcBackend::MakeIndoorStages(

@@ -192,6 +192,10 @@ absl::Status CheckDesignParts(int first, int last);
 // For the indoor stage's tracers: the basis `options` ask for, or InvalidArgument for bad
 // options; their per-path settings; I from the sums of a trace.
 absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options);
+// InvalidArgument unless O's batches pair with the indoor stage `options` ask for: as many
+// batches, each with a row per column of I.
+absl::Status CheckOutdoorFitsIndoor(const std::vector<Matrix>& outdoor_batches,
+                                    const IndoorOptions& options);
 PathSettings IndoorPathSettings(const IndoorOptions& options);
 IndoorResult IndoorResultFromTally(const IndoorTally& tally, const IndoorOptions& options);
 

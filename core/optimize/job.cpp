@@ -483,9 +483,10 @@ struct Lanes {
   }
 };
 
-absl::StatusOr<Lanes> MakeLanes(const v1::Sampling& sampling, DcBackend& first, const Scene& scene,
-                                const IndoorOptions& options,
-                                const std::vector<Matrix>& outdoor_batches, const Matrix& sky) {
+// The lanes' design tallies, their indoor records made but no annual product yet
+// (LanesWithProduct).
+absl::StatusOr<Lanes> StartLanes(const v1::Sampling& sampling, DcBackend& first, const Scene& scene,
+                                 const IndoorOptions& options) {
   const int count = sampling.candidates_at_once() > 0 ? sampling.candidates_at_once()
                                                       : first.DefaultCandidatesAtOnce();
   Lanes lanes;
@@ -499,7 +500,7 @@ absl::StatusOr<Lanes> MakeLanes(const v1::Sampling& sampling, DcBackend& first, 
   std::vector<absl::Status> made(count);
   ParallelFor(count, count, [&](uint64_t l) {
     absl::StatusOr<std::unique_ptr<DesignTallies>> tallies =
-        backends[l]->MakeDesignTallies(scene, options, outdoor_batches, sky);
+        backends[l]->StartDesignTallies(scene, options);
     if (tallies.ok()) {
       lanes.tallies[l] = *std::move(tallies);
     } else {
@@ -508,6 +509,20 @@ absl::StatusOr<Lanes> MakeLanes(const v1::Sampling& sampling, DcBackend& first, 
   });
   for (const absl::Status& status : made) FENESTRA_RETURN_IF_ERROR(status);
   return lanes;
+}
+
+// `started` (StartLanes) once the outdoor stage and the sky are there: every lane's annual
+// product set with `outdoor_batches` and `sky`.
+absl::StatusOr<Lanes> LanesWithProduct(absl::StatusOr<Lanes> started,
+                                       const std::vector<Matrix>& outdoor_batches,
+                                       const Matrix& sky) {
+  FENESTRA_RETURN_IF_ERROR(started.status());
+  std::vector<std::unique_ptr<DesignTallies>>& tallies = started->tallies;
+  std::vector<absl::Status> set(tallies.size());
+  ParallelFor(tallies.size(), tallies.size(),
+              [&](uint64_t l) { set[l] = tallies[l]->SetProduct(outdoor_batches, sky); });
+  for (const absl::Status& status : set) FENESTRA_RETURN_IF_ERROR(status);
+  return started;
 }
 
 // The job's search from the start or from `so_far`, keeping `checkpoint` (that of `so_far`,
@@ -770,33 +785,38 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   v1::SearchCheckpoint& checkpoint = from.checkpoint;
   const JobClock clock{start, from.resumed_seconds};
 
+  // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O_b) S, as
+  // the backend does it best (on the CPU the paths recorded once, then replayed per design;
+  // on the GPU I and E never leave the device), for the designs within the job's ranges.
+  // A design's paths depend on the seed alone, never on the designs before it, so a resumed
+  // search evaluates as the uninterrupted one would. The records need neither the sky nor
+  // the outdoor stage, so they are made beside them.
+  FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
+  const IndoorOptions indoor_options = JobIndoorOptions(job);
+  const Scene ranged = WithJobRanges(job.scene, spec);
+  std::future<absl::StatusOr<Lanes>> started = std::async(std::launch::async, [&] {
+    return StartLanes(spec.sampling(), *backend, ranged, indoor_options);
+  });
+
   // Sky matrix, the occupied hours and the lit analysed ones, the metric settings; the outdoor
   // matrix: the cached one, or traced now
   OutdoorMatrix computed;
-  FENESTRA_ASSIGN_OR_RETURN(
-      setting, SettingAndOutdoor(job, callbacks, outdoor, computed, *result.mutable_timings()));
+  absl::StatusOr<AnnualSetting> made_setting =
+      SettingAndOutdoor(job, callbacks, outdoor, computed, *result.mutable_timings());
+  if (callbacks.stage) callbacks.stage("indoor paths");
+  absl::StatusOr<Lanes> recorded = started.get();
+  FENESTRA_RETURN_IF_ERROR(made_setting.status());
+  const AnnualSetting& setting = *made_setting;
   const OutdoorMatrix& matrix = outdoor != nullptr ? *outdoor : computed;
   const MetricOptions& metric_options = setting.options;
-
-  // The designs' indoor stage, with the same random streams for every design
-  FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
-  const IndoorOptions indoor_options = JobIndoorOptions(job);
   if (!(matrix.parts == indoor_options.parts)) {
     return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
   }
   if (static_cast<int>(matrix.batches.size()) != indoor_options.batches) {
     return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
   }
-
-  // Per design: the indoor stage, then the metrics from the tallies of E_b = (I_b O_b) S, as
-  // the backend does it best (on the CPU the paths recorded once, then replayed per design;
-  // on the GPU I and E never leave the device), for the designs within the job's ranges.
-  // A design's paths depend on the seed alone, never on the designs before it, so a resumed
-  // search evaluates as the uninterrupted one would.
-  if (callbacks.stage) callbacks.stage("indoor paths");
-  const Scene ranged = WithJobRanges(job.scene, spec);
-  FENESTRA_ASSIGN_OR_RETURN(lanes, MakeLanes(spec.sampling(), *backend, ranged, indoor_options,
-                                             matrix.batches, setting.lit_sky));
+  FENESTRA_ASSIGN_OR_RETURN(lanes,
+                            LanesWithProduct(std::move(recorded), matrix.batches, setting.lit_sky));
   Racer racer({.lanes = lanes.Tallies(),
                .options = metric_options,
                .analysed_hours = setting.analysed_hours,

@@ -273,8 +273,9 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
   absl::StatusOr<std::unique_ptr<DesignTallies>> on_device =
       gpu->MakeDesignTallies(scene, indoor, o->batches, sky);
   absl::StatusOr<std::unique_ptr<DesignTallies>> in_turn =
-      gpu->DcBackend::MakeDesignTallies(scene, indoor, o->batches, sky);
+      gpu->DcBackend::StartDesignTallies(scene, indoor);
   ASSERT_TRUE(on_device.ok() && in_turn.ok()) << on_device.status();
+  ASSERT_TRUE((*in_turn)->SetProduct(o->batches, sky).ok());
   // Limits at quartiles of E, so that sensors fall on either side of them
   absl::StatusOr<IndoorResult> i =
       ComputeIndoorStage(scene, DefaultDesign(scene), indoor, gpu.get());

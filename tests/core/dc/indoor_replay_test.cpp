@@ -67,10 +67,17 @@ TEST(IndoorReplayTest, RoundsEndAsOneTrace) {
   }
   const Matrix sky = 100 * Matrix::Random(kDaylightBins, 300).cwiseAbs();
   std::unique_ptr<DcBackend> cpu = MakeEmbreeBackend();
-  absl::StatusOr<std::unique_ptr<DesignTallies>> tallies =
-      cpu->MakeDesignTallies(scene, options, outdoor, sky);
+  // The records come first; the tallies wait for an annual product that fits them
+  absl::StatusOr<std::unique_ptr<DesignTallies>> tallies = cpu->StartDesignTallies(scene, options);
   ASSERT_TRUE(tallies.ok()) << tallies.status();
   const BlindDesign a = *DesignWithOverrides(scene, {{"alpha", 0.2}});
+  EXPECT_EQ((*tallies)->Tally(a, MetricOptions{}).status().code(),
+            absl::StatusCode::kFailedPrecondition);
+  const std::vector<Matrix> too_few(outdoor.begin(), outdoor.end() - 1);
+  EXPECT_EQ((*tallies)->SetProduct(too_few, sky).code(), absl::StatusCode::kInvalidArgument);
+  const std::vector<Matrix> other_rows(outdoor.size(), Matrix::Ones(columns - 1, kDaylightBins));
+  EXPECT_EQ((*tallies)->SetProduct(other_rows, sky).code(), absl::StatusCode::kInvalidArgument);
+  ASSERT_TRUE((*tallies)->SetProduct(outdoor, sky).ok());
   absl::StatusOr<IndoorResult> i = ComputeIndoorStage(scene, a, options);
   absl::StatusOr<std::unique_ptr<AnnualProduct>> product = cpu->MakeAnnualProduct(outdoor, sky);
   ASSERT_TRUE(i.ok() && product.ok());
