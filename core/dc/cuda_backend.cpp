@@ -160,6 +160,19 @@ class CudaAnnualProduct : public AnnualProduct {
     return tallies.Versions(steps_);
   }
 
+  // E_b through `sky` (as ApplyToSky) of one design's indoor sums on the device
+  // (CudaTracer::DeviceSums), batch b's divided by batch_paths[b].
+  absl::StatusOr<std::vector<Matrix>> ApplyToSkySums(const double* device_sums, int sensors,
+                                                     const std::vector<uint64_t>& batch_paths,
+                                                     const Matrix& sky) {
+    FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
+    Matrix illuminance(Eigen::Index{batches_} * sensors, sky.cols());
+    FENESTRA_RETURN_IF_ERROR(Check(
+        annual_->IlluminanceOfSums(device_sums, batches_, sensors, batch_paths.data(), sky.data(),
+                                   static_cast<int>(sky.cols()), illuminance.data())));
+    return SplitBatches(illuminance, batches_);
+  }
+
   // The tallies of `designs` designs' indoor sums on the device (CudaTracer::DeviceSums),
   // design k's at device_sums + k * design_sums, batch b's divided by batch_paths[b].
   std::vector<absl::StatusOr<std::vector<HourTally>>> TallySums(
@@ -441,20 +454,7 @@ class CudaDesignTallies : public DesignTallies {
     const std::vector<uint64_t> batch_paths = PartPaths(
         static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, kDesignParts, 0, parts);
     if (replay_ != nullptr) {
-      // The parts not traced yet: all of them for another design, or where the sums of the
-      // earlier ones are gone
-      const bool goes_on = held_parts_ > 0 && design == held_design_ && parts > held_parts_ &&
-                           tracer_->ReplayedParts() == held_parts_;
-      if (!goes_on) {
-        held_parts_ = 0;
-        FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind_));
-      }
-      CudaCounters counters;
-      FENESTRA_RETURN_IF_ERROR(
-          Check(tracer_->ReplayIndoor(blind_, held_parts_, parts, nullptr, &counters)));
-      rays_ += counters.rays;
-      held_design_ = design;
-      held_parts_ = parts;
+      FENESTRA_RETURN_IF_ERROR(Replay(design, parts));
     } else if (parts != kDesignParts) {
       return absl::UnimplementedError("designs traced in full are traced in one round");
     } else {
@@ -517,7 +517,16 @@ class CudaDesignTallies : public DesignTallies {
     }
     return out;
   }
-  AnnualProduct& Product() override { return *product_; }
+  // The replay's sums stay on the device for the product
+  absl::StatusOr<std::vector<Matrix>> DesignIlluminance(const BlindDesign& design,
+                                                        const Matrix& sky) override {
+    if (replay_ == nullptr) return DesignTallies::DesignIlluminance(design, sky);
+    FENESTRA_RETURN_IF_ERROR(CheckProductSet(product_.get()));
+    FENESTRA_RETURN_IF_ERROR(Replay(design, kDesignParts));
+    return product_->ApplyToSkySums(tracer_->DeviceSums(), static_cast<int>(scene_.sensors.size()),
+                                    FullBatchPaths(), sky);
+  }
+  AnnualProduct* Product() override { return product_.get(); }
   int DesignsAtOnce() const override { return replay_ != nullptr ? kReplayDesignsAtOnce : 1; }
   bool TracesInParts() const override { return replay_ != nullptr; }
   bool RoundsPay() const override { return false; }
@@ -547,6 +556,24 @@ class CudaDesignTallies : public DesignTallies {
         tally != nullptr ? tally->sum.data() : nullptr, &counters)));
     if (tally != nullptr) Count(counters, &tally->counters);
     rays_ += counters.rays;
+    return absl::OkStatus();
+  }
+
+  // Replays parts [0, parts) of `design`'s paths into the tracer's sums: only the parts not
+  // traced yet where the tracer still holds the earlier ones of the same design.
+  absl::Status Replay(const BlindDesign& design, int parts) {
+    const bool goes_on = held_parts_ > 0 && design == held_design_ && parts > held_parts_ &&
+                         tracer_->ReplayedParts() == held_parts_;
+    if (!goes_on) {
+      held_parts_ = 0;
+      FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind_));
+    }
+    CudaCounters counters;
+    FENESTRA_RETURN_IF_ERROR(
+        Check(tracer_->ReplayIndoor(blind_, held_parts_, parts, nullptr, &counters)));
+    rays_ += counters.rays;
+    held_design_ = design;
+    held_parts_ = parts;
     return absl::OkStatus();
   }
 

@@ -142,14 +142,20 @@ class DesignTallies {
   // it to rounding: by the tallies' replay where they have one, which spares building the
   // design's scene. Errors as Tally.
   virtual absl::StatusOr<std::vector<Matrix>> IndoorBatches(const BlindDesign& design) = 0;
+  // E_b = (I_b O_b) `sky` (146 x any steps, as AnnualProduct::ApplyToSky takes it) of
+  // `design`'s paths, every part: by default ApplyToSky(IndoorBatches(design), sky); the GPU
+  // forms it where the replay's sums lie. After SetProduct; errors as IndoorBatches and
+  // ApplyToSky.
+  virtual absl::StatusOr<std::vector<Matrix>> DesignIlluminance(const BlindDesign& design,
+                                                                const Matrix& sky);
   // Sets the annual product the tallies form E with (DcBackend::MakeAnnualProduct's O_b and
   // S); Tally and Product need it. InvalidArgument where O_b's rows are not the indoor
   // stage's columns or its batches not the stage's batches.
   virtual absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches,
                                   const Matrix& sky) = 0;
-  // The annual product the tallies form E with: their O_b, already where they are used.
-  // After SetProduct.
-  virtual AnnualProduct& Product() = 0;
+  // The annual product the tallies form E with: their O_b, already where they are used;
+  // null before SetProduct.
+  virtual AnnualProduct* Product() = 0;
   // How many designs TallyDesigns takes in one pass (more only cost proportionally more).
   virtual int DesignsAtOnce() const { return 1; }
   // Whether Tally takes fewer than kDesignParts (the replays do; full traces do not).

@@ -397,7 +397,7 @@ class StagedDesignTallies : public DesignTallies {
     rays_ += indoor.rays_traced;
     return std::move(indoor.batches);
   }
-  AnnualProduct& Product() override { return *product_; }
+  AnnualProduct* Product() override { return product_.get(); }
   bool TracesInParts() const override { return stages_->TracesInParts(); }
   uint64_t RaysTraced() const override { return rays_; }
 
@@ -420,6 +420,13 @@ std::vector<absl::StatusOr<std::vector<HourTally>>> DesignTallies::TallyDesigns(
   std::vector<absl::StatusOr<std::vector<HourTally>>> out;
   for (const BlindDesign& design : designs) out.push_back(Tally(design, options));
   return out;
+}
+
+absl::StatusOr<std::vector<Matrix>> DesignTallies::DesignIlluminance(const BlindDesign& design,
+                                                                     const Matrix& sky) {
+  FENESTRA_RETURN_IF_ERROR(CheckProductSet(Product()));
+  FENESTRA_ASSIGN_OR_RETURN(indoor, IndoorBatches(design));
+  return Product()->ApplyToSky(indoor, sky);
 }
 
 absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::StartDesignTallies(

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
 #include "core/metrics/illuminance.h"
 
@@ -30,23 +31,28 @@ Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns) {
 }
 
 absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
-    const Scene& scene, const std::vector<Matrix>& indoor_batches, AnnualProduct& product,
-    const SkyMatrix& sky) {
+    const Scene& scene, const SkyMatrix& sky, const DesignIlluminanceOf& illuminance) {
   v1::HourlyIlluminance out;
   SetAxes(scene, sky, out);
   const int64_t sensors = static_cast<int64_t>(scene.sensors.size());
   const int64_t steps = static_cast<int64_t>(sky.steps.size());
   out.mutable_illuminance_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
   out.mutable_standard_error_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
-  if (indoor_batches.size() < 2) {
-    return absl::InvalidArgumentError("standard errors need at least 2 batches");
-  }
   const std::vector<int> lit = LitColumns(sky.radiance);
   if (lit.empty()) return out;
 
   // E_b = (I_b O_b) S over the steps with daylight, for each batch b
-  FENESTRA_ASSIGN_OR_RETURN(batches,
-                            product.ApplyToSky(indoor_batches, SkyColumnsInLux(sky.radiance, lit)));
+  FENESTRA_ASSIGN_OR_RETURN(batches, illuminance(SkyColumnsInLux(sky.radiance, lit)));
+  if (batches.size() < 2) {
+    return absl::InvalidArgumentError("standard errors need at least 2 batches");
+  }
+  for (const Matrix& batch : batches) {
+    if (batch.rows() != sensors || batch.cols() != static_cast<Eigen::Index>(lit.size())) {
+      return absl::InvalidArgumentError(absl::StrCat("a batch of the illuminance is ", batch.rows(),
+                                                     " x ", batch.cols(), ", expected ", sensors,
+                                                     " x ", lit.size()));
+    }
+  }
 
   // Their mean, and its standard error from the spread of the batches
   Matrix mean, standard_error;

@@ -4,6 +4,7 @@
 // indoor stage (the search's random streams), the backend's annual product
 // E_b = (I_b O_b) S (core/dc/dc_backend.h) over every time step with daylight.
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -25,13 +26,16 @@ inline constexpr int64_t kMaxHourlyIlluminanceValues = 2'000'000;
 // efficacy, so that (I O) S comes out in lux.
 Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns);
 
+// A design's E_b = (I_b O_b) S' through a sky S' in lux (146 x any steps), one per batch:
+// DesignTallies::DesignIlluminance, or AnnualProduct::ApplyToSky of the design's I_b.
+using DesignIlluminanceOf = std::function<absl::StatusOr<std::vector<Matrix>>(const Matrix&)>;
+
 // The illuminance of a design at every sensor of `scene` and every step of `sky`, the mean
 // over the paired batches with its standard error (both stages' noise), from the design's
-// I_b (`indoor_batches`: IndoorResult::batches, DesignTallies::IndoorBatches) through the
-// O_b of `product` (traced with the same parts and basis; its own S is not used).
-// InvalidArgument for fewer than 2 batches; errors as AnnualProduct::ApplyToSky.
+// E_b over the steps with daylight (`illuminance`, with the random streams of the search and
+// the O_b of its outdoor stage). InvalidArgument for fewer than 2 batches; errors as
+// `illuminance`.
 absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
-    const Scene& scene, const std::vector<Matrix>& indoor_batches, AnnualProduct& product,
-    const SkyMatrix& sky);
+    const Scene& scene, const SkyMatrix& sky, const DesignIlluminanceOf& illuminance);
 
 }  // namespace fenestra

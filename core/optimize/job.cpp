@@ -274,9 +274,9 @@ absl::Status HourlyAndCheck(const PreparedJob& job, const AnnualSetting& setting
         std::launch::async,
         [&, design = DesignAt(job, search.best_x)]() -> absl::StatusOr<v1::HourlyIlluminance> {
           const auto hourly_start = std::chrono::steady_clock::now();
-          FENESTRA_ASSIGN_OR_RETURN(indoor, tallies.IndoorBatches(design));
-          absl::StatusOr<v1::HourlyIlluminance> values =
-              DesignHourlyIlluminance(job.scene, indoor, tallies.Product(), *setting.sky);
+          absl::StatusOr<v1::HourlyIlluminance> values = DesignHourlyIlluminance(
+              job.scene, *setting.sky,
+              [&](const Matrix& sky) { return tallies.DesignIlluminance(design, sky); });
           hourly_seconds = SecondsSince(hourly_start);
           return values;
         });

@@ -345,6 +345,40 @@ struct CudaAnnualTally::Impl {
         staging.Upload(host_indoor, indoor.get(), static_cast<size_t>(rows) * cells));
     return "";
   }
+  // `indoor` from indoor sums on the device (TallySums) for `designs` designs.
+  std::string MeanOfSums(const double* device_sums, size_t design_sums, int designs, int sensors,
+                         const uint64_t* batch_paths) {
+    BatchPaths paths{};
+    for (int b = 0; b < batches; ++b) paths.paths[b] = static_cast<double>(batch_paths[b]);
+    const int rows = designs * batches * sensors;
+    FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(device));
+    FENESTRA_CUDA_RETURN_IF_ERROR(indoor.Reserve(static_cast<size_t>(rows) * cells));
+    const int threads = 256;
+    const dim3 grid((cells + threads - 1) / threads, rows);
+    BatchMeanKernel<<<grid, threads>>>(device_sums, design_sums, designs, sensors, cells, paths,
+                                       indoor.get());
+    FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
+    return "";
+  }
+  // E of `rows` rows of `indoor` into the host's `host_illuminance` (rows x steps), through
+  // `other_sky` (kTregenzaBinCount x other_steps) in S's place where it is not null.
+  std::string DownloadIlluminance(int rows, double* host_illuminance, const double* other_sky,
+                                  int other_steps) {
+    const double* sky_matrix = nullptr;
+    int sky_steps = steps;
+    if (other_sky != nullptr) {
+      FENESTRA_CUDA_RETURN_IF_ERROR(
+          this->other_sky.Upload(other_sky, static_cast<size_t>(kTregenzaBinCount) * other_steps));
+      sky_matrix = this->other_sky.get();
+      sky_steps = other_steps;
+    }
+    if (std::string error = FormIlluminance(rows, sky_matrix, sky_steps); !error.empty()) {
+      return error;
+    }
+    FENESTRA_CUDA_RETURN_IF_ERROR(staging.Download(illuminance.get(), host_illuminance,
+                                                   static_cast<size_t>(rows) * sky_steps));
+    return "";
+  }
   // E = (I O) S from `indoor` into `illuminance`; with `sky_steps` columns of `sky_matrix`
   // in S's place where it is not null.
   std::string FormIlluminance(int rows, const double* sky_matrix = nullptr, int sky_steps = 0) {
@@ -457,18 +491,7 @@ std::string CudaAnnualTally::Illuminance(const double* indoor, int rows, double*
            std::to_string(d.batches) + " batches";
   }
   if (std::string error = d.UploadIndoor(indoor, rows); !error.empty()) return error;
-  const double* sky = nullptr;
-  int steps = d.steps;
-  if (other_sky != nullptr) {
-    FENESTRA_CUDA_RETURN_IF_ERROR(
-        d.other_sky.Upload(other_sky, static_cast<size_t>(kTregenzaBinCount) * other_steps));
-    sky = d.other_sky.get();
-    steps = other_steps;
-  }
-  if (std::string error = d.FormIlluminance(rows, sky, steps); !error.empty()) return error;
-  FENESTRA_CUDA_RETURN_IF_ERROR(
-      d.staging.Download(d.illuminance.get(), illuminance, static_cast<size_t>(rows) * steps));
-  return "";
+  return d.DownloadIlluminance(rows, illuminance, other_sky, other_steps);
 }
 
 std::string CudaAnnualTally::Tally(const double* indoor, int batches, int sensors,
@@ -485,16 +508,22 @@ std::string CudaAnnualTally::TallySums(const double* device_sums, size_t design_
   Impl& d = *impl_;
   if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
   if (designs < 1) return "CUDA annual product: " + std::to_string(designs) + " designs to tally";
-  BatchPaths paths{};
-  for (int b = 0; b < batches; ++b) paths.paths[b] = static_cast<double>(batch_paths[b]);
-  const int rows = designs * batches * sensors;
-  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
-  FENESTRA_CUDA_RETURN_IF_ERROR(d.indoor.Reserve(static_cast<size_t>(rows) * d.cells));
-  const int threads = 256;
-  const dim3 grid((d.cells + threads - 1) / threads, rows);
-  BatchMeanKernel<<<grid, threads>>>(device_sums, design_sums, designs, sensors, d.cells, paths,
-                                     d.indoor.get());
+  if (std::string error = d.MeanOfSums(device_sums, design_sums, designs, sensors, batch_paths);
+      !error.empty()) {
+    return error;
+  }
   return d.Tally(designs, sensors, requests);
+}
+
+std::string CudaAnnualTally::IlluminanceOfSums(const double* device_sums, int batches, int sensors,
+                                               const uint64_t* batch_paths, const double* other_sky,
+                                               int other_steps, double* illuminance) {
+  Impl& d = *impl_;
+  if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
+  if (std::string error = d.MeanOfSums(device_sums, 0, 1, sensors, batch_paths); !error.empty()) {
+    return error;
+  }
+  return d.DownloadIlluminance(batches * sensors, illuminance, other_sky, other_steps);
 }
 
 std::string CudaAnnualTally::CheckPairs(int columns, int batches) const {

@@ -53,6 +53,12 @@ class CudaAnnualTally {
   // together), and the tallies come back in one download. 1 <= designs.
   std::string TallySums(const double* device_sums, size_t design_sums, int designs, int batches,
                         int sensors, const uint64_t* batch_paths, const TallyRequest* requests);
+  // E_b = (I_b O_b) S' of one design's indoor sums on this device, as TallySums takes them,
+  // into `illuminance` (batches x sensors rows, batch-major, x `other_steps`), with
+  // `other_sky` (kTregenzaBinCount x other_steps, row-major) as S' for this call.
+  std::string IlluminanceOfSums(const double* device_sums, int batches, int sensors,
+                                const uint64_t* batch_paths, const double* other_sky,
+                                int other_steps, double* illuminance);
 
   // Whether I_b O_b runs on the FP64 tensor cores: from Create on, where the device's code
   // has them (compute capability 8.0 and later); false takes the kernel of the CUDA cores

@@ -316,6 +316,23 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
   ASSERT_TRUE(traced.ok()) << traced.status();
   ExpectIndoorBatchesAreTheTrace(**on_device, tilted, *traced);
   ExpectIndoorBatchesAreTheTrace(**in_turn, tilted, *traced);
+  // Its E through another sky, formed where the replay's sums lie, is the product of its I
+  const Matrix other_sky = Matrix::Random(kDaylightBins, 7).cwiseAbs();
+  absl::StatusOr<std::vector<Matrix>> from_sums =
+      (*on_device)->DesignIlluminance(tilted, other_sky);
+  absl::StatusOr<std::vector<Matrix>> replayed = (*on_device)->IndoorBatches(tilted);
+  ASSERT_TRUE(from_sums.ok() && replayed.ok()) << from_sums.status() << replayed.status();
+  absl::StatusOr<std::vector<Matrix>> from_host =
+      (*on_device)->Product()->ApplyToSky(*replayed, other_sky);
+  ASSERT_TRUE(from_host.ok()) << from_host.status();
+  ASSERT_EQ(from_sums->size(), from_host->size());
+  for (size_t b = 0; b < from_sums->size(); ++b) {
+    ASSERT_EQ((*from_sums)[b].rows(), static_cast<Eigen::Index>(scene.sensors.size()));
+    ASSERT_EQ((*from_sums)[b].cols(), 7);
+    EXPECT_GT((*from_host)[b].maxCoeff(), 0);
+    EXPECT_LE(((*from_sums)[b] - (*from_host)[b]).cwiseAbs().maxCoeff(),
+              1e-12 * (*from_host)[b].maxCoeff());
+  }
   // Without a blind there is nothing to replay: the design is traced in full, and its I is
   // still the indoor stage's (the outdoor stage never sees the blind, so O stays)
   Scene bare = scene;

@@ -119,8 +119,9 @@ TEST(HourlyIlluminanceTest, StandardErrorsMatchTheSpreadBetweenSeeds) {
     absl::StatusOr<std::unique_ptr<AnnualProduct>> product =
         backend->MakeAnnualProduct(outdoor->batches, Matrix::Zero(kDaylightBins, 1));
     ASSERT_TRUE(product.ok()) << product.status();
-    absl::StatusOr<v1::HourlyIlluminance> hourly =
-        DesignHourlyIlluminance(scene, indoor->batches, **product, *sky);
+    absl::StatusOr<v1::HourlyIlluminance> hourly = DesignHourlyIlluminance(
+        scene, *sky,
+        [&](const Matrix& lux) { return (*product)->ApplyToSky(indoor->batches, lux); });
     ASSERT_TRUE(hourly.ok()) << hourly.status();
     runs.push_back(*std::move(hourly));
   }
@@ -141,17 +142,36 @@ TEST(HourlyIlluminanceTest, StandardErrorsMatchTheSpreadBetweenSeeds) {
   EXPECT_LT(rms, 2.0);
 }
 
-TEST(HourlyIlluminanceTest, NeedsTwoBatches) {
+// Errors need two batches or more, each a row per sensor and a column per step with daylight
+TEST(HourlyIlluminanceTest, NeedsTwoBatchesOfTheSensorsAndLitSteps) {
   const Scene scene = LoadExample("city_office");
   SkyMatrix sky;
-  std::unique_ptr<DcBackend> backend = MakeEmbreeBackend();
-  const Matrix o = Matrix::Zero(288 + 146, kDaylightBins);
-  absl::StatusOr<std::unique_ptr<AnnualProduct>> product =
-      backend->MakeAnnualProduct({o, o}, Matrix::Zero(kDaylightBins, 1));
-  ASSERT_TRUE(product.ok()) << product.status();
+  sky.radiance = Matrix::Zero(kDaylightBins, 3);
+  sky.radiance.col(1).setOnes();
+  sky.steps.resize(3);
+  const Eigen::Index sensors = static_cast<Eigen::Index>(scene.sensors.size());
+  const auto returning = [](std::vector<Matrix> batches) {
+    return [batches](const Matrix& lux) -> absl::StatusOr<std::vector<Matrix>> {
+      EXPECT_EQ(lux.cols(), 1);
+      return batches;
+    };
+  };
+  const Matrix one_step = Matrix::Constant(sensors, 1, 100.0);
+  EXPECT_EQ(DesignHourlyIlluminance(scene, sky, returning({one_step})).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(DesignHourlyIlluminance(scene, sky, returning({one_step, Matrix::Zero(sensors, 2)}))
+                .status()
+                .code(),
+            absl::StatusCode::kInvalidArgument);
   absl::StatusOr<v1::HourlyIlluminance> hourly =
-      DesignHourlyIlluminance(scene, {Matrix::Zero(9, 288 + 146)}, **product, sky);
-  EXPECT_EQ(hourly.status().code(), absl::StatusCode::kInvalidArgument);
+      DesignHourlyIlluminance(scene, sky, returning({one_step, 3 * one_step}));
+  ASSERT_TRUE(hourly.ok()) << hourly.status();
+  // The mean of 100 and 300 lx at the lit step, nothing at the others
+  ASSERT_EQ(hourly->illuminance_lux_size(), 3 * sensors);
+  EXPECT_FLOAT_EQ(hourly->illuminance_lux(1), 200.0f);
+  EXPECT_FLOAT_EQ(hourly->standard_error_lux(1), 100.0f);
+  EXPECT_EQ(hourly->illuminance_lux(0), 0.0f);
+  EXPECT_EQ(hourly->illuminance_lux(2), 0.0f);
 }
 
 }  // namespace
