@@ -124,6 +124,7 @@ class CudaAnnualProduct : public AnnualProduct {
   static absl::StatusOr<std::unique_ptr<CudaAnnualProduct>> Make(int device,
                                                                  const std::vector<Matrix>& outdoor,
                                                                  const Matrix& sky) {
+    FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor, sky));
     std::string error;
     std::unique_ptr<CudaAnnualTally> annual = CudaAnnualTally::Create(device, &error);
     if (!annual) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
@@ -440,7 +441,6 @@ class CudaDesignTallies : public DesignTallies {
         replay_(std::move(replay)) {}
 
   absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
-    FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor_batches, sky));
     FENESTRA_RETURN_IF_ERROR(CheckOutdoorFitsIndoor(outdoor_batches, options_));
     FENESTRA_ASSIGN_OR_RETURN(product, CudaAnnualProduct::Make(device_, outdoor_batches, sky));
     product_ = std::move(product);
@@ -610,7 +610,6 @@ class CudaBackend : public DcBackend {
 
   absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(
       const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
-    FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor_batches, sky));
     FENESTRA_ASSIGN_OR_RETURN(product, CudaAnnualProduct::Make(device_, outdoor_batches, sky));
     return std::unique_ptr<AnnualProduct>(std::move(product));
   }

@@ -484,7 +484,7 @@ struct Lanes {
 };
 
 // The lanes' design tallies, their indoor records made but no annual product yet
-// (LanesWithProduct).
+// (SetLaneProducts).
 absl::StatusOr<Lanes> StartLanes(const v1::Sampling& sampling, DcBackend& first, const Scene& scene,
                                  const IndoorOptions& options) {
   const int count = sampling.candidates_at_once() > 0 ? sampling.candidates_at_once()
@@ -511,18 +511,15 @@ absl::StatusOr<Lanes> StartLanes(const v1::Sampling& sampling, DcBackend& first,
   return lanes;
 }
 
-// `started` (StartLanes) once the outdoor stage and the sky are there: every lane's annual
-// product set with `outdoor_batches` and `sky`.
-absl::StatusOr<Lanes> LanesWithProduct(absl::StatusOr<Lanes> started,
-                                       const std::vector<Matrix>& outdoor_batches,
-                                       const Matrix& sky) {
-  FENESTRA_RETURN_IF_ERROR(started.status());
-  std::vector<std::unique_ptr<DesignTallies>>& tallies = started->tallies;
-  std::vector<absl::Status> set(tallies.size());
-  ParallelFor(tallies.size(), tallies.size(),
-              [&](uint64_t l) { set[l] = tallies[l]->SetProduct(outdoor_batches, sky); });
+// Once the outdoor stage and the sky are there: every lane's annual product set with
+// `outdoor_batches` and `sky`.
+absl::Status SetLaneProducts(Lanes& lanes, const std::vector<Matrix>& outdoor_batches,
+                             const Matrix& sky) {
+  std::vector<absl::Status> set(lanes.tallies.size());
+  ParallelFor(set.size(), set.size(),
+              [&](uint64_t l) { set[l] = lanes.tallies[l]->SetProduct(outdoor_batches, sky); });
   for (const absl::Status& status : set) FENESTRA_RETURN_IF_ERROR(status);
-  return started;
+  return absl::OkStatus();
 }
 
 // The job's search from the start or from `so_far`, keeping `checkpoint` (that of `so_far`,
@@ -815,8 +812,8 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (static_cast<int>(matrix.batches.size()) != indoor_options.batches) {
     return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
   }
-  FENESTRA_ASSIGN_OR_RETURN(lanes,
-                            LanesWithProduct(std::move(recorded), matrix.batches, setting.lit_sky));
+  FENESTRA_ASSIGN_OR_RETURN(lanes, std::move(recorded));
+  FENESTRA_RETURN_IF_ERROR(SetLaneProducts(lanes, matrix.batches, setting.lit_sky));
   Racer racer({.lanes = lanes.Tallies(),
                .options = metric_options,
                .analysed_hours = setting.analysed_hours,
