@@ -1,8 +1,10 @@
 // GPU benchmarks (bench/README.md): rays per second on the lightwell and the city office,
 // the lightwell 3 x 10^7-path case, the city-office outdoor stage, one candidate
 // evaluation and the 500-evaluation four-variable optimization. Needs a CUDA device.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 
@@ -322,10 +324,18 @@ void FourVariableOptimization() {
 }  // namespace fenestra
 
 int main(int argc, char** argv) {
-  const bool quick = argc > 1 && std::string(argv[1]) == "quick";
+  const std::string mode = argc > 1 ? argv[1] : "";
+  const bool quick = mode == "quick";
   using namespace fenestra;
   std::unique_ptr<DcBackend> gpu = ValueOrExit(MakeCudaBackend(0));
   std::printf("device: %s\n", gpu->Name().c_str());
+  if (mode == "job") {
+    // The four-variable job alone, `runs` times after one run that loads the kernels
+    const int runs = argc > 2 ? std::max(1, std::atoi(argv[2])) : 3;
+    std::printf("first run (loads the kernels):\n");
+    for (int r = 0; r <= runs; ++r) FourVariableOptimization();
+    return 0;
+  }
 
   // Rays per second and the lightwell reference case (Radiance -ab 30 = 29 reflections)
   OneStage(*gpu, "lightwell", nullptr, 10'000'000, 29);

@@ -121,17 +121,24 @@ struct TracerSlot {
 // the product lives.
 class CudaAnnualProduct : public AnnualProduct {
  public:
+  // O_b from `on_device` where it lies on `device`, else from the host.
   static absl::StatusOr<std::unique_ptr<CudaAnnualProduct>> Make(int device,
                                                                  const std::vector<Matrix>& outdoor,
-                                                                 const Matrix& sky) {
+                                                                 const Matrix& sky,
+                                                                 const DeviceMatrices& on_device) {
     FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor, sky));
     std::string error;
     std::unique_ptr<CudaAnnualTally> annual = CudaAnnualTally::Create(device, &error);
     if (!annual) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
+    const bool from_device = on_device.data != nullptr && on_device.device == device;
     std::vector<const double*> batches;
-    for (const Matrix& batch : outdoor) batches.push_back(batch.data());
-    FENESTRA_RETURN_IF_ERROR(Check(annual->SetProduct(batches, static_cast<int>(outdoor[0].rows()),
-                                                      sky.data(), static_cast<int>(sky.cols()))));
+    for (size_t b = 0; b < outdoor.size(); ++b) {
+      batches.push_back(from_device ? on_device.data.get() + b * outdoor[b].size()
+                                    : outdoor[b].data());
+    }
+    FENESTRA_RETURN_IF_ERROR(
+        Check(annual->SetProduct(batches, static_cast<int>(outdoor[0].rows()), sky.data(),
+                                 static_cast<int>(sky.cols()), from_device)));
     return std::unique_ptr<CudaAnnualProduct>(new CudaAnnualProduct(
         std::move(annual), static_cast<int>(outdoor.size()), outdoor[0].rows(), sky.cols()));
   }
@@ -440,9 +447,11 @@ class CudaDesignTallies : public DesignTallies {
         outdoor_(std::move(outdoor)),
         replay_(std::move(replay)) {}
 
-  absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
+  absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches, const Matrix& sky,
+                          const DeviceMatrices& on_device) override {
     FENESTRA_RETURN_IF_ERROR(CheckOutdoorFitsIndoor(outdoor_batches, options_));
-    FENESTRA_ASSIGN_OR_RETURN(product, CudaAnnualProduct::Make(device_, outdoor_batches, sky));
+    FENESTRA_ASSIGN_OR_RETURN(product,
+                              CudaAnnualProduct::Make(device_, outdoor_batches, sky, on_device));
     product_ = std::move(product);
     return absl::OkStatus();
   }
@@ -610,7 +619,7 @@ class CudaBackend : public DcBackend {
 
   absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(
       const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
-    FENESTRA_ASSIGN_OR_RETURN(product, CudaAnnualProduct::Make(device_, outdoor_batches, sky));
+    FENESTRA_ASSIGN_OR_RETURN(product, CudaAnnualProduct::Make(device_, outdoor_batches, sky, {}));
     return std::unique_ptr<AnnualProduct>(std::move(product));
   }
 
@@ -705,6 +714,7 @@ class CudaBackend : public DcBackend {
     out.mean = o.mean.data();
     out.standard_error = o.standard_error.data();
     out.first_escapes = o.first_escapes.data();
+    out.batches_on_device = &o.batches_on_device.data;
     // O's matrices (44 MB on the city office), written by the download: in huge pages where
     // whole ones fit, and first touched on every core (their page faults on the download's
     // one thread took 0.02 s of a 0.03 s stage on the H200's host)
@@ -720,6 +730,7 @@ class CudaBackend : public DcBackend {
     FENESTRA_RETURN_IF_ERROR(Check(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,
                                                     WithoutImportance(path), out, &counters)));
     Count(counters, &o.counters);
+    o.batches_on_device.device = device_;
     return o;
   }
 

@@ -23,6 +23,14 @@ struct IndoorOptions;
 // Number of daylight-coefficient columns: bin 0 = ground, 1..145 = Tregenza sky patches.
 inline constexpr int kDaylightBins = 146;
 
+// Matrices a GPU holds, one after the other, each laid out as the host's copy of it: on GPU
+// `device`, freed when the last holder lets go. A backend on that GPU takes them from there
+// rather than uploading the host's copy they equal; `data` is null where there is none.
+struct DeviceMatrices {
+  std::shared_ptr<const double> data;
+  int device = -1;
+};
+
 // The outdoor stage's matrix O in batches, as a backend forms it from its sums
 // (FormOutdoorBatches): per batch (window cells + 146) x 146, the reflected light per window
 // cell over its paths whose first segment met a surface, then the identity for the direct
@@ -35,6 +43,8 @@ struct OutdoorBatches {
   Eigen::VectorXd first_escapes;
   uint64_t paths_per_cell = 0;  // in all batches
   TraceCounters counters;
+  // The batches where a GPU formed them (CUDA backends), else empty.
+  DeviceMatrices batches_on_device;
 };
 
 // O's batches from the outdoor sums on the host.
@@ -150,9 +160,14 @@ class DesignTallies {
                                                                 const Matrix& sky);
   // Sets the annual product the tallies form E with (DcBackend::MakeAnnualProduct's O_b and
   // S); Tally and Product need it. InvalidArgument where O_b's rows are not the indoor
-  // stage's columns or its batches not the stage's batches.
-  virtual absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches,
-                                  const Matrix& sky) = 0;
+  // stage's columns or its batches not the stage's batches. `on_device`: the same O_b where
+  // a GPU holds them (OutdoorBatches::batches_on_device), or empty.
+  virtual absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches, const Matrix& sky,
+                                  const DeviceMatrices& on_device) = 0;
+  // SetProduct from the host's O_b alone.
+  absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches, const Matrix& sky) {
+    return SetProduct(outdoor_batches, sky, {});
+  }
   // The annual product the tallies form E with: their O_b, already where they are used;
   // null before SetProduct.
   virtual AnnualProduct* Product() = 0;

@@ -164,6 +164,7 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const Outd
   result.coefficients = std::move(formed.mean);
   result.standard_error = std::move(formed.standard_error);
   result.batches = std::move(formed.batches);
+  result.batches_on_device = std::move(formed.batches_on_device);
   result.sky_view = formed.first_escapes / static_cast<double>(formed.paths_per_cell);
   result.paths_per_cell = static_cast<int64_t>(formed.paths_per_cell);
   result.basis_cells = basis.cell_count;
@@ -362,7 +363,8 @@ class StagedDesignTallies : public DesignTallies {
                       const IndoorOptions& options)
       : stages_(std::move(stages)), backend_(backend), options_(options) {}
 
-  absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
+  absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches, const Matrix& sky,
+                          const DeviceMatrices&) override {
     FENESTRA_RETURN_IF_ERROR(CheckOutdoorFitsIndoor(outdoor_batches, options_));
     FENESTRA_ASSIGN_OR_RETURN(product, backend_->MakeAnnualProduct(outdoor_batches, sky));
     product_ = std::move(product);

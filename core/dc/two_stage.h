@@ -95,9 +95,10 @@ struct OutdoorOptions {
 // outdoor surface; then one row per sky bin, the identity, for I's direct columns. The mean
 // of independent batch estimates, with the standard error of that mean.
 struct OutdoorResult {
-  Matrix coefficients;          // (window cells + 146) x 146
-  Matrix standard_error;        // (window cells + 146) x 146
-  std::vector<Matrix> batches;  // per batch: (window cells + 146) x 146
+  Matrix coefficients;               // (window cells + 146) x 146
+  Matrix standard_error;             // (window cells + 146) x 146
+  std::vector<Matrix> batches;       // per batch: (window cells + 146) x 146
+  DeviceMatrices batches_on_device;  // the batches where a GPU formed them, else empty
   // Per window cell: the fraction of its paths whose first segment reached the sky.
   Eigen::VectorXd sky_view;
   int basis_cells = 0;

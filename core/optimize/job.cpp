@@ -512,12 +512,12 @@ absl::StatusOr<Lanes> StartLanes(const v1::Sampling& sampling, DcBackend& first,
 }
 
 // Once the outdoor stage and the sky are there: every lane's annual product set with
-// `outdoor_batches` and `sky`.
-absl::Status SetLaneProducts(Lanes& lanes, const std::vector<Matrix>& outdoor_batches,
-                             const Matrix& sky) {
+// `outdoor`'s batches (from the GPU that formed them where a lane is on it) and `sky`.
+absl::Status SetLaneProducts(Lanes& lanes, const OutdoorMatrix& outdoor, const Matrix& sky) {
   std::vector<absl::Status> set(lanes.tallies.size());
-  ParallelFor(set.size(), set.size(),
-              [&](uint64_t l) { set[l] = lanes.tallies[l]->SetProduct(outdoor_batches, sky); });
+  ParallelFor(set.size(), set.size(), [&](uint64_t l) {
+    set[l] = lanes.tallies[l]->SetProduct(outdoor.batches, sky, outdoor.batches_on_device);
+  });
   for (const absl::Status& status : set) FENESTRA_RETURN_IF_ERROR(status);
   return absl::OkStatus();
 }
@@ -639,7 +639,8 @@ WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Window& wind
 }
 
 absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1::Sampling& sampling,
-                                                   const std::function<bool()>& cancelled) {
+                                                   const std::function<bool()>& cancelled,
+                                                   bool keep_on_device) {
   if (cancelled && cancelled()) return absl::CancelledError("cancelled before the outdoor stage");
   OutdoorOptions options;
   options.paths = sampling.outdoor_paths();
@@ -654,6 +655,7 @@ absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1:
   matrix.coefficients = std::move(result.coefficients);
   matrix.standard_error = std::move(result.standard_error);
   matrix.batches = std::move(result.batches);
+  if (keep_on_device) matrix.batches_on_device = std::move(result.batches_on_device);
   matrix.basis_cells = result.basis_cells;
   matrix.parts = result.parts;
   matrix.paths = result.paths_per_cell * result.sky_view.size();
@@ -751,8 +753,8 @@ absl::StatusOr<AnnualSetting> SettingAndOutdoor(const PreparedJob& job,
     }
   } else {
     if (callbacks.stage) callbacks.stage("outdoor");
-    absl::StatusOr<OutdoorMatrix> matrix =
-        ComputeOutdoorMatrix(job.scene, job.job.sampling(), callbacks.cancelled);
+    absl::StatusOr<OutdoorMatrix> matrix = ComputeOutdoorMatrix(
+        job.scene, job.job.sampling(), callbacks.cancelled, /*keep_on_device=*/true);
     if (matrix.ok()) {
       computed = *std::move(matrix);
       timings.set_outdoor_seconds(computed.wall_seconds);
@@ -813,7 +815,8 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
     return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
   }
   FENESTRA_ASSIGN_OR_RETURN(lanes, std::move(recorded));
-  FENESTRA_RETURN_IF_ERROR(SetLaneProducts(lanes, matrix.batches, setting.lit_sky));
+  FENESTRA_RETURN_IF_ERROR(SetLaneProducts(lanes, matrix, setting.lit_sky));
+  computed.batches_on_device = {};  // the lanes hold their own copies
   Racer racer({.lanes = lanes.Tallies(),
                .options = metric_options,
                .analysed_hours = setting.analysed_hours,

@@ -26,6 +26,9 @@ struct OutdoorMatrix {
   Matrix coefficients;  // O (core/dc/two_stage.h): window cells + 146 rows
   Matrix standard_error;
   std::vector<Matrix> batches;  // O_b, paired with the indoor batches
+  // The batches where a GPU formed them, while the job that traced them uses them (see
+  // ComputeOutdoorMatrix), else empty.
+  DeviceMatrices batches_on_device;
   int basis_cells = 0;
   WindowParts parts;
   int64_t paths = 0;
@@ -99,9 +102,12 @@ double OutdoorMeanRelativeError(const OutdoorMatrix& matrix);
 absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& sampling);
 
 // Traces the outdoor stage: only the scene's outdoor surfaces and its window; `sampling`
-// resolved (ResolveSampling). `cancelled` is polled between batches of paths.
+// resolved (ResolveSampling). `cancelled` is polled between batches of paths. The batches a
+// GPU formed stay on it (OutdoorMatrix::batches_on_device) only with `keep_on_device`, for a
+// job's annual product on the same GPU; a matrix to be kept for later holds no GPU memory.
 absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1::Sampling& sampling,
-                                                   const std::function<bool()>& cancelled = {});
+                                                   const std::function<bool()>& cancelled = {},
+                                                   bool keep_on_device = false);
 
 // What a running job reports after each evaluation, and once more after its final check.
 struct JobProgress {

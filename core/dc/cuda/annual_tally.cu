@@ -451,7 +451,7 @@ void CudaAnnualTally::UseTensorCores(bool use) {
 bool CudaAnnualTally::UsesTensorCores() const { return impl_->tensor_cores; }
 
 std::string CudaAnnualTally::SetProduct(const std::vector<const double*>& outdoor, int cells,
-                                        const double* sky, int steps) {
+                                        const double* sky, int steps, bool outdoor_on_device) {
   Impl& d = *impl_;
   const int batches = static_cast<int>(outdoor.size());
   if (batches < 1 || batches > kMaxTallyBatches) {
@@ -461,11 +461,12 @@ std::string CudaAnnualTally::SetProduct(const std::vector<const double*>& outdoo
   // O_b as the host holds them, then transposed on the device (on the host, the transpose
   // took 50-60 ms of a four-variable job's second)
   const size_t batch_size = static_cast<size_t>(cells) * kTregenzaBinCount;
+  const cudaMemcpyKind from = outdoor_on_device ? cudaMemcpyDeviceToDevice : cudaMemcpyHostToDevice;
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_rows.Reserve(batch_size * batches));
   for (int b = 0; b < batches; ++b) {
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaMemcpy(d.outdoor_rows.get() + b * batch_size, outdoor[b],
-                                             batch_size * sizeof(double), cudaMemcpyHostToDevice));
+                                             batch_size * sizeof(double), from));
   }
   FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_transposed.Reserve(batch_size * batches));
   const dim3 grid((kTregenzaBinCount + kTile - 1) / kTile, (cells + kTile - 1) / kTile, batches);

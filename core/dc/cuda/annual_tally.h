@@ -22,9 +22,10 @@ class CudaAnnualTally {
 
   // Uploads the O_b (each cells x kTregenzaBinCount, row-major, one per batch; cells = the
   // columns of I) and S (kTregenzaBinCount x steps, row-major). The device keeps them until
-  // the next SetProduct.
+  // the next SetProduct. With `outdoor_on_device` the O_b lie on this device already (a
+  // tracer's, CudaTracer::OutdoorOutput) and are copied from there.
   std::string SetProduct(const std::vector<const double*>& outdoor, int cells, const double* sky,
-                         int steps);
+                         int steps, bool outdoor_on_device = false);
   // `rows` stacked indoor rows (rows x cells, batch-major, rows / B per batch) through the
   // product into `illuminance` (rows x steps). With `other_sky` (kTregenzaBinCount x
   // `other_steps`, row-major) that sky takes S's place for this call, S staying uploaded.

@@ -987,6 +987,7 @@ std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis
   FENESTRA_CUDA_RETURN_IF_ERROR(download(out.mean, batches * entries, entries));
   FENESTRA_CUDA_RETURN_IF_ERROR(download(out.standard_error, (batches + 1) * entries, entries));
   FENESTRA_CUDA_RETURN_IF_ERROR(download(out.first_escapes, (batches + 2) * entries, cells));
+  if (out.batches_on_device != nullptr) *out.batches_on_device = HandOver(d.formed, d.device);
   return "";
 }
 

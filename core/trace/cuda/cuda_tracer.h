@@ -81,6 +81,10 @@ class CudaTracer {
     double* mean;
     double* standard_error;
     double* first_escapes;
+    // Where not null: O's batches also left on the device for the caller, one after the
+    // other as `batches` get them, freed when the last holder lets go (the tracer forms its
+    // next outdoor stage elsewhere).
+    std::shared_ptr<const double>* batches_on_device = nullptr;
   };
   // Outdoor paths, paths_per_cell from each window cell in `batches` batches, the same
   // streams as TraceOutdoorCpu; O formed from their sums on the device, then downloaded.

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <memory>
 #include <string>
 
 namespace fenestra {
@@ -55,6 +56,13 @@ class Allocation {
     return e;
   }
   T* get() const { return data_; }
+  // The allocation, now the caller's to free (Memory::Free); this one is empty after.
+  T* Release() {
+    T* data = data_;
+    data_ = nullptr;
+    capacity_ = 0;
+    return data;
+  }
 
  private:
   T* data_ = nullptr;
@@ -100,5 +108,17 @@ class PinnedBuffer : public Allocation<double, PinnedMemory> {
     return cudaMemcpy(device, get(), count * sizeof(double), cudaMemcpyHostToDevice);
   }
 };
+
+// `buffer`'s device memory (on GPU `device`) handed to shared holders, the last of which
+// frees it; `buffer` is empty after.
+template <typename T>
+std::shared_ptr<const T> HandOver(DeviceBuffer<T>& buffer, int device) {
+  return std::shared_ptr<const T>(buffer.Release(), [device](const T* data) {
+    int current = 0;
+    const bool known = cudaGetDevice(&current) == cudaSuccess;
+    if (cudaSetDevice(device) == cudaSuccess) cudaFree(const_cast<T*>(data));
+    if (known) cudaSetDevice(current);
+  });
+}
 
 }  // namespace fenestra

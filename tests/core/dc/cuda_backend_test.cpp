@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -359,6 +360,58 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
   EXPECT_FALSE((*in_turn)->TracesInParts());
   EXPECT_EQ((*in_turn)->Tally(DefaultDesign(scene), options, 2).status().code(),
             absl::StatusCode::kUnimplemented);
+}
+
+// The outdoor stage's O_b stay on the GPU for its annual products: a product made from them
+// there equals one uploaded from the host's copy, and a copy said to lie on another device
+// is not taken.
+TEST(CudaBackendTest, OutdoorBatchesOnTheDeviceMakeTheHostsProduct) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const Scene scene = LoadExample("city_office");
+  OutdoorOptions outdoor;
+  outdoor.paths = 200'000;
+  outdoor.parts = AutomaticWindowParts(scene.window);
+  outdoor.batches = 3;
+  absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor, gpu.get());
+  ASSERT_TRUE(o.ok()) << o.status();
+  ASSERT_NE(o->batches_on_device.data, nullptr);
+  EXPECT_EQ(o->batches_on_device.device, 0);
+  const Matrix sky = Matrix::Random(kDaylightBins, 300).cwiseAbs();
+  IndoorOptions indoor;
+  indoor.paths_per_sensor = 6'000;
+  indoor.batches = 3;
+  indoor.parts = outdoor.parts;
+  // Not a device's memory: the product would fail to copy from it
+  const DeviceMatrices elsewhere{
+      std::shared_ptr<const double>(reinterpret_cast<const double*>(16), [](const double*) {}),
+      o->batches_on_device.device + 1};
+  std::vector<std::unique_ptr<DesignTallies>> tallies;
+  for (const DeviceMatrices* on_device :
+       std::vector<const DeviceMatrices*>{&o->batches_on_device, &elsewhere}) {
+    absl::StatusOr<std::unique_ptr<DesignTallies>> made = gpu->StartDesignTallies(scene, indoor);
+    ASSERT_TRUE(made.ok()) << made.status();
+    ASSERT_TRUE((*made)->SetProduct(o->batches, sky, *on_device).ok());
+    tallies.push_back(*std::move(made));
+  }
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> from_host =
+      gpu->MakeAnnualProduct(o->batches, sky);
+  ASSERT_TRUE(from_host.ok()) << from_host.status();
+  const BlindDesign design = *DesignWithOverrides(scene, {{"alpha", 0.6}});
+  absl::StatusOr<std::vector<Matrix>> i = tallies[0]->IndoorBatches(design);
+  ASSERT_TRUE(i.ok()) << i.status();
+  absl::StatusOr<std::vector<Matrix>> expected = (*from_host)->Apply(*i);
+  ASSERT_TRUE(expected.ok()) << expected.status();
+  for (const auto& t : tallies) {
+    absl::StatusOr<std::vector<Matrix>> e = t->Product()->Apply(*i);
+    ASSERT_TRUE(e.ok()) << e.status();
+    ASSERT_EQ(e->size(), expected->size());
+    for (size_t b = 0; b < e->size(); ++b) {
+      EXPECT_GT((*expected)[b].maxCoeff(), 0);
+      EXPECT_LE(((*e)[b] - (*expected)[b]).cwiseAbs().maxCoeff(),
+                1e-12 * (*expected)[b].maxCoeff());
+    }
+  }
 }
 
 // The GPU's replay is the full trace: for designs across the ranges, I equals the indoor

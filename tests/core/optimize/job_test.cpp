@@ -501,6 +501,47 @@ TEST(JobLanesTest, GpuLanesTakeTheStepsOfOneAtATime) {
   }
 }
 
+// On the GPU (none in CI): a job that traces its outdoor stage takes O_b for its annual
+// product from the GPU that formed them; one given the same matrix from a cache (on the host
+// alone: a matrix computed to be kept holds no GPU memory) uploads them. The steps and
+// values are the same.
+TEST(JobLanesTest, GpuOutdoorBatchesOnTheDeviceAreTheHostsCopy) {
+  if (CudaDevices() == 0) GTEST_SKIP() << "no CUDA device";
+  absl::StatusOr<v1::Job> job =
+      ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/four_variables.json");
+  ASSERT_TRUE(job.ok()) << job.status();
+  job->mutable_budget()->set_max_evaluations(40);
+  job->mutable_sampling()->set_backend("cuda");
+  job->mutable_sampling()->set_final_check(false);
+  absl::StatusOr<PreparedJob> prepared =
+      PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
+  ASSERT_TRUE(prepared.ok()) << prepared.status();
+  absl::StatusOr<OutdoorMatrix> kept =
+      ComputeOutdoorMatrix(prepared->scene, prepared->job.sampling(), {}, true);
+  absl::StatusOr<OutdoorMatrix> cached =
+      ComputeOutdoorMatrix(prepared->scene, prepared->job.sampling());
+  ASSERT_TRUE(kept.ok() && cached.ok()) << kept.status() << cached.status();
+  EXPECT_NE(kept->batches_on_device.data, nullptr);
+  EXPECT_GE(kept->batches_on_device.device, 0);
+  EXPECT_EQ(cached->batches_on_device.data, nullptr);
+
+  absl::StatusOr<v1::JobResult> traced = RunJob(*prepared, nullptr);
+  absl::StatusOr<v1::JobResult> from_cache = RunJob(*prepared, &*cached);
+  ASSERT_TRUE(traced.ok() && from_cache.ok()) << traced.status() << from_cache.status();
+  ASSERT_GE(traced->history_size(), 40);  // cached steps come on top
+  ASSERT_EQ(traced->history_size(), from_cache->history_size());
+  for (int i = 0; i < traced->history_size(); ++i) {
+    const v1::Evaluation &a = traced->history(i), &b = from_cache->history(i);
+    SCOPED_TRACE(absl::StrCat("step ", i));
+    for (const auto& [name, value] : a.design()) EXPECT_EQ(b.design().at(name), value);
+    EXPECT_EQ(a.improved(), b.improved());
+    // E's sums differ in the order of the GPU's atomic additions only
+    EXPECT_NEAR(a.value().value(), b.value().value(), 1e-9 * std::abs(a.value().value()));
+    EXPECT_NEAR(a.value().standard_error(), b.value().standard_error(),
+                1e-9 * std::abs(a.value().standard_error()) + 1e-12);
+  }
+}
+
 // A checkpoint belongs to one job: any change of the job's content refuses it.
 TEST_F(JobResumeTest, CheckpointOfAnotherJobIsRefused) {
   const v1::SearchCheckpoint checkpoint = Parsed(AfterSixSteps());
