@@ -445,6 +445,31 @@ TEST(CudaBackendTest, ReplayEqualsTheIndoorStage) {
   EXPECT_EQ((*stages)->Compute(wide).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
+// A bright room (every opaque surface of reflectance 0.9) makes many more window
+// connections per path than the city office, more than the room RecordIndoor first makes
+// for them (kCrossingsPerPath): its records are traced again with room for all, and the
+// replay is still the full trace.
+TEST(CudaBackendTest, ReplayOfABrightRoomIsTheIndoorStage) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  Scene bright = LoadExample("city_office");
+  for (Material& m : bright.materials) {
+    if (m.transmittance < 0) m.reflectance = 0.9;
+  }
+  IndoorOptions options;
+  options.paths_per_sensor = 10'000;
+  options.parts = {2, 2};
+  absl::StatusOr<std::unique_ptr<IndoorStages>> stages = gpu->MakeIndoorStages(bright, options);
+  ASSERT_TRUE(stages.ok()) << stages.status();
+  const BlindDesign design = *DesignWithOverrides(bright, {{"alpha", 0.7}, {"width", 0.1}});
+  absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(bright, design, options, gpu.get());
+  absl::StatusOr<IndoorResult> replayed = (*stages)->Compute(design);
+  ASSERT_TRUE(traced.ok() && replayed.ok()) << traced.status() << replayed.status();
+  EXPECT_NE(replayed->backend.find("replay"), std::string::npos) << replayed->backend;
+  std::printf("bright room: replay against full trace %.3g relative L1 difference\n",
+              ExpectReplayEqualsTrace(*traced, *replayed));
+}
+
 // The stiff scenes of the one-stage tests, on the GPU: finite, and matching the CPU.
 TEST(CudaBackendTest, StiffScenesStayFiniteAndMatch) {
   std::unique_ptr<DcBackend> gpu = Gpu();
