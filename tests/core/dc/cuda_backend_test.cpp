@@ -27,6 +27,24 @@ std::unique_ptr<DcBackend> Gpu() {
   return backend.ok() ? *std::move(backend) : nullptr;
 }
 
+// An outdoor stage of `paths` paths in `batches` batches over the window's automatic parts.
+OutdoorOptions OutdoorInParts(const Scene& scene, int64_t paths, int batches) {
+  OutdoorOptions outdoor;
+  outdoor.paths = paths;
+  outdoor.parts = AutomaticWindowParts(scene.window);
+  outdoor.batches = batches;
+  return outdoor;
+}
+
+// The indoor stage paired with `outdoor`: its parts and batches.
+IndoorOptions IndoorPairedWith(const OutdoorOptions& outdoor, int64_t paths_per_sensor) {
+  IndoorOptions indoor;
+  indoor.paths_per_sensor = paths_per_sensor;
+  indoor.batches = outdoor.batches;
+  indoor.parts = outdoor.parts;
+  return indoor;
+}
+
 // Every entry above 1% of its row maximum agrees within 3 combined standard errors.
 void ExpectParity(const Matrix& a, const Matrix& a_se, const Matrix& b, const Matrix& b_se,
                   const std::string& what) {
@@ -260,17 +278,11 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
   const Scene scene = LoadExample("city_office");
-  OutdoorOptions outdoor;
-  outdoor.paths = 500'000;
-  outdoor.parts = AutomaticWindowParts(scene.window);
-  outdoor.batches = 4;
+  const OutdoorOptions outdoor = OutdoorInParts(scene, 500'000, 4);
   absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor, gpu.get());
   ASSERT_TRUE(o.ok()) << o.status();
   const Matrix sky = Matrix::Random(kDaylightBins, 500).cwiseAbs();
-  IndoorOptions indoor;
-  indoor.paths_per_sensor = 40'000;
-  indoor.batches = 4;
-  indoor.parts = outdoor.parts;
+  const IndoorOptions indoor = IndoorPairedWith(outdoor, 40'000);
   absl::StatusOr<std::unique_ptr<DesignTallies>> on_device =
       gpu->MakeDesignTallies(scene, indoor, o->batches, sky);
   absl::StatusOr<std::unique_ptr<DesignTallies>> in_turn =
@@ -369,19 +381,13 @@ TEST(CudaBackendTest, OutdoorBatchesOnTheDeviceMakeTheHostsProduct) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
   const Scene scene = LoadExample("city_office");
-  OutdoorOptions outdoor;
-  outdoor.paths = 200'000;
-  outdoor.parts = AutomaticWindowParts(scene.window);
-  outdoor.batches = 3;
+  const OutdoorOptions outdoor = OutdoorInParts(scene, 200'000, 3);
   absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor, gpu.get());
   ASSERT_TRUE(o.ok()) << o.status();
   ASSERT_NE(o->batches_on_device.data, nullptr);
   EXPECT_EQ(o->batches_on_device.device, 0);
   const Matrix sky = Matrix::Random(kDaylightBins, 300).cwiseAbs();
-  IndoorOptions indoor;
-  indoor.paths_per_sensor = 6'000;
-  indoor.batches = 3;
-  indoor.parts = outdoor.parts;
+  const IndoorOptions indoor = IndoorPairedWith(outdoor, 6'000);
   // Not a device's memory: the product would fail to copy from it
   const DeviceMatrices elsewhere{
       std::shared_ptr<const double>(reinterpret_cast<const double*>(16), [](const double*) {}),

@@ -445,6 +445,17 @@ TEST_F(JobResumeTest, SeveralCandidatesAtOnceTakeTheSameSteps) {
   }
 }
 
+// The four-variable job on the GPU with `evaluations` evaluations and no final check.
+absl::StatusOr<v1::Job> GpuFourVariableJob(int evaluations) {
+  absl::StatusOr<v1::Job> job =
+      ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/four_variables.json");
+  if (!job.ok()) return job;
+  job->mutable_budget()->set_max_evaluations(evaluations);
+  job->mutable_sampling()->set_backend("cuda");
+  job->mutable_sampling()->set_final_check(false);
+  return job;
+}
+
 // On the GPU (none in CI): the four-variable job (150 evaluations) on four lanes, tracers of
 // their own on the visible GPUs in turn, takes the steps of one lane, with racing (a design
 // at a time per lane) and without (two per lane's launch). The values agree to the GPU's
@@ -452,12 +463,8 @@ TEST_F(JobResumeTest, SeveralCandidatesAtOnceTakeTheSameSteps) {
 // decisions exactly.
 TEST(JobLanesTest, GpuLanesTakeTheStepsOfOneAtATime) {
   if (CudaDevices() == 0) GTEST_SKIP() << "no CUDA device";
-  absl::StatusOr<v1::Job> job =
-      ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/four_variables.json");
+  absl::StatusOr<v1::Job> job = GpuFourVariableJob(150);
   ASSERT_TRUE(job.ok()) << job.status();
-  job->mutable_budget()->set_max_evaluations(150);
-  job->mutable_sampling()->set_backend("cuda");
-  job->mutable_sampling()->set_final_check(false);
   for (const bool racing : {false, true}) {
     job->mutable_sampling()->set_racing(racing);
     std::vector<v1::JobResult> results;
@@ -507,12 +514,8 @@ TEST(JobLanesTest, GpuLanesTakeTheStepsOfOneAtATime) {
 // values are the same.
 TEST(JobLanesTest, GpuOutdoorBatchesOnTheDeviceAreTheHostsCopy) {
   if (CudaDevices() == 0) GTEST_SKIP() << "no CUDA device";
-  absl::StatusOr<v1::Job> job =
-      ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/four_variables.json");
+  absl::StatusOr<v1::Job> job = GpuFourVariableJob(40);
   ASSERT_TRUE(job.ok()) << job.status();
-  job->mutable_budget()->set_max_evaluations(40);
-  job->mutable_sampling()->set_backend("cuda");
-  job->mutable_sampling()->set_final_check(false);
   absl::StatusOr<PreparedJob> prepared =
       PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/city_office");
   ASSERT_TRUE(prepared.ok()) << prepared.status();
