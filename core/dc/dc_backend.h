@@ -303,7 +303,8 @@ inline constexpr int kCandidatesPerGpu = 1;
 // designs traced together share that tail: on the H100 the four-variable job's evaluations
 // took 0.53-0.55 s with 2 per launch (30 of 530 dropped), 0.54 s with 3 (77 dropped), 0.72 s
 // with 4 (118 dropped) and 0.58-0.59 s with 1 (bench/README.md, "Several designs in one
-// launch").
-inline constexpr int kReplayDesignsAtOnce = 2;
+// launch"). With 3, the search takes 2 at once while it improves often (kBusyImprovements,
+// core/optimize/vns.h), which drops fewer.
+inline constexpr int kReplayDesignsAtOnce = 3;
 
 }  // namespace fenestra

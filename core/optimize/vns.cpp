@@ -153,6 +153,7 @@ class Search {
   std::vector<double> StartDesign() const;
   std::vector<double> Propose(Walk& walk) const;
   absl::StatusOr<VnsRecord> Evaluate(std::vector<double> x, int neighborhood);
+  int Lookahead() const;
   void EvaluateAhead(const std::vector<double>& x, bool start);
   void DropAhead();
   void Record(VnsRecord record);
@@ -197,9 +198,22 @@ std::vector<double> Search::Propose(Walk& walk) const {
   return x;
 }
 
+// Designs evaluated at once now: options_.lookahead, or two thirds of it (rounded up) while
+// more than kBusyImprovements of the last kRecentEvaluations evaluations improved.
+int Search::Lookahead() const {
+  int evaluated = 0, improved = 0;
+  for (auto r = state_.history.rbegin();
+       r != state_.history.rend() && evaluated < kRecentEvaluations; ++r) {
+    if (r->cached) continue;
+    ++evaluated;
+    improved += r->improved ? 1 : 0;
+  }
+  return improved > kBusyImprovements ? (2 * options_.lookahead + 2) / 3 : options_.lookahead;
+}
+
 // Evaluates `x`, the design of the next step, with the designs the steps after it propose
-// if none of them improves (options_.lookahead in all, new ones only, within the budget);
-// the start alone (there is no incumbent to propose from yet).
+// if none of them improves (Lookahead() in all, new ones only, within the budget); the start
+// alone (there is no incumbent to propose from yet).
 void Search::EvaluateAhead(const std::vector<double>& x, bool start) {
   std::vector<std::vector<double>> designs = {x};
   const auto known = [&](const std::vector<double>& y) {
@@ -208,10 +222,10 @@ void Search::EvaluateAhead(const std::vector<double>& x, bool start) {
   const int neighborhoods = static_cast<int>(options_.neighborhoods.size());
   Walk walk = walk_;  // past x's proposal
   walk.Advance(false, false, neighborhoods);
-  const int max_steps = 16 * options_.lookahead;
-  for (int step = 0;
-       !start && step < max_steps && static_cast<int>(designs.size()) < options_.lookahead &&
-       !WalkEnds(walk, state_.evaluations + static_cast<int>(designs.size()));
+  const int lookahead = Lookahead();
+  const int max_steps = 16 * lookahead;
+  for (int step = 0; !start && step < max_steps && static_cast<int>(designs.size()) < lookahead &&
+                     !WalkEnds(walk, state_.evaluations + static_cast<int>(designs.size()));
        ++step) {
     std::vector<double> y = Propose(walk);
     const bool cached = known(y);

@@ -19,12 +19,13 @@
 // platform and standard library, provided the objective is deterministic and no time
 // budget or cancellation cuts the run short.
 //
-// A search may evaluate several designs at once (VnsOptions::lookahead, a BatchObjective):
-// it proposes the designs the next steps would propose if none of them improved, evaluates
-// them together (on several devices, say), then takes the steps one by one as before. At the
-// first improvement the designs evaluated ahead are dropped, and the search proposes from the
-// new incumbent. The steps, and so the result, are those of the search one design at a time
-// for the same seed; only time is spent on the dropped evaluations (VnsResult::discarded).
+// A search may evaluate several designs at once (VnsOptions::lookahead, fewer while it
+// improves often; a BatchObjective): it proposes the designs the next steps would propose if
+// none of them improved, evaluates them together (on several devices, say), then takes the
+// steps one by one as before. At the first improvement the designs evaluated ahead are
+// dropped, and the search proposes from the new incumbent. The steps, and so the result, are
+// those of the search one design at a time for the same seed; only time is spent on the
+// dropped evaluations (VnsResult::discarded).
 //
 // A search can stop and go on later, in another process: after each step it hands out its
 // result so far (VnsCallbacks::checkpoint), and RunVns continues from one (`resume`). All of
@@ -103,11 +104,19 @@ struct VnsOptions {
   // at the resolution of the variables' steps.
   int max_consecutive_cache_hits = 1000;
   // Designs evaluated at once, ahead of the steps that take them (the file comment); 1 = one
-  // at a time. In [1, kMaxLookahead].
+  // at a time. In [1, kMaxLookahead]. At most this many: fewer while the search improves
+  // often (kBusyImprovements).
   int lookahead = 1;
 };
 
 inline constexpr int kMaxLookahead = 64;
+
+// The designs evaluated ahead of an improvement are dropped, so while the search improves
+// often it evaluates fewer at once: two thirds of VnsOptions::lookahead (rounded up) while
+// more than kBusyImprovements of its last kRecentEvaluations evaluations improved
+// (bench/README.md, "Fewer designs at once while the search improves").
+inline constexpr int kRecentEvaluations = 20;
+inline constexpr int kBusyImprovements = 2;
 
 // What the objective returns for one design.
 struct Evaluation {

@@ -752,6 +752,35 @@ TEST_F(LookaheadTest, TakesTheStepsOfTheSearchOneDesignAtATime) {
   }
 }
 
+// While more than kBusyImprovements of the last kRecentEvaluations evaluations improved, a
+// batch holds two thirds of the lookahead (rounded up), else all of it.
+TEST_F(LookaheadTest, EvaluatesFewerAtOnceWhileTheSearchImproves) {
+  const absl::StatusOr<VnsResult> ahead = RunVns(vars_, Batches(), Options(3));
+  ASSERT_TRUE(ahead.ok()) << ahead.status();
+  std::set<size_t> sizes;
+  for (const auto& batch : batches_) {
+    // The step that took the batch's first design, and the evaluations before it
+    const auto taken =
+        std::find_if(ahead->history.begin(), ahead->history.end(),
+                     [&](const VnsRecord& r) { return r.x == batch[0] && !r.cached; });
+    ASSERT_NE(taken, ahead->history.end());
+    int evaluated = 0, improved = 0;
+    for (auto r = std::make_reverse_iterator(taken);
+         r != ahead->history.rend() && evaluated < kRecentEvaluations; ++r) {
+      if (r->cached) continue;
+      ++evaluated;
+      improved += r->improved ? 1 : 0;
+    }
+    const size_t expected = improved > kBusyImprovements ? 2 : 3;
+    SCOPED_TRACE(absl::StrCat("step ", taken - ahead->history.begin()));
+    // Fewer where the proposals were cached or the budget ends; the start alone
+    EXPECT_LE(batch.size(), taken == ahead->history.begin() ? 1 : expected);
+    sizes.insert(batch.size());
+  }
+  EXPECT_TRUE(sizes.contains(2));
+  EXPECT_TRUE(sizes.contains(3));
+}
+
 // An error in a design evaluated ahead and dropped never reaches the search; one in a design
 // a step takes stops it.
 TEST_F(LookaheadTest, AnErrorMattersOnlyWhereAStepTakesItsDesign) {
