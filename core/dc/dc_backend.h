@@ -304,7 +304,9 @@ inline constexpr int kCandidatesPerGpu = 1;
 // took 0.53-0.55 s with 2 per launch (30 of 530 dropped), 0.54 s with 3 (77 dropped), 0.72 s
 // with 4 (118 dropped) and 0.58-0.59 s with 1 (bench/README.md, "Several designs in one
 // launch"). With 3, the search takes 2 at once while it improves often (kBusyImprovements,
-// core/optimize/vns.h), which drops fewer.
+// core/optimize/vns.h), which drops fewer: on H200s the search took 0.436-0.460 s against
+// 0.460-0.474 s with 2 per launch (bench/README.md, "Fewer designs at once while the search
+// improves").
 inline constexpr int kReplayDesignsAtOnce = 3;
 
 }  // namespace fenestra
