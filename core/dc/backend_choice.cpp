@@ -49,6 +49,20 @@ int NextCudaDevice() {
 
 int CudaDevicesInUse() { return static_cast<int>(DevicesInUse().size()); }
 
+int LaneCudaDevice(int first, int lane) {
+  const std::vector<int> devices = DevicesInUse();
+  const auto at = std::find(devices.begin(), devices.end(), first);
+  if (at == devices.end()) return first;
+  const size_t index = static_cast<size_t>(at - devices.begin()) + static_cast<size_t>(lane);
+  return devices[index % devices.size()];
+}
+
+absl::StatusOr<std::unique_ptr<DcBackend>> MakeLaneBackend(const std::string& name,
+                                                           const DcBackend& first, int lane) {
+  if (first.Gpu() < 0) return MakeBackend(name);
+  return MakeCudaBackend(LaneCudaDevice(first.Gpu(), lane));
+}
+
 std::vector<int> WorkerCudaDevices(int worker, int workers) {
   const std::vector<int> all = DevicesInUse();
   std::vector<int> mine;

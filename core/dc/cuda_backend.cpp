@@ -613,6 +613,7 @@ class CudaBackend : public DcBackend {
       : device_(device), tracer_(std::move(tracer)) {}
 
   std::string Name() const override { return absl::StrCat("cuda (", tracer_->device_name(), ")"); }
+  int Gpu() const override { return device_; }
   int DefaultCandidatesAtOnce() const override {
     return kCandidatesPerGpu * std::max(1, CudaDevicesInUse());
   }

@@ -192,6 +192,8 @@ class DcBackend {
   // Designs a job evaluates at once by default (Sampling.candidates_at_once): one on the CPU,
   // whose one evaluation uses every core; kCandidatesPerGpu per GPU in use on CUDA.
   virtual int DefaultCandidatesAtOnce() const { return 1; }
+  // The GPU this backend traces on; -1 on the CPU.
+  virtual int Gpu() const { return -1; }
 
   // Traces options.paths_per_sensor paths from every sensor through `mesh` (materials
   // indexed by mesh.material). InvalidArgument for bad options, sensors or materials.
@@ -255,6 +257,17 @@ absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int device = 0);
 // "cpu", "cuda" or "auto" (a GPU when there is one, else the CPU). Successive GPU backends
 // take the GPUs in use in turn (NextCudaDevice).
 absl::StatusOr<std::unique_ptr<DcBackend>> MakeBackend(const std::string& name);
+
+// The GPU of lane `lane` (>= 0) of a job whose first lane is on GPU `first`: the lane-th GPU
+// after it among those NextCudaDevice takes on this thread, so that a job's lanes take
+// distinct GPUs while there are enough, whatever other jobs and stages take meanwhile;
+// `first` itself when it is not among them.
+int LaneCudaDevice(int first, int lane);
+
+// The backend of lane `lane` (>= 1) of a job whose first lane is `first`: on a GPU, one on
+// LaneCudaDevice(first.Gpu(), lane); on the CPU, MakeBackend(name).
+absl::StatusOr<std::unique_ptr<DcBackend>> MakeLaneBackend(const std::string& name,
+                                                           const DcBackend& first, int lane);
 
 // Number of CUDA devices this build and host can use (0 without CUDA).
 int CudaDevices();

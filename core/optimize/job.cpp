@@ -470,8 +470,8 @@ void AddSearch(const SearchSettings& settings, const VnsResult& search,
 }
 
 // The lanes a job's designs are evaluated on at once (Sampling.candidates_at_once): the
-// job's backend and as many more as asked (on CUDA each takes the next GPU in turn), each
-// with the indoor stage's design tallies. The tallies are made at once.
+// job's backend and as many more as asked (on CUDA each on the next GPU in use after the one
+// before, MakeLaneBackend), each with the indoor stage's design tallies.
 struct Lanes {
   std::vector<std::unique_ptr<DcBackend>> more;  // the backends after the job's
   std::vector<std::unique_ptr<DesignTallies>> tallies;
@@ -483,19 +483,26 @@ struct Lanes {
   }
 };
 
-// The lanes' design tallies, their indoor records made but no annual product yet
-// (SetLaneProducts).
-absl::StatusOr<Lanes> StartLanes(const v1::Sampling& sampling, DcBackend& first, const Scene& scene,
-                                 const IndoorOptions& options) {
+// The lanes' backends after `first`, made on the job's thread: the GPUs a lane may take are
+// that thread's (a daemon worker's, ThreadCudaDevices).
+absl::StatusOr<Lanes> MakeLanes(const v1::Sampling& sampling, const DcBackend& first) {
   const int count = sampling.candidates_at_once() > 0 ? sampling.candidates_at_once()
                                                       : first.DefaultCandidatesAtOnce();
   Lanes lanes;
-  std::vector<DcBackend*> backends = {&first};
   for (int l = 1; l < count; ++l) {
-    FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(sampling.backend()));
-    backends.push_back(backend.get());
+    FENESTRA_ASSIGN_OR_RETURN(backend, MakeLaneBackend(sampling.backend(), first, l));
     lanes.more.push_back(std::move(backend));
   }
+  return lanes;
+}
+
+// The lanes' design tallies, their indoor records made at once but no annual product yet
+// (SetLaneProducts).
+absl::Status StartLanes(Lanes& lanes, DcBackend& first, const Scene& scene,
+                        const IndoorOptions& options) {
+  std::vector<DcBackend*> backends = {&first};
+  for (const auto& backend : lanes.more) backends.push_back(backend.get());
+  const int count = static_cast<int>(backends.size());
   lanes.tallies.resize(count);
   std::vector<absl::Status> made(count);
   ParallelFor(count, count, [&](uint64_t l) {
@@ -508,7 +515,7 @@ absl::StatusOr<Lanes> StartLanes(const v1::Sampling& sampling, DcBackend& first,
     }
   });
   for (const absl::Status& status : made) FENESTRA_RETURN_IF_ERROR(status);
-  return lanes;
+  return absl::OkStatus();
 }
 
 // Once the outdoor stage and the sky are there: every lane's annual product set with
@@ -793,9 +800,9 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(spec.sampling().backend()));
   const IndoorOptions indoor_options = JobIndoorOptions(job);
   const Scene ranged = WithJobRanges(job.scene, spec);
-  std::future<absl::StatusOr<Lanes>> started = std::async(std::launch::async, [&] {
-    return StartLanes(spec.sampling(), *backend, ranged, indoor_options);
-  });
+  FENESTRA_ASSIGN_OR_RETURN(lanes, MakeLanes(spec.sampling(), *backend));
+  std::future<absl::Status> started = std::async(
+      std::launch::async, [&] { return StartLanes(lanes, *backend, ranged, indoor_options); });
 
   // Sky matrix, the occupied hours and the lit analysed ones, the metric settings; the outdoor
   // matrix: the cached one, or traced now
@@ -803,7 +810,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   absl::StatusOr<AnnualSetting> made_setting =
       SettingAndOutdoor(job, callbacks, outdoor, computed, *result.mutable_timings());
   if (callbacks.stage) callbacks.stage("indoor paths");
-  absl::StatusOr<Lanes> recorded = started.get();
+  const absl::Status recorded = started.get();
   FENESTRA_RETURN_IF_ERROR(made_setting.status());
   const AnnualSetting& setting = *made_setting;
   const OutdoorMatrix& matrix = outdoor != nullptr ? *outdoor : computed;
@@ -814,7 +821,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   if (static_cast<int>(matrix.batches.size()) != indoor_options.batches) {
     return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
   }
-  FENESTRA_ASSIGN_OR_RETURN(lanes, std::move(recorded));
+  FENESTRA_RETURN_IF_ERROR(recorded);
   FENESTRA_RETURN_IF_ERROR(SetLaneProducts(lanes, matrix, setting.lit_sky));
   computed.batches_on_device = {};  // the lanes hold their own copies
   Racer racer({.lanes = lanes.Tallies(),

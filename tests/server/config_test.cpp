@@ -95,6 +95,25 @@ TEST(ConfigTest, WorkersShareOutTheGpus) {
   EXPECT_EQ(WorkerCudaDevices(0, 2).empty(), CudaDevices() == 0);  // every visible GPU
 }
 
+// A job's lanes take the GPUs after its first lane's in turn, on the job's thread's GPUs,
+// whatever other backends take meanwhile. Index arithmetic again, so it runs without a GPU.
+TEST(ConfigTest, AJobsLanesTakeTheGpusAfterItsFirst) {
+  UseCudaDevices({3, 1, 2});
+  std::vector<int> lanes;
+  for (int lane = 0; lane < 4; ++lane) lanes.push_back(LaneCudaDevice(1, lane));
+  EXPECT_THAT(lanes, ::testing::ElementsAre(1, 2, 3, 1));  // more lanes than GPUs: in turn
+  for (int k = 0; k < 3; ++k) NextCudaDevice();            // other stages' backends
+  EXPECT_EQ(LaneCudaDevice(1, 1), 2);
+  EXPECT_EQ(LaneCudaDevice(3, 1), 1);
+  EXPECT_EQ(LaneCudaDevice(0, 1), 0);  // a GPU not in use: the lanes stay on it
+  {
+    const ThreadCudaDevices worker({2});  // a daemon worker's thread: its GPU only
+    EXPECT_EQ(LaneCudaDevice(2, 1), 2);
+    EXPECT_EQ(LaneCudaDevice(2, 2), 2);
+  }
+  UseCudaDevices({});
+}
+
 TEST(ConfigTest, TheStoreIsSqliteOrAPostgresqlUrlAndLeasesAreNotTooShort) {
   v1::DaemonConfig config;
   config.set_store("postgresql://fenestra@db.example.org:5432/fenestra");
