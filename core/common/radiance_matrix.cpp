@@ -51,8 +51,8 @@ absl::Status WriteRadianceMatrix(const std::string& path, const Matrix& m, Matri
       binary);
 }
 
-double MeanRelativeError(const Matrix& value, const Matrix& standard_error, double min_fraction,
-                         bool per_row) {
+double MeanRelativeError(Eigen::Ref<const Matrix> value, Eigen::Ref<const Matrix> standard_error,
+                         double min_fraction, bool per_row) {
   if (value.size() == 0 || standard_error.rows() != value.rows() ||
       standard_error.cols() != value.cols()) {
     return 0;

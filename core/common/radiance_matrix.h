@@ -26,8 +26,9 @@ absl::Status WriteRadianceMatrix(const std::string& path, const Matrix& m,
 void MeanAndError(const std::vector<Matrix>& batches, Matrix* mean, Matrix* standard_error);
 
 // Mean of standard_error / value over the entries above `min_fraction` of their row's
-// maximum (of the whole matrix's maximum when !per_row); 0 when there are none.
-double MeanRelativeError(const Matrix& value, const Matrix& standard_error,
+// maximum (of the whole matrix's maximum when !per_row); 0 when there are none. Takes blocks
+// of whole rows (topRows) without copying them.
+double MeanRelativeError(Eigen::Ref<const Matrix> value, Eigen::Ref<const Matrix> standard_error,
                          double min_fraction = 0.01, bool per_row = true);
 
 // Reads a one-component Radiance matrix (ascii, float or double), or a gzip-free

@@ -11,6 +11,7 @@
 namespace fenestra {
 namespace {
 
+// Without O_b (empty `outdoor`), the product of the sky alone (DcBackend::MakeSkyProduct).
 class CpuAnnualProduct : public AnnualProduct {
  public:
   CpuAnnualProduct(std::vector<Matrix> outdoor, Matrix sky)
@@ -21,8 +22,12 @@ class CpuAnnualProduct : public AnnualProduct {
   }
   absl::StatusOr<std::vector<Matrix>> ApplyToSky(const std::vector<Matrix>& indoor_batches,
                                                  const Matrix& sky) override {
-    FENESTRA_RETURN_IF_ERROR(CheckPairs(indoor_batches, outdoor_));
     FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
+    if (outdoor_.empty()) {
+      FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, kDaylightBins));
+      return SplitBatches(ProductOnAllCores(stacked, sky), indoor_batches.size());
+    }
+    FENESTRA_RETURN_IF_ERROR(CheckPairs(indoor_batches, outdoor_));
     // Every batch's light through the window, then all batches' E in one product
     return SplitBatches(ProductOnAllCores(ThroughWindow(indoor_batches, outdoor_), sky),
                         indoor_batches.size());
@@ -45,6 +50,11 @@ absl::StatusOr<std::unique_ptr<AnnualProduct>> DcBackend::MakeAnnualProduct(
     const std::vector<Matrix>& outdoor_batches, const Matrix& sky) {
   FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor_batches, sky));
   return std::make_unique<CpuAnnualProduct>(outdoor_batches, sky);
+}
+
+absl::StatusOr<std::unique_ptr<AnnualProduct>> DcBackend::MakeSkyProduct(const Matrix& sky) {
+  FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
+  return std::make_unique<CpuAnnualProduct>(std::vector<Matrix>{}, sky);
 }
 
 }  // namespace fenestra

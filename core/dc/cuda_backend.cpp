@@ -142,6 +142,17 @@ class CudaAnnualProduct : public AnnualProduct {
     return std::unique_ptr<CudaAnnualProduct>(new CudaAnnualProduct(
         std::move(annual), static_cast<int>(outdoor.size()), outdoor[0].rows(), sky.cols()));
   }
+  // The product of the sky alone (DcBackend::MakeSkyProduct).
+  static absl::StatusOr<std::unique_ptr<CudaAnnualProduct>> MakeSky(int device, const Matrix& sky) {
+    FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
+    std::string error;
+    std::unique_ptr<CudaAnnualTally> annual = CudaAnnualTally::Create(device, &error);
+    if (!annual) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
+    FENESTRA_RETURN_IF_ERROR(
+        Check(annual->SetSkyProduct(sky.data(), static_cast<int>(sky.cols()))));
+    return std::unique_ptr<CudaAnnualProduct>(
+        new CudaAnnualProduct(std::move(annual), kAnyBatches, kDaylightBins, sky.cols()));
+  }
 
   absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
     return Illuminance(indoor_batches, nullptr);
@@ -156,9 +167,10 @@ class CudaAnnualProduct : public AnnualProduct {
   absl::StatusOr<std::vector<HourTally>> Tally(const std::vector<Matrix>& indoor_batches,
                                                const MetricOptions& options) override {
     const int batches = static_cast<int>(indoor_batches.size());
-    if (batches != batches_) {
-      return absl::InvalidArgumentError(absl::StrCat("the indoor stage has ", batches,
-                                                     " batches, the outdoor matrix ", batches_));
+    FENESTRA_RETURN_IF_ERROR(CheckBatchCount(batches));
+    if (batches < 2) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("standard errors need at least 2 batches, got ", batches));
     }
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
     const int sensors = static_cast<int>(indoor_batches[0].rows());
@@ -202,18 +214,24 @@ class CudaAnnualProduct : public AnnualProduct {
   }
 
  private:
+  // batches_ of the product of the sky alone: its O_b, the identity, pair with any count
+  static constexpr int kAnyBatches = 0;
+
   CudaAnnualProduct(std::unique_ptr<CudaAnnualTally> annual, int batches, Eigen::Index rows,
                     Eigen::Index steps)
       : annual_(std::move(annual)), batches_(batches), rows_(rows), steps_(steps) {}
 
+  absl::Status CheckBatchCount(size_t batches) const {
+    if (batches_ == kAnyBatches || static_cast<int>(batches) == batches_) return absl::OkStatus();
+    return absl::InvalidArgumentError(absl::StrCat("the indoor stage has ", batches,
+                                                   " batches, the outdoor matrix ", batches_,
+                                                   "; they pair up"));
+  }
+
   // E through S, or through `other_sky` where it is not null.
   absl::StatusOr<std::vector<Matrix>> Illuminance(const std::vector<Matrix>& indoor_batches,
                                                   const Matrix* other_sky) {
-    if (static_cast<int>(indoor_batches.size()) != batches_) {
-      return absl::InvalidArgumentError(absl::StrCat("the indoor stage has ", indoor_batches.size(),
-                                                     " batches, the outdoor matrix ", batches_,
-                                                     "; they pair up"));
-    }
+    FENESTRA_RETURN_IF_ERROR(CheckBatchCount(indoor_batches.size()));
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
     const Eigen::Index steps = other_sky != nullptr ? other_sky->cols() : steps_;
     Matrix illuminance(stacked.rows(), steps);
@@ -621,6 +639,10 @@ class CudaBackend : public DcBackend {
   absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(
       const std::vector<Matrix>& outdoor_batches, const Matrix& sky) override {
     FENESTRA_ASSIGN_OR_RETURN(product, CudaAnnualProduct::Make(device_, outdoor_batches, sky, {}));
+    return std::unique_ptr<AnnualProduct>(std::move(product));
+  }
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeSkyProduct(const Matrix& sky) override {
+    FENESTRA_ASSIGN_OR_RETURN(product, CudaAnnualProduct::MakeSky(device_, sky));
     return std::unique_ptr<AnnualProduct>(std::move(product));
   }
 

@@ -226,6 +226,11 @@ class DcBackend {
   // outlive the backend.
   virtual absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeAnnualProduct(
       const std::vector<Matrix>& outdoor_batches, const Matrix& sky);
+  // The annual product of `sky` alone, every O_b the identity: E_b = D_b S for one-stage
+  // daylight coefficients D_b (sensors x 146, their columns the sky's bins already), in any
+  // number of batches (at least 2 for Tally). Where MakeAnnualProduct computes; must not
+  // outlive the backend.
+  virtual absl::StatusOr<std::unique_ptr<AnnualProduct>> MakeSkyProduct(const Matrix& sky);
 
   // The indoor stage of `scene` for the designs within its blind's ranges, the way this
   // backend does it best (core/dc/two_stage.h, IndoorStages): by default each design

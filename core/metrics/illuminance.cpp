@@ -1,5 +1,6 @@
 #include "core/metrics/illuminance.h"
 
+#include <cstdint>
 #include <string>
 
 #include "absl/strings/str_cat.h"
@@ -7,9 +8,14 @@
 namespace fenestra {
 
 std::vector<int> LitColumns(const Matrix& sky) {
+  // Row by row, as the matrix lies in memory (a column's entries are a row apart)
+  std::vector<uint8_t> lit(static_cast<size_t>(sky.cols()), 0);
+  for (Eigen::Index i = 0; i < sky.rows(); ++i) {
+    for (Eigen::Index j = 0; j < sky.cols(); ++j) lit[j] |= sky(i, j) != 0.0;
+  }
   std::vector<int> columns;
   for (Eigen::Index j = 0; j < sky.cols(); ++j) {
-    if ((sky.col(j).array() != 0.0).any()) columns.push_back(static_cast<int>(j));
+    if (lit[j]) columns.push_back(static_cast<int>(j));
   }
   return columns;
 }

@@ -23,9 +23,12 @@ void SetAxes(const Scene& scene, const SkyMatrix& sky, v1::HourlyIlluminance& ou
 }  // namespace
 
 Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns) {
+  // Row by row, as both matrices lie in memory
   Matrix lux(radiance.rows(), static_cast<Eigen::Index>(columns.size()));
-  for (size_t c = 0; c < columns.size(); ++c) {
-    lux.col(c) = kWhiteEfficacyLumensPerWatt * radiance.col(columns[c]);
+  for (Eigen::Index i = 0; i < radiance.rows(); ++i) {
+    for (size_t c = 0; c < columns.size(); ++c) {
+      lux(i, static_cast<Eigen::Index>(c)) = kWhiteEfficacyLumensPerWatt * radiance(i, columns[c]);
+    }
   }
   return lux;
 }

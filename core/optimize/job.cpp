@@ -193,14 +193,17 @@ absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualS
                                            const std::vector<double>& x,
                                            const v1::Estimate& two_stage, DcBackend* backend,
                                            const std::function<bool()>& cancelled) {
-  // E_b = D_b S and its tallies by the backend's annual product, as the search's designs (a
-  // one-stage D_b already holds the sky bins' light, so its O_b are the identity): on a GPU
-  // the check's 32 pilot batches take a product there instead of one on the host
+  // E_b = D_b S and its tallies by the backend, as the search's designs: a one-stage D_b
+  // already holds the sky bins' light, so the product is the sky's alone (on a GPU the
+  // check's 32 pilot batches take a product there instead of one on the host), made once
+  // for the pilot and the check
+  std::unique_ptr<AnnualProduct> product;
   const DaylightMetric metric =
       [&](std::span<const Matrix> dc_batches) -> absl::StatusOr<Evaluation> {
-    const std::vector<Matrix> identity(dc_batches.size(),
-                                       Matrix::Identity(kDaylightBins, kDaylightBins));
-    FENESTRA_ASSIGN_OR_RETURN(product, backend->MakeAnnualProduct(identity, setting.lit_sky));
+    if (product == nullptr) {
+      FENESTRA_ASSIGN_OR_RETURN(made, backend->MakeSkyProduct(setting.lit_sky));
+      product = std::move(made);
+    }
     FENESTRA_ASSIGN_OR_RETURN(
         versions, product->Tally({dc_batches.begin(), dc_batches.end()}, setting.options));
     FENESTRA_ASSIGN_OR_RETURN(
@@ -824,6 +827,10 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   FENESTRA_RETURN_IF_ERROR(recorded);
   FENESTRA_RETURN_IF_ERROR(SetLaneProducts(lanes, matrix, setting.lit_sky));
   computed.batches_on_device = {};  // the lanes hold their own copies
+  // The outdoor matrix's mean relative error, for the result: a pass over O and its errors
+  // (5-15 ms at the job's end) made beside the search
+  std::future<double> outdoor_error =
+      std::async(std::launch::async, [&matrix] { return OutdoorMeanRelativeError(matrix); });
   Racer racer({.lanes = lanes.Tallies(),
                .options = metric_options,
                .analysed_hours = setting.analysed_hours,
@@ -853,7 +860,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
 
   // The result
   AddSearch(search_settings, search, checkpoint, result);
-  result.set_outdoor_mean_relative_standard_error(OutdoorMeanRelativeError(matrix));
+  result.set_outdoor_mean_relative_standard_error(outdoor_error.get());
   result.set_backend(backend->Name());
   FENESTRA_RETURN_IF_ERROR(
       HourlyAndCheck(job, setting, search, *lanes.tallies.front(), callbacks, clock, result));

@@ -337,6 +337,7 @@ struct CudaAnnualTally::Impl {
   PinnedBuffer staging;
   int cells = 0, steps = 0, batches = 0;  // cells: columns of I, rows of O_b
   bool tensor_cores = false;              // I_b O_b by MultiplyTransposedMmaKernel
+  bool sky_only = false;                  // the O_b are the identity: E_b = I_b S (SetSkyProduct)
 
   std::string UploadIndoor(const double* host_indoor, int rows) {
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(device));
@@ -346,8 +347,8 @@ struct CudaAnnualTally::Impl {
     return "";
   }
   // `indoor` from indoor sums on the device (TallySums) for `designs` designs.
-  std::string MeanOfSums(const double* device_sums, size_t design_sums, int designs, int sensors,
-                         const uint64_t* batch_paths) {
+  std::string MeanOfSums(const double* device_sums, size_t design_sums, int designs, int batches,
+                         int sensors, const uint64_t* batch_paths) {
     BatchPaths paths{};
     for (int b = 0; b < batches; ++b) paths.paths[b] = static_cast<double>(batch_paths[b]);
     const int rows = designs * batches * sensors;
@@ -360,10 +361,11 @@ struct CudaAnnualTally::Impl {
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
     return "";
   }
-  // E of `rows` rows of `indoor` into the host's `host_illuminance` (rows x steps), through
-  // `other_sky` (kTregenzaBinCount x other_steps) in S's place where it is not null.
-  std::string DownloadIlluminance(int rows, double* host_illuminance, const double* other_sky,
-                                  int other_steps) {
+  // E of `rows` rows of `indoor` (`batches` batches) into the host's `host_illuminance` (rows x
+  // steps), through `other_sky` (kTregenzaBinCount x other_steps) in S's place where it is not
+  // null.
+  std::string DownloadIlluminance(int rows, int batches, double* host_illuminance,
+                                  const double* other_sky, int other_steps) {
     const double* sky_matrix = nullptr;
     int sky_steps = steps;
     if (other_sky != nullptr) {
@@ -372,36 +374,41 @@ struct CudaAnnualTally::Impl {
       sky_matrix = this->other_sky.get();
       sky_steps = other_steps;
     }
-    if (std::string error = FormIlluminance(rows, sky_matrix, sky_steps); !error.empty()) {
+    if (std::string error = FormIlluminance(rows, batches, sky_matrix, sky_steps); !error.empty()) {
       return error;
     }
     FENESTRA_CUDA_RETURN_IF_ERROR(staging.Download(illuminance.get(), host_illuminance,
                                                    static_cast<size_t>(rows) * sky_steps));
     return "";
   }
-  // E = (I O) S from `indoor` into `illuminance`; with `sky_steps` columns of `sky_matrix`
-  // in S's place where it is not null.
-  std::string FormIlluminance(int rows, const double* sky_matrix = nullptr, int sky_steps = 0) {
+  // E = (I O) S from `indoor` (`batches` batches of rows) into `illuminance`; with `sky_steps`
+  // columns of `sky_matrix` in S's place where it is not null.
+  std::string FormIlluminance(int rows, int batches, const double* sky_matrix = nullptr,
+                              int sky_steps = 0) {
     if (sky_matrix == nullptr) {
       sky_matrix = sky.get();
       sky_steps = steps;
     }
-    FENESTRA_CUDA_RETURN_IF_ERROR(
-        through_window.Reserve(static_cast<size_t>(rows) * kTregenzaBinCount));
     FENESTRA_CUDA_RETURN_IF_ERROR(illuminance.Reserve(static_cast<size_t>(rows) * sky_steps));
-    FENESTRA_CUDA_RETURN_IF_ERROR(
-        MultiplyTransposed(indoor.get(), outdoor_transposed.get(), through_window.get(), rows,
-                           cells, kTregenzaBinCount, rows / batches, tensor_cores));
-    Multiply(through_window.get(), sky_matrix, illuminance.get(), rows, sky_steps);
+    const double* through = indoor.get();
+    if (!sky_only) {
+      FENESTRA_CUDA_RETURN_IF_ERROR(
+          through_window.Reserve(static_cast<size_t>(rows) * kTregenzaBinCount));
+      FENESTRA_CUDA_RETURN_IF_ERROR(
+          MultiplyTransposed(indoor.get(), outdoor_transposed.get(), through_window.get(), rows,
+                             cells, kTregenzaBinCount, rows / batches, tensor_cores));
+      through = through_window.get();
+    }
+    Multiply(through, sky_matrix, illuminance.get(), rows, sky_steps);
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
     return "";
   }
-  // The tallies of E from `indoor` (BatchMeanKernel's rows) for `designs` designs, design
-  // k's into requests[k].
-  std::string Tally(int designs, int sensors, const TallyRequest* requests) {
+  // The tallies of E from `indoor` (BatchMeanKernel's rows) for `designs` designs of `batches`
+  // batches each, design k's into requests[k].
+  std::string Tally(int designs, int batches, int sensors, const TallyRequest* requests) {
     const int versions = batches + 1;
     const size_t per_sensor = static_cast<size_t>(versions) * sensors;
-    if (std::string error = FormIlluminance(designs * batches * sensors); !error.empty()) {
+    if (std::string error = FormIlluminance(designs * batches * sensors, batches); !error.empty()) {
       return error;
     }
     static_assert(sizeof(double) == sizeof(unsigned long long));
@@ -480,6 +487,20 @@ std::string CudaAnnualTally::SetProduct(const std::vector<const double*>& outdoo
   d.cells = cells;
   d.steps = steps;
   d.batches = batches;
+  d.sky_only = false;
+  return "";
+}
+
+std::string CudaAnnualTally::SetSkyProduct(const double* sky, int steps) {
+  Impl& d = *impl_;
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.sky.Upload(sky, static_cast<size_t>(kTregenzaBinCount) * steps));
+  // Done before it returns, as SetProduct
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaStreamSynchronize(cudaStreamPerThread));
+  d.cells = kTregenzaBinCount;
+  d.steps = steps;
+  d.batches = 0;
+  d.sky_only = true;
   return "";
 }
 
@@ -487,12 +508,12 @@ std::string CudaAnnualTally::Illuminance(const double* indoor, int rows, double*
                                          const double* other_sky, int other_steps) {
   Impl& d = *impl_;
   if (d.cells == 0) return kNoProduct;
-  if (rows % d.batches != 0) {
+  if (!d.sky_only && rows % d.batches != 0) {
     return "CUDA annual product: " + std::to_string(rows) + " indoor rows do not split into " +
            std::to_string(d.batches) + " batches";
   }
   if (std::string error = d.UploadIndoor(indoor, rows); !error.empty()) return error;
-  return d.DownloadIlluminance(rows, illuminance, other_sky, other_steps);
+  return d.DownloadIlluminance(rows, d.batches, illuminance, other_sky, other_steps);
 }
 
 std::string CudaAnnualTally::Tally(const double* indoor, int batches, int sensors,
@@ -500,7 +521,7 @@ std::string CudaAnnualTally::Tally(const double* indoor, int batches, int sensor
   Impl& d = *impl_;
   if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
   if (std::string error = d.UploadIndoor(indoor, batches * sensors); !error.empty()) return error;
-  return d.Tally(1, sensors, &request);
+  return d.Tally(1, batches, sensors, &request);
 }
 
 std::string CudaAnnualTally::TallySums(const double* device_sums, size_t design_sums, int designs,
@@ -509,11 +530,12 @@ std::string CudaAnnualTally::TallySums(const double* device_sums, size_t design_
   Impl& d = *impl_;
   if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
   if (designs < 1) return "CUDA annual product: " + std::to_string(designs) + " designs to tally";
-  if (std::string error = d.MeanOfSums(device_sums, design_sums, designs, sensors, batch_paths);
+  if (std::string error =
+          d.MeanOfSums(device_sums, design_sums, designs, batches, sensors, batch_paths);
       !error.empty()) {
     return error;
   }
-  return d.Tally(designs, sensors, requests);
+  return d.Tally(designs, batches, sensors, requests);
 }
 
 std::string CudaAnnualTally::IlluminanceOfSums(const double* device_sums, int batches, int sensors,
@@ -521,15 +543,17 @@ std::string CudaAnnualTally::IlluminanceOfSums(const double* device_sums, int ba
                                                int other_steps, double* illuminance) {
   Impl& d = *impl_;
   if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
-  if (std::string error = d.MeanOfSums(device_sums, 0, 1, sensors, batch_paths); !error.empty()) {
+  if (std::string error = d.MeanOfSums(device_sums, 0, 1, batches, sensors, batch_paths);
+      !error.empty()) {
     return error;
   }
-  return d.DownloadIlluminance(batches * sensors, illuminance, other_sky, other_steps);
+  return d.DownloadIlluminance(batches * sensors, batches, illuminance, other_sky, other_steps);
 }
 
 std::string CudaAnnualTally::CheckPairs(int columns, int batches) const {
   const Impl& d = *impl_;
   if (d.cells == 0) return kNoProduct;
+  if (d.sky_only && columns == d.cells && batches >= 2 && batches <= kMaxTallyBatches) return "";
   if (columns != d.cells || batches != d.batches) {
     return "CUDA annual product: " + std::to_string(d.cells) + " rows in " +
            std::to_string(d.batches) + " batches, the indoor stage " + std::to_string(columns) +

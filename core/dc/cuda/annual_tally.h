@@ -26,6 +26,10 @@ class CudaAnnualTally {
   // tracer's, CudaTracer::OutdoorOutput) and are copied from there.
   std::string SetProduct(const std::vector<const double*>& outdoor, int cells, const double* sky,
                          int steps, bool outdoor_on_device = false);
+  // Uploads S alone, the O_b being the identity (kTregenzaBinCount cells): E_b = I_b S for
+  // indoor rows whose columns are the sky's bins already (one-stage daylight coefficients), in
+  // any number of batches from 2 to the most SetProduct takes. Kept until the next SetProduct.
+  std::string SetSkyProduct(const double* sky, int steps);
   // `rows` stacked indoor rows (rows x cells, batch-major, rows / B per batch) through the
   // product into `illuminance` (rows x steps). With `other_sky` (kTregenzaBinCount x
   // `other_steps`, row-major) that sky takes S's place for this call, S staying uploaded.

@@ -122,9 +122,40 @@ TEST(AnnualProductTest, TalliesTheVersionsOfE) {
   EXPECT_EQ((*product)->Tally(wrong, options).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
-// One-stage coefficients through a product whose O_b are the identity (as a job's final
-// check takes them): the metrics and errors of D_b times the sky's analysed columns in lux.
-TEST(AnnualProductTest, IdentityOutdoorBatchesGiveTheMetricsOfDTimesTheSky) {
+// The metrics and errors of one-stage D_b times the sky's analysed columns in lux, directly.
+absl::StatusOr<AnnualMetricsEstimate> DirectMetrics(std::span<const Matrix> dc,
+                                                    const Matrix& radiance,
+                                                    const std::vector<int>& columns,
+                                                    const std::vector<bool>& occupied,
+                                                    const MetricOptions& options) {
+  return AnnualMetricsWithErrors(dc, std::span<const Matrix>(&radiance, 1), columns, occupied,
+                                 options);
+}
+
+void ExpectSameMetrics(const AnnualMetricsEstimate& direct, const AnnualMetricsEstimate& tallied) {
+  const SceneMetrics& a = direct.value.scene;
+  const SceneMetrics& b = tallied.value.scene;
+  EXPECT_GT(a.udi_mean_percent, 0);
+  EXPECT_LT(a.udi_mean_percent, 100);
+  EXPECT_GT(a.udi_mean_fell_short_percent, 0);
+  EXPECT_GT(a.udi_mean_exceeded_percent, 0);
+  EXPECT_NEAR(b.udi_mean_percent, a.udi_mean_percent, 1e-9);
+  EXPECT_NEAR(b.udi_mean_fell_short_percent, a.udi_mean_fell_short_percent, 1e-9);
+  EXPECT_NEAR(b.udi_all_percent, a.udi_all_percent, 1e-9);
+  EXPECT_NEAR(b.da_mean_percent, a.da_mean_percent, 1e-9);
+  EXPECT_NEAR(b.cda_mean_percent, a.cda_mean_percent, 1e-9);
+  EXPECT_NEAR(b.mean_illuminance_lux, a.mean_illuminance_lux, 1e-9 * a.mean_illuminance_lux);
+  const SceneMetrics& ea = direct.standard_error.scene;
+  const SceneMetrics& eb = tallied.standard_error.scene;
+  EXPECT_GT(ea.udi_mean_percent, 0);
+  EXPECT_NEAR(eb.udi_mean_percent, ea.udi_mean_percent, 1e-9);
+  EXPECT_NEAR(eb.cda_mean_percent, ea.cda_mean_percent, 1e-9);
+}
+
+// One-stage coefficients through the product of the sky alone (as a job's final check takes
+// them, its pilot's 32 batches and then the check's 8 through one product): the metrics and
+// errors of D_b times the sky's analysed columns in lux.
+TEST(AnnualProductTest, TheSkysProductGivesTheMetricsOfDTimesTheSky) {
   const int batches = 32, sensors = 4, steps = 300;
   std::srand(11);
   std::vector<Matrix> dc;
@@ -148,38 +179,29 @@ TEST(AnnualProductTest, IdentityOutdoorBatchesGiveTheMetricsOfDTimesTheSky) {
     lit_sky.col(c) = kWhiteEfficacyLumensPerWatt * radiance.col(columns[c]);
   }
   const MetricOptions options;
-  absl::StatusOr<AnnualMetricsEstimate> direct = AnnualMetricsWithErrors(
-      dc, std::span<const Matrix>(&radiance, 1), columns, occupied, options);
-  ASSERT_TRUE(direct.ok()) << direct.status();
-
   std::unique_ptr<DcBackend> backend = MakeEmbreeBackend();
-  const std::vector<Matrix> identity(batches, Matrix::Identity(kDaylightBins, kDaylightBins));
-  absl::StatusOr<std::unique_ptr<AnnualProduct>> product =
-      backend->MakeAnnualProduct(identity, lit_sky);
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> product = backend->MakeSkyProduct(lit_sky);
   ASSERT_TRUE(product.ok()) << product.status();
-  absl::StatusOr<std::vector<HourTally>> versions = (*product)->Tally(dc, options);
-  ASSERT_TRUE(versions.ok()) << versions.status();
-  absl::StatusOr<AnnualMetricsEstimate> tallied =
-      AnnualMetricsFromTallies(*versions, AnalysedHours(occupied, options.hours), options);
-  ASSERT_TRUE(tallied.ok()) << tallied.status();
-
-  const SceneMetrics& a = direct->value.scene;
-  const SceneMetrics& b = tallied->value.scene;
-  EXPECT_GT(a.udi_mean_percent, 0);
-  EXPECT_LT(a.udi_mean_percent, 100);
-  EXPECT_GT(a.udi_mean_fell_short_percent, 0);
-  EXPECT_GT(a.udi_mean_exceeded_percent, 0);
-  EXPECT_NEAR(b.udi_mean_percent, a.udi_mean_percent, 1e-9);
-  EXPECT_NEAR(b.udi_mean_fell_short_percent, a.udi_mean_fell_short_percent, 1e-9);
-  EXPECT_NEAR(b.udi_all_percent, a.udi_all_percent, 1e-9);
-  EXPECT_NEAR(b.da_mean_percent, a.da_mean_percent, 1e-9);
-  EXPECT_NEAR(b.cda_mean_percent, a.cda_mean_percent, 1e-9);
-  EXPECT_NEAR(b.mean_illuminance_lux, a.mean_illuminance_lux, 1e-9 * a.mean_illuminance_lux);
-  const SceneMetrics& ea = direct->standard_error.scene;
-  const SceneMetrics& eb = tallied->standard_error.scene;
-  EXPECT_GT(ea.udi_mean_percent, 0);
-  EXPECT_NEAR(eb.udi_mean_percent, ea.udi_mean_percent, 1e-9);
-  EXPECT_NEAR(eb.cda_mean_percent, ea.cda_mean_percent, 1e-9);
+  for (const int count : {batches, 8}) {
+    SCOPED_TRACE(count);
+    const std::vector<Matrix> some(dc.begin(), dc.begin() + count);
+    absl::StatusOr<AnnualMetricsEstimate> direct =
+        DirectMetrics(some, radiance, columns, occupied, options);
+    ASSERT_TRUE(direct.ok()) << direct.status();
+    absl::StatusOr<std::vector<HourTally>> versions = (*product)->Tally(some, options);
+    ASSERT_TRUE(versions.ok()) << versions.status();
+    absl::StatusOr<AnnualMetricsEstimate> tallied =
+        AnnualMetricsFromTallies(*versions, AnalysedHours(occupied, options.hours), options);
+    ASSERT_TRUE(tallied.ok()) << tallied.status();
+    ExpectSameMetrics(*direct, *tallied);
+  }
+  // One batch has no error; coefficients of other columns, or a sky of other rows, are refused
+  EXPECT_EQ((*product)->Tally({dc[0]}, options).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ((*product)->Tally({dc[0], Matrix::Zero(sensors, 288)}, options).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(backend->MakeSkyProduct(Matrix::Zero(10, 4)).status().code(),
+            absl::StatusCode::kInvalidArgument);
 }
 
 }  // namespace

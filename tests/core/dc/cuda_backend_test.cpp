@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <memory>
@@ -183,8 +184,27 @@ RandomInputs RandomProduct(int steps) {
   return inputs;
 }
 
-// UDI limits and DA threshold at the quartiles and median of `illuminance`, so that every
-// count lies far from none and from all.
+// The same counts in every version, and sums within rounding.
+void ExpectSameTallies(const std::vector<HourTally>& got, const std::vector<HourTally>& expected) {
+  ASSERT_EQ(got.size(), expected.size());
+  for (size_t v = 0; v < got.size(); ++v) {
+    const HourTally &a = got[v], &b = expected[v];
+    EXPECT_EQ(a.hours, b.hours);
+    EXPECT_EQ(a.all_in, b.all_in) << "version " << v;
+    EXPECT_EQ(a.any_below, b.any_below) << "version " << v;
+    EXPECT_EQ(a.any_above, b.any_above) << "version " << v;
+    ASSERT_EQ(a.sensors.size(), b.sensors.size());
+    for (size_t i = 0; i < a.sensors.size(); ++i) {
+      const SensorHourTally &x = a.sensors[i], &y = b.sensors[i];
+      EXPECT_EQ(x.below, y.below) << "version " << v << " sensor " << i;
+      EXPECT_EQ(x.above, y.above) << "version " << v << " sensor " << i;
+      EXPECT_EQ(x.da, y.da) << "version " << v << " sensor " << i;
+      EXPECT_NEAR(x.credit, y.credit, 1e-10 * y.credit);
+      EXPECT_NEAR(x.sum, y.sum, 1e-10 * y.sum);
+    }
+  }
+}
+
 // The annual product (I_b O_b) S on the GPU equals the CPU's, also with another sky for one
 // call, and a second product on the same backend does not disturb the first.
 TEST(CudaBackendTest, AnnualProductMatchesCpu) {
@@ -229,7 +249,7 @@ TEST(CudaBackendTest, AnnualTallyMatchesCpu) {
   if (!gpu) GTEST_SKIP() << "no CUDA device";
   const int steps = 3000;
   auto [outdoor, sky, indoor] = RandomProduct(steps);
-  const int sensors = static_cast<int>(indoor[0].rows()), batches = static_cast<int>(indoor.size());
+  const int batches = static_cast<int>(indoor.size());
   std::unique_ptr<DcBackend> cpu = MakeEmbreeBackend();
   absl::StatusOr<std::unique_ptr<AnnualProduct>> on_cpu = cpu->MakeAnnualProduct(outdoor, sky);
   absl::StatusOr<std::unique_ptr<AnnualProduct>> on_gpu = gpu->MakeAnnualProduct(outdoor, sky);
@@ -244,24 +264,8 @@ TEST(CudaBackendTest, AnnualTallyMatchesCpu) {
   absl::StatusOr<std::vector<HourTally>> from_gpu = (*on_gpu)->Tally(indoor, options);
   ASSERT_TRUE(expected.ok() && from_cpu.ok() && from_gpu.ok()) << from_gpu.status();
   ASSERT_EQ(from_gpu->size(), static_cast<size_t>(batches + 1));
-  for (const std::vector<HourTally>* other : {&*expected, &*from_cpu}) {
-    for (int v = 0; v <= batches; ++v) {
-      const HourTally &a = (*from_gpu)[v], &b = (*other)[v];
-      EXPECT_EQ(a.hours, b.hours);
-      EXPECT_EQ(a.all_in, b.all_in) << "version " << v;
-      EXPECT_EQ(a.any_below, b.any_below) << "version " << v;
-      EXPECT_EQ(a.any_above, b.any_above) << "version " << v;
-      ASSERT_EQ(a.sensors.size(), b.sensors.size());
-      for (int i = 0; i < sensors; ++i) {
-        const SensorHourTally &x = a.sensors[i], &y = b.sensors[i];
-        EXPECT_EQ(x.below, y.below) << "version " << v << " sensor " << i;
-        EXPECT_EQ(x.above, y.above) << "version " << v << " sensor " << i;
-        EXPECT_EQ(x.da, y.da) << "version " << v << " sensor " << i;
-        EXPECT_NEAR(x.credit, y.credit, 1e-10 * y.credit);
-        EXPECT_NEAR(x.sum, y.sum, 1e-10 * y.sum);
-      }
-    }
-  }
+  ExpectSameTallies(*from_gpu, *expected);
+  ExpectSameTallies(*from_gpu, *from_cpu);
   EXPECT_GT((*from_gpu)[0].any_below, 0);
   EXPECT_GT((*from_gpu)[0].any_above, 0);
   EXPECT_GT((*from_gpu)[0].sensors[0].below, steps / 10);
@@ -270,6 +274,40 @@ TEST(CudaBackendTest, AnnualTallyMatchesCpu) {
   indoor[3](2, 7) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ((*on_gpu)->Tally(indoor, options).status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_EQ((*on_cpu)->Tally(indoor, options).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+// The product of the sky alone (a job's final check) on the GPU equals the CPU's, for the
+// pilot's 32 batches and then the check's 8 through one product.
+TEST(CudaBackendTest, SkyProductMatchesCpu) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  std::srand(5);
+  const Matrix sky = Matrix::Random(kDaylightBins, 2000).cwiseAbs();
+  std::vector<Matrix> dc;
+  for (int b = 0; b < 32; ++b) dc.push_back(Matrix::Random(9, kDaylightBins).cwiseAbs());
+  std::unique_ptr<DcBackend> cpu = MakeEmbreeBackend();
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> on_cpu = cpu->MakeSkyProduct(sky);
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> on_gpu = gpu->MakeSkyProduct(sky);
+  ASSERT_TRUE(on_cpu.ok() && on_gpu.ok()) << on_gpu.status();
+  const MetricOptions options = QuartileLimits(dc[0] * sky);
+  for (const size_t count : {32, 8}) {
+    SCOPED_TRACE(count);
+    const std::vector<Matrix> some(dc.begin(), dc.begin() + count);
+    absl::StatusOr<std::vector<Matrix>> e = (*on_gpu)->Apply(some);
+    ASSERT_TRUE(e.ok()) << e.status();
+    ASSERT_EQ(e->size(), count);
+    for (size_t b = 0; b < count; ++b) {
+      const Matrix expected = dc[b] * sky;
+      EXPECT_LT(((*e)[b] - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff());
+    }
+    absl::StatusOr<std::vector<HourTally>> from_cpu = (*on_cpu)->Tally(some, options);
+    absl::StatusOr<std::vector<HourTally>> from_gpu = (*on_gpu)->Tally(some, options);
+    ASSERT_TRUE(from_cpu.ok() && from_gpu.ok()) << from_gpu.status();
+    ExpectSameTallies(*from_gpu, *from_cpu);
+  }
+  EXPECT_EQ((*on_gpu)->Tally({dc[0]}, options).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ((*on_gpu)->Tally({dc[0], Matrix::Zero(9, 288)}, options).status().code(),
+            absl::StatusCode::kInvalidArgument);
 }
 
 // A search's objective on the GPU, with I and E kept on the device, gives the tallies of
