@@ -486,6 +486,21 @@ struct Lanes {
   }
 };
 
+// How the search's designs are evaluated: on the lanes, in rounds where the job asks for racing
+// (by default where the backend's rounds pay).
+Racer::Setting RacerSetting(const v1::Sampling& sampling, const Lanes& lanes,
+                            const AnnualSetting& setting, const SearchSettings& search) {
+  return {.lanes = lanes.Tallies(),
+          .options = setting.options,
+          .analysed_hours = setting.analysed_hours,
+          .metric = setting.metric,
+          .objective = search.options.objective,
+          .racing = {.rounds = {sampling.racing_rounds().begin(), sampling.racing_rounds().end()},
+                     .standard_errors = sampling.racing_standard_errors()},
+          .enabled = sampling.has_racing() ? sampling.racing() : lanes.tallies.front()->RoundsPay(),
+          .audit = sampling.racing_audit()};
+}
+
 // The lanes' backends after `first`, made on the job's thread: the GPUs a lane may take are
 // that thread's (a daemon worker's, ThreadCudaDevices).
 absl::StatusOr<Lanes> MakeLanes(const v1::Sampling& sampling, const DcBackend& first) {
@@ -817,7 +832,6 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   FENESTRA_RETURN_IF_ERROR(made_setting.status());
   const AnnualSetting& setting = *made_setting;
   const OutdoorMatrix& matrix = outdoor != nullptr ? *outdoor : computed;
-  const MetricOptions& metric_options = setting.options;
   if (!(matrix.parts == indoor_options.parts)) {
     return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
   }
@@ -831,17 +845,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   // (5-15 ms at the job's end) made beside the search
   std::future<double> outdoor_error =
       std::async(std::launch::async, [&matrix] { return OutdoorMeanRelativeError(matrix); });
-  Racer racer({.lanes = lanes.Tallies(),
-               .options = metric_options,
-               .analysed_hours = setting.analysed_hours,
-               .metric = setting.metric,
-               .objective = search_settings.options.objective,
-               .racing = {.rounds = {spec.sampling().racing_rounds().begin(),
-                                     spec.sampling().racing_rounds().end()},
-                          .standard_errors = spec.sampling().racing_standard_errors()},
-               .enabled = spec.sampling().has_racing() ? spec.sampling().racing()
-                                                       : lanes.tallies.front()->RoundsPay(),
-               .audit = spec.sampling().racing_audit()});
+  Racer racer(RacerSetting(spec.sampling(), lanes, setting, search_settings));
 
   // The search
   if (callbacks.stage) callbacks.stage("search");
