@@ -127,9 +127,7 @@ class CudaAnnualProduct : public AnnualProduct {
                                                                  const Matrix& sky,
                                                                  const DeviceMatrices& on_device) {
     FENESTRA_RETURN_IF_ERROR(CheckOutdoorBatches(outdoor, sky));
-    std::string error;
-    std::unique_ptr<CudaAnnualTally> annual = CudaAnnualTally::Create(device, &error);
-    if (!annual) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
+    FENESTRA_ASSIGN_OR_RETURN(annual, NewTally(device));
     const bool from_device = on_device.data != nullptr && on_device.device == device;
     std::vector<const double*> batches;
     for (size_t b = 0; b < outdoor.size(); ++b) {
@@ -145,9 +143,7 @@ class CudaAnnualProduct : public AnnualProduct {
   // The product of the sky alone (DcBackend::MakeSkyProduct).
   static absl::StatusOr<std::unique_ptr<CudaAnnualProduct>> MakeSky(int device, const Matrix& sky) {
     FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
-    std::string error;
-    std::unique_ptr<CudaAnnualTally> annual = CudaAnnualTally::Create(device, &error);
-    if (!annual) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
+    FENESTRA_ASSIGN_OR_RETURN(annual, NewTally(device));
     FENESTRA_RETURN_IF_ERROR(
         Check(annual->SetSkyProduct(sky.data(), static_cast<int>(sky.cols()))));
     return std::unique_ptr<CudaAnnualProduct>(
@@ -216,6 +212,13 @@ class CudaAnnualProduct : public AnnualProduct {
  private:
   // batches_ of the product of the sky alone: its O_b, the identity, pair with any count
   static constexpr int kAnyBatches = 0;
+
+  static absl::StatusOr<std::unique_ptr<CudaAnnualTally>> NewTally(int device) {
+    std::string error;
+    std::unique_ptr<CudaAnnualTally> annual = CudaAnnualTally::Create(device, &error);
+    if (!annual) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
+    return annual;
+  }
 
   CudaAnnualProduct(std::unique_ptr<CudaAnnualTally> annual, int batches, Eigen::Index rows,
                     Eigen::Index steps)
