@@ -12,6 +12,7 @@
 #include "core/dc/backend_support.h"
 #include "core/dc/dc_backend.h"
 #include "core/dc/two_stage.h"
+#include "core/metrics/metric_errors.h"
 #include "core/trace/one_stage_cpu.h"
 
 #if FENESTRA_WITH_CUDA
@@ -164,10 +165,7 @@ class CudaAnnualProduct : public AnnualProduct {
                                                const MetricOptions& options) override {
     const int batches = static_cast<int>(indoor_batches.size());
     FENESTRA_RETURN_IF_ERROR(CheckBatchCount(batches));
-    if (batches < 2) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("standard errors need at least 2 batches, got ", batches));
-    }
+    FENESTRA_RETURN_IF_ERROR(CheckErrorBatches(batches));
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
     const int sensors = static_cast<int>(indoor_batches[0].rows());
     DeviceTallies tallies(batches, sensors, options);

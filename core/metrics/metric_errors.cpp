@@ -105,6 +105,12 @@ absl::StatusOr<AnnualMetricsEstimate> Jackknife(std::span<const Matrix> batches,
 
 }  // namespace
 
+absl::Status CheckErrorBatches(int batches) {
+  if (batches >= 2) return absl::OkStatus();
+  return absl::InvalidArgumentError(
+      absl::StrCat("standard errors need at least 2 batches, got ", batches));
+}
+
 double JackknifeStandardError(std::span<const double> leave_one_out_values) {
   const size_t b = leave_one_out_values.size();
   if (b < 2) return 0;
@@ -119,10 +125,7 @@ double JackknifeStandardError(std::span<const double> leave_one_out_values) {
 absl::StatusOr<std::vector<HourTally>> TallyBatchVersions(
     std::span<const Matrix> illuminance_batches_lux, const MetricOptions& options) {
   const int batches = static_cast<int>(illuminance_batches_lux.size());
-  if (batches < 2) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("standard errors need at least 2 batches, got ", batches));
-  }
+  FENESTRA_RETURN_IF_ERROR(CheckErrorBatches(batches));
   const Matrix& first = illuminance_batches_lux[0];
   for (const Matrix& e : illuminance_batches_lux) {
     if (e.rows() != first.rows() || e.cols() != first.cols()) {
@@ -203,10 +206,7 @@ absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsWithErrors(
     std::span<const int> columns, const std::vector<bool>& occupied, const MetricOptions& options,
     const Matrix* direct_illuminance_lux) {
   const int batches = static_cast<int>(dc_batches.size());
-  if (batches < 2) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("standard errors need at least 2 batches, got ", batches));
-  }
+  FENESTRA_RETURN_IF_ERROR(CheckErrorBatches(batches));
   for (const Matrix& d : dc_batches) {
     if (d.rows() != dc_batches[0].rows() || d.cols() != dc_batches[0].cols()) {
       return absl::InvalidArgumentError("daylight coefficient batches differ in shape");
@@ -237,10 +237,7 @@ absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromIlluminanceBatches(
     const std::vector<bool>& occupied, const MetricOptions& options,
     const Matrix* direct_illuminance_lux) {
   const int batches = static_cast<int>(illuminance_batches_lux.size());
-  if (batches < 2) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("standard errors need at least 2 batches, got ", batches));
-  }
+  FENESTRA_RETURN_IF_ERROR(CheckErrorBatches(batches));
   for (const Matrix& e : illuminance_batches_lux) {
     if (e.rows() != illuminance_batches_lux[0].rows() ||
         e.cols() != static_cast<Eigen::Index>(columns.size())) {

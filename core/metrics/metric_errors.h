@@ -35,6 +35,9 @@ struct AnnualMetricsEstimate {
 // The jackknife standard error from the B leave-one-out values; 0 when B < 2.
 double JackknifeStandardError(std::span<const double> leave_one_out_values);
 
+// InvalidArgument unless there are at least 2 batches, which standard errors need.
+absl::Status CheckErrorBatches(int batches);
+
 // The tallies of the versions of E that AnnualMetricsFromTallies takes, from B >= 2 batch
 // illuminances (each n x hours, lx, every column an analysed hour): E = mean of the E_b,
 // then each E_(-b) = (B E - E_b) / (B - 1). Assumes valid options (CheckMetricOptions).

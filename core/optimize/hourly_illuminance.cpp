@@ -6,6 +6,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
 #include "core/metrics/illuminance.h"
+#include "core/metrics/metric_errors.h"
 
 namespace fenestra {
 namespace {
@@ -46,9 +47,7 @@ absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
 
   // E_b = (I_b O_b) S over the steps with daylight, for each batch b
   FENESTRA_ASSIGN_OR_RETURN(batches, illuminance(SkyColumnsInLux(sky.radiance, lit)));
-  if (batches.size() < 2) {
-    return absl::InvalidArgumentError("standard errors need at least 2 batches");
-  }
+  FENESTRA_RETURN_IF_ERROR(CheckErrorBatches(static_cast<int>(batches.size())));
   for (const Matrix& batch : batches) {
     if (batch.rows() != sensors || batch.cols() != static_cast<Eigen::Index>(lit.size())) {
       return absl::InvalidArgumentError(absl::StrCat("a batch of the illuminance is ", batch.rows(),

@@ -335,9 +335,10 @@ struct CudaAnnualTally::Impl {
   DeviceBuffer<unsigned long long> tallies;
   std::vector<unsigned long long> host_tallies;
   PinnedBuffer staging;
-  int cells = 0, steps = 0, batches = 0;  // cells: columns of I, rows of O_b
-  bool tensor_cores = false;              // I_b O_b by MultiplyTransposedMmaKernel
-  bool sky_only = false;                  // the O_b are the identity: E_b = I_b S (SetSkyProduct)
+  int cells = 0, steps = 0;   // cells: columns of I, rows of O_b
+  int outdoor_batches = 0;    // the O_b; 0 for the sky's product (sky_only)
+  bool tensor_cores = false;  // I_b O_b by MultiplyTransposedMmaKernel
+  bool sky_only = false;      // the O_b are the identity: E_b = I_b S (SetSkyProduct)
 
   std::string UploadIndoor(const double* host_indoor, int rows) {
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(device));
@@ -486,7 +487,7 @@ std::string CudaAnnualTally::SetProduct(const std::vector<const double*>& outdoo
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaStreamSynchronize(cudaStreamPerThread));
   d.cells = cells;
   d.steps = steps;
-  d.batches = batches;
+  d.outdoor_batches = batches;
   d.sky_only = false;
   return "";
 }
@@ -499,7 +500,7 @@ std::string CudaAnnualTally::SetSkyProduct(const double* sky, int steps) {
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaStreamSynchronize(cudaStreamPerThread));
   d.cells = kTregenzaBinCount;
   d.steps = steps;
-  d.batches = 0;
+  d.outdoor_batches = 0;
   d.sky_only = true;
   return "";
 }
@@ -508,12 +509,12 @@ std::string CudaAnnualTally::Illuminance(const double* indoor, int rows, double*
                                          const double* other_sky, int other_steps) {
   Impl& d = *impl_;
   if (d.cells == 0) return kNoProduct;
-  if (!d.sky_only && rows % d.batches != 0) {
+  if (!d.sky_only && rows % d.outdoor_batches != 0) {
     return "CUDA annual product: " + std::to_string(rows) + " indoor rows do not split into " +
-           std::to_string(d.batches) + " batches";
+           std::to_string(d.outdoor_batches) + " batches";
   }
   if (std::string error = d.UploadIndoor(indoor, rows); !error.empty()) return error;
-  return d.DownloadIlluminance(rows, d.batches, illuminance, other_sky, other_steps);
+  return d.DownloadIlluminance(rows, d.outdoor_batches, illuminance, other_sky, other_steps);
 }
 
 std::string CudaAnnualTally::Tally(const double* indoor, int batches, int sensors,
@@ -554,10 +555,10 @@ std::string CudaAnnualTally::CheckPairs(int columns, int batches) const {
   const Impl& d = *impl_;
   if (d.cells == 0) return kNoProduct;
   if (d.sky_only && columns == d.cells && batches >= 2 && batches <= kMaxTallyBatches) return "";
-  if (columns != d.cells || batches != d.batches) {
+  if (columns != d.cells || batches != d.outdoor_batches) {
     return "CUDA annual product: " + std::to_string(d.cells) + " rows in " +
-           std::to_string(d.batches) + " batches, the indoor stage " + std::to_string(columns) +
-           " columns in " + std::to_string(batches);
+           std::to_string(d.outdoor_batches) + " batches, the indoor stage " +
+           std::to_string(columns) + " columns in " + std::to_string(batches);
   }
   return "";
 }
