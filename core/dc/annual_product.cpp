@@ -1,5 +1,5 @@
-// The annual product E_b = (I_b O_b) S on the CPU (Eigen, on all cores); the
-// default tallies of E for the metrics.
+// The annual product E_b = (I_b O_b) S on the CPU (Eigen, on all cores), and the tallies
+// of E for the metrics.
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -22,29 +22,35 @@ class CpuAnnualProduct : public AnnualProduct {
   }
   absl::StatusOr<std::vector<Matrix>> ApplyToSky(const std::vector<Matrix>& indoor_batches,
                                                  const Matrix& sky) override {
-    FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
-    if (outdoor_.empty()) {
-      FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, kDaylightBins));
-      return SplitBatches(ProductOnAllCores(stacked, sky), indoor_batches.size());
-    }
-    FENESTRA_RETURN_IF_ERROR(CheckPairs(indoor_batches, outdoor_));
-    // Every batch's light through the window, then all batches' E in one product
-    return SplitBatches(ProductOnAllCores(ThroughWindow(indoor_batches, outdoor_), sky),
-                        indoor_batches.size());
+    FENESTRA_ASSIGN_OR_RETURN(stacked, StackedIlluminance(indoor_batches, sky));
+    return SplitBatches(stacked, indoor_batches.size());
+  }
+  // From E as the product makes it, the batches stacked, not copied apart
+  absl::StatusOr<std::vector<HourTally>> Tally(const std::vector<Matrix>& indoor_batches,
+                                               const MetricOptions& options) override {
+    FENESTRA_ASSIGN_OR_RETURN(stacked, StackedIlluminance(indoor_batches, sky_));
+    return TallyStackedVersions(stacked, static_cast<int>(indoor_batches.size()), options);
   }
 
  private:
+  // E_b of every batch through `sky`, batch b's rows from b n on.
+  absl::StatusOr<Matrix> StackedIlluminance(const std::vector<Matrix>& indoor_batches,
+                                            const Matrix& sky) const {
+    FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
+    if (outdoor_.empty()) {
+      FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, kDaylightBins));
+      return ProductOnAllCores(stacked, sky);
+    }
+    FENESTRA_RETURN_IF_ERROR(CheckPairs(indoor_batches, outdoor_));
+    // Every batch's light through the window, then all batches' E in one product
+    return ProductOnAllCores(ThroughWindow(indoor_batches, outdoor_), sky);
+  }
+
   std::vector<Matrix> outdoor_;
   Matrix sky_;
 };
 
 }  // namespace
-
-absl::StatusOr<std::vector<HourTally>> AnnualProduct::Tally(
-    const std::vector<Matrix>& indoor_batches, const MetricOptions& options) {
-  FENESTRA_ASSIGN_OR_RETURN(illuminance, Apply(indoor_batches));
-  return TallyBatchVersions(illuminance, options);
-}
 
 absl::StatusOr<std::unique_ptr<AnnualProduct>> DcBackend::MakeAnnualProduct(
     const std::vector<Matrix>& outdoor_batches, const Matrix& sky) {

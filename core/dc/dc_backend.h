@@ -118,10 +118,10 @@ class AnnualProduct {
   virtual absl::StatusOr<std::vector<Matrix>> ApplyToSky(const std::vector<Matrix>& indoor_batches,
                                                          const Matrix& sky) = 0;
   // The tallies of E of the mean of the B >= 2 batches, then of each leave-one-out mean
-  // (TallyBatchVersions in core/metrics/metric_errors.h), every column of S an analysed hour.
-  // By default from Apply; a GPU can tally where E is. InvalidArgument as Apply, or B < 2.
+  // (TallyBatchVersions in core/metrics/metric_errors.h), every column of S an analysed hour;
+  // a GPU tallies where E is. InvalidArgument as Apply, or B < 2.
   virtual absl::StatusOr<std::vector<HourTally>> Tally(const std::vector<Matrix>& indoor_batches,
-                                                       const MetricOptions& options);
+                                                       const MetricOptions& options) = 0;
 };
 
 // A design's indoor paths in rounds (racing, core/optimize/racing.h): each batch's paths

@@ -103,44 +103,54 @@ int AnalysedHours(const std::vector<bool>& occupied, HourBasis hours) {
   return static_cast<int>(std::count(occupied.begin(), occupied.end(), true));
 }
 
+HourTallyBuilder::HourTallyBuilder(int sensors, int64_t hours, const MetricOptions& options)
+    : any_below_(hours, 0),
+      any_above_(hours, 0),
+      lower_(options.udi_lower_lux),
+      upper_(options.udi_upper_lux),
+      da_(options.da_threshold_lux) {
+  tally_.hours = hours;
+  tally_.sensors.resize(sensors);
+}
+
+void HourTallyBuilder::AddRow(int sensor, const double* row) {
+  // Without branches: the comparisons are data, not control flow (hours fall either side of
+  // the limits at random, which a branch predictor cannot learn); noting per hour whether
+  // some sensor left the range
+  int64_t below = 0, above = 0, da_hours = 0;
+  double credit = 0, sum = 0;
+  uint8_t* any_below = any_below_.data();
+  uint8_t* any_above = any_above_.data();
+  for (int64_t h = 0; h < tally_.hours; ++h) {
+    const double v = row[h];
+    const HourClass c = ClassifyHour(v, lower_, upper_, da_);
+    below += c.below;
+    above += c.above;
+    any_below[h] |= c.below;
+    any_above[h] |= c.above;
+    da_hours += c.da;
+    credit += c.credit;
+    sum += v;
+  }
+  tally_.sensors[sensor] = {below, above, da_hours, credit, sum};
+}
+
+HourTally HourTallyBuilder::Finish() {
+  for (int64_t h = 0; h < tally_.hours; ++h) {
+    tally_.all_in += !any_below_[h] && !any_above_[h];
+    tally_.any_below += any_below_[h];
+    tally_.any_above += any_above_[h];
+  }
+  return std::move(tally_);
+}
+
 HourTally TallyHours(const Matrix& illuminance_lux, const MetricOptions& options) {
   const Matrix& e = illuminance_lux;
-  const double a = options.udi_lower_lux;
-  const double b = options.udi_upper_lux;
-  const double da = options.da_threshold_lux;
-  const Eigen::Index hours = e.cols();
-  HourTally tally;
-  tally.hours = hours;
-  tally.sensors.resize(e.rows());
-  std::vector<uint8_t> any_below(hours, 0);
-  std::vector<uint8_t> any_above(hours, 0);
-
-  // Count per sensor; note per hour whether some sensor left the range
+  HourTallyBuilder builder(static_cast<int>(e.rows()), e.cols(), options);
   for (Eigen::Index i = 0; i < e.rows(); ++i) {
-    const double* row = e.data() + i * hours;
-    // Without branches: the comparisons are data, not control flow (hours fall either side
-    // of the limits at random, which a branch predictor cannot learn)
-    int64_t below = 0, above = 0, da_hours = 0;
-    double credit = 0, sum = 0;
-    for (Eigen::Index h = 0; h < hours; ++h) {
-      const double v = row[h];
-      const HourClass c = ClassifyHour(v, a, b, da);
-      below += c.below;
-      above += c.above;
-      any_below[h] |= c.below;
-      any_above[h] |= c.above;
-      da_hours += c.da;
-      credit += c.credit;
-      sum += v;
-    }
-    tally.sensors[i] = {below, above, da_hours, credit, sum};
+    builder.AddRow(static_cast<int>(i), e.data() + i * e.cols());
   }
-  for (Eigen::Index h = 0; h < hours; ++h) {
-    tally.all_in += !any_below[h] && !any_above[h];
-    tally.any_below += any_below[h];
-    tally.any_above += any_above[h];
-  }
-  return tally;
+  return builder.Finish();
 }
 
 AnnualMetrics MetricsFromTally(const HourTally& tally, int analysed_hours,

@@ -129,6 +129,21 @@ struct HourTally {
 // Assumes valid options (CheckMetricOptions).
 HourTally TallyHours(const Matrix& illuminance_lux, const MetricOptions& options);
 
+// TallyHours one sensor's row at a time: each row (`hours` values, lx) to AddRow, then
+// Finish. The same sums in the same order, so the same tally to the last bit.
+class HourTallyBuilder {
+ public:
+  HourTallyBuilder(int sensors, int64_t hours, const MetricOptions& options);
+  // Sensor `sensor`'s row. Assumes valid options and a sensor within range.
+  void AddRow(int sensor, const double* row);
+  HourTally Finish();
+
+ private:
+  HourTally tally_;
+  std::vector<uint8_t> any_below_, any_above_;  // per hour
+  double lower_, upper_, da_;
+};
+
 // The metrics of a tally over `analysed_hours` >= tally.hours (> 0) hours, those beyond the
 // tally being dark (E = 0). Without ASE (has_ase false; see AddAse). Assumes valid options.
 AnnualMetrics MetricsFromTally(const HourTally& tally, int analysed_hours,

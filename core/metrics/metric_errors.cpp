@@ -1,5 +1,6 @@
 #include "core/metrics/metric_errors.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <utility>
@@ -103,6 +104,42 @@ absl::StatusOr<AnnualMetricsEstimate> Jackknife(std::span<const Matrix> batches,
   return estimate;
 }
 
+// The tallies of the versions of E (TallyBatchVersions) from B >= 2 batches of `sensors` x
+// `hours` finite values, batch b's row of sensor i at row_of(b, i), one sensor at a time and
+// without a matrix per version: E of the mean of all batches (summed in batch order, then
+// divided), then of the mean without each batch in turn, (B E - E_b) / (B - 1), the same
+// arithmetic as those matrices' and so the same tallies.
+template <class RowOf>
+std::vector<HourTally> TallyVersions(int batches, Eigen::Index sensors, Eigen::Index hours,
+                                     const MetricOptions& options, const RowOf& row_of) {
+  static_assert(Matrix::IsRowMajor, "a sensor's hours lie side by side");
+  std::vector<HourTallyBuilder> builders;
+  for (int v = 0; v <= batches; ++v) {
+    builders.emplace_back(static_cast<int>(sensors), hours, options);
+  }
+  const double scale = 1.0 / (batches - 1);
+  std::vector<double> mean(hours), left_out(hours);
+  for (Eigen::Index i = 0; i < sensors; ++i) {
+    const double* first = row_of(0, i);
+    std::copy(first, first + hours, mean.begin());
+    for (int b = 1; b < batches; ++b) {
+      const double* e_b = row_of(b, i);
+      for (Eigen::Index h = 0; h < hours; ++h) mean[h] += e_b[h];
+    }
+    for (double& e : mean) e /= batches;
+    builders[0].AddRow(static_cast<int>(i), mean.data());
+    for (int b = 0; b < batches; ++b) {
+      const double* e_b = row_of(b, i);
+      for (Eigen::Index h = 0; h < hours; ++h) left_out[h] = (batches * mean[h] - e_b[h]) * scale;
+      builders[1 + b].AddRow(static_cast<int>(i), left_out.data());
+    }
+  }
+  std::vector<HourTally> versions;
+  versions.reserve(batches + 1);
+  for (HourTallyBuilder& builder : builders) versions.push_back(builder.Finish());
+  return versions;
+}
+
 }  // namespace
 
 absl::Status CheckErrorBatches(int batches) {
@@ -135,19 +172,23 @@ absl::StatusOr<std::vector<HourTally>> TallyBatchVersions(
     }
     if (!e.allFinite()) return absl::InvalidArgumentError("illuminance has a non-finite value");
   }
+  return TallyVersions(batches, first.rows(), first.cols(), options, [&](int b, Eigen::Index i) {
+    return illuminance_batches_lux[b].data() + i * first.cols();
+  });
+}
 
-  // E of the mean of all batches, then of the mean without each batch in turn
-  Matrix full = first;
-  for (int b = 1; b < batches; ++b) full += illuminance_batches_lux[b];
-  full /= batches;
-  std::vector<HourTally> versions;
-  versions.reserve(batches + 1);
-  versions.push_back(TallyHours(full, options));
-  const double scale = 1.0 / (batches - 1);
-  for (const Matrix& e_b : illuminance_batches_lux) {
-    versions.push_back(TallyHours((batches * full - e_b) * scale, options));
+absl::StatusOr<std::vector<HourTally>> TallyStackedVersions(const Matrix& stacked, int batches,
+                                                            const MetricOptions& options) {
+  FENESTRA_RETURN_IF_ERROR(CheckErrorBatches(batches));
+  if (stacked.rows() % batches != 0) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        stacked.rows(), " rows of illuminance do not split into ", batches, " batches"));
   }
-  return versions;
+  if (!stacked.allFinite()) return absl::InvalidArgumentError("illuminance has a non-finite value");
+  const Eigen::Index sensors = stacked.rows() / batches;
+  return TallyVersions(batches, sensors, stacked.cols(), options, [&](int b, Eigen::Index i) {
+    return stacked.data() + (b * sensors + i) * stacked.cols();
+  });
 }
 
 absl::StatusOr<AnnualMetricsEstimate> AnnualMetricsFromTallies(

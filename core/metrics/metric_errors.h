@@ -45,6 +45,12 @@ absl::Status CheckErrorBatches(int batches);
 absl::StatusOr<std::vector<HourTally>> TallyBatchVersions(
     std::span<const Matrix> illuminance_batches_lux, const MetricOptions& options);
 
+// TallyBatchVersions of B batches stacked in `stacked` (B n x hours, batch b's n rows from
+// row b n on), as the annual products make them, without copying them apart. InvalidArgument
+// for fewer than 2 batches, rows that do not split into B, or a non-finite value.
+absl::StatusOr<std::vector<HourTally>> TallyStackedVersions(const Matrix& stacked, int batches,
+                                                            const MetricOptions& options);
+
 // Metrics and standard errors from the tallies of the versions of E: versions[0] of the mean
 // of the B >= 2 batches, versions[1 + b] of E_(-b), the hours beyond them dark as in
 // MetricsFromTally; no ASE. InvalidArgument for fewer than 3 versions, versions that differ

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <span>
 #include <vector>
@@ -263,6 +264,71 @@ TEST(MetricErrorsTest, TalliesRejectBadVersions) {
   EXPECT_FALSE(TallyBatchVersions(std::span<const Matrix>(e.data(), 1), {}).ok());
   e[1] = Matrix::Ones(2, 13);
   EXPECT_FALSE(TallyBatchVersions(e, {}).ok());
+}
+
+// Two tallies equal to the last bit.
+void ExpectSameTally(const HourTally& got, const HourTally& want) {
+  EXPECT_EQ(got.hours, want.hours);
+  EXPECT_EQ(got.all_in, want.all_in);
+  EXPECT_EQ(got.any_below, want.any_below);
+  EXPECT_EQ(got.any_above, want.any_above);
+  ASSERT_EQ(got.sensors.size(), want.sensors.size());
+  for (size_t i = 0; i < got.sensors.size(); ++i) {
+    EXPECT_EQ(got.sensors[i].below, want.sensors[i].below) << i;
+    EXPECT_EQ(got.sensors[i].above, want.sensors[i].above) << i;
+    EXPECT_EQ(got.sensors[i].da, want.sensors[i].da) << i;
+    EXPECT_EQ(got.sensors[i].credit, want.sensors[i].credit) << i;
+    EXPECT_EQ(got.sensors[i].sum, want.sensors[i].sum) << i;
+  }
+}
+
+// The versions' tallies from batches stacked in one matrix, as the CPU's annual product makes
+// them, and from the batches apart: both those of the version matrices, to the last bit.
+TEST(MetricErrorsTest, StackedBatchesTallyAsTheVersionMatrices) {
+  const int batches = 5, sensors = 3, hours = 200;
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> log_lux(std::log(20.0), std::log(8000.0));
+  std::vector<Matrix> e(batches, Matrix(sensors, hours));
+  Matrix stacked(batches * sensors, hours);
+  for (int b = 0; b < batches; ++b) {
+    for (int i = 0; i < sensors; ++i) {
+      for (int h = 0; h < hours; ++h) e[b](i, h) = std::exp(log_lux(rng));
+    }
+    stacked.middleRows(b * sensors, sensors) = e[b];
+  }
+  MetricOptions options;
+  Matrix mean = e[0];
+  for (int b = 1; b < batches; ++b) mean += e[b];
+  mean /= batches;
+  std::vector<HourTally> want = {TallyHours(mean, options)};
+  for (const Matrix& e_b : e) {
+    want.push_back(TallyHours((batches * mean - e_b) * (1.0 / (batches - 1)), options));
+  }
+  // Every class occurs: below, within and above the UDI range, some hours all within
+  EXPECT_GT(want[0].any_below, 0);
+  EXPECT_GT(want[0].any_above, 0);
+  EXPECT_GT(want[0].all_in, 0);
+
+  absl::StatusOr<std::vector<HourTally>> apart = TallyBatchVersions(e, options);
+  absl::StatusOr<std::vector<HourTally>> together = TallyStackedVersions(stacked, batches, options);
+  ASSERT_TRUE(apart.ok()) << apart.status();
+  ASSERT_TRUE(together.ok()) << together.status();
+  ASSERT_EQ(apart->size(), want.size());
+  ASSERT_EQ(together->size(), want.size());
+  for (size_t v = 0; v < want.size(); ++v) {
+    SCOPED_TRACE(v);
+    ExpectSameTally((*apart)[v], want[v]);
+    ExpectSameTally((*together)[v], want[v]);
+  }
+
+  // One batch, rows that do not split into the batches, a value that is not finite
+  EXPECT_EQ(TallyStackedVersions(stacked.topRows(sensors), 1, options).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(TallyStackedVersions(stacked, 4, options).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  stacked(7, 3) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(TallyStackedVersions(stacked, batches, options).status().code(),
+            absl::StatusCode::kInvalidArgument);
 }
 
 TEST(MetricErrorsTest, RejectsBadInput) {
