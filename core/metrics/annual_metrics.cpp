@@ -121,7 +121,8 @@ void HourTallyBuilder::AddRow(int sensor, const double* row) {
   double credit = 0, sum = 0;
   uint8_t* any_below = any_below_.data();
   uint8_t* any_above = any_above_.data();
-  for (int64_t h = 0; h < tally_.hours; ++h) {
+  const int64_t hours = tally_.hours;  // read once: the flags' stores may alias it
+  for (int64_t h = 0; h < hours; ++h) {
     const double v = row[h];
     const HourClass c = ClassifyHour(v, lower_, upper_, da_);
     below += c.below;
