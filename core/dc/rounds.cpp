@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -24,8 +25,10 @@ std::pair<double, double> Weights(double paths_a, double paths_b) {
   return {paths_a / (paths_a + paths_b), paths_b / (paths_a + paths_b)};
 }
 
-Matrix MergeMeans(const Matrix& a, const Matrix& b, std::pair<double, double> w) {
-  return w.first * a + w.second * b;
+// b becomes the mean of a and b weighted by `w`, in place (a round's matrices are large).
+template <class M>
+void MergeMeanInto(const M& a, M& b, std::pair<double, double> w) {
+  b = w.first * a + w.second * b;
 }
 
 template <class M>
@@ -144,16 +147,16 @@ std::pair<double, double> CheapestGrowth(const Eigen::VectorXd& x, const Eigen::
   return best;
 }
 
-// Merges the batches of two rounds batch by batch, weighted by `w`, into `merged`, and
-// sets its standard error from their scatter about `merged_mean`.
-void MergeBatches(const std::vector<Matrix>& a, const std::vector<Matrix>& b,
-                  std::pair<double, double> w, const Matrix& merged_mean,
-                  std::vector<Matrix>& merged, Matrix& standard_error) {
+// Merges the batches of round a into those of round b, batch by batch, weighted by `w`, and
+// sets `standard_error` from their scatter about `merged_mean`.
+void MergeBatchesInto(const std::vector<Matrix>& a, std::vector<Matrix>& b,
+                      std::pair<double, double> w, const Matrix& merged_mean,
+                      Matrix& standard_error) {
   const double batches = static_cast<double>(b.size());
   Matrix variance = Matrix::Zero(merged_mean.rows(), merged_mean.cols());
   for (size_t k = 0; k < b.size(); ++k) {
-    merged[k] = MergeMeans(a[k], b[k], w);
-    variance += (merged[k] - merged_mean).cwiseAbs2();
+    MergeMeanInto(a[k], b[k], w);
+    variance += (b[k] - merged_mean).cwiseAbs2();
   }
   standard_error = (variance / (batches * (batches - 1))).cwiseSqrt();
 }
@@ -170,35 +173,35 @@ uint64_t RoundSeed(uint64_t seed, int round) {
   return z ^ (z >> 31);
 }
 
-absl::StatusOr<OneStageResult> MergeRounds(const OneStageResult& a, const OneStageResult& b) {
+absl::StatusOr<OneStageResult> MergeRounds(const OneStageResult& a, OneStageResult b) {
   FENESTRA_RETURN_IF_ERROR(SameShape(a.coefficients, b.coefficients, "D"));
   if (a.batch_coefficients.size() != b.batch_coefficients.size()) {
     return absl::InvalidArgumentError("rounds with different batch counts");
   }
   const auto w = Weights(a.paths_per_sensor, b.paths_per_sensor);
-  OneStageResult m = b;
-  m.coefficients = MergeMeans(a.coefficients, b.coefficients, w);
-  m.standard_error = MergeErrors(a.standard_error, b.standard_error, w);
-  m.sky_sum = w.first * a.sky_sum + w.second * b.sky_sum;
-  m.sky_sum_standard_error = MergeErrors(a.sky_sum_standard_error, b.sky_sum_standard_error, w);
-  for (size_t k = 0; k < b.batch_coefficients.size(); ++k) {
-    m.batch_coefficients[k] = MergeMeans(a.batch_coefficients[k], b.batch_coefficients[k], w);
+  OneStageResult m = std::move(b);
+  MergeMeanInto(a.coefficients, m.coefficients, w);
+  m.standard_error = MergeErrors(a.standard_error, m.standard_error, w);
+  MergeMeanInto(a.sky_sum, m.sky_sum, w);
+  m.sky_sum_standard_error = MergeErrors(a.sky_sum_standard_error, m.sky_sum_standard_error, w);
+  for (size_t k = 0; k < m.batch_coefficients.size(); ++k) {
+    MergeMeanInto(a.batch_coefficients[k], m.batch_coefficients[k], w);
   }
-  m.paths_per_sensor = a.paths_per_sensor + b.paths_per_sensor;
-  m.rays_traced = a.rays_traced + b.rays_traced;
-  m.branches = a.branches + b.branches;
-  m.pilot_paths = a.pilot_paths + b.pilot_paths;
-  m.importance_cells = std::max(a.importance_cells, b.importance_cells);
-  m.escaped_paths = a.escaped_paths + b.escaped_paths;
-  m.roulette_paths = a.roulette_paths + b.roulette_paths;
-  m.bounce_limit_paths = a.bounce_limit_paths + b.bounce_limit_paths;
-  m.truncated_paths = a.truncated_paths + b.truncated_paths;
-  m.max_path_weight = std::max(a.max_path_weight, b.max_path_weight);
-  m.wall_seconds = a.wall_seconds + b.wall_seconds;
+  m.paths_per_sensor += a.paths_per_sensor;
+  m.rays_traced += a.rays_traced;
+  m.branches += a.branches;
+  m.pilot_paths += a.pilot_paths;
+  m.importance_cells = std::max(a.importance_cells, m.importance_cells);
+  m.escaped_paths += a.escaped_paths;
+  m.roulette_paths += a.roulette_paths;
+  m.bounce_limit_paths += a.bounce_limit_paths;
+  m.truncated_paths += a.truncated_paths;
+  m.max_path_weight = std::max(a.max_path_weight, m.max_path_weight);
+  m.wall_seconds += a.wall_seconds;
   return m;
 }
 
-absl::StatusOr<OutdoorResult> MergeRounds(const OutdoorResult& a, const OutdoorResult& b) {
+absl::StatusOr<OutdoorResult> MergeRounds(const OutdoorResult& a, OutdoorResult b) {
   FENESTRA_RETURN_IF_ERROR(SameShape(a.coefficients, b.coefficients, "O"));
   if (a.basis_cells != b.basis_cells || !(a.parts == b.parts)) {
     return absl::InvalidArgumentError("outdoor rounds with different window cells");
@@ -208,30 +211,30 @@ absl::StatusOr<OutdoorResult> MergeRounds(const OutdoorResult& a, const OutdoorR
         "outdoor rounds with different batch counts (at least 2 needed)");
   }
   const auto w = Weights(a.paths_per_cell, b.paths_per_cell);
-  OutdoorResult m = b;
-  m.coefficients = MergeMeans(a.coefficients, b.coefficients, w);
-  MergeBatches(a.batches, b.batches, w, m.coefficients, m.batches, m.standard_error);
-  m.sky_view = w.first * a.sky_view + w.second * b.sky_view;
-  m.paths_per_cell = a.paths_per_cell + b.paths_per_cell;
-  m.rays_traced = a.rays_traced + b.rays_traced;
-  m.wall_seconds = a.wall_seconds + b.wall_seconds;
+  OutdoorResult m = std::move(b);
+  MergeMeanInto(a.coefficients, m.coefficients, w);
+  MergeBatchesInto(a.batches, m.batches, w, m.coefficients, m.standard_error);
+  MergeMeanInto(a.sky_view, m.sky_view, w);
+  m.paths_per_cell += a.paths_per_cell;
+  m.rays_traced += a.rays_traced;
+  m.wall_seconds += a.wall_seconds;
   return m;
 }
 
-absl::StatusOr<IndoorResult> MergeRounds(const IndoorResult& a, const IndoorResult& b) {
+absl::StatusOr<IndoorResult> MergeRounds(const IndoorResult& a, IndoorResult b) {
   FENESTRA_RETURN_IF_ERROR(SameShape(a.coefficients, b.coefficients, "I"));
   if (!(a.parts == b.parts) || a.batches.size() != b.batches.size() || a.batches.size() < 2) {
     return absl::InvalidArgumentError(
         "indoor rounds with different window parts or batch counts (at least 2 needed)");
   }
   const auto w = Weights(a.paths_per_sensor, b.paths_per_sensor);
-  IndoorResult m = b;
-  m.coefficients = MergeMeans(a.coefficients, b.coefficients, w);
-  MergeBatches(a.batches, b.batches, w, m.coefficients, m.batches, m.standard_error);
-  m.paths_per_sensor = a.paths_per_sensor + b.paths_per_sensor;
-  m.rays_traced = a.rays_traced + b.rays_traced;
-  m.wall_seconds = a.wall_seconds + b.wall_seconds;
-  m.trace_seconds = a.trace_seconds + b.trace_seconds;
+  IndoorResult m = std::move(b);
+  MergeMeanInto(a.coefficients, m.coefficients, w);
+  MergeBatchesInto(a.batches, m.batches, w, m.coefficients, m.standard_error);
+  m.paths_per_sensor += a.paths_per_sensor;
+  m.rays_traced += a.rays_traced;
+  m.wall_seconds += a.wall_seconds;
+  m.trace_seconds += a.trace_seconds;
   return m;
 }
 
@@ -307,7 +310,7 @@ absl::StatusOr<OneStageToTarget> TraceOneStageToTarget(
     options.paths_per_sensor = std::max<int64_t>(2, std::llround((plan.factor[0] - 1) * paths));
     options.seed = RoundSeed(first_round.seed, round + 1);
     FENESTRA_ASSIGN_OR_RETURN(next, ComputeOneStage(scene, design, options, backend));
-    FENESTRA_ASSIGN_OR_RETURN(merged, MergeRounds(run.result, next));
+    FENESTRA_ASSIGN_OR_RETURN(merged, MergeRounds(run.result, std::move(next)));
     run.result = std::move(merged);
   }
 }
@@ -377,7 +380,7 @@ absl::StatusOr<TwoStageToTarget> TraceTwoStageToTarget(
           std::max<int64_t>(indoor.batches, std::llround((plan.factor[0] - 1) * plan.paths[0]));
       indoor.seed = RoundSeed(first_indoor.seed, indoor_rounds++);
       FENESTRA_ASSIGN_OR_RETURN(next, ComputeIndoorStage(scene, design, indoor, backend));
-      FENESTRA_ASSIGN_OR_RETURN(merged, MergeRounds(run.indoor, next));
+      FENESTRA_ASSIGN_OR_RETURN(merged, MergeRounds(run.indoor, std::move(next)));
       run.indoor = std::move(merged);
     }
     if (plan.factor[1] > 1.01) {
@@ -385,7 +388,7 @@ absl::StatusOr<TwoStageToTarget> TraceTwoStageToTarget(
                                         std::llround((plan.factor[1] - 1) * plan.paths[1]));
       outdoor.seed = RoundSeed(first_outdoor.seed, outdoor_rounds++);
       FENESTRA_ASSIGN_OR_RETURN(next, ComputeOutdoorStage(scene, outdoor, backend));
-      FENESTRA_ASSIGN_OR_RETURN(merged, MergeRounds(run.outdoor, next));
+      FENESTRA_ASSIGN_OR_RETURN(merged, MergeRounds(run.outdoor, std::move(next)));
       run.outdoor = std::move(merged);
     }
   }

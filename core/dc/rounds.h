@@ -27,10 +27,11 @@ uint64_t RoundSeed(uint64_t seed, int round);
 // standard errors sqrt(w_a^2 se_a^2 + w_b^2 se_b^2), counts and times added. The stages'
 // batches are merged batch by batch (so they stay independent, alike and paired) and their
 // standard errors come from their scatter, as for one trace. InvalidArgument when the shapes,
-// bases, window parts or batch counts differ.
-absl::StatusOr<OneStageResult> MergeRounds(const OneStageResult& a, const OneStageResult& b);
-absl::StatusOr<OutdoorResult> MergeRounds(const OutdoorResult& a, const OutdoorResult& b);
-absl::StatusOr<IndoorResult> MergeRounds(const IndoorResult& a, const IndoorResult& b);
+// bases, window parts or batch counts differ. The merge is made in b's matrices: pass the
+// later round by std::move, as the stages' batches are large.
+absl::StatusOr<OneStageResult> MergeRounds(const OneStageResult& a, OneStageResult b);
+absl::StatusOr<OutdoorResult> MergeRounds(const OutdoorResult& a, OutdoorResult b);
+absl::StatusOr<IndoorResult> MergeRounds(const IndoorResult& a, IndoorResult b);
 
 // Per sensor: standard error / sky sum; 0 where both are 0 (no light reached the sensor),
 // +inf where only the sum is 0.
