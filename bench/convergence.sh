@@ -7,11 +7,12 @@
 #   city office: a long one-stage run of this machine, traced first to --target-error
 #   REFERENCE_ERROR (with a seed none of the measured runs uses).
 # Writes bench/results/convergence_MACHINE_{lightwell,city_office}_{one_stage,two_stage,
-# two_stage_30_5}.{csv,svg},
-# the city office's reference D and a log of everything printed, convergence_MACHINE.txt.
+# two_stage_30_5}.{csv,svg} and a log of everything printed, bench/results/convergence_MACHINE.txt;
+# the city office's reference D goes to OUT/convergence_MACHINE_city_office_reference.mtx
+# (OUT: default build/bench, not committed).
 #
-#   bash bench/convergence.sh [MACHINE] [BACKEND] [MAX_SECONDS] [REFERENCE_ERROR] [REFERENCE_SECONDS]
-#   bash bench/convergence.sh cpu2 cpu 150 0.004 300    # this 2-core machine (the defaults)
+#   bash bench/convergence.sh [MACHINE] [BACKEND] [MAX_SECONDS] [REFERENCE_ERROR] [REFERENCE_SECONDS] [OUT]
+#   bash bench/convergence.sh cpu2 cpu 150 0.004 300    # a 2-core machine (the defaults)
 #   bash bench/convergence.sh h100 cuda 60 0.001 300    # a GPU build on an H100
 #
 # FENESTRA names the executable (default build/client/fenestra); run from the repository root.
@@ -23,11 +24,12 @@ max_seconds=${3:-150}
 reference_error=${4:-0.004}
 reference_seconds=${5:-300}
 fenestra=${FENESTRA:-build/client/fenestra}
+out=${6:-build/bench}
 results=bench/results
 log=$results/convergence_$machine.txt
 reference_seed=1000
 
-mkdir -p "$results"
+mkdir -p "$results" "$out"
 {
   echo "# bench/convergence.sh $machine $backend $max_seconds $reference_error $reference_seconds"
   echo "# machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) hardware threads"
@@ -49,7 +51,7 @@ run() {
 
 # The city office's reference: one-stage to the reference error (exit code 2: the time ran out
 # first; the reference is then as good as that time allowed, which the log shows)
-city_reference=$results/convergence_${machine}_city_office_reference.mtx
+city_reference=$out/convergence_${machine}_city_office_reference.mtx
 run dc examples/city_office/scene.json --backend "$backend" --seed "$reference_seed" \
   --target-error "$reference_error" --max-seconds "$reference_seconds" -o "$city_reference" ||
   [ $? -eq 2 ]

@@ -1,25 +1,27 @@
 #!/usr/bin/env bash
-# The four city-office experiments of the design brief (examples/city_office/: alpha_max,
-# alpha_target, alpha_width_target, four_variables), each run by `fenestra optimize --local`
-# on one backend, with its result file, history CSV and report page, and a summary of what
-# each printed (best design, values with errors, the final check, timings).
+# The four city-office experiments (examples/city_office/: alpha_max, alpha_target,
+# alpha_width_target, four_variables), each run by `fenestra optimize --local` on one backend,
+# with its result file, history CSV and report page, and a summary of what each printed (best
+# design, values with errors, the final check, timings).
 #
-#   bash bench/experiments.sh [MACHINE] [BACKEND]
-#   bash bench/experiments.sh cpu2 cpu     # this 2-core machine (the defaults)
+#   bash bench/experiments.sh [MACHINE] [BACKEND] [OUT]
+#   bash bench/experiments.sh cpu2 cpu     # a 2-core machine (the defaults)
 #   bash bench/experiments.sh h100 cuda    # a GPU build on an H100
 #
-# Writes bench/results/experiments_MACHINE.txt and, per experiment E,
-# bench/results/experiment_E_MACHINE.{result.json,csv,html}.
+# Writes the summary bench/results/experiments_MACHINE.txt and, per experiment E, the large
+# outputs OUT/experiment_E_MACHINE.{result.json,csv,html} (OUT: default build/bench, not
+# committed; bench/final_check_bench reads the cpu2 result files from there).
 # FENESTRA names the executable (default build/client/fenestra); run from the repository root.
 set -euo pipefail
 
 machine=${1:-cpu2}
 backend=${2:-cpu}
 fenestra=${FENESTRA:-build/client/fenestra}
+out=${3:-build/bench}
 results=bench/results
 log=$results/experiments_$machine.txt
 
-mkdir -p "$results"
+mkdir -p "$results" "$out"
 {
   echo "# bench/experiments.sh $machine $backend: the four city-office experiments, 'fenestra optimize --local --backend $backend'"
   echo "# machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) hardware threads"
@@ -32,7 +34,7 @@ mkdir -p "$results"
 } > "$log"
 
 for experiment in alpha_max alpha_target alpha_width_target four_variables; do
-  prefix=$results/experiment_${experiment}_$machine
+  prefix=$out/experiment_${experiment}_$machine
   echo | tee -a "$log"
   echo "## $experiment ($(grep -m1 '"name"' "examples/city_office/$experiment.json" | cut -d'"' -f4))" |
     tee -a "$log"

@@ -1,8 +1,8 @@
 // The final check of the city-office experiments: each job's best design, as stored in
-// bench/results/experiment_<job>.result.json, checked by the one-stage method as the job does
-// after its search (CheckJobDesign), then the quick job end to end. Prints both values, their
-// difference, the paths and the check's wall, CPU and charged time (min(wall, CPU / threads):
-// the machine may be shared, bench/README.md).
+// build/bench/experiment_<job>_cpu2.result.json (written by bench/experiments.sh), checked by
+// the one-stage method as the job does after its search (CheckJobDesign), then the quick job
+// end to end. Prints both values, their difference, the paths and the check's wall, CPU and
+// charged time (min(wall, CPU / threads): the machine may be shared, bench/README.md).
 //
 //   final_check_bench [seeds] [cpu|cuda|auto]
 //   final_check_bench split [cpu|cuda|auto] [OUTDOOR/INDOOR ...]
@@ -139,7 +139,7 @@ int main(int argc, char** argv) {
   for (const char* name : {"alpha_max", "alpha_target", "alpha_width_target", "four_variables"}) {
     v1::JobResult stored;
     const std::string path =
-        std::string(FENESTRA_SOURCE_DIR "/bench/results/experiment_") + name + ".result.json";
+        std::string(FENESTRA_SOURCE_DIR "/build/bench/experiment_") + name + "_cpu2.result.json";
     if (absl::Status s = ReadJsonProtoFile(path, "result", &stored); !s.ok()) {
       std::fprintf(stderr, "error: %s\n", std::string(s.message()).c_str());
       return 1;

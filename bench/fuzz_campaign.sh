@@ -11,7 +11,7 @@
 #   --seconds  wall-clock cap per target (default 0 = none)
 #   --workers  processes per target (default: cores / targets, at least 1)
 #   --targets  which fuzz targets (default all: tests/fuzz/fuzz_common.sh lists them)
-#   --out      the table (default bench/results/fuzz_campaign.txt)
+#   --out      the table (default bench/results/fuzz_campaign_cpuN.txt, N = this machine's cores)
 # New corpus inputs and crashing inputs stay in DIR/fuzz-campaign/<target>/; a crash is
 # committed under tests/fuzz/regressions/<target>/ once fixed.
 set -euo pipefail
@@ -22,7 +22,7 @@ build=build-sanitize
 runs=10000000
 seconds=0
 workers=0
-out=bench/results/fuzz_campaign.txt
+out=bench/results/fuzz_campaign_cpu$(nproc).txt
 while [ $# -gt 0 ]; do
   case "$1" in
     --build) build="$2"; shift 2 ;;
