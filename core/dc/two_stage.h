@@ -1,9 +1,10 @@
 #pragma once
 
-// The two-stage method (DESIGN.md section 1): the outdoor matrix O (window cells x 146
-// sky bins) once per site, the indoor matrix I (sensors x window cells) per design, and
-// D = I O. The outdoor stage sees only outdoor surfaces, the indoor stage only indoor
-// surfaces and the blind; each builds its own acceleration structure from them.
+// The two-stage method (core/README.md, "Two-stage method"): the outdoor matrix O ((window
+// cells + 146) x 146 sky bins) once per site, the indoor matrix I (sensors x (window cells +
+// 146)) per design, and D = I O. The outdoor stage sees only outdoor surfaces, the indoor
+// stage only indoor surfaces and the blind; each builds its own acceleration structure from
+// them.
 //
 // Window sampling: the outdoor stage starts its paths at uniform points of each window part,
 // and the indoor stage connects to uniform window points, so O is the mean over the part's

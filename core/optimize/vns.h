@@ -1,11 +1,12 @@
 // Variable Neighborhood Search (Mladenovic & Hansen 1997, "Variable neighborhood search",
-// Computers & Operations Research 24(11)) over box-constrained design variables, as in the
-// design brief: neighborhood N_k = (v, r) changes v randomly chosen free variables at once,
-// each by U(-r, r) x (upper - lower). The search starts at N_1; an improvement moves the
-// incumbent and returns to N_1, a failure goes on to N_{k+1}; after the last neighborhood
-// a new cycle starts at N_1 from the incumbent. It stops at the first of: the evaluation
-// budget, the time budget, `failed_cycles_to_stop` consecutive cycles in which every
-// neighborhood failed, the target reached (target mode), or cancellation.
+// Computers & Operations Research 24(11)) over box-constrained design variables
+// (core/README.md, "Variable Neighborhood Search"): neighborhood N_k = (v, r) changes v
+// randomly chosen free variables at once, each by U(-r, r) x (upper - lower). The search
+// starts at N_1; an improvement moves the incumbent and returns to N_1, a failure goes on
+// to N_{k+1}; after the last neighborhood a new cycle starts at N_1 from the incumbent. It
+// stops at the first of: the evaluation budget, the time budget, `failed_cycles_to_stop`
+// consecutive cycles in which every neighborhood failed, the target reached (target mode),
+// or cancellation.
 //
 // Moves are clamped to the box by default, so optima on a bound (a blind fully open, a
 // tilt of 0) are reached exactly; BoundaryRule::kReflect mirrors them back instead. A

@@ -26,14 +26,15 @@
 // once per path, AtReflection and Escape once per event of any branch. PathState::vertex
 // numbers the interactions of the whole tree, so every draw of a path is distinct.
 //
-// OneStageMode is the one-stage daylight-coefficient estimator (DESIGN.md section 1): start
-// at a sensor with a cosine-sampled direction and add pi times the path weight to the sky
-// bin of the escape direction. The two-stage modes plug in here without touching the
-// loop: the outdoor stage starts on the window (uniform point, direction uniform within one
-// hemisphere cell) and escapes like the one-stage mode into O[cell, bin]; the indoor stage
-// starts at a sensor, connects each vertex to a sampled window point in Start and
-// AtReflection (next-event estimation, using random purpose 1), scores rays that leave
-// through the window too, and weights the two by multiple importance sampling.
+// OneStageMode is the one-stage daylight-coefficient estimator (core/README.md, "One-stage
+// method"): start at a sensor with a cosine-sampled direction and add pi times the path
+// weight to the sky bin of the escape direction. The two-stage modes plug in here without
+// touching the loop: the outdoor stage starts on the window (uniform point, direction
+// within one hemisphere cell by projected solid angle) and escapes like the one-stage mode
+// into O[cell, bin]; the indoor stage starts at a sensor, connects each vertex to a sampled
+// window point in Start and AtReflection (next-event estimation, using random purpose 1),
+// scores rays that leave through the window too, and weights the two by multiple importance
+// sampling.
 #pragma once
 
 #include <math.h>

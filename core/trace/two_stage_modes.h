@@ -1,4 +1,5 @@
-// The two path modes of the two-stage method (DESIGN.md section 1), for TracePath.
+// The two path modes of the two-stage method (core/README.md, "Two-stage method"), for
+// TracePath.
 //
 // The window is the interface: a rectangle (the opening's outer face) with a frame
 // (across, up, outward normal); directions are binned by the hemisphere basis of
