@@ -25,7 +25,19 @@ stop_daemon() {
   fi
   pid=""
 }
-trap 'stop_daemon; rm -rf "$data"' EXIT
+# On failure the daemon's whole log, else only its lines about the site and the job and its
+# warnings
+finish() {
+  local status=$?
+  stop_daemon
+  if [ "$status" -ne 0 ] && [ -s "$data/fenestrad.log" ]; then
+    echo "fenestrad log:" >&2
+    cat "$data/fenestrad.log" >&2
+  fi
+  rm -rf "$data"
+  exit "$status"
+}
+trap finish EXIT
 
 $fenestra scene check examples/city_office/scene.json
 
@@ -36,7 +48,6 @@ build/server/fenestrad --listen 127.0.0.1:0 --auth none --data-dir "$data" --por
 pid=$!
 for _ in $(seq 100); do [ -s "$data/port" ] && break; sleep 0.1; done
 if [ ! -s "$data/port" ]; then
-  cat "$data/fenestrad.log" >&2
   exit 1
 fi
 server="127.0.0.1:$(cat "$data/port")"
@@ -47,5 +58,5 @@ $fenestra site add --job "$job" --wait --server "$server"
 $fenestra job submit "$job" --site site-1 --watch --server "$server"
 
 stop_daemon
-echo "fenestrad log:"
-cat "$data/fenestrad.log"
+echo "fenestrad, on the site and the job:"
+grep -E '^[^ ]+ [^ ]+ ([a-z]+ (site|job) |(warning|error|critical) )' "$data/fenestrad.log" || true

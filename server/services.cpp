@@ -40,7 +40,8 @@ std::string_view TargetOf(const Request& r) {
 
 // Serves one call: authenticates the caller, reads the request from `stream`, runs
 // `body(caller, request)` and logs "rpc <method> <peer> <user> "<target>" -> <code>
-// (<ms> ms)".
+// (<ms> ms)": at info, or at debug when a read-only call (Get, List, Watch, which clients
+// poll) succeeds.
 template <typename Request, typename Stream, typename Body>
 grpc::Status Serve(const Authenticator& auth, const char* method, grpc::ServerContext* context,
                    Stream* stream, Body&& body) {
@@ -64,8 +65,12 @@ grpc::Status Serve(const Authenticator& auth, const char* method, grpc::ServerCo
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (status.ok()) {
-    spdlog::info("rpc {} {} {} \"{}\" -> OK ({:.1f} ms)", method, LogSafe(context->peer()), user,
-                 LogSafe(target), ms);
+    const std::string_view name(method);
+    const bool read_only =
+        name.ends_with(".Get") || name.ends_with(".List") || name.ends_with(".Watch");
+    spdlog::log(read_only ? spdlog::level::debug : spdlog::level::info,
+                "rpc {} {} {} \"{}\" -> OK ({:.1f} ms)", method, LogSafe(context->peer()), user,
+                LogSafe(target), ms);
   } else {
     spdlog::info("rpc {} {} {} \"{}\" -> {}: {} ({:.1f} ms)", method, LogSafe(context->peer()),
                  user, LogSafe(target), absl::StatusCodeToString(status.code()),

@@ -56,6 +56,13 @@ TEST_F(FenestradTest, SiteMatrixIsComputedOnceReusedByJobsAndLoadedAfterRestart)
   EXPECT_THAT(r.out, HasSubstr("job-2      succeeded"));
   r = d->Cli({"site", "list"});
   EXPECT_THAT(r.out, HasSubstr("site-1     ready"));
+  r = d->Cli({"site", "show", site.id()});
+  EXPECT_THAT(r.out, HasSubstr("location: 34.8300° S, 56.0000° W;"));
+  // The client's polls (site add --wait, job watch) are logged at debug only; what changes
+  // is logged at info
+  EXPECT_THAT(d->Log(), ::testing::Not(HasSubstr("rpc SiteService.Get")));
+  EXPECT_THAT(d->Log(), ::testing::Not(HasSubstr("rpc JobService.Watch")));
+  EXPECT_THAT(d->Log(), HasSubstr("rpc JobService.Submit"));
 
   // A restarted daemon loads the matrix from disk instead of tracing it
   EXPECT_EQ(d->Stop(), 0);
