@@ -98,23 +98,24 @@ void TraversalAlone(const std::string& name, const BlindDesign* design) {
           mode);
     }
   }
-  std::string error;
-  const std::unique_ptr<CudaTracer> tracer = CudaTracer::Create(0, &error);
-  if (!tracer ||
-      !tracer
-           ->SetScene(bvh, geometry.triangle_material.data(), geometry.triangle_material.size(),
-                      geometry.materials.data(), geometry.materials.size())
-           .empty()) {
-    std::printf("traversal alone: %s\n", error.c_str());
+  absl::StatusOr<std::unique_ptr<CudaTracer>> tracer = CudaTracer::Create(0);
+  absl::Status status = tracer.status();
+  if (status.ok()) {
+    status = (*tracer)->SetScene(bvh, geometry.triangle_material.data(),
+                                 geometry.triangle_material.size(), geometry.materials.data(),
+                                 geometry.materials.size());
+  }
+  if (!status.ok()) {
+    std::printf("traversal alone: %s\n", status.ToString().c_str());
     return;
   }
   std::vector<float> distance(origins.size());
   double seconds[2] = {};
   for (const bool same : {false, true}) {
     for (int run = 0; run < 2; ++run) {  // the first warms up
-      const std::string e = tracer->IntersectRays(origins.data(), directions.data(), origins.size(),
-                                                  same, distance.data(), &seconds[same]);
-      if (!e.empty()) std::printf("traversal alone: %s\n", e.c_str());
+      const absl::Status e = (*tracer)->IntersectRays(
+          origins.data(), directions.data(), origins.size(), same, distance.data(), &seconds[same]);
+      if (!e.ok()) std::printf("traversal alone: %s\n", e.ToString().c_str());
     }
   }
   std::printf(

@@ -163,16 +163,16 @@ void Roulette(const Bench& bench) {
   for (double t : {1.0, 0.5, 0.25, 0.1, 0.05, 0.02, 0.005}) strategies.push_back({true, t, false});
   strategies.push_back({false, 1.0, false});
   strategies.push_back({true, 0.25, true});
-  for (int bounces : {29, 4, 0}) {
+  for (int bounces : {29, 4, kUnlimitedBounces}) {
     std::printf(
         "\n## Path termination at %s, %lld paths per sensor, seed 7\n",
-        bounces > 0 ? (std::to_string(bounces) + " reflections").c_str() : "unlimited reflections",
+        bounces >= 0 ? (std::to_string(bounces) + " reflections").c_str() : "unlimited reflections",
         static_cast<long long>(paths));
     std::printf("%-9s %8s %8s %9s %9s %9s %9s %11s\n", "strategy", "wall s", "cpu s", "rays/path",
                 "c(S1)", "c(S2)", "c(S3)", "efficiency");
     double base = 0;
     for (const Strategy& strategy : strategies) {
-      if (bounces <= 0 && !strategy.roulette) continue;
+      if (bounces < 0 && !strategy.roulette) continue;
       const Run r = Trace(bench, paths, bounces, strategy, 7, nullptr);
       // Efficiency: 1 / (seconds per path x relative variance per path), mean over the
       // sensors, relative to the first row

@@ -175,7 +175,7 @@ void CompareDesign(const Design& d, const Scene& scene, const AnnualSky& sky, Dc
   const BlindDesign design = BlindAt(scene, d);
   OneStageOptions one;
   one.paths_per_sensor = one_stage_paths;
-  one.max_bounces = 0;
+  one.max_bounces = kUnlimitedBounces;
   one.seed = 1;
   one.batches = kDefaultBatches;
   one.weight_windows = false;  // as the GPU runs it

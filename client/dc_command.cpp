@@ -163,8 +163,7 @@ bool RunOneStage(const DcArgs& a, DcInput& in, MatrixFormat format) {
   const double all_paths =
       static_cast<double>(result.paths_per_sensor) * static_cast<double>(in.scene.sensors.size());
   fmt::print("dc: {} sensors x {} paths, {} ({}), {} backend on {} threads\n",
-             in.scene.sensors.size(), result.paths_per_sensor,
-             ReflectionLimit(options.max_bounces > 0 ? options.max_bounces : -1),
+             in.scene.sensors.size(), result.paths_per_sensor, ReflectionLimit(options.max_bounces),
              result.importance_cells > 0 ? std::string("weight windows")
              : options.russian_roulette
                  ? fmt::format("Russian roulette below weight {}", options.roulette_threshold)

@@ -48,9 +48,9 @@ absl::Status CheckOneStageInput(const std::vector<Sensor>& sensors,
     return absl::InvalidArgumentError(
         absl::StrCat("batches must be in [0, paths per sensor], got ", options.batches));
   }
-  if (options.max_bounces <= 0 && !options.russian_roulette) {
+  if (options.max_bounces < 0 && !options.russian_roulette) {
     return absl::InvalidArgumentError(
-        "unlimited bounces (max_bounces <= 0) need Russian roulette to end the paths");
+        "unlimited bounces (max_bounces < 0) need Russian roulette to end the paths");
   }
   if (options.russian_roulette &&
       !(options.roulette_threshold > 0 && options.roulette_threshold <= 1)) {
@@ -62,7 +62,7 @@ absl::Status CheckOneStageInput(const std::vector<Sensor>& sensors,
 
 PathSettings PathSettingsFor(const OneStageOptions& options) {
   PathSettings settings;
-  settings.max_bounces = options.max_bounces > 0 ? options.max_bounces : -1;
+  settings.max_bounces = options.max_bounces >= 0 ? options.max_bounces : kUnlimitedBounces;
   settings.russian_roulette = options.russian_roulette;
   settings.roulette_threshold = static_cast<float>(options.roulette_threshold);
   settings.max_vertices = 1u << 20;

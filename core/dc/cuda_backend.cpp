@@ -29,20 +29,20 @@ namespace fenestra {
 #if FENESTRA_WITH_CUDA
 namespace {
 
-absl::Status Check(const std::string& error) {
-  return error.empty() ? absl::OkStatus() : absl::InternalError(error);
+// `status` with its message prefixed by what it kept from happening.
+absl::Status CannotUseGpu(const absl::Status& status) {
+  return absl::Status(status.code(), absl::StrCat("cannot use the GPU: ", status.message()));
 }
 
 // Device memory the indoor replay's records may take; a job whose records would take more
-// traces every design in full.
+// traces every design in full (CudaTracer::RecordIndoor's RESOURCE_EXHAUSTED).
 constexpr size_t kMaxReplayBytes = size_t{4} << 30;
 
 // Builds the geometry's BVH and hands it to the tracer to trace next.
 absl::Status UploadScene(CudaTracer& tracer, const TraceGeometry& geometry, BvhQuality quality) {
   FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(geometry, quality));
-  return Check(tracer.SetScene(bvh, geometry.triangle_material.data(),
-                               geometry.triangle_material.size(), geometry.materials.data(),
-                               geometry.materials.size()));
+  return tracer.SetScene(bvh, geometry.triangle_material.data(), geometry.triangle_material.size(),
+                         geometry.materials.data(), geometry.materials.size());
 }
 
 // Host buffers for the tallies the GPU reduces E to (CudaAnnualTally::TallyRequest).
@@ -92,7 +92,8 @@ PathSettings WithoutImportance(PathSettings path) {
   return path;
 }
 
-void Count(const CudaCounters& counters, TraceCounters* out) {
+// The kernels' counters as the backends report them.
+void CopyCounters(const CudaCounters& counters, TraceCounters* out) {
   out->rays = counters.rays;
   for (int e = 0; e < 6; ++e) out->ends[e] = counters.ends[e];
   out->max_weight = 1.0f;
@@ -135,9 +136,9 @@ class CudaAnnualProduct : public AnnualProduct {
       batches.push_back(from_device ? on_device.data.get() + b * outdoor[b].size()
                                     : outdoor[b].data());
     }
-    FENESTRA_RETURN_IF_ERROR(
-        Check(annual->SetProduct(batches, static_cast<int>(outdoor[0].rows()), sky.data(),
-                                 static_cast<int>(sky.cols()), from_device)));
+    FENESTRA_RETURN_IF_ERROR(annual->SetProduct(batches, static_cast<int>(outdoor[0].rows()),
+                                                sky.data(), static_cast<int>(sky.cols()),
+                                                from_device));
     return std::unique_ptr<CudaAnnualProduct>(new CudaAnnualProduct(
         std::move(annual), static_cast<int>(outdoor.size()), outdoor[0].rows(), sky.cols()));
   }
@@ -145,8 +146,7 @@ class CudaAnnualProduct : public AnnualProduct {
   static absl::StatusOr<std::unique_ptr<CudaAnnualProduct>> MakeSky(int device, const Matrix& sky) {
     FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
     FENESTRA_ASSIGN_OR_RETURN(annual, NewTally(device));
-    FENESTRA_RETURN_IF_ERROR(
-        Check(annual->SetSkyProduct(sky.data(), static_cast<int>(sky.cols()))));
+    FENESTRA_RETURN_IF_ERROR(annual->SetSkyProduct(sky.data(), static_cast<int>(sky.cols())));
     return std::unique_ptr<CudaAnnualProduct>(
         new CudaAnnualProduct(std::move(annual), kAnyBatches, kDaylightBins, sky.cols()));
   }
@@ -169,8 +169,7 @@ class CudaAnnualProduct : public AnnualProduct {
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
     const int sensors = static_cast<int>(indoor_batches[0].rows());
     DeviceTallies tallies(batches, sensors, options);
-    FENESTRA_RETURN_IF_ERROR(
-        Check(annual_->Tally(stacked.data(), batches, sensors, tallies.request)));
+    FENESTRA_RETURN_IF_ERROR(annual_->Tally(stacked.data(), batches, sensors, tallies.request));
     return tallies.Versions(steps_);
   }
 
@@ -181,9 +180,9 @@ class CudaAnnualProduct : public AnnualProduct {
                                                      const Matrix& sky) {
     FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
     Matrix illuminance(Eigen::Index{batches_} * sensors, sky.cols());
-    FENESTRA_RETURN_IF_ERROR(Check(
+    FENESTRA_RETURN_IF_ERROR(
         annual_->IlluminanceOfSums(device_sums, batches_, sensors, batch_paths.data(), sky.data(),
-                                   static_cast<int>(sky.cols()), illuminance.data())));
+                                   static_cast<int>(sky.cols()), illuminance.data()));
     return SplitBatches(illuminance, batches_);
   }
 
@@ -198,8 +197,8 @@ class CudaAnnualProduct : public AnnualProduct {
       tallies.push_back(std::make_unique<DeviceTallies>(batches_, sensors, options));
       requests.push_back(tallies.back()->request);
     }
-    const absl::Status tallied = Check(annual_->TallySums(
-        device_sums, design_sums, designs, batches_, sensors, batch_paths.data(), requests.data()));
+    const absl::Status tallied = annual_->TallySums(device_sums, design_sums, designs, batches_,
+                                                    sensors, batch_paths.data(), requests.data());
     std::vector<absl::StatusOr<std::vector<HourTally>>> out;
     for (int k = 0; k < designs; ++k) {
       out.push_back(tallied.ok() ? tallies[k]->Versions(steps_) : tallied);
@@ -212,9 +211,8 @@ class CudaAnnualProduct : public AnnualProduct {
   static constexpr int kAnyBatches = 0;
 
   static absl::StatusOr<std::unique_ptr<CudaAnnualTally>> NewTally(int device) {
-    std::string error;
-    std::unique_ptr<CudaAnnualTally> annual = CudaAnnualTally::Create(device, &error);
-    if (!annual) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
+    absl::StatusOr<std::unique_ptr<CudaAnnualTally>> annual = CudaAnnualTally::Create(device);
+    if (!annual.ok()) return CannotUseGpu(annual.status());
     return annual;
   }
 
@@ -236,9 +234,9 @@ class CudaAnnualProduct : public AnnualProduct {
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
     const Eigen::Index steps = other_sky != nullptr ? other_sky->cols() : steps_;
     Matrix illuminance(stacked.rows(), steps);
-    FENESTRA_RETURN_IF_ERROR(Check(annual_->Illuminance(
+    FENESTRA_RETURN_IF_ERROR(annual_->Illuminance(
         stacked.data(), static_cast<int>(stacked.rows()), illuminance.data(),
-        other_sky != nullptr ? other_sky->data() : nullptr, static_cast<int>(steps))));
+        other_sky != nullptr ? other_sky->data() : nullptr, static_cast<int>(steps)));
     return SplitBatches(illuminance, indoor_batches.size());
   }
 
@@ -263,7 +261,7 @@ class OutdoorHolder {
   // Makes the tracer hold this outdoor scene.
   absl::Status Hold() {
     if (slot_->current == generation_) return absl::OkStatus();
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->SetOutdoorScene(bvh_, met_)));
+    FENESTRA_RETURN_IF_ERROR(tracer_->SetOutdoorScene(bvh_, met_));
     slot_->current = generation_;
     return absl::OkStatus();
   }
@@ -332,8 +330,8 @@ class CudaReplay {
     FENESTRA_ASSIGN_OR_RETURN(scene, MakeScene(design, &bvh, &triangle_material));
     FENESTRA_RETURN_IF_ERROR(Hold());
     *blind = scene.blind;
-    return Check(tracer_->SetScene(bvh, triangle_material.data(), triangle_material.size(),
-                                   room_.materials.data(), room_.materials.size()));
+    return tracer_->SetScene(bvh, triangle_material.data(), triangle_material.size(),
+                             room_.materials.data(), room_.materials.size());
   }
 
   // Every part of `design`, its sums downloaded (IndoorResultFromTally gives its I).
@@ -345,8 +343,8 @@ class CudaReplay {
                                         static_cast<uint64_t>(options_.paths_per_sensor));
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(
-        Check(tracer_->ReplayIndoor(blind, 0, kDesignParts, tally.sum.data(), &counters)));
-    Count(counters, &tally.counters);
+        tracer_->ReplayIndoor(blind, 0, kDesignParts, tally.sum.data(), &counters));
+    CopyCounters(counters, &tally.counters);
     tally.trace_seconds = counters.kernel_seconds;
     tally.wall_seconds = SecondsSince(start);
     return tally;
@@ -357,7 +355,7 @@ class CudaReplay {
   absl::Status ReplayDesigns(const std::vector<CudaTracer::DesignScene>& scenes,
                              CudaCounters* counters) {
     FENESTRA_RETURN_IF_ERROR(Hold());
-    return Check(tracer_->ReplayIndoorDesigns(scenes, room_.materials, counters));
+    return tracer_->ReplayIndoorDesigns(scenes, room_.materials, counters);
   }
 
   size_t triangles() const { return triangles_; }
@@ -391,21 +389,19 @@ class CudaReplay {
       FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(room_, BvhQuality::kHigh));
       room_bvh_ = std::move(bvh);
     }
-    FENESTRA_RETURN_IF_ERROR(Check(
-        tracer_->SetScene(room_bvh_, room_.triangle_material.data(), room_.triangle_material.size(),
-                          room_.materials.data(), room_.materials.size())));
+    FENESTRA_RETURN_IF_ERROR(tracer_->SetScene(room_bvh_, room_.triangle_material.data(),
+                                               room_.triangle_material.size(),
+                                               room_.materials.data(), room_.materials.size()));
     FENESTRA_RETURN_IF_ERROR(outdoor_->Hold());
     const std::vector<TraceSensor> sensors = LocalSensors(room_, scene_.sensors);
     PathSettings path = IndoorPathSettings(options_);
     path.importance = nullptr;
-    const std::string error = tracer_->RecordIndoor(
+    FENESTRA_RETURN_IF_ERROR(tracer_->RecordIndoor(
         LocalEnvelopeOfBlind(room_, scene_), sensors.data(), static_cast<int>(sensors.size()),
         LocalWindow(room_, scene_.window, options_.parts),
         OutdoorOffset(room_, outdoor_->geometry()), basis_,
         static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, kDesignParts,
-        options_.seed, path, kMaxReplayBytes, &stats_);
-    if (absl::StartsWith(error, kReplayTooLarge)) return absl::UnavailableError(error);
-    FENESTRA_RETURN_IF_ERROR(Check(error));
+        options_.seed, path, kMaxReplayBytes, &stats_));
     slot_->current = generation_;
     return absl::OkStatus();
   }
@@ -557,7 +553,7 @@ class CudaDesignTallies : public DesignTallies {
   AnnualProduct* Product() override { return product_.get(); }
   int DesignsAtOnce() const override { return replay_ != nullptr ? kReplayDesignsAtOnce : 1; }
   bool TracesInParts() const override { return replay_ != nullptr; }
-  bool RoundsPay() const override { return false; }
+  bool RacesByDefault() const override { return false; }
   uint64_t RaysTraced() const override { return rays_; }
 
  private:
@@ -577,12 +573,12 @@ class CudaDesignTallies : public DesignTallies {
                                options_.batches, paths);
     }
     CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->Indoor(
+    FENESTRA_RETURN_IF_ERROR(tracer_->Indoor(
         sensors.data(), static_cast<int>(sensors.size()), window,
         OutdoorOffset(geometry, outdoor_->geometry()), basis_, paths, options_.batches,
         options_.seed, WithoutImportance(IndoorPathSettings(options_)),
-        tally != nullptr ? tally->sum.data() : nullptr, &counters)));
-    if (tally != nullptr) Count(counters, &tally->counters);
+        tally != nullptr ? tally->sum.data() : nullptr, &counters));
+    if (tally != nullptr) CopyCounters(counters, &tally->counters);
     rays_ += counters.rays;
     return absl::OkStatus();
   }
@@ -597,8 +593,7 @@ class CudaDesignTallies : public DesignTallies {
       FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind_));
     }
     CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(
-        Check(tracer_->ReplayIndoor(blind_, held_parts_, parts, nullptr, &counters)));
+    FENESTRA_RETURN_IF_ERROR(tracer_->ReplayIndoor(blind_, held_parts_, parts, nullptr, &counters));
     rays_ += counters.rays;
     held_design_ = design;
     held_parts_ = parts;
@@ -686,9 +681,9 @@ class CudaBackend : public DcBackend {
     const size_t rows = static_cast<size_t>(sensor_count) * batches;
     std::vector<double> batch_sum(rows * kDaylightBins), batch_squares(rows * kDaylightBins);
     CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->OneStage(
+    FENESTRA_RETURN_IF_ERROR(tracer_->OneStage(
         local.data(), sensor_count, static_cast<uint64_t>(options.paths_per_sensor), batches,
-        options.seed, path, batch_sum.data(), batch_squares.data(), &counters)));
+        options.seed, path, batch_sum.data(), batch_squares.data(), &counters));
     OneStageTally tally;
     tally.sensor_count = sensor_count;
     tally.batches = batches;
@@ -751,9 +746,9 @@ class CudaBackend : public DcBackend {
     }
     ReadyFreshBuffers(fresh);
     CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,
-                                                    WithoutImportance(path), out, &counters)));
-    Count(counters, &o.counters);
+    FENESTRA_RETURN_IF_ERROR(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,
+                                              WithoutImportance(path), out, &counters));
+    CopyCounters(counters, &o.counters);
     o.batches_on_device.device = device_;
     return o;
   }
@@ -767,17 +762,17 @@ class CudaBackend : public DcBackend {
     // A room and its blind, built anew for every design of a search; the outdoor surfaces
     FENESTRA_RETURN_IF_ERROR(Upload(geometry, BvhQuality::kMedium));
     FENESTRA_ASSIGN_OR_RETURN(outdoor_bvh, BuildBvh(outdoor, BvhQuality::kHigh));
-    FENESTRA_RETURN_IF_ERROR(Check(
-        tracer_->SetOutdoorScene(outdoor_bvh, OutdoorMetCells(geometry, outdoor, window, basis))));
+    FENESTRA_RETURN_IF_ERROR(
+        tracer_->SetOutdoorScene(outdoor_bvh, OutdoorMetCells(geometry, outdoor, window, basis)));
     outdoor_slot_.current = 0;
     IndoorTally tally =
         ZeroIndoorTally(static_cast<int>(sensors.size()), IndoorColumnCount(window, basis), batches,
                         paths_per_sensor);
     CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(Check(tracer_->Indoor(
+    FENESTRA_RETURN_IF_ERROR(tracer_->Indoor(
         sensors.data(), tally.sensors, window, OutdoorOffset(geometry, outdoor), basis,
-        paths_per_sensor, batches, seed, WithoutImportance(path), tally.sum.data(), &counters)));
-    Count(counters, &tally.counters);
+        paths_per_sensor, batches, seed, WithoutImportance(path), tally.sum.data(), &counters));
+    CopyCounters(counters, &tally.counters);
     tally.wall_seconds = SecondsSince(start);
     tally.trace_seconds = counters.kernel_seconds;
     return tally;
@@ -792,7 +787,7 @@ class CudaBackend : public DcBackend {
   }
 
   // The replay of `scene`'s indoor paths; null for a scene without a blind or records that
-  // would not fit.
+  // would not fit the device (RESOURCE_EXHAUSTED).
   absl::StatusOr<std::unique_ptr<CudaReplay>> MaybeReplay(const Scene& scene,
                                                           const IndoorOptions& options,
                                                           const HemisphereBasis& basis,
@@ -800,7 +795,7 @@ class CudaBackend : public DcBackend {
     if (!scene.blind) return nullptr;
     absl::StatusOr<std::unique_ptr<CudaReplay>> replay =
         CudaReplay::Make(tracer_.get(), &replay_slot_, scene, options, basis, outdoor);
-    if (replay.status().code() == absl::StatusCode::kUnavailable) return nullptr;
+    if (absl::IsResourceExhausted(replay.status())) return nullptr;
     return replay;
   }
 
@@ -819,10 +814,9 @@ class CudaBackend : public DcBackend {
 int CudaDevices() { return CudaDeviceCount(); }
 
 absl::StatusOr<std::unique_ptr<DcBackend>> MakeCudaBackend(int device) {
-  std::string error;
-  std::unique_ptr<CudaTracer> tracer = CudaTracer::Create(device, &error);
-  if (!tracer) return absl::UnavailableError(absl::StrCat("cannot use the GPU: ", error));
-  return std::unique_ptr<DcBackend>(std::make_unique<CudaBackend>(device, std::move(tracer)));
+  absl::StatusOr<std::unique_ptr<CudaTracer>> tracer = CudaTracer::Create(device);
+  if (!tracer.ok()) return CannotUseGpu(tracer.status());
+  return std::unique_ptr<DcBackend>(std::make_unique<CudaBackend>(device, *std::move(tracer)));
 }
 
 #else

@@ -53,10 +53,10 @@ OutdoorBatches FormOutdoorBatches(const OutdoorTally& tally);
 // How to trace the one-stage daylight coefficients.
 struct OneStageOptions {
   int64_t paths_per_sensor = 100000;  // at least 2
-  // Surface reflections a path may make (Radiance's -ab is one more); <= 0 = unlimited,
-  // ended by Russian roulette only (unbiased).
-  int max_bounces = 0;
-  uint64_t seed = 1;  // a path's random stream is a function of (seed, sensor, path index)
+  // Surface reflections a path may make (Radiance's -ab is one more); 0 = none (the direct
+  // component), kUnlimitedBounces = ended by Russian roulette only (unbiased).
+  int max_bounces = kUnlimitedBounces;
+  uint64_t seed = kDefaultSeed;  // a path's random stream is a function of (seed, sensor, path index)
   int threads = 0;    // CPU threads; 0 = every hardware thread
   // Russian roulette: required when unlimited; optional (still unbiased) with a limit.
   bool russian_roulette = true;
@@ -175,10 +175,11 @@ class DesignTallies {
   virtual int DesignsAtOnce() const { return 1; }
   // Whether Tally takes fewer than kDesignParts (the replays do; full traces do not).
   virtual bool TracesInParts() const { return false; }
-  // Whether tracing in rounds pays: a round's annual product and tallies cost little beside
-  // the paths it may save (on the CPU). On the GPU they cost more than the paths racing
-  // saves on the reference jobs (bench/results/racing_h100.txt).
-  virtual bool RoundsPay() const { return TracesInParts(); }
+  // Whether a job races its candidates (traces them in rounds) where it does not say: a
+  // round's annual product and tallies cost little beside the paths it may save (on the CPU).
+  // On the GPU they cost more than the paths racing saves on the reference jobs
+  // (bench/results/racing_h100.txt).
+  virtual bool RacesByDefault() const { return TracesInParts(); }
   // Closest-hit queries of every Tally so far.
   virtual uint64_t RaysTraced() const = 0;
 };

@@ -33,7 +33,7 @@ class EmbreeBackend : public DcBackend {
     FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
 
     // Learn the importance map, then trace
-    OneStageSettings settings;
+    OneStageCpuRun settings;
     settings.paths_per_sensor = static_cast<uint64_t>(options.paths_per_sensor);
     settings.seed = options.seed;
     settings.threads = options.threads;

@@ -21,7 +21,7 @@ namespace {
 
 PathSettings Settings(int max_bounces, bool russian_roulette, double roulette_threshold) {
   PathSettings settings;
-  settings.max_bounces = max_bounces >= 0 ? max_bounces : -1;
+  settings.max_bounces = max_bounces >= 0 ? max_bounces : kUnlimitedBounces;
   settings.russian_roulette = russian_roulette;
   settings.roulette_threshold = static_cast<float>(roulette_threshold);
   settings.max_vertices = 1u << 20;

@@ -27,7 +27,7 @@ absl::StatusOr<Evaluation> TraceMetric(const Scene& scene, const BlindDesign& de
                                        const DaylightMetric& metric, DcBackend* backend) {
   OneStageOptions options;
   options.paths_per_sensor = paths_per_sensor;
-  options.max_bounces = 0;  // unlimited: Russian roulette alone ends the paths
+  options.max_bounces = kUnlimitedBounces;  // Russian roulette alone ends the paths
   options.seed = seed;
   options.batches = batches;
   FENESTRA_ASSIGN_OR_RETURN(result, ComputeOneStage(scene, design, options, backend));

@@ -9,7 +9,7 @@
 // error to about 1/sqrt(2 (B - 1)) (27% at the jobs' 8), and the paths go with its square, so
 // the pilot uses more batches; the check itself uses the job's, as the search does. In the
 // city office the check's standard error came out within 0.6-1.7 times the target
-// (bench/results/final_check_cpu.txt).
+// (bench/results/final_check_cpu2.txt).
 #pragma once
 
 #include <cstdint>
@@ -19,6 +19,7 @@
 #include "absl/status/statusor.h"
 #include "core/common/radiance_matrix.h"
 #include "core/dc/dc_backend.h"
+#include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
 #include "core/optimize/vns.h"
 #include "fenestra/v1/job.pb.h"
@@ -34,7 +35,7 @@ inline constexpr int64_t kFinalCheckMinPathsPerSensor = 1'000;
 // Batches of the pilot: its standard error known to about 13%.
 inline constexpr int kFinalCheckPilotBatches = 32;
 // The most paths of the check, all sensors together: about 3 s on 2 CPU cores in the city
-// office (bench/results/final_check_cpu.txt).
+// office (bench/results/final_check_cpu2.txt).
 inline constexpr int64_t kFinalCheckMaxPaths = 5'000'000;
 
 // The metric and its standard error from B >= 2 batch estimates of the daylight
@@ -43,9 +44,9 @@ using DaylightMetric =
     std::function<absl::StatusOr<Evaluation>(std::span<const Matrix> dc_batches)>;
 
 struct FinalCheckOptions {
-  int batches = 8;  // independent batches of paths, for the jackknife; >= 2
+  int batches = kDefaultBatches;  // independent batches of paths, for the jackknife; >= 2
   // The job's seed: the check's streams are derived from it, apart from the two stages'.
-  uint64_t seed = 1;
+  uint64_t seed = kDefaultSeed;
   // Polled before each trace; true leaves the check out (Cancelled).
   std::function<bool()> cancelled;
 };

@@ -44,6 +44,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/trace/philox.h"
 
 namespace fenestra {
 
@@ -100,7 +101,7 @@ struct VnsOptions {
   // whose errors largely cancel between designs.
   double min_improvement = 0;
   double min_improvement_standard_errors = 0;
-  uint64_t seed = 1;
+  uint64_t seed = kDefaultSeed;
   // Stop when this many proposals in a row were already in the cache: the space is used up
   // at the resolution of the variables' steps.
   int max_consecutive_cache_hits = 1000;

@@ -22,7 +22,9 @@ namespace fenestra {
 // Random streams of pilot paths: apart from the sensors' own.
 inline constexpr uint32_t kPilotStreamBase = 0x40000000u;
 
-struct OneStageSettings {
+// What one CPU trace of one-stage paths takes (TraceOneStageCpu), made from a request's
+// OneStageOptions (core/dc/dc_backend.h) by the Embree backend.
+struct OneStageCpuRun {
   uint64_t paths_per_sensor = 0;
   uint64_t seed = 0;
   int threads = 0;  // 0 = every hardware thread
@@ -120,7 +122,7 @@ struct Chunk {
 template <class Intersector>
 OneStageTally TraceOneStageCpu(const Intersector& scene, const SurfaceTable& surfaces,
                                const std::vector<TraceSensor>& sensors,
-                               const OneStageSettings& settings) {
+                               const OneStageCpuRun& settings) {
   using one_stage_internal::Chunk;
   const auto start = std::chrono::steady_clock::now();
   const uint64_t n = settings.paths_per_sensor;

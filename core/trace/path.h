@@ -81,9 +81,14 @@ struct TraceSensor {
   Vec3f normal;    // unit
 };
 
+// Every bounce setting (PathSettings, OneStageOptions, the stage options, the job's
+// `*_bounces`): surface reflections a path may make; 0 = none (the direct component),
+// kUnlimitedBounces (any negative value) = as many as Russian roulette allows.
+inline constexpr int32_t kUnlimitedBounces = -1;
+
 // How far paths go.
 struct PathSettings {
-  int32_t max_bounces;       // surface reflections allowed; < 0 = unlimited (needs roulette)
+  int32_t max_bounces;       // surface reflections allowed; kUnlimitedBounces (needs roulette)
   bool russian_roulette;     // play roulette when the weight falls below the threshold
   float roulette_threshold;  // in (0, 1]; 1 = survive with the reflectance, weight stays 1
   uint32_t max_vertices;     // hard cap on surface interactions per path (safety net)

@@ -12,6 +12,10 @@
 
 namespace fenestra {
 
+// The seed of every random stream where a run does not give one (a job's `seed`, the
+// options of each stage and method, the search).
+inline constexpr uint64_t kDefaultSeed = 1;
+
 struct Philox4x32 {
   uint32_t v[4];
 };

@@ -5,6 +5,9 @@
 #include <cstring>
 #include <vector>
 
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
 #include "core/dc/cuda/annual_tally.h"
 #include "core/metrics/hour_class.h"
 #include "core/trace/cuda/device_buffer.cuh"
@@ -322,7 +325,9 @@ __global__ void TallyKernel(const double* e, int designs, int batches, int senso
   }
 }
 
-constexpr char kNoProduct[] = "CUDA annual product: no outdoor matrix and sky set";
+absl::Status NoProduct() {
+  return absl::FailedPreconditionError("CUDA annual product: no outdoor matrix and sky set");
+}
 
 }  // namespace
 
@@ -340,16 +345,16 @@ struct CudaAnnualTally::Impl {
   bool tensor_cores = false;  // I_b O_b by MultiplyTransposedMmaKernel
   bool sky_only = false;      // the O_b are the identity: E_b = I_b S (SetSkyProduct)
 
-  std::string UploadIndoor(const double* host_indoor, int rows) {
+  absl::Status UploadIndoor(const double* host_indoor, int rows) {
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(device));
     FENESTRA_CUDA_RETURN_IF_ERROR(indoor.Reserve(static_cast<size_t>(rows) * cells));
     FENESTRA_CUDA_RETURN_IF_ERROR(
         staging.Upload(host_indoor, indoor.get(), static_cast<size_t>(rows) * cells));
-    return "";
+    return absl::OkStatus();
   }
   // `indoor` from indoor sums on the device (TallySums) for `designs` designs.
-  std::string MeanOfSums(const double* device_sums, size_t design_sums, int designs, int batches,
-                         int sensors, const uint64_t* batch_paths) {
+  absl::Status MeanOfSums(const double* device_sums, size_t design_sums, int designs, int batches,
+                          int sensors, const uint64_t* batch_paths) {
     BatchPaths paths{};
     for (int b = 0; b < batches; ++b) paths.paths[b] = static_cast<double>(batch_paths[b]);
     const int rows = designs * batches * sensors;
@@ -360,13 +365,13 @@ struct CudaAnnualTally::Impl {
     BatchMeanKernel<<<grid, threads>>>(device_sums, design_sums, designs, sensors, cells, paths,
                                        indoor.get());
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
-    return "";
+    return absl::OkStatus();
   }
   // E of `rows` rows of `indoor` (`batches` batches) into the host's `host_illuminance` (rows x
   // steps), through `other_sky` (kTregenzaBinCount x other_steps) in S's place where it is not
   // null.
-  std::string DownloadIlluminance(int rows, int batches, double* host_illuminance,
-                                  const double* other_sky, int other_steps) {
+  absl::Status DownloadIlluminance(int rows, int batches, double* host_illuminance,
+                                   const double* other_sky, int other_steps) {
     const double* sky_matrix = nullptr;
     int sky_steps = steps;
     if (other_sky != nullptr) {
@@ -375,17 +380,15 @@ struct CudaAnnualTally::Impl {
       sky_matrix = this->other_sky.get();
       sky_steps = other_steps;
     }
-    if (std::string error = FormIlluminance(rows, batches, sky_matrix, sky_steps); !error.empty()) {
-      return error;
-    }
+    FENESTRA_RETURN_IF_ERROR(FormIlluminance(rows, batches, sky_matrix, sky_steps));
     FENESTRA_CUDA_RETURN_IF_ERROR(staging.Download(illuminance.get(), host_illuminance,
                                                    static_cast<size_t>(rows) * sky_steps));
-    return "";
+    return absl::OkStatus();
   }
   // E = (I O) S from `indoor` (`batches` batches of rows) into `illuminance`; with `sky_steps`
   // columns of `sky_matrix` in S's place where it is not null.
-  std::string FormIlluminance(int rows, int batches, const double* sky_matrix = nullptr,
-                              int sky_steps = 0) {
+  absl::Status FormIlluminance(int rows, int batches, const double* sky_matrix = nullptr,
+                               int sky_steps = 0) {
     if (sky_matrix == nullptr) {
       sky_matrix = sky.get();
       sky_steps = steps;
@@ -402,16 +405,14 @@ struct CudaAnnualTally::Impl {
     }
     Multiply(through, sky_matrix, illuminance.get(), rows, sky_steps);
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
-    return "";
+    return absl::OkStatus();
   }
   // The tallies of E from `indoor` (BatchMeanKernel's rows) for `designs` designs of `batches`
   // batches each, design k's into requests[k].
-  std::string Tally(int designs, int batches, int sensors, const TallyRequest* requests) {
+  absl::Status Tally(int designs, int batches, int sensors, const TallyRequest* requests) {
     const int versions = batches + 1;
     const size_t per_sensor = static_cast<size_t>(versions) * sensors;
-    if (std::string error = FormIlluminance(designs * batches * sensors, batches); !error.empty()) {
-      return error;
-    }
+    FENESTRA_RETURN_IF_ERROR(FormIlluminance(designs * batches * sensors, batches));
     static_assert(sizeof(double) == sizeof(unsigned long long));
     static_assert(sizeof(int64_t) == sizeof(unsigned long long));
     const TallyLayout layout{3 * per_sensor, 4 * static_cast<size_t>(versions),
@@ -434,18 +435,16 @@ struct CudaAnnualTally::Impl {
       std::memcpy(requests[k].sums, design + layout.counts + layout.hours,
                   2 * per_sensor * sizeof(double));
     }
-    return "";
+    return absl::OkStatus();
   }
 };
 
 CudaAnnualTally::CudaAnnualTally(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 CudaAnnualTally::~CudaAnnualTally() = default;
 
-std::unique_ptr<CudaAnnualTally> CudaAnnualTally::Create(int device, std::string* error) {
-  if (const cudaError_t e = cudaSetDevice(device); e != cudaSuccess) {
-    *error = CudaErrorText(e);
-    return nullptr;
-  }
+absl::StatusOr<std::unique_ptr<CudaAnnualTally>> CudaAnnualTally::Create(int device) {
+  FENESTRA_RETURN_IF_ERROR(CheckCudaDevice(device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(device));
   auto impl = std::make_unique<Impl>();
   impl->device = device;
   impl->tensor_cores = TensorCoresRun();
@@ -458,13 +457,13 @@ void CudaAnnualTally::UseTensorCores(bool use) {
 
 bool CudaAnnualTally::UsesTensorCores() const { return impl_->tensor_cores; }
 
-std::string CudaAnnualTally::SetProduct(const std::vector<const double*>& outdoor, int cells,
-                                        const double* sky, int steps, bool outdoor_on_device) {
+absl::Status CudaAnnualTally::SetProduct(const std::vector<const double*>& outdoor, int cells,
+                                         const double* sky, int steps, bool outdoor_on_device) {
   Impl& d = *impl_;
   const int batches = static_cast<int>(outdoor.size());
   if (batches < 1 || batches > kMaxTallyBatches) {
-    return "CUDA annual product: " + std::to_string(batches) + " outdoor batches, not 1 to " +
-           std::to_string(kMaxTallyBatches);
+    return absl::InvalidArgumentError(absl::StrCat(
+        "CUDA annual product: ", batches, " outdoor batches, not 1 to ", kMaxTallyBatches));
   }
   // O_b as the host holds them, then transposed on the device (on the host, the transpose
   // took 50-60 ms of a four-variable job's second)
@@ -489,10 +488,10 @@ std::string CudaAnnualTally::SetProduct(const std::vector<const double*>& outdoo
   d.steps = steps;
   d.outdoor_batches = batches;
   d.sky_only = false;
-  return "";
+  return absl::OkStatus();
 }
 
-std::string CudaAnnualTally::SetSkyProduct(const double* sky, int steps) {
+absl::Status CudaAnnualTally::SetSkyProduct(const double* sky, int steps) {
   Impl& d = *impl_;
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.sky.Upload(sky, static_cast<size_t>(kTregenzaBinCount) * steps));
@@ -502,65 +501,65 @@ std::string CudaAnnualTally::SetSkyProduct(const double* sky, int steps) {
   d.steps = steps;
   d.outdoor_batches = 0;
   d.sky_only = true;
-  return "";
+  return absl::OkStatus();
 }
 
-std::string CudaAnnualTally::Illuminance(const double* indoor, int rows, double* illuminance,
-                                         const double* other_sky, int other_steps) {
+absl::Status CudaAnnualTally::Illuminance(const double* indoor, int rows, double* illuminance,
+                                          const double* other_sky, int other_steps) {
   Impl& d = *impl_;
-  if (d.cells == 0) return kNoProduct;
+  if (d.cells == 0) return NoProduct();
   if (!d.sky_only && rows % d.outdoor_batches != 0) {
-    return "CUDA annual product: " + std::to_string(rows) + " indoor rows do not split into " +
-           std::to_string(d.outdoor_batches) + " batches";
+    return absl::InvalidArgumentError(absl::StrCat("CUDA annual product: ", rows,
+                                                   " indoor rows do not split into ",
+                                                   d.outdoor_batches, " batches"));
   }
-  if (std::string error = d.UploadIndoor(indoor, rows); !error.empty()) return error;
+  FENESTRA_RETURN_IF_ERROR(d.UploadIndoor(indoor, rows));
   return d.DownloadIlluminance(rows, d.outdoor_batches, illuminance, other_sky, other_steps);
 }
 
-std::string CudaAnnualTally::Tally(const double* indoor, int batches, int sensors,
-                                   const TallyRequest& request) {
+absl::Status CudaAnnualTally::Tally(const double* indoor, int batches, int sensors,
+                                    const TallyRequest& request) {
   Impl& d = *impl_;
-  if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
-  if (std::string error = d.UploadIndoor(indoor, batches * sensors); !error.empty()) return error;
+  FENESTRA_RETURN_IF_ERROR(CheckPairs(d.cells, batches));
+  FENESTRA_RETURN_IF_ERROR(d.UploadIndoor(indoor, batches * sensors));
   return d.Tally(1, batches, sensors, &request);
 }
 
-std::string CudaAnnualTally::TallySums(const double* device_sums, size_t design_sums, int designs,
-                                       int batches, int sensors, const uint64_t* batch_paths,
-                                       const TallyRequest* requests) {
+absl::Status CudaAnnualTally::TallySums(const double* device_sums, size_t design_sums, int designs,
+                                        int batches, int sensors, const uint64_t* batch_paths,
+                                        const TallyRequest* requests) {
   Impl& d = *impl_;
-  if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
-  if (designs < 1) return "CUDA annual product: " + std::to_string(designs) + " designs to tally";
-  if (std::string error =
-          d.MeanOfSums(device_sums, design_sums, designs, batches, sensors, batch_paths);
-      !error.empty()) {
-    return error;
+  FENESTRA_RETURN_IF_ERROR(CheckPairs(d.cells, batches));
+  if (designs < 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("CUDA annual product: ", designs, " designs to tally"));
   }
+  FENESTRA_RETURN_IF_ERROR(
+      d.MeanOfSums(device_sums, design_sums, designs, batches, sensors, batch_paths));
   return d.Tally(designs, batches, sensors, requests);
 }
 
-std::string CudaAnnualTally::IlluminanceOfSums(const double* device_sums, int batches, int sensors,
-                                               const uint64_t* batch_paths, const double* other_sky,
-                                               int other_steps, double* illuminance) {
+absl::Status CudaAnnualTally::IlluminanceOfSums(const double* device_sums, int batches, int sensors,
+                                                const uint64_t* batch_paths,
+                                                const double* other_sky, int other_steps,
+                                                double* illuminance) {
   Impl& d = *impl_;
-  if (std::string error = CheckPairs(d.cells, batches); !error.empty()) return error;
-  if (std::string error = d.MeanOfSums(device_sums, 0, 1, batches, sensors, batch_paths);
-      !error.empty()) {
-    return error;
-  }
+  FENESTRA_RETURN_IF_ERROR(CheckPairs(d.cells, batches));
+  FENESTRA_RETURN_IF_ERROR(d.MeanOfSums(device_sums, 0, 1, batches, sensors, batch_paths));
   return d.DownloadIlluminance(batches * sensors, batches, illuminance, other_sky, other_steps);
 }
 
-std::string CudaAnnualTally::CheckPairs(int columns, int batches) const {
+absl::Status CudaAnnualTally::CheckPairs(int columns, int batches) const {
   const Impl& d = *impl_;
-  if (d.cells == 0) return kNoProduct;
-  if (d.sky_only && columns == d.cells && batches >= 2 && batches <= kMaxTallyBatches) return "";
+  if (d.cells == 0) return NoProduct();
+  if (d.sky_only && columns == d.cells && batches >= 2 && batches <= kMaxTallyBatches)
+    return absl::OkStatus();
   if (columns != d.cells || batches != d.outdoor_batches) {
-    return "CUDA annual product: " + std::to_string(d.cells) + " rows in " +
-           std::to_string(d.outdoor_batches) + " batches, the indoor stage " +
-           std::to_string(columns) + " columns in " + std::to_string(batches);
+    return absl::FailedPreconditionError(
+        absl::StrCat("CUDA annual product: ", d.cells, " rows in ", d.outdoor_batches,
+                     " batches, the indoor stage ", columns, " columns in ", batches));
   }
-  return "";
+  return absl::OkStatus();
 }
 
 }  // namespace fenestra

@@ -3,19 +3,22 @@
 // The annual product of the two-stage method and its metric tallies on a GPU: E_b =
 // (I_b O_b) S, then what the annual metrics need of E (core/metrics/annual_metrics.h,
 // HourTally), reduced on the device so that E never leaves it. Host-only declarations (no
-// CUDA headers); errors come back as text ("" is success), as the tracer's.
+// CUDA headers); errors are statuses, as the tracer's (core/trace/cuda/cuda_tracer.h).
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+
 namespace fenestra {
 
 class CudaAnnualTally {
  public:
-  // On CUDA device `device`; null with `error` set when it cannot be used.
-  static std::unique_ptr<CudaAnnualTally> Create(int device, std::string* error);
+  // On CUDA device `device`; UNAVAILABLE where the host has no CUDA device.
+  static absl::StatusOr<std::unique_ptr<CudaAnnualTally>> Create(int device);
   ~CudaAnnualTally();
   CudaAnnualTally(const CudaAnnualTally&) = delete;
   CudaAnnualTally& operator=(const CudaAnnualTally&) = delete;
@@ -24,17 +27,17 @@ class CudaAnnualTally {
   // columns of I) and S (kTregenzaBinCount x steps, row-major). The device keeps them until
   // the next SetProduct. With `outdoor_on_device` the O_b lie on this device already (a
   // tracer's, CudaTracer::OutdoorOutput) and are copied from there.
-  std::string SetProduct(const std::vector<const double*>& outdoor, int cells, const double* sky,
-                         int steps, bool outdoor_on_device = false);
+  absl::Status SetProduct(const std::vector<const double*>& outdoor, int cells, const double* sky,
+                          int steps, bool outdoor_on_device = false);
   // Uploads S alone, the O_b being the identity (kTregenzaBinCount cells): E_b = I_b S for
   // indoor rows whose columns are the sky's bins already (one-stage daylight coefficients), in
   // any number of batches from 2 to the most SetProduct takes. Kept until the next SetProduct.
-  std::string SetSkyProduct(const double* sky, int steps);
+  absl::Status SetSkyProduct(const double* sky, int steps);
   // `rows` stacked indoor rows (rows x cells, batch-major, rows / B per batch) through the
   // product into `illuminance` (rows x steps). With `other_sky` (kTregenzaBinCount x
   // `other_steps`, row-major) that sky takes S's place for this call, S staying uploaded.
-  std::string Illuminance(const double* indoor, int rows, double* illuminance,
-                          const double* other_sky = nullptr, int other_steps = 0);
+  absl::Status Illuminance(const double* indoor, int rows, double* illuminance,
+                           const double* other_sky = nullptr, int other_steps = 0);
 
   // Version 0 is E of the mean of the batches, version 1 + b the mean of the others
   // (B E - E_b) / (B - 1). Per version v and sensor i, counts[(v * sensors + i) * 3 + k] gets
@@ -50,20 +53,20 @@ class CudaAnnualTally {
   };
   // The tallies of E_b = (I_b O_b) S for the host's `indoor`, batches x sensors stacked rows
   // (batch-major), as many batches as the product's.
-  std::string Tally(const double* indoor, int batches, int sensors, const TallyRequest& request);
+  absl::Status Tally(const double* indoor, int batches, int sensors, const TallyRequest& request);
   // The same for `designs` designs at once from indoor sums on this device (a tracer's,
   // CudaTracer::DeviceSums): design k's row (b, s) at device_sums + k * design_sums +
   // (b * sensors + s) * cells, divided by batch_paths[b], the paths summed into batch b; its
   // tallies into requests[k]. One product takes every design's rows (a batch's rows
   // together), and the tallies come back in one download. 1 <= designs.
-  std::string TallySums(const double* device_sums, size_t design_sums, int designs, int batches,
-                        int sensors, const uint64_t* batch_paths, const TallyRequest* requests);
+  absl::Status TallySums(const double* device_sums, size_t design_sums, int designs, int batches,
+                         int sensors, const uint64_t* batch_paths, const TallyRequest* requests);
   // E_b = (I_b O_b) S' of one design's indoor sums on this device, as TallySums takes them,
   // into `illuminance` (batches x sensors rows, batch-major, x `other_steps`), with
   // `other_sky` (kTregenzaBinCount x other_steps, row-major) as S' for this call.
-  std::string IlluminanceOfSums(const double* device_sums, int batches, int sensors,
-                                const uint64_t* batch_paths, const double* other_sky,
-                                int other_steps, double* illuminance);
+  absl::Status IlluminanceOfSums(const double* device_sums, int batches, int sensors,
+                                 const uint64_t* batch_paths, const double* other_sky,
+                                 int other_steps, double* illuminance);
 
   // Whether I_b O_b runs on the FP64 tensor cores: from Create on, where the device's code
   // has them (compute capability 8.0 and later); false takes the kernel of the CUDA cores
@@ -71,8 +74,9 @@ class CudaAnnualTally {
   void UseTensorCores(bool use);
   bool UsesTensorCores() const;
 
-  // "" when the product pairs with indoor stages of `columns` columns in `batches` batches.
-  std::string CheckPairs(int columns, int batches) const;
+  // OK where the product pairs with indoor stages of `columns` columns in `batches` batches,
+  // FAILED_PRECONDITION otherwise.
+  absl::Status CheckPairs(int columns, int batches) const;
 
  private:
   struct Impl;

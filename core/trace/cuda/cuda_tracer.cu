@@ -10,7 +10,10 @@
 #include <cstring>
 #include <vector>
 
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
 #include "core/common/batch_mean.h"
+#include "core/common/status_macros.h"
 #include "core/trace/bvh_intersector.h"
 #include "core/trace/cuda/cuda_tracer.h"
 #include "core/trace/cuda/device_buffer.cuh"
@@ -603,14 +606,14 @@ class KernelTimer {
 };
 
 // Lets `kernel` keep a row of `columns` doubles in shared memory (beside its basis and
-// counters), opting in to more than the default where needed. "" or the error, which names
+// counters), opting in to more than the default where needed. The error names
 // what the columns hold and what to change where they do not fit.
 template <class Kernel>
-std::string AllowSharedRow(Kernel kernel, int columns,
-                           const char* held = "columns of the indoor matrix",
-                           const char* remedy = "use fewer window parts or the 288-cell basis") {
+absl::Status AllowSharedRow(Kernel kernel, int columns,
+                            const char* held = "columns of the indoor matrix",
+                            const char* remedy = "use fewer window parts or the 288-cell basis") {
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
-  if (shared <= kDefaultShared) return "";
+  if (shared <= kDefaultShared) return absl::OkStatus();
   int device = 0, limit = 0;
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetDevice(&device));
   FENESTRA_CUDA_RETURN_IF_ERROR(
@@ -618,19 +621,19 @@ std::string AllowSharedRow(Kernel kernel, int columns,
   const size_t available =
       static_cast<size_t>(limit) - sizeof(HemisphereBasis) - kCounters * sizeof(unsigned long long);
   if (shared > available) {
-    return "CUDA: " + std::to_string(columns) + " " + held +
-           " do not fit the kernel's shared memory (at most " +
-           std::to_string(available / sizeof(double)) + " on this device): " + remedy;
+    return absl::ResourceExhaustedError(absl::StrCat(
+        "CUDA: ", columns, " ", held, " do not fit the kernel's shared memory (at most ",
+        available / sizeof(double), " on this device): ", remedy));
   }
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaFuncSetAttribute(
       kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(shared)));
-  return "";
+  return absl::OkStatus();
 }
 
 // A resumed path's share of the replay's work, in connection tests (ReplayRowWork): on the
 // city office the replay kernel took 1.24 ms with blocks shared by connections alone, 1.14 ms
 // with resumes weighing 2-4, 1.05 ms with 16, 1.00 ms with 32, 1.01-1.02 ms with 64-128 and
-// 1.04 ms by resumes alone (bench/results/replay_row_blocks_h100.txt).
+// 1.04 ms by resumes alone (bench/HISTORY.md).
 constexpr double kResumeWork = 32;
 
 // The room RecordIndoor first makes for the crossing connections of a row's paths, per path:
@@ -700,20 +703,20 @@ struct CudaTracer::Impl {
 
   // The indoor stage's paths (CudaTracer::Indoor); the sums stay on the device without
   // host_sum.
-  std::string TraceIndoor(const TraceSensor* host_sensors, int sensor_count,
-                          const TraceWindow& window, Vec3f outdoor_offset,
-                          const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
-                          uint64_t seed, const PathSettings& path, double* host_sum,
-                          CudaCounters* out);
+  absl::Status TraceIndoor(const TraceSensor* host_sensors, int sensor_count,
+                           const TraceWindow& window, Vec3f outdoor_offset,
+                           const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
+                           uint64_t seed, const PathSettings& path, double* host_sum,
+                           CudaCounters* out);
   // Runs RecordKernel for `recorded`, its record capacities grown and the kernel run once
   // more when a row made more records than there was room for; each row's record counts
   // into `counts` (3 per row, as Recorded::counts).
-  std::string TraceRecords(int columns, size_t max_bytes, std::vector<unsigned long long>& counts,
-                           CudaCounters* counters);
+  absl::Status TraceRecords(int columns, size_t max_bytes, std::vector<unsigned long long>& counts,
+                            CudaCounters* counters);
   // The designs' indoor sums of parts [first, last) from the records (CudaTracer::ReplayIndoor,
   // ReplayIndoorDesigns), added to those of parts [0, first) already in `sum` (one design).
-  std::string Replay(const ReplayDesigns& designs, const TraceMaterial* materials, int first,
-                     int last, double* host_sum, CudaCounters* out);
+  absl::Status Replay(const ReplayDesigns& designs, const TraceMaterial* materials, int first,
+                      int last, double* host_sum, CudaCounters* out);
   size_t DesignSums() const {
     return static_cast<size_t>(recorded.batches) * recorded.sensor_count *
            IndoorColumnCount(recorded.window, recorded.basis);
@@ -736,7 +739,7 @@ struct CudaTracer::Impl {
 
   // Per (sensor, batch), its resumed paths longest first (DeviceRecords::order) from the
   // lengths the last replay wrote: a counting sort by length, ties as recorded.
-  std::string OrderResumes() {
+  absl::Status OrderResumes() {
     const Recorded& r = recorded;
     const size_t record_rows = r.counts.size() / 3;
     const size_t slots = record_rows * r.resume_capacity;
@@ -763,7 +766,7 @@ struct CudaTracer::Impl {
     }
     FENESTRA_CUDA_RETURN_IF_ERROR(resume_order.Upload(order.data(), slots));
     resume_order_made = true;
-    return "";
+    return absl::OkStatus();
   }
 
   // The replay's work per row (design, sensor, batch) over parts [first, last) of the
@@ -816,9 +819,9 @@ struct CudaTracer::Impl {
   // Zeroes the outputs (the sums unless adding to them), runs `launch`, times it, downloads
   // (the sums only where host_sum is given: else they stay in `sum`).
   template <class Launch>
-  std::string Run(size_t rows, size_t sum_size, bool squares, Launch launch, double* host_sum,
-                  double* host_sum_squares, CudaCounters* out, bool add_to_sums = false) {
-    if (!has_scene) return "CUDA tracer: no scene uploaded";
+  absl::Status Run(size_t rows, size_t sum_size, bool squares, Launch launch, double* host_sum,
+                   double* host_sum_squares, CudaCounters* out, bool add_to_sums = false) {
+    if (!has_scene) return absl::FailedPreconditionError("CUDA tracer: no scene uploaded");
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(device));
     if (!add_to_sums) {
       replayed_parts = 0;
@@ -847,7 +850,7 @@ struct CudaTracer::Impl {
     out->rays = host_counters.get()[0];
     for (int i = 0; i < 6; ++i) out->ends[i] = host_counters.get()[1 + i];
     out->kernel_seconds = seconds;
-    return "";
+    return absl::OkStatus();
   }
 };
 
@@ -860,7 +863,7 @@ int CudaDeviceCount() {
 std::string CudaDeviceName(int device) {
   cudaDeviceProp properties;
   if (device >= CudaDeviceCount() || cudaGetDeviceProperties(&properties, device) != cudaSuccess) {
-    return "";
+    return std::string();
   }
   return properties.name;
 }
@@ -868,23 +871,14 @@ std::string CudaDeviceName(int device) {
 CudaTracer::CudaTracer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 CudaTracer::~CudaTracer() = default;
 
-std::unique_ptr<CudaTracer> CudaTracer::Create(int device, std::string* error) {
-  const int count = CudaDeviceCount();
-  if (device < 0 || device >= count) {
-    *error = count == 0 ? "no CUDA device is available on this host"
-                        : "CUDA device " + std::to_string(device) + " does not exist (" +
-                              std::to_string(count) + " visible)";
-    return nullptr;
-  }
+absl::StatusOr<std::unique_ptr<CudaTracer>> CudaTracer::Create(int device) {
+  FENESTRA_RETURN_IF_ERROR(CheckCudaDevice(device));
   auto impl = std::make_unique<Impl>();
   impl->device = device;
   cudaDeviceProp properties;
   cudaError_t e = cudaGetDeviceProperties(&properties, device);
   if (e == cudaSuccess) e = cudaSetDevice(device);
-  if (e != cudaSuccess) {
-    *error = CudaErrorText(e);
-    return nullptr;
-  }
+  FENESTRA_CUDA_RETURN_IF_ERROR(e);
   impl->multiprocessors = properties.multiProcessorCount;
   impl->name = properties.name;
   return std::unique_ptr<CudaTracer>(new CudaTracer(std::move(impl)));
@@ -892,9 +886,9 @@ std::unique_ptr<CudaTracer> CudaTracer::Create(int device, std::string* error) {
 
 std::string CudaTracer::device_name() const { return impl_->name; }
 
-std::string CudaTracer::SetScene(const BvhLayout& bvh, const uint32_t* triangle_material,
-                                 size_t triangle_count, const TraceMaterial* materials,
-                                 size_t material_count) {
+absl::Status CudaTracer::SetScene(const BvhLayout& bvh, const uint32_t* triangle_material,
+                                  size_t triangle_count, const TraceMaterial* materials,
+                                  size_t material_count) {
   Impl& d = *impl_;
   d.replayed_parts = 0;  // the sums were another scene's
   d.has_scene = false;
@@ -904,14 +898,14 @@ std::string CudaTracer::SetScene(const BvhLayout& bvh, const uint32_t* triangle_
   FENESTRA_CUDA_RETURN_IF_ERROR(d.triangle_material.Upload(triangle_material, triangle_count));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.materials.Upload(materials, material_count));
   d.has_scene = true;
-  return "";
+  return absl::OkStatus();
 }
 
-std::string CudaTracer::IntersectRays(const Vec3f* origins, const Vec3f* directions, size_t count,
-                                      bool same_ray_per_warp, float* distance,
-                                      double* kernel_seconds) {
+absl::Status CudaTracer::IntersectRays(const Vec3f* origins, const Vec3f* directions, size_t count,
+                                       bool same_ray_per_warp, float* distance,
+                                       double* kernel_seconds) {
   Impl& d = *impl_;
-  if (!d.has_scene) return "CUDA tracer: no scene uploaded";
+  if (!d.has_scene) return absl::FailedPreconditionError("CUDA tracer: no scene uploaded");
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.ray_origins.Upload(origins, count));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.ray_directions.Upload(directions, count));
@@ -925,13 +919,13 @@ std::string CudaTracer::IntersectRays(const Vec3f* origins, const Vec3f* directi
       },
       kernel_seconds));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.ray_distances.Download(distance, count));
-  return "";
+  return absl::OkStatus();
 }
 
-std::string CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
-                                 uint64_t paths_per_sensor, int batches, uint64_t seed,
-                                 const PathSettings& path, double* sum, double* sum_squares,
-                                 CudaCounters* counters) {
+absl::Status CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
+                                  uint64_t paths_per_sensor, int batches, uint64_t seed,
+                                  const PathSettings& path, double* sum, double* sum_squares,
+                                  CudaCounters* counters) {
   Impl& d = *impl_;
   FENESTRA_CUDA_RETURN_IF_ERROR(d.sensors.Upload(sensors, sensor_count));
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
@@ -946,38 +940,32 @@ std::string CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
       sum, sum_squares, counters);
 }
 
-std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
-                                uint64_t paths_per_cell, int batches, uint64_t seed,
-                                const PathSettings& path, const OutdoorOutput& out,
-                                CudaCounters* counters) {
+absl::Status CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
+                                 uint64_t paths_per_cell, int batches, uint64_t seed,
+                                 const PathSettings& path, const OutdoorOutput& out,
+                                 CudaCounters* counters) {
   Impl& d = *impl_;
   const int cells = WindowCellCount(window, basis);
   const int row_size = batches * kOutdoorRowSize;
-  if (std::string error = AllowSharedRow(
-          OutdoorKernel, row_size, "outdoor sums (the batches of a cell)", "use fewer batches");
-      !error.empty()) {
-    return error;
-  }
+  FENESTRA_RETURN_IF_ERROR(AllowSharedRow(
+      OutdoorKernel, row_size, "outdoor sums (the batches of a cell)", "use fewer batches"));
   const size_t shared = static_cast<size_t>(row_size) * sizeof(double);
   const unsigned int per_cell =
       d.BlocksPerRow(OutdoorKernel, shared, paths_per_cell, static_cast<unsigned int>(cells));
   constexpr unsigned int kMaxGridRows = 65535;
-  if (std::string error = d.Run(
-          cells, static_cast<size_t>(cells) * batches * kOutdoorRowSize, false,
-          [&] {
-            for (unsigned int first = 0; first < static_cast<unsigned int>(cells);
-                 first += kMaxGridRows) {
-              const dim3 grid(per_cell,
-                              std::min(kMaxGridRows, static_cast<unsigned int>(cells) - first));
-              OutdoorKernel<<<grid, kThreads, shared>>>(
-                  d.Scene(), d.Surfaces(), path, window, basis, paths_per_cell, batches, seed,
-                  first, d.sum.get(), d.counters.get(), d.next_path.get());
-            }
-          },
-          nullptr, nullptr, counters);
-      !error.empty()) {
-    return error;
-  }
+  FENESTRA_RETURN_IF_ERROR(d.Run(
+      cells, static_cast<size_t>(cells) * batches * kOutdoorRowSize, false,
+      [&] {
+        for (unsigned int first = 0; first < static_cast<unsigned int>(cells);
+             first += kMaxGridRows) {
+          const dim3 grid(per_cell,
+                          std::min(kMaxGridRows, static_cast<unsigned int>(cells) - first));
+          OutdoorKernel<<<grid, kThreads, shared>>>(
+              d.Scene(), d.Surfaces(), path, window, basis, paths_per_cell, batches, seed, first,
+              d.sum.get(), d.counters.get(), d.next_path.get());
+        }
+      },
+      nullptr, nullptr, counters));
   // O formed where the sums lie; each part downloaded straight to its place
   const size_t entries = static_cast<size_t>(cells + kTregenzaBinCount) * kTregenzaBinCount;
   FENESTRA_CUDA_RETURN_IF_ERROR(d.formed.Reserve((batches + 2) * entries + cells));
@@ -995,10 +983,10 @@ std::string CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis
   FENESTRA_CUDA_RETURN_IF_ERROR(download(out.standard_error, (batches + 1) * entries, entries));
   FENESTRA_CUDA_RETURN_IF_ERROR(download(out.first_escapes, (batches + 2) * entries, cells));
   if (out.batches_on_device != nullptr) *out.batches_on_device = HandOver(d.formed, d.device);
-  return "";
+  return absl::OkStatus();
 }
 
-std::string CudaTracer::SetOutdoorScene(const BvhLayout& bvh, const std::vector<uint8_t>& met) {
+absl::Status CudaTracer::SetOutdoorScene(const BvhLayout& bvh, const std::vector<uint8_t>& met) {
   Impl& d = *impl_;
   d.replayed_parts = 0;
   d.has_outdoor = false;
@@ -1008,21 +996,22 @@ std::string CudaTracer::SetOutdoorScene(const BvhLayout& bvh, const std::vector<
       d.outdoor_triangles.Upload(bvh.triangles.data(), bvh.triangles.size()));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.outdoor_met.Upload(met.data(), met.size()));
   d.has_outdoor = true;
-  return "";
+  return absl::OkStatus();
 }
 
-std::string CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int sensor_count,
-                                          const TraceWindow& window, Vec3f outdoor_offset,
-                                          const HemisphereBasis& basis, uint64_t paths_per_sensor,
-                                          int batches, uint64_t seed, const PathSettings& path,
-                                          double* host_sum, CudaCounters* out) {
+absl::Status CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int sensor_count,
+                                           const TraceWindow& window, Vec3f outdoor_offset,
+                                           const HemisphereBasis& basis, uint64_t paths_per_sensor,
+                                           int batches, uint64_t seed, const PathSettings& path,
+                                           double* host_sum, CudaCounters* out) {
   Impl& d = *this;
-  if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
+  if (!d.has_outdoor)
+    return absl::FailedPreconditionError("CUDA tracer: no outdoor scene uploaded");
   FENESTRA_CUDA_RETURN_IF_ERROR(d.sensors.Upload(host_sensors, sensor_count));
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
   const int cells = IndoorColumnCount(window, basis);
   const size_t shared = static_cast<size_t>(cells) * sizeof(double);
-  if (std::string error = AllowSharedRow(IndoorKernel, cells); !error.empty()) return error;
+  FENESTRA_RETURN_IF_ERROR(AllowSharedRow(IndoorKernel, cells));
   const dim3 grid(d.BlocksPerRow(IndoorKernel, shared, paths_per_sensor / batches + 1, rows), rows);
   return d.Run(
       rows, static_cast<size_t>(batches) * sensor_count * cells, false,
@@ -1035,33 +1024,33 @@ std::string CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int s
       host_sum, nullptr, out);
 }
 
-std::string CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
-                               const TraceWindow& window, Vec3f outdoor_offset,
-                               const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
-                               uint64_t seed, const PathSettings& path, double* sum,
-                               CudaCounters* counters) {
+absl::Status CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
+                                const TraceWindow& window, Vec3f outdoor_offset,
+                                const HemisphereBasis& basis, uint64_t paths_per_sensor,
+                                int batches, uint64_t seed, const PathSettings& path, double* sum,
+                                CudaCounters* counters) {
   return impl_->TraceIndoor(sensors, sensor_count, window, outdoor_offset, basis, paths_per_sensor,
                             batches, seed, path, sum, counters);
 }
 
-std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
-                                     int sensor_count, const TraceWindow& window,
-                                     Vec3f outdoor_offset, const HemisphereBasis& basis,
-                                     uint64_t paths_per_sensor, int batches, int parts,
-                                     uint64_t seed, const PathSettings& path, size_t max_bytes,
-                                     CudaReplayStats* stats) {
+absl::Status CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
+                                      int sensor_count, const TraceWindow& window,
+                                      Vec3f outdoor_offset, const HemisphereBasis& basis,
+                                      uint64_t paths_per_sensor, int batches, int parts,
+                                      uint64_t seed, const PathSettings& path, size_t max_bytes,
+                                      CudaReplayStats* stats) {
   Impl& d = *impl_;
-  if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
+  if (!d.has_outdoor)
+    return absl::FailedPreconditionError("CUDA tracer: no outdoor scene uploaded");
   d.recorded.valid = false;
   d.resume_order_made = false;
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.replay_sensors.Upload(sensors, sensor_count));
   const int columns = IndoorColumnCount(window, basis);
-  for (std::string error :
-       {AllowSharedRow(RecordKernel, columns), AllowSharedRow(ReplayKernel, columns)}) {
-    if (!error.empty()) return error;
-  }
-  if (parts < 1) return "CUDA tracer: no parts of the batches to record";
+  FENESTRA_RETURN_IF_ERROR(AllowSharedRow(RecordKernel, columns));
+  FENESTRA_RETURN_IF_ERROR(AllowSharedRow(ReplayKernel, columns));
+  if (parts < 1)
+    return absl::FailedPreconditionError("CUDA tracer: no parts of the batches to record");
   // Rows (sensor, part of a batch): the indoor kernel's rows of batches x parts batches
   const int row_batches = batches * parts;
   const unsigned int rows = static_cast<unsigned int>(sensor_count * row_batches);
@@ -1086,9 +1075,7 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
        path};
   std::vector<unsigned long long> counts(3 * static_cast<size_t>(rows));
   CudaCounters counters;
-  if (std::string error = d.TraceRecords(columns, max_bytes, counts, &counters); !error.empty()) {
-    return error;
-  }
+  FENESTRA_RETURN_IF_ERROR(d.TraceRecords(columns, max_bytes, counts, &counters));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.fixed.Reserve(static_cast<size_t>(rows) * columns));
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaMemcpy(d.fixed.get(), d.sum.get(),
                                            static_cast<size_t>(rows) * columns * sizeof(double),
@@ -1103,12 +1090,12 @@ std::string CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceS
   }
   stats->rays = counters.rays;
   stats->kernel_seconds = counters.kernel_seconds;
-  return "";
+  return absl::OkStatus();
 }
 
-std::string CudaTracer::Impl::TraceRecords(int columns, size_t max_bytes,
-                                           std::vector<unsigned long long>& counts,
-                                           CudaCounters* counters) {
+absl::Status CudaTracer::Impl::TraceRecords(int columns, size_t max_bytes,
+                                            std::vector<unsigned long long>& counts,
+                                            CudaCounters* counters) {
   Impl& d = *this;
   Recorded& r = d.recorded;
   const int row_batches = r.batches * r.parts;
@@ -1123,8 +1110,10 @@ std::string CudaTracer::Impl::TraceRecords(int columns, size_t max_bytes,
                 r.connection_capacity * sizeof(ReplayConnection) +
                 r.resume_capacity * sizeof(ReplayResume) + 2 * columns * sizeof(double));
     if (bytes > max_bytes) {
-      return std::string(kReplayTooLarge) + " (" + std::to_string(bytes >> 20) + " MiB, at most " +
-             std::to_string(max_bytes >> 20) + " MiB)";
+      return absl::ResourceExhaustedError(
+          absl::StrCat("CUDA tracer: the indoor paths' records would take more device memory "
+                       "than allowed (",
+                       bytes >> 20, " MiB, at most ", max_bytes >> 20, " MiB)"));
     }
     FENESTRA_CUDA_RETURN_IF_ERROR(d.crossings.Reserve(rows * r.crossing_capacity));
     FENESTRA_CUDA_RETURN_IF_ERROR(d.connections.Reserve(rows * r.connection_capacity));
@@ -1132,7 +1121,7 @@ std::string CudaTracer::Impl::TraceRecords(int columns, size_t max_bytes,
     FENESTRA_CUDA_RETURN_IF_ERROR(d.record_counts.Zero(3 * static_cast<size_t>(rows)));
     const DeviceRecords records = d.Records();
     const dim3 grid(d.BlocksPerRow(RecordKernel, shared, row_paths, rows), rows);
-    std::string error = d.Run(
+    FENESTRA_RETURN_IF_ERROR(d.Run(
         rows, static_cast<size_t>(rows) * columns, false,
         [&] {
           RecordKernel<<<grid, kThreads, shared>>>(
@@ -1140,32 +1129,36 @@ std::string CudaTracer::Impl::TraceRecords(int columns, size_t max_bytes,
               d.replay_sensors.get(), r.sensor_count, r.window, r.basis, r.paths_per_sensor,
               row_batches, r.seed, records, d.sum.get(), d.counters.get(), d.next_path.get());
         },
-        nullptr, nullptr, counters);
-    if (!error.empty()) return error;
+        nullptr, nullptr, counters));
     FENESTRA_CUDA_RETURN_IF_ERROR(d.record_counts.Download(counts.data(), counts.size()));
     const unsigned long long most = *std::max_element(counts.begin(), counts.begin() + rows);
     const unsigned long long most_crossing =
         *std::max_element(counts.begin() + 2 * rows, counts.end());
-    if (most <= r.connection_capacity && most_crossing <= r.crossing_capacity) return "";
-    if (attempt > 0) return "CUDA tracer: the indoor paths' records changed between two traces";
+    if (most <= r.connection_capacity && most_crossing <= r.crossing_capacity)
+      return absl::OkStatus();
+    if (attempt > 0)
+      return absl::InternalError(
+          "CUDA tracer: the indoor paths' records changed between two traces");
     r.connection_capacity = std::max<uint64_t>(most, r.connection_capacity);
     r.crossing_capacity = std::max<uint64_t>(most_crossing, r.crossing_capacity);
   }
 }
 
-std::string CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceMaterial* materials,
-                                     int first, int last, double* host_sum, CudaCounters* out) {
+absl::Status CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceMaterial* materials,
+                                      int first, int last, double* host_sum, CudaCounters* out) {
   Impl& d = *this;
-  if (!d.recorded.valid) return "CUDA tracer: no indoor paths recorded";
-  if (!d.has_outdoor) return "CUDA tracer: no outdoor scene uploaded";
+  if (!d.recorded.valid)
+    return absl::FailedPreconditionError("CUDA tracer: no indoor paths recorded");
+  if (!d.has_outdoor)
+    return absl::FailedPreconditionError("CUDA tracer: no outdoor scene uploaded");
   const Recorded& r = d.recorded;
   if (first < 0 || first >= last || last > r.parts) {
-    return "CUDA tracer: parts [" + std::to_string(first) + ", " + std::to_string(last) + ") of " +
-           std::to_string(r.parts) + " recorded";
+    return absl::InvalidArgumentError(
+        absl::StrCat("CUDA tracer: parts [", first, ", ", last, ") of ", r.parts, " recorded"));
   }
   if (first > 0 && (d.replayed_parts != first || designs.count != 1)) {
-    return "CUDA tracer: the sums of the parts before " + std::to_string(first) +
-           " are no longer on the device";
+    return absl::FailedPreconditionError(absl::StrCat("CUDA tracer: the sums of the parts before ",
+                                                      first, " are no longer on the device"));
   }
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   const ReplayParts parts{r.batches, r.parts, first, last};
@@ -1195,7 +1188,7 @@ std::string CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceMa
   } else if (all_parts) {
     records.order = d.resume_order.get();
   }
-  std::string error = d.Run(
+  absl::Status status = d.Run(
       rows, d.DesignSums() * designs.count, false,
       [&] {
         ReplayKernel<<<d.row_blocks_total, kThreads, shared>>>(
@@ -1205,15 +1198,15 @@ std::string CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceMa
             d.next_path.get());
       },
       host_sum, nullptr, out, first > 0);
-  if (measure && error.empty()) error = d.OrderResumes();
-  d.replayed_parts = error.empty() && designs.count == 1 ? last : 0;
-  return error;
+  if (measure && status.ok()) status = d.OrderResumes();
+  d.replayed_parts = status.ok() && designs.count == 1 ? last : 0;
+  return status;
 }
 
 int CudaTracer::ReplayedParts() const { return impl_->replayed_parts; }
 
-std::string CudaTracer::ReplayIndoor(const LocalSlats& blind, int first, int last, double* sum,
-                                     CudaCounters* counters) {
+absl::Status CudaTracer::ReplayIndoor(const LocalSlats& blind, int first, int last, double* sum,
+                                      CudaCounters* counters) {
   Impl& d = *impl_;
   ReplayDesigns designs{};
   designs.design[0] = {d.nodes.get(), d.triangles.get(), d.triangle_material.get(), blind,
@@ -1222,13 +1215,13 @@ std::string CudaTracer::ReplayIndoor(const LocalSlats& blind, int first, int las
   return d.Replay(designs, d.materials.get(), first, last, sum, counters);
 }
 
-std::string CudaTracer::ReplayIndoorDesigns(const std::vector<DesignScene>& scenes,
-                                            const std::vector<TraceMaterial>& materials,
-                                            CudaCounters* counters) {
+absl::Status CudaTracer::ReplayIndoorDesigns(const std::vector<DesignScene>& scenes,
+                                             const std::vector<TraceMaterial>& materials,
+                                             CudaCounters* counters) {
   Impl& d = *impl_;
   if (scenes.empty() || scenes.size() > kMaxReplayDesigns) {
-    return "CUDA tracer: " + std::to_string(scenes.size()) + " designs in one replay (1 to " +
-           std::to_string(kMaxReplayDesigns) + ")";
+    return absl::InvalidArgumentError(absl::StrCat(
+        "CUDA tracer: ", scenes.size(), " designs in one replay (1 to ", kMaxReplayDesigns, ")"));
   }
   // The designs' scenes one after the other; each design's BVH indexes its own part
   std::vector<BvhNode> nodes;

@@ -3,13 +3,16 @@
 // The GPU tracer: the shared per-path code (core/trace/path.h, two_stage_modes.h) with the
 // BVH traversal of core/trace/bvh_intersector.h; each thread traces paths one ray at a time
 // and starts its row's next path as soon as one ends. Host-only
-// declarations (no CUDA headers), so C++ code includes it; errors come back as text and
-// the caller turns them into a status.
+// declarations (no CUDA headers), so C++ code includes it. Errors are statuses: CUDA's own
+// errors INTERNAL (RESOURCE_EXHAUSTED where device memory ran out), a call out of order
+// FAILED_PRECONDITION, arguments the tracer cannot take INVALID_ARGUMENT.
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
 #include "core/geometry/hemisphere_basis.h"
 #include "core/trace/bvh_layout.h"
 #include "core/trace/indoor_replay_modes.h"
@@ -35,10 +38,6 @@ struct CudaReplayStats {
   double kernel_seconds = 0;
 };
 
-// How RecordIndoor's error begins where the records would take more than allowed.
-inline constexpr char kReplayTooLarge[] =
-    "CUDA tracer: the indoor paths' records would take more device memory than allowed";
-
 // Name of CUDA device `device`, or "" when there is none.
 std::string CudaDeviceName(int device = 0);
 
@@ -47,31 +46,30 @@ int CudaDeviceCount();
 
 class CudaTracer {
  public:
-  // A tracer on `device`; null with `error` set when there is no such device.
-  static std::unique_ptr<CudaTracer> Create(int device, std::string* error);
+  // A tracer on `device`; UNAVAILABLE where the host has no CUDA device, INVALID_ARGUMENT
+  // where it has no device `device`.
+  static absl::StatusOr<std::unique_ptr<CudaTracer>> Create(int device);
   ~CudaTracer();
   CudaTracer(const CudaTracer&) = delete;
   CudaTracer& operator=(const CudaTracer&) = delete;
 
   // Uploads the scene to trace next: its BVH, and per triangle an index into `materials`.
-  // "" or the error.
-  std::string SetScene(const BvhLayout& bvh, const uint32_t* triangle_material,
-                       size_t triangle_count, const TraceMaterial* materials,
-                       size_t material_count);
+  absl::Status SetScene(const BvhLayout& bvh, const uint32_t* triangle_material,
+                        size_t triangle_count, const TraceMaterial* materials,
+                        size_t material_count);
 
   // Closest hits of `count` rays (origins and unit directions in the scene's frame) in the
   // uploaded scene: distance[i] gets the distance to ray i's hit, INFINITY on a miss. With
   // same_ray_per_warp, every lane of a warp traces the warp's first ray: the traversal's
   // cost without divergence or scattered memory reads, a yardstick for benchmarks.
-  // "" or the error.
-  std::string IntersectRays(const Vec3f* origins, const Vec3f* directions, size_t count,
-                            bool same_ray_per_warp, float* distance, double* kernel_seconds);
+  absl::Status IntersectRays(const Vec3f* origins, const Vec3f* directions, size_t count,
+                             bool same_ray_per_warp, float* distance, double* kernel_seconds);
 
   // One-stage paths of each sensor in `batches` contiguous batches; sum and sum_squares
   // get [(sensor * batches + batch) * kTregenzaBinCount + bin].
-  std::string OneStage(const TraceSensor* sensors, int sensor_count, uint64_t paths_per_sensor,
-                       int batches, uint64_t seed, const PathSettings& path, double* sum,
-                       double* sum_squares, CudaCounters* counters);
+  absl::Status OneStage(const TraceSensor* sensors, int sensor_count, uint64_t paths_per_sensor,
+                        int batches, uint64_t seed, const PathSettings& path, double* sum,
+                        double* sum_squares, CudaCounters* counters);
 
   // Where Outdoor puts O: each batch, their mean and its standard error, row-major
   // (window cells + kTregenzaBinCount) x kTregenzaBinCount as FormOutdoorBatches makes them
@@ -88,57 +86,56 @@ class CudaTracer {
   };
   // Outdoor paths, paths_per_cell from each window cell in `batches` batches, the same
   // streams as TraceOutdoorCpu; O formed from their sums on the device, then downloaded.
-  std::string Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
-                      uint64_t paths_per_cell, int batches, uint64_t seed, const PathSettings& path,
-                      const OutdoorOutput& out, CudaCounters* counters);
+  absl::Status Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
+                       uint64_t paths_per_cell, int batches, uint64_t seed,
+                       const PathSettings& path, const OutdoorOutput& out, CudaCounters* counters);
 
   // Uploads the outdoor surfaces' BVH, which the indoor stage tests its window connections
   // against (OutdoorView), and per window cell whether all its views meet them
-  // (WindowCellsMeetingSurfaces, for the next indoor stages' parts and basis). "" or the
-  // error.
-  std::string SetOutdoorScene(const BvhLayout& bvh, const std::vector<uint8_t>& met);
+  // (WindowCellsMeetingSurfaces, for the next indoor stages' parts and basis).
+  absl::Status SetOutdoorScene(const BvhLayout& bvh, const std::vector<uint8_t>& met);
 
   // Indoor paths in `batches` contiguous batches per sensor, as TraceIndoorCpu, against the
   // uploaded scene and outdoor scene (`outdoor_offset`: OutdoorView::offset); sum gets
   // [(batch * sensors + sensor) * columns + column], or, null, leaves them on the device.
-  std::string Indoor(const TraceSensor* sensors, int sensor_count, const TraceWindow& window,
-                     Vec3f outdoor_offset, const HemisphereBasis& basis, uint64_t paths_per_sensor,
-                     int batches, uint64_t seed, const PathSettings& path, double* sum,
-                     CudaCounters* counters);
+  absl::Status Indoor(const TraceSensor* sensors, int sensor_count, const TraceWindow& window,
+                      Vec3f outdoor_offset, const HemisphereBasis& basis, uint64_t paths_per_sensor,
+                      int batches, uint64_t seed, const PathSettings& path, double* sum,
+                      CudaCounters* counters);
 
   // The indoor replay (core/dc/indoor_replay.h) on the device. RecordIndoor traces the
   // indoor paths, as Indoor, through the uploaded scene (the room without the blind) up to
   // where they could first meet a blind inside `envelope`, and keeps on the device what no
   // blind changes, the next-event connections that cleared the room and the paths that
-  // reached the envelope (an error, and nothing recorded, where that would take more than
-  // `max_bytes`). ReplayIndoor then gives Indoor's sums for the uploaded scene, a room with
-  // a blind inside the envelope in the recorded frame, from the records: the connections
-  // tested against `blind` (its slats alone), the paths that reached the envelope traced
-  // on. Each batch's paths are recorded in `parts` parts of consecutive paths, and
-  // ReplayIndoor replays parts [first, last) of every batch, added to the sums of parts
+  // reached the envelope (RESOURCE_EXHAUSTED, and nothing recorded, where that would take
+  // more than `max_bytes` or more device memory than there is). ReplayIndoor then gives Indoor's
+  // sums for the uploaded scene, a room with a blind inside the envelope in the recorded frame,
+  // from the records: the connections tested against `blind` (its slats alone), the paths that
+  // reached the envelope traced on. Each batch's paths are recorded in `parts` parts of consecutive
+  // paths, and ReplayIndoor replays parts [first, last) of every batch, added to the sums of parts
   // [0, first) that the replay before it left on the device (an error where they are no
-  // longer there). "" or the error.
-  std::string RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
-                           int sensor_count, const TraceWindow& window, Vec3f outdoor_offset,
-                           const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
-                           int parts, uint64_t seed, const PathSettings& path, size_t max_bytes,
-                           CudaReplayStats* stats);
-  std::string ReplayIndoor(const LocalSlats& blind, int first, int last, double* sum,
-                           CudaCounters* counters);
+  // longer there: FAILED_PRECONDITION).
+  absl::Status RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
+                            int sensor_count, const TraceWindow& window, Vec3f outdoor_offset,
+                            const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
+                            int parts, uint64_t seed, const PathSettings& path, size_t max_bytes,
+                            CudaReplayStats* stats);
+  absl::Status ReplayIndoor(const LocalSlats& blind, int first, int last, double* sum,
+                            CudaCounters* counters);
 
   // ReplayIndoor for several designs in one launch, every part of each (a launch's last
   // paths end one after another, so designs traced together share that tail): design k's
   // room with its blind (`scenes[k]`, its triangles' materials indexed into `materials`)
   // and its slats alone (`scenes[k].blind`). The sums stay on the device, design k's at
-  // DeviceSums() + k * DesignSums(). At most kMaxReplayDesigns. "" or the error.
+  // DeviceSums() + k * DesignSums(). At most kMaxReplayDesigns.
   struct DesignScene {
     const BvhLayout* bvh;
     const std::vector<uint32_t>* triangle_material;
     LocalSlats blind;
   };
-  std::string ReplayIndoorDesigns(const std::vector<DesignScene>& scenes,
-                                  const std::vector<TraceMaterial>& materials,
-                                  CudaCounters* counters);
+  absl::Status ReplayIndoorDesigns(const std::vector<DesignScene>& scenes,
+                                   const std::vector<TraceMaterial>& materials,
+                                   CudaCounters* counters);
   static constexpr int kMaxReplayDesigns = 8;
   // Doubles of one design's sums in a replay (batches x sensors x columns); 0 with no records.
   size_t DesignSums() const;

@@ -1,7 +1,7 @@
 #pragma once
 
 // Device and page-locked host allocations for the CUDA code (the tracer, the annual
-// product), and how CUDA errors become the text those return. Compiled by nvcc only.
+// product), and how CUDA errors become the statuses those return. Compiled by nvcc only.
 #include <cuda_runtime.h>
 
 #include <algorithm>
@@ -9,20 +9,49 @@
 #include <memory>
 #include <string>
 
+#include "absl/status/status.h"
+
 namespace fenestra {
 
-// A CUDA error as the text the CUDA code returns ("" is success).
-inline std::string CudaErrorText(cudaError_t e) {
-  return std::string("CUDA: ") + cudaGetErrorString(e);
+// A CUDA error as a status: out of memory is RESOURCE_EXHAUSTED, a missing device or driver
+// UNAVAILABLE, anything else INTERNAL.
+inline absl::Status CudaError(cudaError_t e) {
+  const std::string message = std::string("CUDA: ") + cudaGetErrorString(e);
+  switch (e) {
+    case cudaSuccess:
+      return absl::OkStatus();
+    case cudaErrorMemoryAllocation:
+      return absl::ResourceExhaustedError(message);
+    case cudaErrorNoDevice:
+    case cudaErrorInsufficientDriver:
+    case cudaErrorDevicesUnavailable:
+      return absl::UnavailableError(message);
+    default:
+      return absl::InternalError(message);
+  }
 }
 
-// In a function returning the error text: returns it when `expr` (a cudaError_t) fails.
+// In a function returning an absl::Status: returns CudaError of `expr` (a cudaError_t) when it
+// fails.
 #define FENESTRA_CUDA_RETURN_IF_ERROR(expr)                                                     \
   do {                                                                                          \
     if (const cudaError_t fenestra_cuda_error_ = (expr); fenestra_cuda_error_ != cudaSuccess) { \
-      return ::fenestra::CudaErrorText(fenestra_cuda_error_);                                   \
+      return ::fenestra::CudaError(fenestra_cuda_error_);                                       \
     }                                                                                           \
   } while (0)
+
+// OK where CUDA device `device` exists; UNAVAILABLE where the host has no device, otherwise
+// INVALID_ARGUMENT naming how many there are.
+inline absl::Status CheckCudaDevice(int device) {
+  int count = 0;
+  if (cudaGetDeviceCount(&count) != cudaSuccess) count = 0;
+  if (count == 0) return absl::UnavailableError("no CUDA device is available on this host");
+  if (device < 0 || device >= count) {
+    return absl::InvalidArgumentError("CUDA device " + std::to_string(device) +
+                                      " does not exist (" + std::to_string(count) + " visible)");
+  }
+  return absl::OkStatus();
+}
 
 // Where an allocation lives: device memory, or page-locked host memory.
 struct DeviceMemory {

@@ -114,7 +114,8 @@ TEST(ExtremeScenesTest, ClosedTouchingSlatsLetNoLightThrough) {
       {"wall", 0.8, -1}, {"floor", 0.2, -1}, {"slat", 0.8, -1}};
   const std::vector<Sensor> sensors = {{"near", {0, -0.3, 1.5}, {0, 1, 0}},
                                        {"centre", {0, -3, 0.7}, {0, 0, 1}}};
-  const auto result = ComputeOneStage(mesh, materials, sensors, Options(200000, 0, 3));
+  const auto result =
+      ComputeOneStage(mesh, materials, sensors, Options(200000, kUnlimitedBounces, 3));
   ASSERT_TRUE(result.ok()) << result.status();
   ExpectFinite(*result);
   EXPECT_EQ(result->coefficients.maxCoeff(), 0.0);
@@ -127,7 +128,7 @@ TEST(ExtremeScenesTest, ClosedTouchingSlatsLetNoLightThrough) {
   open.material.resize(keep);
   open.side.resize(keep);
   open.part.resize(keep);
-  const auto lit = ComputeOneStage(open, materials, sensors, Options(20000, 0, 3));
+  const auto lit = ComputeOneStage(open, materials, sensors, Options(20000, kUnlimitedBounces, 3));
   ASSERT_TRUE(lit.ok());
   EXPECT_GT(lit->sky_sum(0), 0.05);
 }
@@ -162,8 +163,9 @@ TEST(ExtremeScenesTest, SensorsLyingOnSurfaces) {
   // On an endless ground, facing up: nothing but sky, exactly pi
   TriangleMesh ground;
   AddSquare(ground, 0, 0, 1e4, 0, 0);
-  const auto on_ground = ComputeOneStage(
-      ground, {{"ground", 0.2, -1}}, {{"s", {3.25, -7.5, 0}, {0, 0, 1}}}, Options(100000, 0, 5));
+  const auto on_ground =
+      ComputeOneStage(ground, {{"ground", 0.2, -1}}, {{"s", {3.25, -7.5, 0}, {0, 0, 1}}},
+                      Options(100000, kUnlimitedBounces, 5));
   ASSERT_TRUE(on_ground.ok());
   EXPECT_NEAR(on_ground->sky_sum(0), kPi, 1e-12);
   EXPECT_EQ(on_ground->coefficients(0, 0), 0.0);

@@ -148,10 +148,10 @@ struct GlazedSlab {
     AddSquare(mesh, 0, 0, 1e4, 1, 1);
     materials = {{"ground", rho_g, -1}, {"pane", rho_p, tau}};
   }
-  // Expected sky sum with at most `max_bounces` reflections (<= 0: unlimited).
+  // Expected sky sum with at most `max_bounces` reflections (< 0: unlimited).
   double SkySum(int max_bounces) const {
     const double r = rho_p * rho_g;
-    if (max_bounces <= 0) return kPi * tau / (1 - r);
+    if (max_bounces < 0) return kPi * tau / (1 - r);
     return kPi * tau * (1 - std::pow(r, max_bounces / 2 + 1)) / (1 - r);
   }
 };
@@ -164,10 +164,12 @@ TEST(OneStageTest, RouletteAndBounceLimitsAreUnbiased) {
     int max_bounces;
     bool weight_windows;
   };
-  const Case cases[] = {{true, 1.0, 0, false},     {true, 0.3, 0, false}, {true, 0.01, 0, false},
-                        {false, 1.0, 1000, false}, {true, 1.0, 1, false}, {false, 1.0, 2, false},
-                        {true, 0.3, 3, false},     {true, 1.0, 4, false}, {false, 1.0, 0, false},
-                        {true, 0.25, 0, true},     {true, 0.25, 3, true}, {false, 1.0, 6, true}};
+  // max_bounces -1: unlimited; 0: the direct component alone
+  const Case cases[] = {{true, 1.0, -1, false},    {true, 0.3, -1, false}, {true, 0.01, -1, false},
+                        {false, 1.0, 1000, false}, {true, 1.0, 1, false},  {false, 1.0, 2, false},
+                        {true, 0.3, 3, false},     {true, 1.0, 4, false},  {false, 1.0, -1, false},
+                        {true, 0.25, -1, true},    {true, 0.25, 3, true},  {false, 1.0, 6, true},
+                        {true, 1.0, 0, false},     {false, 1.0, 0, false}};
   for (const Case& c : cases) {
     OneStageOptions options = Options(200000, 4);
     options.russian_roulette = c.roulette;
@@ -175,7 +177,7 @@ TEST(OneStageTest, RouletteAndBounceLimitsAreUnbiased) {
     options.max_bounces = c.max_bounces;
     options.weight_windows = c.weight_windows;
     const auto result = ComputeOneStage(slab.mesh, slab.materials, slab.sensors, options);
-    if (!c.roulette && c.max_bounces <= 0) {
+    if (!c.roulette && c.max_bounces < 0) {
       EXPECT_EQ(result.status().code(), absl::StatusCode::kInvalidArgument);
       continue;
     }
@@ -212,7 +214,7 @@ TEST(OneStageTest, StandardErrorsAreCalibrated) {
   // below 0.3): z of the sky sum and of every sky bin against the analytic values
   const GlazedSlab slab;
   const std::vector<double> patches = CosineWeightedPatches();
-  const double share = slab.SkySum(0) / kPi;
+  const double share = slab.SkySum(kUnlimitedBounces) / kPi;
   const int kSeeds = 100;
   std::vector<double> z_sum, z_bins;
   for (int seed = 0; seed < kSeeds; ++seed) {
@@ -221,7 +223,8 @@ TEST(OneStageTest, StandardErrorsAreCalibrated) {
     options.weight_windows = false;
     const auto result = ComputeOneStage(slab.mesh, slab.materials, slab.sensors, options);
     ASSERT_TRUE(result.ok()) << result.status();
-    z_sum.push_back((result->sky_sum(0) - slab.SkySum(0)) / result->sky_sum_standard_error(0));
+    z_sum.push_back((result->sky_sum(0) - slab.SkySum(kUnlimitedBounces)) /
+                    result->sky_sum_standard_error(0));
     for (int b = 1; b < kDaylightBins; ++b) {
       z_bins.push_back((result->coefficients(0, b) - share * patches[b]) /
                        result->standard_error(0, b));
@@ -306,7 +309,9 @@ void CheckSplitCalibration(int max_bounces, int seeds) {
       bin_stats.n);
 }
 
-TEST(OneStageTest, StandardErrorsAreCalibratedWhenPathsSplit) { CheckSplitCalibration(0, 60); }
+TEST(OneStageTest, StandardErrorsAreCalibratedWhenPathsSplit) {
+  CheckSplitCalibration(kUnlimitedBounces, 60);
+}
 
 TEST(OneStageTest, WeightWindowsWithABounceLimitAreUnbiased) { CheckSplitCalibration(3, 40); }
 

@@ -44,7 +44,7 @@ Comparison Compare(const Scene& scene, const BlindDesign& design, const Sampling
   Comparison c;
   OneStageOptions one;
   one.paths_per_sensor = sampling.one_stage_paths;
-  one.max_bounces = std::max(0, sampling.bounces);
+  one.max_bounces = sampling.bounces;
   one.seed = 11;
   one.batches = kDefaultBatches;
   absl::StatusOr<OneStageResult> reference = ComputeOneStage(scene, design, one);

@@ -18,9 +18,9 @@ namespace {
 // E = (I_b O_b) S for a batch's rows within one block's row tiles (9 sensors: one design's)
 // and across two blocks (40), with k (the window cells) not a multiple of the chunks'.
 TEST(CudaAnnualTallyTest, BothKernelsOfIOGiveTheCpuProduct) {
-  std::string error;
-  std::unique_ptr<CudaAnnualTally> tally = CudaAnnualTally::Create(0, &error);
-  if (!tally) GTEST_SKIP() << error;
+  absl::StatusOr<std::unique_ptr<CudaAnnualTally>> created = CudaAnnualTally::Create(0);
+  if (!created.ok()) GTEST_SKIP() << created.status();
+  std::unique_ptr<CudaAnnualTally> tally = *std::move(created);
   const int cells = 3456 + kTregenzaBinCount, batches = 3, steps = 50;
   std::srand(5);
   std::vector<Matrix> outdoor;
@@ -30,7 +30,7 @@ TEST(CudaAnnualTallyTest, BothKernelsOfIOGiveTheCpuProduct) {
     outdoor_data.push_back(outdoor.back().data());
   }
   const Matrix sky = Matrix::Random(kTregenzaBinCount, steps).cwiseAbs();
-  ASSERT_EQ(tally->SetProduct(outdoor_data, cells, sky.data(), steps), "");
+  ASSERT_EQ(tally->SetProduct(outdoor_data, cells, sky.data(), steps), absl::OkStatus());
   std::printf("the tensor cores' kernel runs on this device: %s\n",
               tally->UsesTensorCores() ? "yes" : "no (compute capability below 8.0)");
   for (const int sensors : {9, 40}) {
@@ -44,7 +44,7 @@ TEST(CudaAnnualTallyTest, BothKernelsOfIOGiveTheCpuProduct) {
     for (const bool tensor_cores : {false, true}) {
       tally->UseTensorCores(tensor_cores);
       Matrix e(rows, steps);
-      ASSERT_EQ(tally->Illuminance(indoor.data(), rows, e.data()), "");
+      ASSERT_EQ(tally->Illuminance(indoor.data(), rows, e.data()), absl::OkStatus());
       EXPECT_LT((e - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff())
           << sensors << " sensors, tensor cores " << tally->UsesTensorCores();
     }

@@ -17,9 +17,9 @@ namespace fenestra {
 namespace {
 
 TEST(CudaTracerTest, ClosestHitsMatchTheCpu) {
-  std::string error;
-  std::unique_ptr<CudaTracer> tracer = CudaTracer::Create(0, &error);
-  if (!tracer) GTEST_SKIP() << error;
+  absl::StatusOr<std::unique_ptr<CudaTracer>> created = CudaTracer::Create(0);
+  if (!created.ok()) GTEST_SKIP() << created.status();
+  std::unique_ptr<CudaTracer> tracer = *std::move(created);
   const Scene scene = LoadExample("city_office");
   const BlindDesign design = *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}});
   absl::StatusOr<TraceGeometry> geometry =
@@ -30,7 +30,7 @@ TEST(CudaTracerTest, ClosestHitsMatchTheCpu) {
   ASSERT_EQ(
       tracer->SetScene(*bvh, geometry->triangle_material.data(), geometry->triangle_material.size(),
                        geometry->materials.data(), geometry->materials.size()),
-      "");
+      absl::OkStatus());
 
   // Rays from the room and the street, directions uniform on the sphere
   std::mt19937_64 rng(11);
@@ -47,10 +47,10 @@ TEST(CudaTracerTest, ClosestHitsMatchTheCpu) {
   double seconds = 0;
   ASSERT_EQ(tracer->IntersectRays(origins.data(), directions.data(), origins.size(), false,
                                   gpu.data(), &seconds),
-            "");
+            absl::OkStatus());
   ASSERT_EQ(tracer->IntersectRays(origins.data(), directions.data(), origins.size(), true,
                                   same.data(), &seconds),
-            "");
+            absl::OkStatus());
   const BvhIntersector cpu{bvh->nodes.data(), bvh->triangles.data()};
   int hits = 0, disagreements = 0;
   for (size_t i = 0; i < origins.size(); ++i) {
