@@ -3,7 +3,8 @@
 # embedded example (the city office in Montevideo): starts fenestrad on localhost with a
 # temporary data directory, registers the site (its outdoor matrix is traced once and
 # cached), submits the tilt experiment with the client, shows its progress and the best
-# design, then stops the daemon.
+# design, then stops the daemon and prints its lines on the site and the job (its whole log
+# when a step fails).
 # Usage: examples/run_example.sh [JOB.json]   (default: examples/city_office/alpha_max.json;
 #        examples/city_office/alpha_max_quick.json takes seconds)
 set -euo pipefail
