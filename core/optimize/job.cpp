@@ -1,149 +1,40 @@
+// The run of a job (job.h): the annual setting (sky matrix, occupied and lit hours) made
+// beside the outdoor stage, the lanes that evaluate the designs (indoor stage, annual product,
+// racing), the search with its checkpoints and progress, then the best design's hourly
+// illuminance and its final check by the one-stage method. A job's fields are read and its
+// result written by job_proto.cpp, its hashes made by job_hash.cpp, a checkpoint it resumes
+// read by job_checkpoint.cpp; the door is job_validation.cpp.
 #include "core/optimize/job.h"
 
 #include <algorithm>
 #include <chrono>
-#include <climits>
-#include <cmath>
 #include <filesystem>
 #include <future>
-#include <map>
-#include <optional>
 #include <span>
 
 #include "absl/strings/str_cat.h"
-#include "absl/strings/str_join.h"
-#include "core/common/content_hash.h"
-#include "core/common/json_proto.h"
 #include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/common/thread_pool.h"
 #include "core/dc/two_stage.h"
-#include "core/geometry/scene_proto.h"
 #include "core/metrics/annual_metrics.h"
 #include "core/metrics/illuminance.h"
 #include "core/metrics/metric_errors.h"
 #include "core/metrics/occupancy.h"
-#include "core/optimize/build_info.h"
-#include "core/optimize/design_variables.h"
 #include "core/optimize/final_check.h"
 #include "core/optimize/hourly_illuminance.h"
+#include "core/optimize/job_checkpoint.h"
+#include "core/optimize/job_proto.h"
 #include "core/optimize/metric_objective.h"
 #include "core/optimize/racing.h"
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
 #include "core/sky/sky_matrix.h"
-#include "google/protobuf/io/coded_stream.h"
-#include "google/protobuf/io/zero_copy_stream_impl_lite.h"
 
 namespace fenestra {
 namespace {
 
 namespace fs = std::filesystem;
-
-absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric) {
-  switch (metric) {
-    case v1::METRIC_UNSPECIFIED:
-    case v1::METRIC_UDI:
-      return SceneMetric::kUdiMean;
-    case v1::METRIC_UDI_ALL_SENSORS:
-      return SceneMetric::kUdiAll;
-    case v1::METRIC_DA:
-      return SceneMetric::kDaMean;
-    case v1::METRIC_CDA:
-      return SceneMetric::kCdaMean;
-    case v1::METRIC_SDA:
-      return SceneMetric::kSda;
-    case v1::METRIC_UDI_FELL_SHORT:
-      return SceneMetric::kUdiMeanFellShort;
-    case v1::METRIC_UDI_EXCEEDED:
-      return SceneMetric::kUdiMeanExceeded;
-    default:
-      return InvalidJobField("objective.metric", "unknown metric");
-  }
-}
-
-BlindDesign DesignAt(const PreparedJob& job, const std::vector<double>& x) {
-  BlindDesign design = DefaultDesign(job.scene);
-  for (int i = 0; i < job.job.variables_size(); ++i) {
-    design.*(FindDesignVariable(job.job.variables(i).name())->field) = x[i];
-  }
-  return design;
-}
-
-// `search_start_seconds`: when the search started, in the job's time.
-v1::Evaluation ToProto(const PreparedJob& job, const VnsRecord& record,
-                       double search_start_seconds) {
-  v1::Evaluation e;
-  e.set_index(record.index);
-  for (int i = 0; i < job.job.variables_size(); ++i) {
-    (*e.mutable_design())[job.job.variables(i).name()] = record.x[i];
-  }
-  e.mutable_value()->set_value(record.evaluation.value);
-  e.mutable_value()->set_standard_error(record.evaluation.standard_error);
-  e.set_seconds(record.evaluation_seconds);
-  e.set_cached(record.cached);
-  e.set_improved(record.improved);
-  e.set_neighborhood(record.neighborhood);
-  e.set_elapsed_seconds(search_start_seconds + record.elapsed_seconds);
-  e.set_raced_out(record.evaluation.partial);
-  return e;
-}
-
-// The best value against time: the evaluations that moved the incumbent.
-void AddBestOverTime(v1::JobResult& result) {
-  for (const v1::Evaluation& e : result.history()) {
-    if (!e.improved()) continue;
-    v1::BestSoFar& best = *result.add_best_over_time();
-    best.set_elapsed_seconds(e.elapsed_seconds());
-    best.set_evaluation(e.index());
-    *best.mutable_value() = e.value();
-  }
-}
-
-void SetEstimate(v1::Estimate* out, double value, double standard_error) {
-  out->set_value(value);
-  out->set_standard_error(standard_error);
-}
-
-// What a result says about how it was made: the job as run (its scene self-contained), the
-// weather's location and the versions.
-void DescribeRun(const v1::Job& spec, const Scene& scene, const EpwLocation& location,
-                 v1::JobResult& result) {
-  v1::Job& job = *result.mutable_job();
-  job = spec;
-  job.clear_scene_file();
-  job.clear_weather_file();
-  *job.mutable_scene() = SelfContainedSceneProto(scene);
-  std::vector<std::string> place;
-  for (const std::string& part : {location.city, location.region, location.country}) {
-    if (!part.empty() && part != "-") place.push_back(part);
-  }
-  result.set_weather_location(absl::StrJoin(place, ", "));
-  for (const auto& [name, version] : ComponentVersions()) {
-    (*result.mutable_versions())[name] = version;
-  }
-}
-
-v1::Metrics ToProto(const AnnualMetricsEstimate& m) {
-  v1::Metrics out;
-  const SceneMetrics &v = m.value.scene, &se = m.standard_error.scene;
-  SetEstimate(out.mutable_udi(), v.udi_mean_percent, se.udi_mean_percent);
-  SetEstimate(out.mutable_udi_fell_short(), v.udi_mean_fell_short_percent,
-              se.udi_mean_fell_short_percent);
-  SetEstimate(out.mutable_udi_exceeded(), v.udi_mean_exceeded_percent,
-              se.udi_mean_exceeded_percent);
-  SetEstimate(out.mutable_udi_all_sensors(), v.udi_all_percent, se.udi_all_percent);
-  SetEstimate(out.mutable_da(), v.da_mean_percent, se.da_mean_percent);
-  SetEstimate(out.mutable_cda(), v.cda_mean_percent, se.cda_mean_percent);
-  SetEstimate(out.mutable_sda(), v.sda_percent, se.sda_percent);
-  for (size_t s = 0; s < m.value.sensors.size(); ++s) {
-    SetEstimate(out.add_sensor_udi(), m.value.sensors[s].udi_percent,
-                m.standard_error.sensors[s].udi_percent);
-    SetEstimate(out.add_sensor_da(), m.value.sensors[s].da_percent,
-                m.standard_error.sensors[s].da_percent);
-  }
-  return out;
-}
 
 // What the annual metrics of a job's designs need: the sky matrix, the occupied steps and
 // the lit analysed ones (the rest are dark or not counted), the metric settings and the
@@ -222,7 +113,7 @@ absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualS
                         absl::StrCat("final check: ", outcome.status().message()));
   }
   if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&outcome->one_stage.payload)) {
-    *outcome->check.mutable_one_stage_metrics() = ToProto(*metrics);
+    *outcome->check.mutable_one_stage_metrics() = MetricsProto(*metrics);
   }
   return std::move(outcome->check);
 }
@@ -297,181 +188,6 @@ absl::Status HourlyAndCheck(const PreparedJob& job, const AnnualSetting& setting
   return absl::OkStatus();
 }
 
-// The search of a job: its variables, in the job's order, and its options.
-struct SearchSettings {
-  std::vector<DesignVariable> variables;
-  VnsOptions options;
-};
-
-SearchSettings MakeSearchSettings(const v1::Job& spec) {
-  SearchSettings search;
-  for (const v1::DesignVariable& v : spec.variables()) {
-    search.variables.push_back({v.name(), v.lower(), v.upper(), v.start(), v.fixed(), v.step()});
-  }
-  VnsOptions& vns = search.options;
-  if (spec.neighborhoods_size() > 0) {
-    vns.neighborhoods.clear();
-    for (const v1::Neighborhood& n : spec.neighborhoods()) {
-      vns.neighborhoods.push_back({n.variables(), n.radius()});
-    }
-  }
-  switch (spec.objective().goal()) {
-    case v1::GOAL_MINIMIZE:
-      vns.objective.sense = ObjectiveSense::kMinimize;
-      break;
-    case v1::GOAL_TARGET:
-      vns.objective.sense = ObjectiveSense::kTarget;
-      vns.objective.target = spec.objective().target();
-      vns.objective.target_tolerance = spec.objective().target_tolerance();
-      break;
-    default:
-      vns.objective.sense = ObjectiveSense::kMaximize;
-  }
-  vns.max_evaluations = spec.budget().max_evaluations();
-  vns.max_seconds = spec.budget().max_seconds();
-  vns.failed_cycles_to_stop = std::max(0, spec.budget().failed_cycles_to_stop());
-  vns.seed = spec.sampling().seed();
-  return search;
-}
-
-absl::Status CheckCheckpointFormat(const v1::SearchCheckpoint& checkpoint) {
-  if (checkpoint.format() == kSearchCheckpointFormat) return absl::OkStatus();
-  return absl::InvalidArgumentError(absl::StrCat("search checkpoint: format ", checkpoint.format(),
-                                                 ", but this build reads format ",
-                                                 kSearchCheckpointFormat, " only"));
-}
-
-// The search so far that `checkpoint` holds, once it is known to be of this format, of the
-// job whose content hash is `job_hash` and a history its search makes (CheckVnsResume).
-absl::StatusOr<VnsResult> ResumedSearch(const std::string& job_hash, const SearchSettings& search,
-                                        const v1::SearchCheckpoint& checkpoint) {
-  FENESTRA_RETURN_IF_ERROR(CheckCheckpointFormat(checkpoint));
-  if (checkpoint.job_hash() != job_hash) {
-    return absl::InvalidArgumentError(
-        "search checkpoint: it belongs to another job (its content hash differs)");
-  }
-  if (checkpoint.history_size() == 0) {
-    return absl::InvalidArgumentError("search checkpoint: no steps");
-  }
-  const double job_seconds = checkpoint.history(checkpoint.history_size() - 1).elapsed_seconds();
-  if (!(job_seconds >= 0) || !std::isfinite(job_seconds)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "search checkpoint: the last step's elapsed_seconds ", job_seconds, " is not a time"));
-  }
-  // The history on the search's clock
-  const double search_start = job_seconds - checkpoint.search_seconds();
-  VnsResult so_far;
-  so_far.elapsed_seconds = checkpoint.search_seconds();
-  for (const v1::Evaluation& e : checkpoint.history()) {
-    VnsRecord record;
-    record.index = e.index();
-    for (const DesignVariable& v : search.variables) {
-      const auto value = e.design().find(v.name);
-      if (value == e.design().end()) {
-        return absl::InvalidArgumentError(absl::StrCat("search checkpoint: step ", e.index(),
-                                                       " has no value of variable '", v.name, "'"));
-      }
-      record.x.push_back(value->second);
-    }
-    if (e.design_size() != static_cast<int>(search.variables.size())) {
-      return absl::InvalidArgumentError(absl::StrCat("search checkpoint: step ", e.index(),
-                                                     " has variables the job does not have"));
-    }
-    record.evaluation.value = e.value().value();
-    record.evaluation.standard_error = e.value().standard_error();
-    record.evaluation.partial = e.raced_out();
-    record.evaluation_seconds = e.seconds();
-    record.elapsed_seconds = e.elapsed_seconds() - search_start;
-    record.cached = e.cached();
-    record.improved = e.improved();
-    record.neighborhood = e.neighborhood();
-    so_far.history.push_back(std::move(record));
-  }
-  if (absl::Status replay = CheckVnsResume(search.variables, search.options, so_far);
-      !replay.ok()) {
-    return absl::InvalidArgumentError(absl::StrCat("search checkpoint: ", replay.message()));
-  }
-  return so_far;
-}
-
-// Where a job's search starts: from nothing, or from a checkpoint.
-struct SearchStart {
-  v1::SearchCheckpoint checkpoint;  // kept up to date after each step
-  std::optional<VnsResult> so_far;  // the search resumed
-  double resumed_seconds = 0;       // the job's clock at the checkpoint [s]
-};
-
-// The start of the job's search: from `resume` when given (ResumedSearch), else new.
-absl::StatusOr<SearchStart> StartOfSearch(const PreparedJob& job, const SearchSettings& settings,
-                                          const v1::SearchCheckpoint* resume) {
-  SearchStart start;
-  if (resume == nullptr) {
-    start.checkpoint.set_format(kSearchCheckpointFormat);
-    start.checkpoint.set_job_hash(JobContentHash(job));
-    return start;
-  }
-  FENESTRA_ASSIGN_OR_RETURN(so_far, ResumedSearch(JobContentHash(job), settings, *resume));
-  start.so_far = std::move(so_far);
-  start.checkpoint = *resume;
-  start.resumed_seconds = resume->history(resume->history_size() - 1).elapsed_seconds();
-  return start;
-}
-
-// The indoor stage of the job's designs.
-IndoorOptions JobIndoorOptions(const PreparedJob& job) {
-  const v1::Sampling& sampling = job.job.sampling();
-  IndoorOptions options;
-  options.paths_per_sensor = sampling.indoor_paths_per_sensor();
-  options.max_bounces = sampling.indoor_bounces();
-  options.seed = sampling.seed();
-  options.basis_cells = sampling.basis_cells();
-  options.parts = SamplingWindowParts(sampling, job.scene.window);
-  options.batches = sampling.batches();
-  return options;
-}
-
-// What racing did, into `result`.
-void AddRacing(const Racer& racer, v1::JobResult& result) {
-  const RacingStats& stats = racer.stats();
-  const RacingSettings& settings = racer.settings();
-  v1::Racing& out = *result.mutable_racing();
-  for (const int parts : settings.rounds) {
-    out.add_round_fractions(static_cast<double>(parts) / kDesignParts);
-  }
-  out.set_standard_errors(settings.standard_errors);
-  out.set_candidates(stats.candidates);
-  for (const int n : stats.rejected) out.add_raced_out(n);
-  if (stats.parts_in_full > 0) {
-    out.set_paths_fraction(static_cast<double>(stats.parts_traced) /
-                           static_cast<double>(stats.parts_in_full));
-  }
-  out.set_rays_traced(stats.rays_traced);
-  if (stats.parts_traced > 0) {
-    out.set_rays_saved(static_cast<uint64_t>(
-        static_cast<double>(stats.rays_traced) / static_cast<double>(stats.parts_traced) *
-        static_cast<double>(std::max<int64_t>(0, stats.parts_in_full - stats.parts_traced))));
-  }
-  out.set_audited(stats.rejected_audited);
-  out.set_audited_would_improve(stats.rejected_would_improve);
-  out.set_audited_better_beyond_error(stats.rejected_better_beyond_error);
-}
-
-// The search into `result`: the best design and its value and metrics, every step (moved
-// from `checkpoint`, which holds them in the job's terms), the counts and why it stopped.
-void AddSearch(const SearchSettings& settings, const VnsResult& search,
-               v1::SearchCheckpoint& checkpoint, v1::JobResult& result) {
-  for (size_t i = 0; i < settings.variables.size(); ++i) {
-    (*result.mutable_best_design())[settings.variables[i].name] = search.best_x[i];
-  }
-  SetEstimate(result.mutable_best_value(), search.best.value, search.best.standard_error);
-  if (checkpoint.has_best_metrics()) *result.mutable_best_metrics() = checkpoint.best_metrics();
-  result.mutable_history()->Swap(checkpoint.mutable_history());
-  AddBestOverTime(result);
-  result.set_evaluations(search.evaluations);
-  result.set_stop_reason(std::string(StopReasonName(search.stop_reason)));
-  result.mutable_timings()->set_evaluation_seconds(search.evaluation_seconds);
-}
-
 // The lanes a job's designs are evaluated on at once (Sampling.candidates_at_once): the
 // job's backend and as many more as asked (on CUDA each on the next GPU in use after the one
 // before, MakeLaneBackend), each with the indoor stage's design tallies.
@@ -487,7 +203,7 @@ struct Lanes {
 };
 
 // How the search's designs are evaluated: on the lanes, in rounds where the job asks for racing
-// (by default where the backend's rounds pay).
+// (by default where the backend races, DesignTallies::RacesByDefault).
 Racer::Setting RacerSetting(const v1::Sampling& sampling, const Lanes& lanes,
                             const AnnualSetting& setting, const SearchSettings& search) {
   return {.lanes = lanes.Tallies(),
@@ -497,7 +213,8 @@ Racer::Setting RacerSetting(const v1::Sampling& sampling, const Lanes& lanes,
           .objective = search.options.objective,
           .racing = {.rounds = {sampling.racing_rounds().begin(), sampling.racing_rounds().end()},
                      .standard_errors = sampling.racing_standard_errors()},
-          .enabled = sampling.has_racing() ? sampling.racing() : lanes.tallies.front()->RoundsPay(),
+          .enabled =
+              sampling.has_racing() ? sampling.racing() : lanes.tallies.front()->RacesByDefault(),
           .audit = sampling.racing_audit()};
 }
 
@@ -572,12 +289,12 @@ absl::StatusOr<VnsResult> RunJobSearch(const PreparedJob& job, const SearchSetti
   vns_callbacks.cancelled = callbacks.cancelled;
   vns_callbacks.checkpoint = [&](const VnsResult& state) {
     const VnsRecord& step = state.history.back();
-    v1::Evaluation& e = *checkpoint.add_history() = ToProto(job, step, search_start);
+    v1::Evaluation& e = *checkpoint.add_history() = EvaluationProto(job, step, search_start);
     if (!step.cached) e.set_paths_fraction(racer.PathsFraction(DesignAt(job, step.x)));
     if (step.improved) racer.SetIncumbent(DesignAt(job, step.x));
     if (step.improved) {
       if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&step.evaluation.payload)) {
-        *checkpoint.mutable_best_metrics() = ToProto(*metrics);
+        *checkpoint.mutable_best_metrics() = MetricsProto(*metrics);
       } else {
         checkpoint.clear_best_metrics();
       }
@@ -602,12 +319,6 @@ absl::StatusOr<VnsResult> RunJobSearch(const PreparedJob& job, const SearchSetti
 
 }  // namespace
 
-absl::StatusOr<v1::Job> ReadJobFile(const std::string& path) {
-  v1::Job job;
-  FENESTRA_RETURN_IF_ERROR(ReadJsonProtoFile(path, "job", &job));
-  return job;
-}
-
 absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& base_dir) {
   FENESTRA_ASSIGN_OR_RETURN(prepared, ValidateJob(job, base_dir));
   // The weather: the job's, else the scene's site
@@ -623,31 +334,6 @@ absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& ba
   FENESTRA_ASSIGN_OR_RETURN(weather, ReadEpw(prepared.weather_file));
   prepared.weather = std::move(weather);
   return prepared;
-}
-
-std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
-  ContentHash hash;
-  hash.String("fenestra outdoor matrix v2");
-  const TriangleMesh& mesh = scene.fixed;
-  for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
-    if (mesh.side[t] != Side::kOutdoor) continue;
-    for (int k = 0; k < 3; ++k) {
-      const Vec3d v = mesh.vertices[3 * t + k];
-      hash.Value(v.x), hash.Value(v.y), hash.Value(v.z);
-    }
-    const Material& m = scene.materials[mesh.material[t]];
-    hash.Value(m.reflectance), hash.Value(m.transmittance);
-  }
-  const Window& w = scene.window;
-  for (const Vec3d& v : {w.center, w.normal, w.up})
-    hash.Value(v.x), hash.Value(v.y), hash.Value(v.z);
-  hash.Value(w.width_m), hash.Value(w.height_m);
-  hash.Value(sampling.outdoor_paths()), hash.Value(sampling.outdoor_bounces());
-  hash.Value(sampling.seed()), hash.Value(sampling.basis_cells());
-  hash.Value(sampling.batches());
-  const WindowParts parts = SamplingWindowParts(sampling, scene.window);
-  hash.Value(parts.columns), hash.Value(parts.rows);
-  return hash.Hex();
 }
 
 double OutdoorMeanRelativeError(const OutdoorMatrix& matrix) {
@@ -703,55 +389,6 @@ absl::StatusOr<std::shared_ptr<const SkyMatrix>> JobSkyMatrix(const PreparedJob&
   return std::make_shared<const SkyMatrix>(std::move(sky));
 }
 
-std::string JobContentHash(const PreparedJob& job) {
-  // The job with its scene inline (a scene_file, or the scene left out, says nothing of the
-  // scene's content), serialized deterministically
-  v1::Job content = job.job;
-  content.clear_scene_file();
-  *content.mutable_scene() = SelfContainedSceneProto(job.scene);
-  // How many designs are evaluated at once changes the time, not the steps
-  content.mutable_sampling()->clear_candidates_at_once();
-  std::string bytes;
-  {
-    google::protobuf::io::StringOutputStream stream(&bytes);
-    google::protobuf::io::CodedOutputStream coded(&stream);
-    coded.SetSerializationDeterministic(true);
-    content.SerializeToCodedStream(&coded);
-  }
-  ContentHash hash;
-  hash.String("fenestra job v1");
-  hash.String(bytes);
-
-  // The weather: the site and every record
-  const EpwLocation& site = job.weather.location;
-  hash.Value(site.latitude_deg), hash.Value(site.longitude_deg);
-  hash.Value(site.time_zone_hours), hash.Value(site.elevation_m);
-  hash.Value(job.weather.records_per_hour);
-  for (const EpwRecord& r : job.weather.records) {
-    for (const int v : {r.year, r.month, r.day, r.hour, r.minute}) hash.Value(v);
-    hash.Value(r.direct_normal_wm2), hash.Value(r.diffuse_horizontal_wm2);
-    for (const std::optional<double>& v :
-         {r.dry_bulb_c, r.dew_point_c, r.global_horizontal_wm2, r.global_horizontal_lux,
-          r.direct_normal_lux, r.diffuse_horizontal_lux}) {
-      hash.Value(v.has_value());
-      hash.Value(v.value_or(0.0));
-    }
-  }
-  return hash.Hex();
-}
-
-absl::StatusOr<v1::SearchCheckpoint> ParseSearchCheckpoint(std::string_view bytes) {
-  v1::SearchCheckpoint checkpoint;
-  if (bytes.size() > static_cast<size_t>(INT_MAX) ||
-      !checkpoint.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()))) {
-    return absl::DataLossError(
-        absl::StrCat("search checkpoint: ", bytes.size(),
-                     " bytes that are not a serialized fenestra.v1.SearchCheckpoint"));
-  }
-  FENESTRA_RETURN_IF_ERROR(CheckCheckpointFormat(checkpoint));
-  return checkpoint;
-}
-
 namespace {
 
 // The job's annual setting (sky matrix, occupied and lit hours, metric settings), made on the
@@ -794,6 +431,24 @@ absl::StatusOr<AnnualSetting> SettingAndOutdoor(const PreparedJob& job,
   return made;
 }
 
+// Whether `matrix` has the window parts and batches of the job's indoor stage.
+absl::Status CheckOutdoorMatchesIndoor(const OutdoorMatrix& matrix, const IndoorOptions& indoor) {
+  if (!(matrix.parts == indoor.parts)) {
+    return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
+  }
+  if (static_cast<int>(matrix.batches.size()) != indoor.batches) {
+    return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
+  }
+  return absl::OkStatus();
+}
+
+// The designs the search evaluates at once (VnsOptions::lookahead): each lane's, as many as it
+// traces together (one where it races).
+int SearchLookahead(const Racer& racer, const Lanes& lanes) {
+  const int per_lane = racer.Races() ? 1 : lanes.tallies.front()->DesignsAtOnce();
+  return std::min(kMaxLookahead, static_cast<int>(lanes.tallies.size()) * per_lane);
+}
+
 }  // namespace
 
 absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix* outdoor,
@@ -832,12 +487,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   FENESTRA_RETURN_IF_ERROR(made_setting.status());
   const AnnualSetting& setting = *made_setting;
   const OutdoorMatrix& matrix = outdoor != nullptr ? *outdoor : computed;
-  if (!(matrix.parts == indoor_options.parts)) {
-    return absl::InvalidArgumentError("the outdoor matrix has other window parts than the job");
-  }
-  if (static_cast<int>(matrix.batches.size()) != indoor_options.batches) {
-    return absl::InvalidArgumentError("the outdoor matrix has other batches than the job");
-  }
+  FENESTRA_RETURN_IF_ERROR(CheckOutdoorMatchesIndoor(matrix, indoor_options));
   FENESTRA_RETURN_IF_ERROR(recorded);
   FENESTRA_RETURN_IF_ERROR(SetLaneProducts(lanes, matrix, setting.lit_sky));
   computed.batches_on_device = {};  // the lanes hold their own copies
@@ -849,10 +499,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
 
   // The search
   if (callbacks.stage) callbacks.stage("search");
-  // Designs evaluated at once: each lane's, as many as it traces together (without racing)
-  const int per_lane = racer.Races() ? 1 : lanes.tallies.front()->DesignsAtOnce();
-  search_settings.options.lookahead =
-      std::min(kMaxLookahead, static_cast<int>(lanes.tallies.size()) * per_lane);
+  search_settings.options.lookahead = SearchLookahead(racer, lanes);
   FENESTRA_ASSIGN_OR_RETURN(search,
                             RunJobSearch(job, search_settings, racer, callbacks, clock,
                                          from.so_far ? &*from.so_far : nullptr, checkpoint));

@@ -3,7 +3,9 @@
 // An optimization job end to end in one process: scene and weather -> sky matrix ->
 // outdoor matrix (once) -> per candidate design: indoor matrix -> D = I O -> E = D S ->
 // annual metrics with standard errors -> Variable Neighborhood Search. The command line's
-// local mode and the service's workers run exactly this.
+// local mode and the service's workers run exactly this. The run is job.cpp; the door
+// (ValidateJob) job_validation.cpp; reading a job file job_proto.cpp; the hashes
+// job_hash.cpp; checkpoints job_checkpoint.cpp.
 #include <functional>
 #include <memory>
 #include <optional>

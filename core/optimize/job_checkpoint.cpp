@@ -1,0 +1,117 @@
+// A job's search checkpoints (job_checkpoint.h): the bytes a store kept parsed
+// (ParseSearchCheckpoint, job.h), a checkpoint checked against the job it resumes, and its
+// history turned back into the search so far.
+#include "core/optimize/job_checkpoint.h"
+
+#include <climits>
+#include <cmath>
+#include <span>
+#include <string>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
+
+namespace fenestra {
+namespace {
+
+absl::Status CheckCheckpointFormat(const v1::SearchCheckpoint& checkpoint) {
+  if (checkpoint.format() == kSearchCheckpointFormat) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrCat("search checkpoint: format ", checkpoint.format(),
+                                                 ", but this build reads format ",
+                                                 kSearchCheckpointFormat, " only"));
+}
+
+// Step `e` of a checkpoint's history as a step of the search over `variables`, on the
+// search's clock (started at `search_start` on the job's). InvalidArgument where its design
+// has not the job's variables.
+absl::StatusOr<VnsRecord> ResumedStep(const v1::Evaluation& e,
+                                      std::span<const DesignVariable> variables,
+                                      double search_start) {
+  VnsRecord record;
+  record.index = e.index();
+  for (const DesignVariable& v : variables) {
+    const auto value = e.design().find(v.name);
+    if (value == e.design().end()) {
+      return absl::InvalidArgumentError(absl::StrCat("search checkpoint: step ", e.index(),
+                                                     " has no value of variable '", v.name, "'"));
+    }
+    record.x.push_back(value->second);
+  }
+  if (e.design_size() != static_cast<int>(variables.size())) {
+    return absl::InvalidArgumentError(absl::StrCat("search checkpoint: step ", e.index(),
+                                                   " has variables the job does not have"));
+  }
+  record.evaluation.value = e.value().value();
+  record.evaluation.standard_error = e.value().standard_error();
+  record.evaluation.partial = e.raced_out();
+  record.evaluation_seconds = e.seconds();
+  record.elapsed_seconds = e.elapsed_seconds() - search_start;
+  record.cached = e.cached();
+  record.improved = e.improved();
+  record.neighborhood = e.neighborhood();
+  return record;
+}
+
+// The search so far that `checkpoint` holds, once it is known to be of this format, of the
+// job whose content hash is `job_hash` and a history its search makes (CheckVnsResume).
+absl::StatusOr<VnsResult> ResumedSearch(const std::string& job_hash, const SearchSettings& search,
+                                        const v1::SearchCheckpoint& checkpoint) {
+  FENESTRA_RETURN_IF_ERROR(CheckCheckpointFormat(checkpoint));
+  if (checkpoint.job_hash() != job_hash) {
+    return absl::InvalidArgumentError(
+        "search checkpoint: it belongs to another job (its content hash differs)");
+  }
+  if (checkpoint.history_size() == 0) {
+    return absl::InvalidArgumentError("search checkpoint: no steps");
+  }
+  const double job_seconds = checkpoint.history(checkpoint.history_size() - 1).elapsed_seconds();
+  if (!(job_seconds >= 0) || !std::isfinite(job_seconds)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "search checkpoint: the last step's elapsed_seconds ", job_seconds, " is not a time"));
+  }
+  // The history on the search's clock
+  const double search_start = job_seconds - checkpoint.search_seconds();
+  VnsResult so_far;
+  so_far.elapsed_seconds = checkpoint.search_seconds();
+  for (const v1::Evaluation& e : checkpoint.history()) {
+    FENESTRA_ASSIGN_OR_RETURN(record, ResumedStep(e, search.variables, search_start));
+    so_far.history.push_back(std::move(record));
+  }
+  if (absl::Status replay = CheckVnsResume(search.variables, search.options, so_far);
+      !replay.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("search checkpoint: ", replay.message()));
+  }
+  return so_far;
+}
+
+}  // namespace
+
+absl::StatusOr<v1::SearchCheckpoint> ParseSearchCheckpoint(std::string_view bytes) {
+  v1::SearchCheckpoint checkpoint;
+  if (bytes.size() > static_cast<size_t>(INT_MAX) ||
+      !checkpoint.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()))) {
+    return absl::DataLossError(
+        absl::StrCat("search checkpoint: ", bytes.size(),
+                     " bytes that are not a serialized fenestra.v1.SearchCheckpoint"));
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckCheckpointFormat(checkpoint));
+  return checkpoint;
+}
+
+absl::StatusOr<SearchStart> StartOfSearch(const PreparedJob& job, const SearchSettings& settings,
+                                          const v1::SearchCheckpoint* resume) {
+  SearchStart start;
+  if (resume == nullptr) {
+    start.checkpoint.set_format(kSearchCheckpointFormat);
+    start.checkpoint.set_job_hash(JobContentHash(job));
+    return start;
+  }
+  FENESTRA_ASSIGN_OR_RETURN(so_far, ResumedSearch(JobContentHash(job), settings, *resume));
+  start.so_far = std::move(so_far);
+  start.checkpoint = *resume;
+  start.resumed_seconds = resume->history(resume->history_size() - 1).elapsed_seconds();
+  return start;
+}
+
+}  // namespace fenestra
