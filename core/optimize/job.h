@@ -69,10 +69,10 @@ absl::StatusOr<v1::Job> ReadJobFile(const std::string& path);
 
 // The door for jobs: validates everything but the weather and fills in defaults. Every
 // string (CheckMessageText), the scene (BuildScene; a relative scene_file is taken from
-// `base_dir`), design variables within a real blind's bounds, budget, sampling, metric
-// settings, objective and neighborhoods (finite, in range, known enum values), then the room
-// (CheckRoom) with the blind at every design of the job's ranges. InvalidArgument naming the
-// field and the reason.
+// `base_dir`), design variables (at least one) within a real blind's bounds, budget,
+// sampling, metric settings, objective and neighborhoods (finite, in range, known enum
+// values), then the room (CheckRoom) with the blind at every design of the job's ranges.
+// InvalidArgument naming the field and the reason.
 absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& base_dir);
 
 // The error of a job's field: InvalidArgument "job FIELD: REASON".

@@ -71,7 +71,15 @@ absl::Status CheckVariable(const v1::DesignVariable& v, const DesignVariableInfo
 }
 
 absl::Status CheckVariables(const v1::Job& job, const Scene& scene) {
-  if (job.variables_size() > 0 && !scene.blind) {
+  // The search needs a variable (RunVns refuses none); with every one fixed it evaluates the
+  // start alone
+  if (job.variables_size() == 0) {
+    return InvalidJobField("variables",
+                           "none given; the search needs at least one design variable (alpha, "
+                           "width, spacing or thickness; with every one fixed it evaluates the "
+                           "start design alone)");
+  }
+  if (!scene.blind) {
     return InvalidJobField("variables", "the scene has no blind to design");
   }
   std::set<std::string> seen;

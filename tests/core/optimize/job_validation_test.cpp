@@ -104,6 +104,20 @@ TEST(JobValidationTest, DesignVariablesOfARealBlind) {
                                             "0.1 m thick and from 0.05 m wide")));
 }
 
+// A job without design variables has nothing to search (RunVns would refuse it after the
+// outdoor stage); one whose variables are all fixed evaluates its start design, and passes.
+TEST(JobValidationTest, AtLeastOneDesignVariable) {
+  v1::Job job = QuickJob();
+  job.clear_variables();
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job variables: none given; the search needs at least one "
+                                      "design variable (alpha, width, spacing or thickness"));
+  job.mutable_scene()->clear_blind();  // nothing to design either way: the variables named
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job variables: none given"));
+  job = QuickJob();
+  for (v1::DesignVariable& v : *job.mutable_variables()) v.set_fixed(true);
+  EXPECT_TRUE(ValidateJob(job, kOffice).ok()) << ErrorOf(job);
+}
+
 // Slats narrow enough for more than kMaxBlindSlats at some design of the job's ranges: the
 // scene's slats, 5 cm at the narrowest, fit its 4 km window 80001 times; 2.5 cm ones would
 // need 160001
@@ -211,7 +225,7 @@ TEST(JobValidationTest, RacingSettings) {
   absl::StatusOr<PreparedJob> prepared = ValidateJob(QuickJob(), kOffice);
   ASSERT_TRUE(prepared.ok()) << prepared.status();
   const v1::Sampling& sampling = prepared->job.sampling();
-  EXPECT_FALSE(sampling.has_racing());  // decided by the backend (DesignTallies::RoundsPay)
+  EXPECT_FALSE(sampling.has_racing());  // decided by the backend (DesignTallies::RacesByDefault)
   EXPECT_EQ(sampling.racing_standard_errors(), 4);
   EXPECT_THAT(sampling.racing_rounds(), ::testing::ElementsAre(1, 2));
   v1::Job custom = QuickJob();
