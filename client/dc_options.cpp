@@ -53,7 +53,9 @@ void AddOneStageFlags(CLI::App* command, DcFlags* flags) {
   command
       ->add_option("--bounces", flags->bounces,
                    "One-stage only: surface reflections a path may make, indoors and outdoors "
-                   "together (Radiance -ab minus 1); 0 = unlimited, ended by Russian roulette. "
+                   "together (Radiance -ab minus 1); 0 = none (the direct component), -1 = "
+                   "unlimited, ended by "
+                   "Russian roulette. "
                    "The two-stage method takes --outdoor-bounces and --indoor-bounces")
       ->capture_default_str();
   command->add_flag("--no-weight-windows", flags->no_weight_windows,
@@ -154,7 +156,8 @@ absl::Status CheckMethodFlags(const DcFlags& flags) {
                                                     two_stage ? "one-stage" : "two-stage"));
     }
   }
-  for (const auto& [value, name] : {std::pair{flags.outdoor_bounces, "--outdoor-bounces"},
+  for (const auto& [value, name] : {std::pair{flags.bounces, "--bounces"},
+                                    std::pair{flags.outdoor_bounces, "--outdoor-bounces"},
                                     std::pair{flags.indoor_bounces, "--indoor-bounces"}}) {
     if (value < -1) {
       return absl::InvalidArgumentError(

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -156,6 +157,48 @@ TEST_F(DcCommandTest, BounceFlagsReachTheirStages) {
   const Eigen::VectorXd d_direct = ReadMatrix(dir_ / "a_D.mtx").rightCols(145).rowwise().sum();
   const Eigen::VectorXd d_reflected = ReadMatrix(dir_ / "c_D.mtx").rightCols(145).rowwise().sum();
   for (int s = 0; s < 3; ++s) EXPECT_GT(d_reflected(s), 10 * d_direct(s)) << "sensor " << s;
+}
+
+// The sensors' sky sums [sr] and their standard errors [sr] the command printed.
+std::vector<std::pair<double, double>> PrintedSkySums(const std::string& output) {
+  static const std::regex line(R"(sky sum (\S+) sr \+- (\S+) \()");
+  std::vector<std::pair<double, double>> sums;
+  for (auto it = std::sregex_iterator(output.begin(), output.end(), line);
+       it != std::sregex_iterator(); ++it) {
+    sums.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
+  }
+  return sums;
+}
+
+// --bounces 0 is the direct component: the sky seen straight through the window and between
+// the open slats of the city office, the same light as the two-stage method with no
+// reflection in either stage (within 4 combined standard errors, fixed seeds), and far less
+// than with reflections; -1 is unlimited.
+TEST_F(DcCommandTest, ZeroBouncesGiveTheDirectComponent) {
+  const auto run = [&](const std::string& flags) {
+    const CliRun r = Fenestra("dc " + kExamples + "/city_office/scene.json --set alpha=1.5 " +
+                              flags + " -o " + (dir_ / "D.mtx").string());
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return r.output;
+  };
+  const std::string one_direct = run("--paths 200000 --bounces 0 --seed 3");
+  EXPECT_NE(one_direct.find("at most 0 reflections"), std::string::npos) << one_direct;
+  const std::string one_all = run("--paths 20000 --bounces -1 --seed 3");
+  EXPECT_NE(one_all.find("unlimited reflections"), std::string::npos) << one_all;
+  const std::string two_direct =
+      run("--method two-stage --outdoor-paths 110592 --indoor-paths 50000 --outdoor-bounces 0 "
+          "--indoor-bounces 0 --seed 4");
+  const auto direct = PrintedSkySums(one_direct), all = PrintedSkySums(one_all),
+             two = PrintedSkySums(two_direct);
+  ASSERT_EQ(direct.size(), 9u) << one_direct;
+  ASSERT_EQ(all.size(), 9u) << one_all;
+  ASSERT_EQ(two.size(), 9u) << two_direct;
+  for (int s = 0; s < 9; ++s) {
+    SCOPED_TRACE(testing::Message() << "sensor " << s);
+    EXPECT_GT(direct[s].first, 10 * direct[s].second);
+    EXPECT_NEAR(direct[s].first, two[s].first, 4 * std::hypot(direct[s].second, two[s].second));
+    EXPECT_GT(all[s].first, 3 * direct[s].first);
+  }
 }
 
 TEST_F(DcCommandTest, OneStageTargetErrorLandsJustBelowIt) {
