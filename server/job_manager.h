@@ -107,6 +107,9 @@ class JobManager {
     int max_evaluations = 0;
     int64_t indoor_paths_per_sensor = 0;
   };
+  // Turns `info` into a job's end in `state` and returns its final event.
+  static v1::JobEvent EndOf(v1::JobInfo& info, v1::JobState state, const v1::JobResult* result,
+                            const std::string& error);
   // Submit's checks before anything is stored: the request (CheckJobRequest), the caller's
   // site, where the weather comes from, the job's match with its site. The scene built for
   // them is dropped on return.

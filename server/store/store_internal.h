@@ -1,0 +1,59 @@
+#pragma once
+
+// What the files of Store (server/store/store*.cpp) share: the states and locks their SQL
+// names, blobs, messages and the admission checks. Not for use outside server/store/.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/str_cat.h"
+#include "fenestra/v1/daemon.pb.h"
+#include "fenestra/v1/job.pb.h"
+#include "fenestra/v1/service.pb.h"
+#include "server/store/database.h"
+
+namespace fenestra::store_internal {
+
+// The lock every admission (a job or site stored against the limits) and every removal
+// of a weather file takes, so that counts and references are read as they stand.
+inline constexpr int64_t kAdmissionLock = 1;
+inline constexpr int64_t kQueued = v1::JOB_STATE_QUEUED;
+inline constexpr int64_t kRunning = v1::JOB_STATE_RUNNING;
+inline constexpr int64_t kComputing = v1::SITE_STATE_COMPUTING;
+
+template <typename Message>
+bool Parse(Message& message, const std::string& bytes) {
+  return message.ParseFromString(bytes);
+}
+
+inline SqlBlob Blob(const std::string& bytes) { return SqlBlob{bytes}; }
+// A blob of no bytes (not NULL).
+inline constexpr SqlBlob kNoBytes{std::string_view("", 0)};
+
+inline absl::Status NoJob(const std::string& id) {
+  return absl::NotFoundError(absl::StrCat("no job '", id, "' is stored"));
+}
+inline absl::Status NoSite(const std::string& id) {
+  return absl::NotFoundError(absl::StrCat("no site '", id, "' is stored"));
+}
+
+inline std::string WeatherFileName(const std::string& weather) { return weather + ".epw"; }
+
+// `(?, ?, ...)` for `n` values.
+inline std::string Placeholders(size_t n) {
+  std::string out = "(";
+  for (size_t i = 0; i < n; ++i) absl::StrAppend(&out, i ? ", ?" : "?");
+  return out + ")";
+}
+
+// Checks that `owner`'s uploads (weather files of its sites and queued or running jobs)
+// and `bytes` more stay within max_upload_bytes_per_user; ResourceExhausted naming it.
+absl::Status CheckUploadQuota(SqlSession& s, const std::string& owner, int64_t bytes,
+                              const v1::Limits& limits);
+// Counts the counter `name` up; its new value.
+absl::StatusOr<int64_t> NextCounter(SqlSession& s, const char* name);
+
+}  // namespace fenestra::store_internal
