@@ -1,9 +1,11 @@
 #include "client/cli_util.h"
 
+#include <fmt/core.h>
 #include <google/protobuf/util/json_util.h>
 
 #include <CLI/CLI.hpp>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -82,6 +84,11 @@ std::string LowerStateName(const std::string& enum_name, int value) {
 }
 
 }  // namespace
+
+std::string FormatLocation(double latitude_deg, double longitude_deg) {
+  return fmt::format("{:.4f}° {}, {:.4f}° {}", std::abs(latitude_deg), latitude_deg < 0 ? 'S' : 'N',
+                     std::abs(longitude_deg), longitude_deg < 0 ? 'W' : 'E');
+}
 
 std::string StateName(v1::SiteState state) {
   return LowerStateName(v1::SiteState_Name(state), state);

@@ -41,6 +41,9 @@ std::string ToJson(const google::protobuf::Message& message, JsonLayout layout);
 absl::Status WriteJsonFile(const std::string& path, const google::protobuf::Message& message);
 
 // A state's name as the client prints it: "computing", "ready", "queued", "succeeded", ...
+// "34.8300° S, 56.0000° W": degrees without sign, the hemisphere's letter after them.
+std::string FormatLocation(double latitude_deg, double longitude_deg);
+
 std::string StateName(v1::SiteState state);
 std::string StateName(v1::JobState state);
 

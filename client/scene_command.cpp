@@ -61,9 +61,9 @@ void PrintSummary(const Scene& scene, const BlindDesign& design) {
         layout.slat_count, layout.pitch_m, layout.axis_depth_m);
   }
   if (!scene.site.weather_file.empty()) {
-    fmt::print("site: latitude {:.3f}, longitude {:.3f}, UTC{:+g}, weather {}\n",
-               scene.site.latitude_deg, scene.site.longitude_deg, scene.site.time_zone_h,
-               scene.site.weather_file);
+    fmt::print("site: {}, UTC{:+g}, weather {}\n",
+               FormatLocation(scene.site.latitude_deg, scene.site.longitude_deg),
+               scene.site.time_zone_h, scene.site.weather_file);
   }
 }
 

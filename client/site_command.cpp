@@ -24,16 +24,9 @@ namespace fs = std::filesystem;
 // How long `site add --wait` waits between two looks at the site.
 constexpr auto kSitePollInterval = std::chrono::milliseconds(250);
 
-// "34.8300° S, 56.0000° W": degrees without sign, the hemisphere's letter after them.
-std::string Location(double latitude_deg, double longitude_deg) {
-  return fmt::format("{:.4f}° {}, {:.4f}° {}", std::abs(latitude_deg),
-                     latitude_deg < 0 ? 'S' : 'N', std::abs(longitude_deg),
-                     longitude_deg < 0 ? 'W' : 'E');
-}
-
 void PrintSite(const v1::SiteInfo& s) {
   fmt::print("{} ({}): {}\n", s.id(), s.name(), StateName(s.state()));
-  fmt::print("  location: {}; weather: {}\n", Location(s.latitude_deg(), s.longitude_deg()),
+  fmt::print("  location: {}; weather: {}\n", FormatLocation(s.latitude_deg(), s.longitude_deg()),
              s.has_weather() ? s.weather_name() : "none");
   const v1::Sampling& sampling = s.sampling();
   const std::string parts =
