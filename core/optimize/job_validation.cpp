@@ -260,9 +260,9 @@ absl::Status InvalidJobField(const std::string& field, const std::string& reason
 absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   v1::Sampling s = given;
   if (s.outdoor_paths() == 0) s.set_outdoor_paths(kDefaultOutdoorPaths);
-  if (s.outdoor_bounces() == 0) s.set_outdoor_bounces(kDefaultOutdoorBounces);
+  if (!s.has_outdoor_bounces()) s.set_outdoor_bounces(kDefaultOutdoorBounces);
   if (s.indoor_paths_per_sensor() == 0) s.set_indoor_paths_per_sensor(kDefaultIndoorPathsPerSensor);
-  if (s.indoor_bounces() == 0) s.set_indoor_bounces(kDefaultIndoorBounces);
+  if (!s.has_indoor_bounces()) s.set_indoor_bounces(kDefaultIndoorBounces);
   if (s.seed() == 0) s.set_seed(kDefaultSeed);
   if (s.basis_cells() == 0) s.set_basis_cells(kDefaultBasisCells);
   if (s.backend().empty()) s.set_backend("auto");
@@ -314,7 +314,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   }
   for (const int bounces : {s.outdoor_bounces(), s.indoor_bounces()}) {
     if (bounces < -1 || bounces > kMaxBounces) {
-      return InvalidJobField("sampling", absl::StrCat("bounces must be in [1, ", kMaxBounces,
+      return InvalidJobField("sampling", absl::StrCat("bounces must be in [0, ", kMaxBounces,
                                                       "], or -1 for unlimited, got ", bounces));
     }
   }

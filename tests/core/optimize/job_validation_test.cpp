@@ -187,7 +187,16 @@ TEST(JobValidationTest, BudgetObjectiveAndSampling) {
   EXPECT_THAT(ErrorOf(job), HasSubstr("job objective.target_tolerance"));
   job = QuickJob();
   job.mutable_sampling()->set_indoor_bounces(1'000'000);
-  EXPECT_THAT(ErrorOf(job), HasSubstr("bounces must be in [1, 1000], or -1 for unlimited"));
+  EXPECT_THAT(ErrorOf(job), HasSubstr("bounces must be in [0, 1000], or -1 for unlimited"));
+  job = QuickJob();  // 0 is no reflection; unset is the default, unlimited
+  job.mutable_sampling()->set_indoor_bounces(0);
+  job.mutable_sampling()->clear_outdoor_bounces();
+  const absl::StatusOr<PreparedJob> accepted = ValidateJob(job, kOffice);
+  EXPECT_TRUE(accepted.ok()) << accepted.status();
+  const absl::StatusOr<v1::Sampling> resolved = ResolveSampling(job.sampling());
+  ASSERT_TRUE(resolved.ok()) << resolved.status();
+  EXPECT_EQ(resolved->indoor_bounces(), 0);
+  EXPECT_EQ(resolved->outdoor_bounces(), kUnlimitedBounces);
   job = QuickJob();  // an outdoor matrix of 22 GB
   job.mutable_sampling()->set_basis_cells(1152);
   job.mutable_sampling()->set_batches(64);
