@@ -201,12 +201,13 @@ absl::Status FenestraClient::ToStatus(const grpc::Status& status) const {
   const std::string& address = options_.address;
   switch (status.error_code()) {
     case grpc::StatusCode::UNAVAILABLE:
-      // fenestrad's own UNAVAILABLE (shutting down) starts with its name
-      if (absl::StartsWith(message, "fenestrad")) break;
-      if (absl::StrContains(absl::AsciiStrToLower(message), "handshake")) {
+      // fenestrad's own UNAVAILABLE (shutting down) comes over a connection that stands
+      if (channel_->GetState(/*try_to_connect=*/false) == GRPC_CHANNEL_READY) break;
+      if (!options_.tls_ca_file.empty()) {
         return absl::UnavailableError(absl::StrCat(
-            "cannot reach fenestrad at ", address, ": the TLS handshake failed (", message,
-            "); does it serve TLS with a certificate signed by the --tls-ca CA?"));
+            "cannot reach fenestrad at ", address, " over TLS (", message,
+            "); is it running, and does it serve TLS with a certificate signed by the --tls-ca "
+            "CA?"));
       }
       return absl::UnavailableError(
           absl::StrCat("cannot reach fenestrad at ", address, " (", message, "); is it running?"));

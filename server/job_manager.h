@@ -153,7 +153,8 @@ class JobManager {
   void Quarantine(Record& record, const absl::Status& unreadable);
   // The job as submitted, read back from the store, with its weather file parsed, its sky
   // matrix (both from weather_ when held there) and its scene built (left out of the
-  // message). DataLoss "the stored job ..." when its record does not parse.
+  // message). When its record does not parse, the store's DataLoss with the payload
+  // kUnparsableRecordUrl (IsUnparsableRecord).
   absl::StatusOr<PreparedJob> Prepare(Record& record);
   // What RunJob reports, stored as the record's events (and checkpoints).
   JobCallbacks Callbacks(Record& record);

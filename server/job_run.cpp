@@ -8,7 +8,6 @@
 #include <thread>
 #include <utility>
 
-#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "core/common/seconds.h"
@@ -325,8 +324,7 @@ void JobManager::RunStarted(Record& r) {
   // The job as submitted, read back from the store, with its weather file
   absl::StatusOr<PreparedJob> prepared =
       WhileStoreAway(r.info.id(), cancelled, [&] { return Prepare(r); });
-  if (prepared.status().code() == absl::StatusCode::kDataLoss &&
-      absl::StartsWith(prepared.status().message(), "the stored job")) {
+  if (IsUnparsableRecord(prepared.status())) {
     Quarantine(r, prepared.status());
     return;
   }

@@ -16,6 +16,11 @@
 
 namespace fenestra {
 
+bool IsUnparsableRecord(const absl::Status& status) {
+  return status.code() == absl::StatusCode::kDataLoss &&
+         status.GetPayload(kUnparsableRecordUrl).has_value();
+}
+
 bool IsPostgresUrl(const std::string& url) {
   return absl::StartsWith(url, "postgresql://") || absl::StartsWith(url, "postgres://");
 }

@@ -289,6 +289,14 @@ class Store final : public UserStore {
   UploadStore* const weather_files_;
 };
 
+// The payload (absl::Status::SetPayload) of the DataLoss a stored job or site answers
+// with when its record no longer parses (LoadJob, CancelJob, LoadSiteScene, UpdateSite):
+// the record's id. Its reader moves such a record to the quarantine table (Quarantine).
+inline constexpr char kUnparsableRecordUrl[] =
+    "type.googleapis.com/fenestra.store.UnparsableRecord";
+// True when `status` is such a DataLoss.
+bool IsUnparsableRecord(const absl::Status& status);
+
 // Opens the store `url` names: "postgresql://user@host:port/db" (or "postgres://") with
 // `connections` pooled connections; "sqlite:DIR" for DIR/fenestra.db without a data
 // directory's files (users only: `fenestrad user`). InvalidArgument for anything else.

@@ -9,11 +9,13 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "absl/strings/cord.h"
 #include "absl/strings/str_cat.h"
 #include "fenestra/v1/daemon.pb.h"
 #include "fenestra/v1/job.pb.h"
 #include "fenestra/v1/service.pb.h"
 #include "server/store/database.h"
+#include "server/store/store.h"
 
 namespace fenestra::store_internal {
 
@@ -38,6 +40,14 @@ inline absl::Status NoJob(const std::string& id) {
 }
 inline absl::Status NoSite(const std::string& id) {
   return absl::NotFoundError(absl::StrCat("no site '", id, "' is stored"));
+}
+
+// The DataLoss of a record `id` that does not parse: `message`, with the payload
+// kUnparsableRecordUrl.
+inline absl::Status UnparsableRecord(const std::string& id, const std::string& message) {
+  absl::Status status = absl::DataLossError(message);
+  status.SetPayload(kUnparsableRecordUrl, absl::Cord(id));
+  return status;
 }
 
 inline std::string WeatherFileName(const std::string& weather) { return weather + ".epw"; }

@@ -26,6 +26,7 @@ using store_internal::kRunning;
 using store_internal::NextCounter;
 using store_internal::Parse;
 using store_internal::Placeholders;
+using store_internal::UnparsableRecord;
 using store_internal::WeatherFileName;
 
 // A waiting task, as QueuePositions orders them.
@@ -285,7 +286,7 @@ absl::StatusOr<v1::Job> Store::LoadJob(const std::string& id) {
         FENESTRA_ASSIGN_OR_RETURN(row, s.Run("SELECT job FROM jobs WHERE id = ?", {id}));
         if (row.rows.empty()) return store_internal::NoJob(id);
         if (!Parse(job, row.rows[0].Bytes(0))) {
-          return absl::DataLossError(absl::StrCat("the stored job ", id, " does not parse"));
+          return UnparsableRecord(id, absl::StrCat("the stored job ", id, " does not parse"));
         }
         return absl::OkStatus();
       },
@@ -359,7 +360,7 @@ absl::StatusOr<Store::Cancelled> Store::CancelJob(
     const SqlRow& r = row.rows[0];
     cancelled = Cancelled{};
     if (!Parse(cancelled.info, r.Bytes(0))) {
-      return absl::DataLossError(absl::StrCat("the stored job ", id, " does not parse"));
+      return UnparsableRecord(id, absl::StrCat("the stored job ", id, " does not parse"));
     }
     cancelled.weather = r.Bytes(3);
     FillFromRow(cancelled.info, r.Bytes(2), true, r.Bytes(4));

@@ -27,6 +27,7 @@ using store_internal::kQueued;
 using store_internal::kRunning;
 using store_internal::NextCounter;
 using store_internal::Parse;
+using store_internal::UnparsableRecord;
 using store_internal::WeatherFileName;
 
 }  // namespace
@@ -165,8 +166,8 @@ absl::StatusOr<v1::Scene> Store::LoadSiteScene(const std::string& id) {
           scene = info.scene();  // stored before scenes had their own column
           return absl::OkStatus();
         }
-        return absl::DataLossError(
-            absl::StrCat("the stored scene of site ", id, " does not parse"));
+        return UnparsableRecord(id,
+                                absl::StrCat("the stored scene of site ", id, " does not parse"));
       },
       /*durable=*/false, /*write=*/false));
   return scene;
@@ -200,7 +201,7 @@ absl::StatusOr<v1::SiteInfo> Store::UpdateSite(const std::string& id, const Leas
           absl::StrCat(id, ": its lease was lost (another replica took it over)"));
     }
     if (!Parse(info, r.Bytes(0))) {
-      return absl::DataLossError(absl::StrCat("the stored site ", id, " does not parse"));
+      return UnparsableRecord(id, absl::StrCat("the stored site ", id, " does not parse"));
     }
     info.clear_scene();
     update(info);

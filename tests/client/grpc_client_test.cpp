@@ -20,8 +20,8 @@
 
 #include "client/cli_util.h"
 #include "client/job_request.h"
-#include "tests/child_process.h"
 #include "tests/certificates.h"
+#include "tests/child_process.h"
 #include "tests/client/recording_server.h"
 
 namespace fenestra {
@@ -236,11 +236,11 @@ TEST_F(GrpcClientTest, TlsServerIsNotReachedWithAnotherCaOrWithoutTls) {
   options.tls_ca_file = certificates_->other_ca_cert;
   absl::Status status = ConnectTo(options).ListJobs(v1::ListJobsRequest()).status();
   EXPECT_EQ(status.code(), absl::StatusCode::kUnavailable);
-  EXPECT_THAT(
-      std::string(status.message()),
-      StartsWith("cannot reach fenestrad at " + server.address() + ": the TLS handshake failed ("));
+  EXPECT_THAT(std::string(status.message()),
+              StartsWith("cannot reach fenestrad at " + server.address() + " over TLS ("));
   EXPECT_THAT(status.message(),
-              HasSubstr("); does it serve TLS with a certificate signed by the --tls-ca CA?"));
+              HasSubstr("); is it running, and does it serve TLS with a certificate signed by "
+                        "the --tls-ca CA?"));
   options.tls_ca_file.clear();
   status = ConnectTo(options).ListJobs(v1::ListJobsRequest()).status();
   EXPECT_THAT(std::string(status.message()),
@@ -492,6 +492,29 @@ TEST(GrpcClientErrorsTest, ServerDownSaysCannotReach) {
   EXPECT_THAT(std::string(status.message()),
               StartsWith("cannot reach fenestrad at " + options.address + " ("));
   EXPECT_THAT(status.message(), HasSubstr("); is it running?"));
+}
+
+// A JobService whose Get answers UNAVAILABLE, as fenestrad does while it shuts down.
+class ShuttingDownJobs final : public v1::JobService::Service {
+  grpc::Status Get(grpc::ServerContext*, const v1::GetJobRequest*, v1::JobInfo*) override {
+    return grpc::Status(grpc::StatusCode::UNAVAILABLE, "fenestrad is shutting down");
+  }
+};
+
+TEST(GrpcClientErrorsTest, TheServersOwnUnavailableKeepsItsMessage) {
+  ShuttingDownJobs jobs;
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port);
+  builder.RegisterService(&jobs);
+  const std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  ASSERT_NE(server, nullptr);
+  ServerOptions options;
+  options.address = "127.0.0.1:" + std::to_string(port);
+  const absl::Status status = ConnectTo(options).GetJob("job-1").status();
+  EXPECT_EQ(status.code(), absl::StatusCode::kUnavailable);
+  EXPECT_EQ(status.message(), "UNAVAILABLE: fenestrad is shutting down");
+  server->Shutdown();
 }
 
 TEST(GrpcClientErrorsTest, SilentServerRunsIntoTheDeadline) {

@@ -12,6 +12,7 @@
 #include <set>
 #include <thread>
 
+#include "absl/strings/cord.h"
 #include "absl/strings/str_cat.h"
 #include "server/store/migrations.h"
 #include "server/store/postgres_database.h"
@@ -533,7 +534,11 @@ TYPED_TEST(StoreTest, RecordsThatDoNotParseAreQuarantined) {
   EXPECT_EQ((*moved)[1].reason, "its SiteInfo names another site");
   EXPECT_EQ(store.GetJob("job-2").status().code(), absl::StatusCode::kNotFound);
   // A job's submitted form is read when it runs
-  EXPECT_EQ(store.LoadJob("job-3").status().code(), absl::StatusCode::kDataLoss);
+  const absl::Status unreadable = store.LoadJob("job-3").status();
+  EXPECT_EQ(unreadable.code(), absl::StatusCode::kDataLoss);
+  EXPECT_TRUE(IsUnparsableRecord(unreadable));
+  EXPECT_EQ(unreadable.GetPayload(kUnparsableRecordUrl), absl::Cord("job-3"));
+  EXPECT_FALSE(IsUnparsableRecord(absl::DataLossError("the job's stored weather file is missing")));
   ASSERT_TRUE(store.Quarantine("jobs", "job-3", "its Job does not parse").ok());
   // Moved, not lost: the next scan finds only the sound ones
   EXPECT_TRUE(store.QuarantineUnparsable()->empty());
