@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 
+#include "absl/status/status.h"
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "client/cli_util.h"
@@ -29,6 +30,13 @@ std::string LocalTime(int64_t unix_ms) {
   return text;
 }
 
+// Why a job failed: its status code's name when fenestrad recorded one, and the reason.
+std::string FailureText(const v1::JobInfo& j) {
+  if (j.error_code() == 0) return j.error();
+  return absl::StrCat(absl::StatusCodeToString(static_cast<absl::StatusCode>(j.error_code())), ": ",
+                      j.error());
+}
+
 void PrintJob(const v1::JobInfo& j) {
   fmt::print("{} ({}): {}{}\n", j.id(), j.name(), StateName(j.state()),
              j.cancel_requested() && j.state() == v1::JOB_STATE_RUNNING ? ", cancelling" : "");
@@ -42,7 +50,7 @@ void PrintJob(const v1::JobInfo& j) {
                j.outdoor_reused() ? "reused from the cache" : "traced", j.outdoor_seconds());
   }
   if (j.has_progress()) fmt::print("  {}\n", FormatProgress(FromProto(j.progress())));
-  if (!j.error().empty()) fmt::print("  error: {}\n", j.error());
+  if (!j.error().empty() || j.error_code() != 0) fmt::print("  error: {}\n", FailureText(j));
   if (j.has_result()) {
     fmt::print("{}", FormatResult(j.result()));
   }
@@ -60,7 +68,7 @@ void RecordEnd(const v1::JobEvent& event, JobEnd& end) {
   switch (event.kind_case()) {
     case v1::JobEvent::kSnapshot:
       if (IsFinalState(event.snapshot().state())) {
-        end = {event.snapshot().state(), event.snapshot().result(), event.snapshot().error()};
+        end = {event.snapshot().state(), event.snapshot().result(), FailureText(event.snapshot())};
       }
       break;
     case v1::JobEvent::kFinished:
@@ -136,9 +144,14 @@ int Watch(FenestraClient& client, const std::string& id, bool json) {
     case v1::JOB_STATE_SUCCEEDED:
       fmt::print("{} succeeded\n{}", id, FormatResult(end.result));
       return 0;
-    case v1::JOB_STATE_FAILED:
-      fmt::print(stderr, "error: {} failed: {}\n", id, end.error);
+    case v1::JOB_STATE_FAILED: {
+      // The failed event says why; the job's info also the status code
+      const absl::StatusOr<v1::JobInfo> info = client.GetJob(id);
+      fmt::print(
+          stderr, "error: {} failed: {}\n", id,
+          info.ok() && info->state() == v1::JOB_STATE_FAILED ? FailureText(*info) : end.error);
       return 1;
+    }
     default:
       fmt::print("{} {}{}\n", id, StateName(*end.state),
                  *end.state == v1::JOB_STATE_INTERRUPTED ? " (fenestrad shut down)" : "");
@@ -151,7 +164,7 @@ int Watch(FenestraClient& client, const std::string& id, bool json) {
 const v1::JobResult& ResultOrFail(const v1::JobInfo& info) {
   if (!info.has_result()) {
     if (info.state() == v1::JOB_STATE_FAILED) {
-      Fail(absl::FailedPreconditionError(absl::StrCat(info.id(), " failed: ", info.error())));
+      Fail(absl::FailedPreconditionError(absl::StrCat(info.id(), " failed: ", FailureText(info))));
     }
     Fail(absl::FailedPreconditionError(
         absl::StrCat(info.id(), " is ", StateName(info.state()),

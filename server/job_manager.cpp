@@ -104,6 +104,7 @@ absl::StatusOr<JobManager::Admission> JobManager::Admit(const v1::SubmitJobReque
   const PreparedJob& prepared = checked->prepared;
   Admission admitted;
 
+
   // The site, and a weather file from somewhere
   if (!request.site_id().empty()) {
     absl::StatusOr<SiteManager::ForJob> found = sites_.Lookup(request.site_id(), caller);
@@ -182,8 +183,9 @@ absl::StatusOr<v1::JobInfo> JobManager::Cancel(const std::string& id, const Call
   // Run here: the runner hears it at once; the store tells the other replicas
   std::shared_ptr<Scheduler::Held> local = scheduler_.Find(id);
   if (local) local->cancel_requested = true;
-  absl::StatusOr<Store::Cancelled> cancelled = store_.CancelJob(
-      id, [](v1::JobInfo& info) { return EndOf(info, v1::JOB_STATE_CANCELLED, nullptr, ""); });
+  absl::StatusOr<Store::Cancelled> cancelled = store_.CancelJob(id, [](v1::JobInfo& info) {
+    return EndOf(info, v1::JOB_STATE_CANCELLED, nullptr, absl::OkStatus());
+  });
   if (!cancelled.ok()) {
     if (!local) return cancelled.status();
     // The runner stops all the same; its end is stored when the store takes it
@@ -258,16 +260,16 @@ absl::Status JobManager::Watch(const std::string& id, const Caller& caller,
   }
 }
 
-// Turns `info` into a job's end in `state` and returns its final event.
 v1::JobEvent JobManager::EndOf(v1::JobInfo& info, v1::JobState state, const v1::JobResult* result,
-                               const std::string& error) {
+                               const absl::Status& error) {
   info.set_state(state);
   info.set_stage("done");
   info.set_finished_unix_ms(NowUnixMs());
   info.set_queue_position(0);
   info.clear_replica();
   if (result) *info.mutable_result() = *result;
-  info.set_error(error);
+  info.set_error(std::string(error.message()));
+  info.set_error_code(static_cast<int32_t>(error.code()));
   v1::JobEvent event;
   switch (state) {
     case v1::JOB_STATE_SUCCEEDED:
@@ -286,7 +288,7 @@ v1::JobEvent JobManager::EndOf(v1::JobInfo& info, v1::JobState state, const v1::
         event.mutable_interrupted();
       break;
     default:
-      event.set_failed(error);
+      event.set_failed(std::string(error.message()));
   }
   event.set_sequence(info.last_sequence() + 1);
   event.set_time_unix_ms(info.finished_unix_ms());

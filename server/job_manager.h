@@ -107,9 +107,10 @@ class JobManager {
     int max_evaluations = 0;
     int64_t indoor_paths_per_sensor = 0;
   };
-  // Turns `info` into a job's end in `state` and returns its final event.
+  // Turns `info` into a job's end in `state` and returns its final event; FAILED: `error`
+  // is why (its message and code; OK otherwise).
   static v1::JobEvent EndOf(v1::JobInfo& info, v1::JobState state, const v1::JobResult* result,
-                            const std::string& error);
+                            const absl::Status& error);
   // Submit's checks before anything is stored: the request (CheckJobRequest), the caller's
   // site, where the weather comes from, the job's match with its site. The scene built for
   // them is dropped on return.
@@ -125,11 +126,12 @@ class JobManager {
   // Save for what a running job reports (stage, outdoor matrix, progress): a failure is
   // logged, the first of a run of them, and the job goes on.
   void Report(Record& record, std::optional<v1::JobEvent> event, bool durable = true);
-  // Ends a job (record mutex held): final state, time and event, stored; once stored,
-  // logged and the weather file's reference dropped. A failed store is tried again every
-  // second by the committer thread, unless the claim was lost.
+  // Ends a job (record mutex held): final state, time and event (FAILED: `error`, its code
+  // kept in JobInfo.error_code), stored; once stored, logged and the weather file's
+  // reference dropped. A failed store is tried again every second by the committer thread,
+  // unless the claim was lost.
   void Finish(Record& record, v1::JobState state, const v1::JobResult* result,
-              const std::string& error);
+              const absl::Status& error);
   // Stores a waiting final state (record mutex held); on success logs it (Ended).
   absl::Status StoreEnd(Record& record);
   void Ended(Record& record);

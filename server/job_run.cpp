@@ -116,7 +116,8 @@ void JobManager::Run(std::shared_ptr<Scheduler::Held> held) {
       RunStarted(r);
     } catch (const std::exception& e) {
       std::lock_guard lock(r.mutex);
-      Finish(r, v1::JOB_STATE_FAILED, nullptr, absl::StrCat("internal error: ", e.what()));
+      Finish(r, v1::JOB_STATE_FAILED, nullptr,
+             absl::InternalError(absl::StrCat("internal error: ", e.what())));
     }
     // An end waiting in the committer keeps the claim held until it is stored
     std::lock_guard lock(r.mutex);
@@ -314,11 +315,11 @@ void JobManager::RunStarted(Record& r) {
         released.ok() ? "" : absl::StrCat(" once its lease expires (", released.message(), ")"));
     return true;
   };
-  const auto fail = [&](const std::string& error) {
+  const auto fail = [&](const absl::Status& error) {
     if (cancelled() && hand_back()) return;
     std::lock_guard lock(r.mutex);
     Finish(r, cancelled() ? stopped_state() : v1::JOB_STATE_FAILED, nullptr,
-           cancelled() ? "" : error);
+           cancelled() ? absl::OkStatus() : error);
   };
 
   // The job as submitted, read back from the store, with its weather file
@@ -328,10 +329,13 @@ void JobManager::RunStarted(Record& r) {
     Quarantine(r, prepared.status());
     return;
   }
-  if (!prepared.ok()) return fail(std::string(prepared.status().message()));
+  if (!prepared.ok()) return fail(prepared.status());
   absl::StatusOr<OutdoorCache::Lookup> lookup =
       WhileStoreAway(r.info.id(), cancelled, [&] { return Outdoor(r, *prepared, cancelled); });
-  if (!lookup.ok()) return fail(absl::StrCat("outdoor stage: ", lookup.status().message()));
+  if (!lookup.ok()) {
+    return fail(absl::Status(lookup.status().code(),
+                             absl::StrCat("outdoor stage: ", lookup.status().message())));
+  }
 
   // The search
   JobCallbacks callbacks = Callbacks(r);
@@ -345,7 +349,7 @@ void JobManager::RunStarted(Record& r) {
     r.resume.reset();
     result = RunJob(*prepared, lookup->matrix.get(), callbacks);
   }
-  if (!result.ok()) return fail(std::string(result.status().message()));
+  if (!result.ok()) return fail(result.status());
   if (result->stop_reason() == "cancelled" && hand_back()) return;
 
   v1::Timings& timings = *result->mutable_timings();
@@ -353,11 +357,11 @@ void JobManager::RunStarted(Record& r) {
   timings.set_total_seconds(SecondsSince(start));
   std::lock_guard lock(r.mutex);
   Finish(r, result->stop_reason() == "cancelled" ? stopped_state() : v1::JOB_STATE_SUCCEEDED,
-         &*result, "");
+         &*result, absl::OkStatus());
 }
 
 void JobManager::Finish(Record& r, v1::JobState state, const v1::JobResult* result,
-                        const std::string& error) {
+                        const absl::Status& error) {
   r.end = EndOf(r.wanted, state, result, error);
   const absl::Status stored = StoreEnd(r);
   if (stored.ok()) return;
