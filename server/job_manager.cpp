@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "core/dc/dc_backend.h"
 #include "server/checksum.h"
 #include "server/limits.h"
 #include "server/log_safe.h"
@@ -104,6 +105,17 @@ absl::StatusOr<JobManager::Admission> JobManager::Admit(const v1::SubmitJobReque
   const PreparedJob& prepared = checked->prepared;
   Admission admitted;
 
+  // A job for the GPU on a daemon without one would fail when it starts
+  if (checked->job.sampling().backend() == "cuda" && CudaDevicesInUse() == 0) {
+    const std::string field = !request.job().sampling().backend().empty() ? "job.sampling.backend"
+                              : !request.default_backend().empty()
+                                  ? "default_backend"
+                                  : "backend (in fenestrad's configuration)";
+    return absl::FailedPreconditionError(
+        absl::StrCat(field,
+                     ": \"cuda\" needs a GPU, and this fenestrad has none; give \"cpu\" "
+                     "or \"auto\""));
+  }
 
   // The site, and a weather file from somewhere
   if (!request.site_id().empty()) {

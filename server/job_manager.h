@@ -111,8 +111,9 @@ class JobManager {
   // is why (its message and code; OK otherwise).
   static v1::JobEvent EndOf(v1::JobInfo& info, v1::JobState state, const v1::JobResult* result,
                             const absl::Status& error);
-  // Submit's checks before anything is stored: the request (CheckJobRequest), the caller's
-  // site, where the weather comes from, the job's match with its site. The scene built for
+  // Submit's checks before anything is stored: the request (CheckJobRequest), a GPU for a
+  // "cuda" job (FailedPrecondition naming the field that asked for it), the caller's site,
+  // where the weather comes from, the job's match with its site. The scene built for
   // them is dropped on return.
   absl::StatusOr<Admission> Admit(const v1::SubmitJobRequest& request, const Caller& caller);
   // The stored job `id` if `caller` may see it; NotFound otherwise.

@@ -1,6 +1,7 @@
-// fenestrad end to end, how a job's errors reach clients: a job that fails after Submit
-// keeps its status code (JobInfo.error_code) through the store, `fenestra job show` and
-// `fenestra job watch`.
+// fenestrad end to end, how a job's errors reach clients: a job the daemon cannot run is
+// refused at Submit naming the field, and a job that fails after Submit keeps its status
+// code (JobInfo.error_code) through the store, `fenestra job show` and `fenestra job watch`.
+#include "core/dc/dc_backend.h"
 #include "tests/server/fenestrad_harness.h"
 
 namespace fenestra {
@@ -10,6 +11,47 @@ using namespace testing_fenestrad;
 using ::testing::HasSubstr;
 
 bool Ended(const v1::JobInfo& job) { return job.state() >= v1::JOB_STATE_SUCCEEDED; }
+
+TEST_F(FenestradTest, ACudaJobIsRefusedAtSubmitWithoutAGpu) {
+  auto d = StartDaemon();
+  const auto submit = [&](const v1::SubmitJobRequest& request, v1::JobInfo* info) {
+    grpc::ClientContext context;
+    return d->jobs().Submit(&context, request, info);
+  };
+  v1::Job job = TinyJob(2);
+  job.mutable_sampling()->set_backend("cuda");
+  v1::JobInfo info;
+  const grpc::Status asked_in_job = submit(InlineRequest(job), &info);
+  if (CudaDevices() > 0) {
+    // With a GPU the job is taken, and runs on it
+    ASSERT_TRUE(asked_in_job.ok()) << asked_in_job.error_message();
+    const v1::JobInfo ended = WaitJob(*d, info.id(), Ended);
+    EXPECT_EQ(ended.state(), v1::JOB_STATE_SUCCEEDED) << ended.error();
+    EXPECT_EQ(ended.backend(), "cuda");
+    return;
+  }
+  EXPECT_EQ(asked_in_job.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_THAT(asked_in_job.error_message(),
+              HasSubstr("job.sampling.backend: \"cuda\" needs a GPU, and this fenestrad has none"));
+  // Asked for as the request's default backend, and through the client
+  v1::SubmitJobRequest request = InlineRequest(TinyJob(2));
+  request.mutable_job()->mutable_sampling()->clear_backend();
+  request.set_default_backend("cuda");
+  const grpc::Status asked_by_default = submit(request, &info);
+  EXPECT_EQ(asked_by_default.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_THAT(asked_by_default.error_message(), HasSubstr("default_backend: \"cuda\""));
+  const CliResult r = d->Cli({"job", "submit", WriteJob("cuda", job)});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_THAT(r.err, HasSubstr("FAILED_PRECONDITION: job.sampling.backend: \"cuda\" needs a GPU"));
+  // Nothing was stored; "cpu" and "auto" are taken
+  grpc::ClientContext list_context;
+  v1::ListJobsResponse listed;
+  ASSERT_TRUE(d->jobs().List(&list_context, v1::ListJobsRequest(), &listed).ok());
+  EXPECT_EQ(listed.jobs_size(), 0);
+  job.mutable_sampling()->set_backend("auto");
+  ASSERT_TRUE(submit(InlineRequest(job), &info).ok());
+  EXPECT_EQ(WaitJob(*d, info.id(), Ended).state(), v1::JOB_STATE_SUCCEEDED);
+}
 
 TEST_F(FenestradTest, AJobThatFailsAfterSubmitKeepsItsStatusCode) {
   auto d = StartDaemon({"--shutdown-grace", "0.3"});
