@@ -53,6 +53,22 @@ TEST_F(FenestradTest, ACudaJobIsRefusedAtSubmitWithoutAGpu) {
   EXPECT_EQ(WaitJob(*d, info.id(), Ended).state(), v1::JOB_STATE_SUCCEEDED);
 }
 
+// A job with nothing to search is refused at Submit, naming the field, and nothing is stored.
+TEST_F(FenestradTest, AJobWithoutDesignVariablesIsRefusedAtSubmit) {
+  auto d = StartDaemon();
+  v1::Job job = TinyJob(2);
+  job.clear_variables();
+  grpc::ClientContext context;
+  v1::JobInfo info;
+  const grpc::Status refused = d->jobs().Submit(&context, InlineRequest(job), &info);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(refused.error_message(), HasSubstr("job variables: none given"));
+  grpc::ClientContext list_context;
+  v1::ListJobsResponse listed;
+  ASSERT_TRUE(d->jobs().List(&list_context, v1::ListJobsRequest(), &listed).ok());
+  EXPECT_EQ(listed.jobs_size(), 0);
+}
+
 TEST_F(FenestradTest, AJobThatFailsAfterSubmitKeepsItsStatusCode) {
   auto d = StartDaemon({"--shutdown-grace", "0.3"});
   const std::string running = Submit(*d, WriteJob("long", LongJob()));
