@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include "absl/strings/str_cat.h"
@@ -55,7 +56,8 @@ struct SiteAddArgs {
   ServerOptions server;
   std::string scene, job, name, backend, window_parts;
   int64_t outdoor_paths = 0;
-  int outdoor_bounces = 0, basis_cells = 0;
+  std::optional<int> outdoor_bounces;  // unset: the job's or the default
+  int basis_cells = 0;
   uint64_t seed = 0;
   bool wait = false, json = false;
 };
@@ -87,7 +89,7 @@ v1::RegisterSiteRequest SiteAddRequest(const SiteAddArgs& args) {
   if (!args.name.empty()) request.set_name(args.name);
   v1::Sampling& s = *request.mutable_sampling();
   if (args.outdoor_paths) s.set_outdoor_paths(args.outdoor_paths);
-  if (args.outdoor_bounces) s.set_outdoor_bounces(args.outdoor_bounces);
+  if (args.outdoor_bounces) s.set_outdoor_bounces(*args.outdoor_bounces);
   if (args.seed) s.set_seed(args.seed);
   if (args.basis_cells) s.set_basis_cells(args.basis_cells);
   if (!args.window_parts.empty()) {
@@ -112,7 +114,9 @@ void AddSiteAdd(CLI::App* site) {
                       absl::StrCat("Outdoor paths [default ", kDefaultOutdoorPaths, "]"));
   add_cmd->add_option(
       "--outdoor-bounces", add->outdoor_bounces,
-      absl::StrCat("Outdoor reflections, -1: unlimited [default ", kDefaultOutdoorBounces, "]"));
+      absl::StrCat("Outdoor reflections: 0 = none (the sky seen straight from the window), "
+                   "-1 = unlimited [default ",
+                   kDefaultOutdoorBounces, "]"));
   add_cmd->add_option("--seed", add->seed,
                       absl::StrCat("Random seed [default ", kDefaultSeed, "]"));
   add_cmd->add_option("--basis-cells", add->basis_cells,

@@ -274,6 +274,25 @@ TEST_F(FenestradTest, ObjMeshesAreSentInlineAsPolygons) {
   EXPECT_THAT(r.out, HasSubstr("best design:"));
 }
 
+// --outdoor-bounces 0 asks for no outdoor reflection (not the default): it reaches the
+// site's sampling as 0, and a site added without it gets the default, unlimited.
+TEST_F(FenestradTest, SiteAddWithZeroOutdoorBouncesTracesNoReflection) {
+  auto d = StartDaemon();
+  const std::string tiny = WriteJob("tiny", TinyJob());
+  CliResult r =
+      d->Cli({"site", "add", "--job", tiny, "--outdoor-bounces", "0", "--wait", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const v1::SiteInfo direct = FromJson<v1::SiteInfo>(r.out);
+  EXPECT_EQ(direct.state(), v1::SITE_STATE_READY);
+  EXPECT_TRUE(direct.sampling().has_outdoor_bounces());
+  EXPECT_EQ(direct.sampling().outdoor_bounces(), 0);
+  r = d->Cli({"site", "add", "--job", tiny, "--wait", "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const v1::SiteInfo unlimited = FromJson<v1::SiteInfo>(r.out);
+  EXPECT_EQ(unlimited.sampling().outdoor_bounces(), -1);  // unlimited
+  EXPECT_NE(unlimited.id(), direct.id());
+}
+
 TEST_F(FenestradTest, BadRequestsGetTheRightCodeAndTheDaemonKeepsServing) {
   auto d = StartDaemon();
   auto submit = [&](const v1::SubmitJobRequest& request) {
