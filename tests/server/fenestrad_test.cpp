@@ -1095,7 +1095,7 @@ TEST_F(FenestradStorageTest, LargeRegistrationMemoryIsBoundedAndGivenBack) {
                after = ProcessStatusMiB(d->pid(), "VmRSS");
   std::cout << "fenestrad resident memory: " << before << " MiB before, " << peak
             << " MiB at the peak, " << after << " MiB after\n";
-  // Measured 650-770 MiB at the peak and 30-35 MiB after (bench/results/memory_registration.txt).
+  // Measured 650-770 MiB at the peak and 30-35 MiB after (bench/results/registration_memory_cpu2.txt).
   // Under AddressSanitizer the allocator pads every block and holds freed ones in quarantine,
   // so resident memory measures the sanitizer: the plain build checks the bounds.
 #if !FENESTRA_SANITIZE
