@@ -105,7 +105,6 @@ bool IsTerminal(v1::JobState s) {
   return s == v1::JOB_STATE_SUCCEEDED || s == v1::JOB_STATE_FAILED ||
          s == v1::JOB_STATE_CANCELLED || s == v1::JOB_STATE_INTERRUPTED;
 }
-bool Ended(const v1::JobInfo& j) { return IsTerminal(j.state()); }
 
 class FenestradAuthTest : public FenestradTest {
  protected:

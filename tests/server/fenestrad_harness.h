@@ -318,6 +318,11 @@ class FenestradTest : public testing::Test {
     }
     EXPECT_THAT(d.Log(), testing::HasSubstr(text));
   }
+  // Whether a job has come to its end: succeeded, failed, cancelled or interrupted.
+  static bool Ended(const v1::JobInfo& j) {
+    return j.state() == v1::JOB_STATE_SUCCEEDED || j.state() == v1::JOB_STATE_FAILED ||
+           j.state() == v1::JOB_STATE_CANCELLED || j.state() == v1::JOB_STATE_INTERRUPTED;
+  }
   static bool Running(const v1::JobInfo& j) {
     return j.state() == v1::JOB_STATE_RUNNING && j.progress().evaluations() >= 2;
   }

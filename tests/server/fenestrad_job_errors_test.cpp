@@ -10,8 +10,6 @@ namespace {
 using namespace testing_fenestrad;
 using ::testing::HasSubstr;
 
-bool Ended(const v1::JobInfo& job) { return job.state() >= v1::JOB_STATE_SUCCEEDED; }
-
 TEST_F(FenestradTest, ACudaJobIsRefusedAtSubmitWithoutAGpu) {
   auto d = StartDaemon();
   const auto submit = [&](const v1::SubmitJobRequest& request, v1::JobInfo* info) {

@@ -788,8 +788,6 @@ std::string Weather(int variant = 0) {
   return epw;
 }
 
-bool Ended(const v1::JobInfo& job) { return job.state() >= v1::JOB_STATE_SUCCEEDED; }
-
 // The data directory under load: uploads, its limit, a full or read-only filesystem,
 // damaged records, large registrations. Stub calls go as the local user (auth none).
 class FenestradStorageTest : public FenestradTest {
