@@ -41,7 +41,7 @@ TEST_F(FenestradTest, ACudaJobIsRefusedAtSubmitWithoutAGpu) {
   const CliResult r = d->Cli({"job", "submit", WriteJob("cuda", job)});
   EXPECT_EQ(r.code, 1);
   EXPECT_THAT(r.err, HasSubstr("FAILED_PRECONDITION: job.sampling.backend: \"cuda\" needs a GPU"));
-  // Nothing was stored; "cpu" and "auto" are taken
+  // Nothing was stored; "auto" is taken and runs here
   grpc::ClientContext list_context;
   v1::ListJobsResponse listed;
   ASSERT_TRUE(d->jobs().List(&list_context, v1::ListJobsRequest(), &listed).ok());
