@@ -11,6 +11,7 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -229,6 +230,25 @@ int Count(const std::string& log, const std::string& text) {
   return n;
 }
 
+// The log `read` gives once it holds every one of `texts`, or after 30 s: a daemon logs a
+// job's end just after storing it, so a client may see the end before the log does.
+std::string LogHolding(const std::function<std::string()>& read,
+                       const std::vector<std::string>& texts) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  std::string log = read();
+  const auto holds = [&] {
+    for (const std::string& text : texts) {
+      if (log.find(text) == std::string::npos) return false;
+    }
+    return true;
+  };
+  while (!holds() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    log = read();
+  }
+  return log;
+}
+
 std::string Dir() {
   const auto* info = testing::UnitTest::GetInstance()->current_test_info();
   const std::string dir =
@@ -396,8 +416,15 @@ TEST_F(ClusterTest, ReplicasRunEveryJobOnceThroughAKilledReplicaAndAStoreOutage)
   }
 
   // Once: one replica's end of each job was stored, the killed one's run fenced off
-  std::string logs;
-  for (const auto& replica : replicas) logs += replica->Log();
+  std::vector<std::string> ends;
+  for (const std::string& id : ids) ends.push_back("job " + id + " succeeded");
+  const std::string logs = LogHolding(
+      [&] {
+        std::string all;
+        for (const auto& replica : replicas) all += replica->Log();
+        return all;
+      },
+      ends);
   for (const std::string& id : ids) {
     EXPECT_EQ(Count(logs, "job " + id + " succeeded"), 1) << id;
   }
@@ -467,7 +494,8 @@ TEST_F(ClusterTest, TheSingleSqliteDaemonResumesAJobAfterSigkill) {
   EXPECT_EQ(done.state(), v1::JOB_STATE_SUCCEEDED) << done.error();
   ExpectSameResult(done.result(), Reference(kLongEvaluations, 2), job.id());
   // It went on after the steps its checkpoint held: at least those stored before the kill
-  const std::string log = daemon->Log();
+  const std::string log =
+      LogHolding([&] { return daemon->Log(); }, {"job " + job.id() + " succeeded"});
   std::smatch match;
   ASSERT_TRUE(std::regex_search(log, match,
                                 std::regex("job " + job.id() +
