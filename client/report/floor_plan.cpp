@@ -1,5 +1,6 @@
 // The floor plan: the room's indoor surfaces projected on the floor plane (x east, y north),
-// the window, and the sensors coloured by the best design's UDI and DA.
+// the window, and the sensors coloured by the best design's UDI and DA, and by their sunlit
+// hours (ASE's) where the result holds them.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -119,11 +120,6 @@ void DrawNorthArrow(Svg& svg, double x, double y) {
   svg.Text(x, y - 4, "N", "plan-label", Anchor::kMiddle);
 }
 
-// Sensor labels fit when no label box overlaps another or another sensor.
-std::string SensorValue(const v1::Estimate& e) {
-  return WithError(e.value(), e.standard_error(), 1);
-}
-
 // Each sensor's name sits above it and its value below, centred; they fit when no two
 // sensors closer than a label's width share a column of labels.
 bool LabelsFit(const std::vector<Xy>& at, double label_width) {
@@ -138,17 +134,66 @@ bool LabelsFit(const std::vector<Xy>& at, double label_width) {
   return true;
 }
 
-// One plan with the sensors coloured by `values` [%].
-std::string PlanFigure(const ReportData& data, const std::string& id, const std::string& what,
-                       const std::string& short_name,
-                       const google::protobuf::RepeatedPtrField<v1::Estimate>& values) {
+// What one plan shows: a value per sensor on a colour scale, with its label.
+struct PlanValues {
+  std::string id;         // the figure's element id
+  std::string what;       // e.g. "UDI 100–3000 lx [%]"
+  std::string bar_label;  // the colour bar's, e.g. "UDI [%]"
+  double lo = 0, hi = 100;
+  std::vector<double> values;
+  std::vector<std::string> labels;
+  std::vector<bool> marked;  // sensors with a square around them; empty = none
+  std::string caption;       // empty = `what` of each sensor
+};
+
+// A plan of one metric [%] per sensor, value ± SE as labels.
+PlanValues EstimatePlan(const std::string& id, const std::string& what,
+                        const std::string& short_name,
+                        const google::protobuf::RepeatedPtrField<v1::Estimate>& estimates) {
+  PlanValues plan;
+  plan.id = id, plan.what = what, plan.bar_label = short_name + " [%]";
+  for (const v1::Estimate& e : estimates) {
+    plan.values.push_back(e.value());
+    plan.labels.push_back(WithError(e.value(), e.standard_error(), 1));
+  }
+  return plan;
+}
+
+// The sensors: coloured dots, with names and values where they fit, the marked ones squared.
+bool DrawSensors(Svg& svg, const Scene& scene, const std::vector<Xy>& at, const PlanValues& plan) {
+  double longest = 0;
+  for (size_t i = 0; i < plan.labels.size(); ++i) {
+    longest =
+        std::max({longest, TextWidth(scene.sensors[i].name, 11), TextWidth(plan.labels[i], 11.5)});
+  }
+  const bool labelled = LabelsFit(at, longest);
+  svg.BeginGroup("sensors");
+  for (size_t i = 0; i < at.size(); ++i) {
+    const double fraction = (plan.values[i] - plan.lo) / (plan.hi - plan.lo);
+    svg.Circle(at[i].first, at[i].second, kSensorRadius, "sensor", ViridisColor(fraction));
+    if (!plan.marked.empty() && plan.marked[i]) {
+      const double half = kSensorRadius + 2;
+      svg.Rect(at[i].first - half, at[i].second - half, 2 * half, 2 * half, "marked-sensor");
+    }
+    if (!labelled) continue;
+    svg.Text(at[i].first, at[i].second - kSensorRadius - 4, scene.sensors[i].name, "sensor-name",
+             Anchor::kMiddle);
+    svg.Text(at[i].first, at[i].second + kSensorRadius + 13, plan.labels[i], "sensor-value",
+             Anchor::kMiddle);
+  }
+  svg.EndGroup();
+  return labelled;
+}
+
+// One plan with the sensors coloured by `plan`'s values.
+std::string PlanFigure(const ReportData& data, const PlanValues& plan) {
   const Scene& scene = *data.scene;
   const Extent e = PlanExtent(scene);
   const double scale =
       std::min(kPlanMaxWidth / (e.max_x - e.min_x), kPlanMaxHeight / (e.max_y - e.min_y));
   const double width = (e.max_x - e.min_x) * scale, height = (e.max_y - e.min_y) * scale;
-  Svg svg(id, "plan-plot", kPlanLeft + width + kLabelRoom + kBarRoom,
-          kPlanTop + height + kPlanBottom, "Floor plan with the sensors coloured by " + what);
+  Svg svg(plan.id, "plan-plot", kPlanLeft + width + kLabelRoom + kBarRoom,
+          kPlanTop + height + kPlanBottom, "Floor plan with the sensors coloured by " + plan.what);
   Chart chart(svg, kPlanLeft, kPlanTop, width, height, {"x, east [m]", e.min_x, e.max_x},
               {"y, north [m]", e.min_y, e.max_y});
   chart.DrawAxes(std::max(2, static_cast<int>(width / 60)),
@@ -160,34 +205,44 @@ std::string PlanFigure(const ReportData& data, const std::string& id, const std:
   std::vector<Xy> at;
   for (const Sensor& s : scene.sensors)
     at.emplace_back(chart.X(s.position.x), chart.Y(s.position.y));
-  double longest = 0;
-  for (int i = 0; i < values.size(); ++i) {
-    longest = std::max(
-        {longest, TextWidth(scene.sensors[i].name, 11), TextWidth(SensorValue(values[i]), 11.5)});
-  }
-  const bool labelled = LabelsFit(at, longest);
-  svg.BeginGroup("sensors");
-  for (size_t i = 0; i < at.size(); ++i) {
-    const v1::Estimate& v = values[static_cast<int>(i)];
-    svg.Circle(at[i].first, at[i].second, kSensorRadius, "sensor", ViridisColor(v.value() / 100));
-    if (!labelled) continue;
-    svg.Text(at[i].first, at[i].second - kSensorRadius - 4, scene.sensors[i].name, "sensor-name",
-             Anchor::kMiddle);
-    svg.Text(at[i].first, at[i].second + kSensorRadius + 13, SensorValue(v), "sensor-value",
-             Anchor::kMiddle);
-  }
-  svg.EndGroup();
+  const bool labelled = DrawSensors(svg, scene, at, plan);
   if (data.map_sensor >= 0) {
     svg.Circle(at[data.map_sensor].first, at[data.map_sensor].second, kSensorRadius + 4,
                "map-sensor");
   }
   ViridisColorBar(svg, kPlanLeft + width + kLabelRoom, kPlanTop + 20, std::min(height - 20, 220.0),
-                  0, 100, short_name + " [%]");
-  std::string figure = "<figure class=\"plot\">" + svg.Finish() + "<figcaption>" + EscapeXml(what) +
-                       " of each sensor, best design";
+                  plan.lo, plan.hi, plan.bar_label);
+  std::string figure =
+      "<figure class=\"plot\">" + svg.Finish() + "<figcaption>" +
+      EscapeXml(plan.caption.empty() ? plan.what + " of each sensor, best design" : plan.caption);
   if (!labelled) figure += " (values in the table below)";
   if (data.map_sensor >= 0) figure += "; the ring marks the temporal map's sensor";
   return figure + "</figcaption></figure>\n";
+}
+
+// Each sensor's sunlit hours (direct sun above ASE's threshold), those ASE counts squared.
+PlanValues SunlitPlan(const ReportData& data) {
+  const v1::Metrics& m = data.result.best_metrics();
+  PlanValues plan;
+  plan.id = "plot-floor-sunlit";
+  plan.what = fmt::format("sunlit hours (direct sun above {:g} lx)", data.ase_threshold_lux);
+  plan.bar_label = "sun [h]";
+  plan.lo = 0;
+  plan.hi = data.ase_min_hours;
+  int counted = 0;
+  for (const int hours : m.sensor_sunlit_hours()) {
+    plan.values.push_back(hours);
+    plan.labels.push_back(fmt::format("{} h", hours));
+    plan.marked.push_back(hours >= data.ase_min_hours);
+    counted += hours >= data.ase_min_hours;
+    plan.hi = std::max(plan.hi, static_cast<double>(hours));
+  }
+  plan.caption = fmt::format(
+      "Analysed hours with more than {:g} lx of direct sun at each sensor, best design{}; the "
+      "squares mark the {} sensor{} with at least {} h, those ASE counts",
+      data.ase_threshold_lux, data.operated_blind ? " with the window bare (as ASE asks)" : "",
+      counted, counted == 1 ? "" : "s", data.ase_min_hours);
+  return plan;
 }
 
 // Mean illuminance of each sensor over the occupied steps [lx].
@@ -213,6 +268,7 @@ std::string SensorTable(const ReportData& data, const std::string& udi, const st
   const v1::Metrics& m = data.result.best_metrics();
   const bool hourly = data.map_sensor >= 0;
   const std::vector<double> means = hourly ? OccupiedMeans(data) : std::vector<double>();
+  const bool sunlit = m.sensor_sunlit_hours_size() > 0;
   std::vector<std::vector<std::string>> rows;
   for (size_t i = 0; i < scene.sensors.size(); ++i) {
     const Sensor& s = scene.sensors[i];
@@ -222,10 +278,13 @@ std::string SensorTable(const ReportData& data, const std::string& udi, const st
                     WithError(m.sensor_udi(k).value(), m.sensor_udi(k).standard_error(), 1),
                     WithError(m.sensor_da(k).value(), m.sensor_da(k).standard_error(), 1),
                     hourly ? fmt::format("{:.0f}", means[i]) : "not recorded"});
+    if (sunlit) rows.back().push_back(fmt::format("{}", m.sensor_sunlit_hours(k)));
   }
-  return HtmlTable("sensor-table",
-                   {"sensor", "x [m]", "y [m]", "z [m]", udi, da, "mean E, occupied hours [lx]"},
-                   rows);
+  std::vector<std::string> header = {
+      "sensor", "x [m]", "y [m]", "z [m]", udi, da, "mean E, occupied hours [lx]"};
+  if (sunlit)
+    header.push_back(fmt::format("sunlit hours (> {:g} lx direct)", data.ase_threshold_lux));
+  return HtmlTable("sensor-table", header, rows);
 }
 
 }  // namespace
@@ -250,8 +309,10 @@ std::string FloorPlanSection(const ReportData& data) {
       "Indoor surfaces seen from above: floors shaded, walls as lines, the window's opening in "
       "blue; north is up. Each sensor shows its value ± standard error for the best design.");
   body += "<div class=\"figures\">" +
-          PlanFigure(data, "plot-floor-udi", udi, "UDI", m.sensor_udi()) +
-          PlanFigure(data, "plot-floor-da", da, "DA", m.sensor_da()) + "</div>\n";
+          PlanFigure(data, EstimatePlan("plot-floor-udi", udi, "UDI", m.sensor_udi())) +
+          PlanFigure(data, EstimatePlan("plot-floor-da", da, "DA", m.sensor_da()));
+  if (m.sensor_sunlit_hours_size() == sensors) body += PlanFigure(data, SunlitPlan(data));
+  body += "</div>\n";
   return Section("floor-plan", heading, body + SensorTable(data, udi, da));
 }
 

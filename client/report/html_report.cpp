@@ -59,6 +59,7 @@ footer { margin-top: 36px; font-size: 13px; border-top: 1px solid #d0d7de; paddi
 .north-arrow { fill: #1a1a1a; }
 .sensor { stroke: #1a1a1a; stroke-width: 1.2; }
 .map-sensor { fill: none; stroke: #d55e00; stroke-width: 2; }
+.marked-sensor { fill: none; stroke: #b2182b; stroke-width: 1.6; }
 .sensor-name { font-size: 10.5px; fill: #555; }
 .sensor-value { font-size: 11px; font-weight: 600; fill: #1a1a1a; }
 .colorbar, .swatch { stroke: #6e7781; stroke-width: 0.8; }

@@ -1,9 +1,10 @@
 #pragma once
 
 // The report of a job result: one self-contained HTML page (inline SVG figures, an inline
-// stylesheet with a print layout; no scripts, fonts or other resources) with the search,
-// the design space, the floor plan with the sensors' metrics, a temporal map of one
-// sensor's illuminance, the blind in section, and the settings, timings and versions.
+// stylesheet with a print layout; no scripts, fonts or other resources) with the best
+// design's metrics and constraints, the search, the design space, the floor plans with the
+// sensors' metrics and sunlit hours, temporal maps of one sensor's illuminance, the direct
+// sun and an operated blind, the blind in section, and the settings, timings and versions.
 #include <string>
 
 #include "absl/status/status.h"

@@ -75,6 +75,16 @@ absl::Status GatherScene(const std::string& source, ReportData& data) {
                         absl::StrCat("per-sensor metrics for ", m.sensor_udi_size(),
                                      " sensors, the scene has ", sensors));
   }
+  if (m.sensor_sunlit_hours_size() != 0 && m.sensor_sunlit_hours_size() != sensors) {
+    return Inconsistent(
+        source, "best_metrics.sensor_sunlit_hours",
+        absl::StrCat("holds ", m.sensor_sunlit_hours_size(), " sensors, the scene has ", sensors));
+  }
+  for (const int hours : m.sensor_sunlit_hours()) {
+    if (hours < 0) return Inconsistent(source, "best_metrics.sensor_sunlit_hours", "must be >= 0");
+  }
+  data.operated_blind =
+      data.result.job().scene().blind().operation() == v1::VenetianBlind::AUTOMATED_SUN;
   data.scene = std::move(scene);
   return absl::OkStatus();
 }
@@ -100,9 +110,20 @@ absl::Status CheckHourly(const std::string& source, const ReportData& data) {
                           "month, day or hour out of range");
     }
   }
-  for (const float e : h.illuminance_lux()) {
-    if (!std::isfinite(e) || e < 0) {
-      return Inconsistent(source, "best_hourly.illuminance_lux", "values must be finite and >= 0");
+  if ((h.direct_sun_lux_size() != 0 && h.direct_sun_lux_size() != values) ||
+      (h.blind_in_place_size() != 0 && h.blind_in_place_size() != steps)) {
+    return Inconsistent(
+        source, "best_hourly",
+        absl::StrCat("direct_sun_lux needs ", values, " values and blind_in_place ", steps,
+                     ", has ", h.direct_sun_lux_size(), " and ", h.blind_in_place_size()));
+  }
+  for (const auto& [field, lux] : {std::pair{"illuminance_lux", &h.illuminance_lux()},
+                                   std::pair{"direct_sun_lux", &h.direct_sun_lux()}}) {
+    for (const float e : *lux) {
+      if (!std::isfinite(e) || e < 0) {
+        return Inconsistent(source, absl::StrCat("best_hourly.", field),
+                            "values must be finite and >= 0");
+      }
     }
   }
   return absl::OkStatus();
@@ -130,10 +151,9 @@ absl::StatusOr<int> PickSensor(const Scene& scene, const v1::Metrics& metrics,
 
 }  // namespace
 
-std::string MetricName(const v1::Job& job) {
-  const v1::MetricSettings& m = job.metrics();
+std::string MetricName(v1::Metric metric, const v1::MetricSettings& m) {
   const std::string udi = fmt::format("UDI {:g}–{:g} lx", m.udi_lower_lux(), m.udi_upper_lux());
-  switch (job.objective().metric()) {
+  switch (metric) {
     case v1::METRIC_UDI_ALL_SENSORS:
       return udi + ", all sensors at once";
     case v1::METRIC_DA:
@@ -146,8 +166,41 @@ std::string MetricName(const v1::Job& job) {
       return udi + ", fell short";
     case v1::METRIC_UDI_EXCEEDED:
       return udi + ", exceeded";
+    case v1::METRIC_ASE:
+      return fmt::format("ASE{:g},{}", m.ase_threshold_lux() > 0 ? m.ase_threshold_lux() : 1000,
+                         m.ase_min_hours() > 0 ? m.ase_min_hours() : 250);
+    case v1::METRIC_BLIND_IN_PLACE:
+      return "blind in place";
     default:
       return udi;
+  }
+}
+
+std::string MetricName(const v1::Job& job) {
+  return MetricName(job.objective().metric(), job.metrics());
+}
+
+const v1::Estimate* MetricEstimate(const v1::Metrics& m, v1::Metric metric) {
+  const auto held = [](bool has, const v1::Estimate& e) { return has ? &e : nullptr; };
+  switch (metric) {
+    case v1::METRIC_UDI_ALL_SENSORS:
+      return held(m.has_udi_all_sensors(), m.udi_all_sensors());
+    case v1::METRIC_DA:
+      return held(m.has_da(), m.da());
+    case v1::METRIC_CDA:
+      return held(m.has_cda(), m.cda());
+    case v1::METRIC_SDA:
+      return held(m.has_sda(), m.sda());
+    case v1::METRIC_UDI_FELL_SHORT:
+      return held(m.has_udi_fell_short(), m.udi_fell_short());
+    case v1::METRIC_UDI_EXCEEDED:
+      return held(m.has_udi_exceeded(), m.udi_exceeded());
+    case v1::METRIC_ASE:
+      return held(m.has_ase(), m.ase());
+    case v1::METRIC_BLIND_IN_PLACE:
+      return held(m.has_blind_in_place(), m.blind_in_place());
+    default:
+      return held(m.has_udi(), m.udi());
   }
 }
 
@@ -187,12 +240,39 @@ void GatherRecordedChecks(ReportData& data) {
         {"two-stage (the search)", estimate(c.two_stage())},
         {"one-stage check", estimate(c.one_stage())},
         {"difference", estimate(c.difference())},
-        {"verdict", c.disagrees() ? "disagrees: beyond 3 standard errors"
-                                  : "agrees within 3 standard errors"},
-        {"one-stage paths per sensor", fmt::format("{} (pilot {}){}", c.paths_per_sensor(),
-                                                   c.pilot_paths_per_sensor(),
-                                                   c.paths_limited() ? ", at the limit" : "")},
+        {"verdict",
+         c.disagrees() ? "disagrees: beyond 3 standard errors" : "agrees within 3 standard errors"},
+        {"one-stage paths per sensor",
+         fmt::format("{} (pilot {}){}", c.paths_per_sensor(), c.pilot_paths_per_sensor(),
+                     c.paths_limited() ? ", at the limit" : "")},
         {"check time", fmt::format("{:.2f} s", c.seconds())}};
+  }
+}
+
+// The objective's constraints at the best design: as the result records them, else from its
+// metrics (older results): a constraint holds unless its metric is beyond the bound by more
+// than constraint_standard_errors of its standard errors.
+void GatherConstraints(ReportData& data) {
+  const v1::JobResult& result = data.result;
+  const v1::Objective& objective = result.job().objective();
+  if (objective.constraint_standard_errors() > 0) {
+    data.constraint_standard_errors = objective.constraint_standard_errors();
+  }
+  if (result.best_constraints_size() > 0) {
+    for (const v1::ConstraintResult& c : result.best_constraints()) {
+      data.constraints.push_back({c.constraint(), c.estimate(), c.holds()});
+    }
+    return;
+  }
+  for (const v1::Constraint& c : objective.constraints()) {
+    ConstraintRow row{c, std::nullopt, false};
+    if (const v1::Estimate* e = MetricEstimate(result.best_metrics(), c.metric())) {
+      const double slack = data.constraint_standard_errors * e->standard_error();
+      row.estimate = *e;
+      row.holds = c.bound() == v1::Constraint::AT_LEAST ? e->value() + slack >= c.value()
+                                                        : e->value() - slack <= c.value();
+    }
+    data.constraints.push_back(std::move(row));
   }
 }
 
@@ -222,6 +302,10 @@ absl::StatusOr<ReportData> GatherReportData(const v1::JobResult& result, const s
     return absl::InvalidArgumentError("--sensor: the result holds no hourly illuminance to map");
   }
   GatherRecordedChecks(data);
+  GatherConstraints(data);
+  const v1::MetricSettings& settings = result.job().metrics();
+  if (settings.ase_threshold_lux() > 0) data.ase_threshold_lux = settings.ase_threshold_lux();
+  if (settings.ase_min_hours() > 0) data.ase_min_hours = settings.ase_min_hours();
   return data;
 }
 

@@ -30,6 +30,14 @@ struct ErrorPoint {
   double standard_error = 0;  // [% points]
 };
 
+// One constraint of the objective at the best design.
+struct ConstraintRow {
+  v1::Constraint constraint;
+  // The best design's value of its metric [%]; unset when the result holds none.
+  std::optional<v1::Estimate> estimate;
+  bool holds = false;
+};
+
 // A free design variable: its name, unit and the range the search explored.
 struct FreeVariable {
   std::string name;
@@ -58,6 +66,15 @@ struct ReportData {
   int map_sensor = -1;
   // Per time step of the hourly illuminance: occupied by the job's schedule.
   std::vector<bool> occupied;
+  // The objective's constraints at the best design: the result's best_constraints, or, for
+  // results without them, worked out from best_metrics with constraint_standard_errors.
+  std::vector<ConstraintRow> constraints;
+  double constraint_standard_errors = 1;
+  // The scene's blind is operated (VenetianBlind.AUTOMATED_SUN): in place only in some hours.
+  bool operated_blind = false;
+  // ASE's direct-sun threshold [lx] and hours, the job's (defaults where it has none).
+  double ase_threshold_lux = 1000;
+  int ase_min_hours = 250;
 };
 
 // Checks `result` and gathers what the report needs. `sensor` picks the temporal map's
@@ -69,6 +86,12 @@ absl::StatusOr<ReportData> GatherReportData(const v1::JobResult& result, const s
 
 // The objective's metric, e.g. "UDI 100–3000 lx", "DA300" (its unit is %).
 std::string MetricName(const v1::Job& job);
+
+// A metric with the job's settings, e.g. "sDA300/50%", "ASE1000,250", "blind in place".
+std::string MetricName(v1::Metric metric, const v1::MetricSettings& settings);
+
+// The estimate of `metric` in `metrics`; nullptr when `metrics` does not hold it.
+const v1::Estimate* MetricEstimate(const v1::Metrics& metrics, v1::Metric metric);
 
 // A design variable's value with its unit: "0.3487 rad (20.0°)", "0.1500 m".
 std::string DesignValue(const std::string& name, double value);

@@ -1,4 +1,5 @@
-// The summary (best design and its metrics) and the settings, timings and versions.
+// The summary (best design, its metrics with ASE and the LEED points, the objective's
+// constraints) and the settings, timings and versions.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -45,16 +46,72 @@ std::string BestMetricsTable(const ReportData& data) {
   auto row = [](const std::string& name, const v1::Estimate& e) -> std::vector<std::string> {
     return {name, WithError(e.value(), e.standard_error())};
   };
-  return HtmlTable(
-      "best-metrics-table", {"metric, best design", "value ± SE [%]"},
-      {row(udi + ", mean over sensors", m.udi()),
-       row("UDI fell short (below the range)", m.udi_fell_short()),
-       row("UDI exceeded (above the range)", m.udi_exceeded()),
-       row(udi + ", all sensors at once", m.udi_all_sensors()),
-       row(fmt::format("DA{:g}", s.da_threshold_lux()), m.da()),
-       row(fmt::format("cDA{:g}", s.da_threshold_lux()), m.cda()),
-       row(fmt::format("sDA{:g}/{:g}%", s.da_threshold_lux(), s.sda_time_fraction_percent()),
-           m.sda())});
+  Rows rows = {row(udi + ", mean over sensors", m.udi()),
+               row("UDI fell short (below the range)", m.udi_fell_short()),
+               row("UDI exceeded (above the range)", m.udi_exceeded()),
+               row(udi + ", all sensors at once", m.udi_all_sensors()),
+               row(fmt::format("DA{:g}", s.da_threshold_lux()), m.da()),
+               row(fmt::format("cDA{:g}", s.da_threshold_lux()), m.cda()),
+               row(MetricName(v1::METRIC_SDA, s), m.sda())};
+  if (m.has_ase()) {
+    rows.push_back(
+        row(MetricName(v1::METRIC_ASE, s) + " (% of sensors; direct sun, exact)", m.ase()));
+  }
+  if (data.operated_blind && m.has_blind_in_place()) {
+    rows.push_back(row("blind in place (% of analysed hours)", m.blind_in_place()));
+  }
+  return HtmlTable("best-metrics-table", {"metric, best design", "value ± SE [%]"}, rows);
+}
+
+// "LEED v4.1 daylight option 1: 2 points; ASE at most 10%: yes", for results with ASE.
+std::string LeedLine(const ReportData& data) {
+  const v1::Metrics& m = data.result.best_metrics();
+  if (!m.has_ase()) return "";
+  const std::string text =
+      fmt::format("LEED v4.1 daylight option 1: {} point{}; ASE at most 10%: {}", m.leed_points(),
+                  m.leed_points() == 1 ? "" : "s", m.ase().value() <= 10 ? "yes" : "no");
+  return fmt::format(
+      "<p class=\"lead\" id=\"leed\">{}</p>\n"
+      "<p class=\"note\">{}</p>\n",
+      EscapeXml(text),
+      EscapeXml(fmt::format(
+          "Points from {} (1 at 40 %, 2 at 55 %, 3 at 75 % of the sensors); LEED asks {} to be "
+          "at most 10 % besides{}.",
+          MetricName(v1::METRIC_SDA, data.result.job().metrics()),
+          MetricName(v1::METRIC_ASE, data.result.job().metrics()),
+          data.operated_blind ? " (ASE with the window bare, the operated blind retracted)" : "")));
+}
+
+// The objective's constraints at the best design, for jobs with constraints.
+std::string ConstraintsTable(const ReportData& data) {
+  Rows rows;
+  int broken = 0, unknown = 0;
+  for (const ConstraintRow& c : data.constraints) {
+    const bool known = c.estimate.has_value();
+    broken += known && !c.holds;
+    unknown += !known;
+    rows.push_back(
+        {MetricName(c.constraint.metric(), data.result.job().metrics()),
+         c.constraint.bound() == v1::Constraint::AT_LEAST ? "at least" : "at most",
+         fmt::format("{:g}", c.constraint.value()),
+         known ? WithError(c.estimate->value(), c.estimate->standard_error()) : "not recorded",
+         known ? (c.holds ? "yes" : "no") : "-"});
+  }
+  std::string verdict = broken == 0 ? "The best design keeps every constraint"
+                                    : fmt::format("The best design breaks {} of the {} constraints",
+                                                  broken, data.constraints.size());
+  if (data.constraints.size() == 1) {
+    verdict = broken == 0 ? "The best design keeps its constraint"
+                          : "The best design breaks its constraint";
+  }
+  if (unknown > 0) verdict = "The result does not hold every constrained metric";
+  return "<div><h3>Constraints</h3>" +
+         HtmlTable("constraints-table",
+                   {"metric", "bound", "value [%]", "best design ± SE [%]", "holds"}, rows) +
+         Note(fmt::format("{}. A constraint holds unless its metric is beyond the bound by more "
+                          "than {:g} of its standard errors.",
+                          verdict, data.constraint_standard_errors)) +
+         "</div>";
 }
 
 Rows JobRows(const ReportData& data) {
@@ -94,13 +151,27 @@ Rows SamplingRows(const ReportData& data) {
 
 Rows MetricRows(const ReportData& data) {
   const v1::MetricSettings& m = data.result.job().metrics();
-  return {{"UDI range",
-           fmt::format("{:g}–{:g} lx, limits included", m.udi_lower_lux(), m.udi_upper_lux())},
-          {"DA threshold", fmt::format("{:g} lx", m.da_threshold_lux())},
-          {"sDA share of hours", fmt::format("{:g} %", m.sda_time_fraction_percent())},
-          {"occupied hours", fmt::format("{:g}–{:g} h local standard time", m.occupied_start_h(),
-                                         m.occupied_end_h())},
-          {"hours counted", m.all_hours() ? "all 8760" : "occupied"}};
+  Rows rows = {{"UDI range",
+                fmt::format("{:g}–{:g} lx, limits included", m.udi_lower_lux(), m.udi_upper_lux())},
+               {"DA threshold", fmt::format("{:g} lx", m.da_threshold_lux())},
+               {"sDA share of hours", fmt::format("{:g} %", m.sda_time_fraction_percent())},
+               {"occupied hours", fmt::format("{:g}–{:g} h local standard time",
+                                              m.occupied_start_h(), m.occupied_end_h())},
+               {"hours counted", m.all_hours() ? "all 8760" : "occupied"}};
+  if (data.result.best_metrics().has_ase()) {
+    rows.push_back(
+        {"ASE", fmt::format("more than {:g} lx of direct sun in at least {} analysed hours",
+                            data.ase_threshold_lux, data.ase_min_hours)});
+  }
+  if (data.operated_blind) {
+    rows.push_back(
+        {"blind operation",
+         fmt::format("automated (sun): in place in the hours in which more than {:g} % of the "
+                     "sensors get more than {:g} lx of direct sun through the bare window",
+                     m.operation_sensor_percent() > 0 ? m.operation_sensor_percent() : 2,
+                     m.operation_threshold_lux() > 0 ? m.operation_threshold_lux() : 1000)});
+  }
+  return rows;
 }
 
 Rows SiteRows(const ReportData& data) {
@@ -145,7 +216,9 @@ std::string KeyValueTable(std::string_view id, std::string_view title, const Row
 std::string SummarySection(const ReportData& data) {
   std::string body = "<div class=\"tables\">";
   body += "<div><h3>Best design</h3>" + BestDesignTable(data) + "</div>";
-  body += "<div><h3>Its annual metrics</h3>" + BestMetricsTable(data) + "</div></div>\n";
+  body += "<div><h3>Its annual metrics</h3>" + BestMetricsTable(data) + "</div>";
+  if (!data.constraints.empty()) body += ConstraintsTable(data);
+  body += "</div>\n" + LeedLine(data);
   return Section("summary", "Summary", body);
 }
 

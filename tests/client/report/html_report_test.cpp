@@ -7,11 +7,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
 #include "core/geometry/blind.h"
 #include "core/geometry/scene.h"
+#include "tests/client/report/direct_sun_result.h"
 #include "tests/client/report/headless_chromium.h"
 #include "tests/quick_job.h"
 
@@ -32,7 +34,8 @@ constexpr char kInspectFigures[] = R"js((() => {
     out.figures[svg.id] = {width: box.width, height: box.height,
                            points: count('.evaluations .point'), sensors: count('.sensor'),
                            labels: count('.sensor-value'), cells: count('.map-cell'),
-                           occupancy: count('.occupied-hours .occupancy'), slats: count('.slat')};
+                           occupancy: count('.occupied-hours .occupancy'), slats: count('.slat'),
+                           marked: count('.marked-sensor')};
     const texts = [...svg.querySelectorAll('text')].map(t => [t.textContent, t.getBoundingClientRect()]);
     for (const [text, r] of texts) {
       if (r.left < box.left - 1 || r.right > box.right + 1 || r.top < box.top - 1 ||
@@ -61,6 +64,23 @@ std::vector<std::string> Strings(const Value& list) {
   std::vector<std::string> out;
   for (const Value& v : list.list_value().values()) out.push_back(v.string_value());
   return out;
+}
+
+// The figures of `result`'s page: nine, and those of the direct sun where it holds them.
+int FigureCount(const v1::JobResult& result) {
+  const v1::HourlyIlluminance& h = result.best_hourly();
+  return 9 + (result.best_metrics().sensor_sunlit_hours_size() > 0) +
+         (h.direct_sun_lux_size() > 0) +
+         (std::find(h.blind_in_place().begin(), h.blind_in_place().end(), false) !=
+          h.blind_in_place().end());
+}
+
+// The summary's rows of metrics: seven, ASE and the blind's hours where the result holds them.
+int MetricRows(const v1::JobResult& result) {
+  const v1::Metrics& m = result.best_metrics();
+  const bool operated =
+      result.job().scene().blind().operation() == v1::VenetianBlind::AUTOMATED_SUN;
+  return 7 + m.has_ase() + (operated && m.has_blind_in_place());
 }
 
 class HtmlReportTest : public testing::Test {
@@ -143,7 +163,7 @@ TEST_F(HtmlReportTest, LoadsWithoutErrorsOrRequestsAndDrawsEveryFigure) {
   ASSERT_TRUE(text.ok()) << text.status();
   const auto& values = text->list_value().values();
   EXPECT_EQ(values[0].number_value(), 9);
-  EXPECT_EQ(values[1].number_value(), 7);
+  EXPECT_EQ(values[1].number_value(), MetricRows(result));
   EXPECT_EQ(values[2].number_value(), 6);
   EXPECT_EQ(values[3].number_value(), 1);
 }
@@ -171,7 +191,7 @@ TEST_F(HtmlReportTest, PrintsWithEveryFigure) {
       "[...document.querySelectorAll('svg.figure')].filter(s => s.getBoundingClientRect().width "
       "> 100).length");
   ASSERT_TRUE(visible.ok()) << visible.status();
-  EXPECT_EQ(visible->number_value(), 9);
+  EXPECT_EQ(visible->number_value(), FigureCount(QuickJobResult()));
   absl::StatusOr<Value> background =
       browser_->Evaluate("getComputedStyle(document.body).backgroundColor");
   ASSERT_TRUE(background.ok()) << background.status();
@@ -181,6 +201,41 @@ TEST_F(HtmlReportTest, PrintsWithEveryFigure) {
   EXPECT_EQ(pdf->substr(0, 5), "%PDF-");
   EXPECT_GT(pdf->size(), 20000u);
   EXPECT_THAT(browser_->problems(), IsEmpty());
+}
+
+// The direct sun's figures: the sensors' sunlit hours and the maps of the direct sun and of
+// the blind in place, with no text overlapping or leaving them
+TEST_F(HtmlReportTest, DrawsTheDirectSunAndTheOperatedBlind) {
+  const v1::JobResult sunny = WithDirectSun(QuickJobResult());
+  const std::string page = (dir_ / "sunny.html").string();
+  ASSERT_TRUE(WriteReport(sunny, {"sunny.json", ""}, page).ok());
+  ASSERT_TRUE(browser_->Load("file://" + page, 1200, 900).ok());
+  EXPECT_THAT(browser_->problems(), IsEmpty());
+  const Value inspected = Inspect();
+  EXPECT_THAT(Strings(Get(inspected, "overlaps")), IsEmpty());
+  EXPECT_THAT(Strings(Get(inspected, "outside")), IsEmpty());
+  const Value figures = Get(inspected, "figures");
+  EXPECT_EQ(static_cast<int>(figures.struct_value().fields().size()), FigureCount(sunny));
+  for (const char* id : {"plot-floor-sunlit", "plot-direct-sun-map", "plot-blind-map"}) {
+    const Value& figure = Get(figures, id);
+    ASSERT_TRUE(figure.has_struct_value()) << id << " is missing";
+    EXPECT_GT(Get(figure, "width").number_value(), 200) << id;
+    EXPECT_GT(Get(figure, "height").number_value(), 150) << id;
+  }
+  EXPECT_EQ(Get(Get(figures, "plot-floor-sunlit"), "sensors").number_value(), 9);
+  EXPECT_EQ(Get(Get(figures, "plot-floor-sunlit"), "labels").number_value(), 9);
+  EXPECT_EQ(Get(Get(figures, "plot-floor-sunlit"), "marked").number_value(), 2);
+  EXPECT_GT(Get(Get(figures, "plot-direct-sun-map"), "cells").number_value(), 24);
+  EXPECT_EQ(Get(Get(figures, "plot-blind-map"), "occupancy").number_value(), 1);
+  absl::StatusOr<Value> rows = browser_->Evaluate(
+      "[document.querySelectorAll('#constraints-table tbody tr').length, "
+      "document.querySelectorAll('#best-metrics-table tbody tr').length, "
+      "document.getElementById('leed').textContent]");
+  ASSERT_TRUE(rows.ok()) << rows.status();
+  const auto& values = rows->list_value().values();
+  EXPECT_EQ(values[0].number_value(), 1);
+  EXPECT_EQ(values[1].number_value(), 9);
+  EXPECT_EQ(values[2].string_value(), "LEED v4.1 daylight option 1: 1 point; ASE at most 10%: no");
 }
 
 // The inspection itself finds overlapping and clipped texts

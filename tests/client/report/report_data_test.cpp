@@ -6,6 +6,8 @@
 #include <cmath>
 
 #include "client/report/html_report.h"
+#include "client/report/sections.h"
+#include "tests/client/report/direct_sun_result.h"
 #include "tests/quick_job.h"
 
 namespace fenestra {
@@ -16,6 +18,27 @@ using ::testing::Not;
 
 absl::Status Gather(const v1::JobResult& result, const std::string& sensor = "") {
   return GatherReportData(result, "r.json", sensor).status();
+}
+
+// The page of `result`; empty when it fails.
+std::string Page(const v1::JobResult& result) {
+  absl::StatusOr<std::string> page = RenderReport(result, {"r.json", ""});
+  EXPECT_TRUE(page.ok()) << page.status();
+  return page.value_or("");
+}
+
+// The markup of the figure with element id `id`; empty when there is none.
+std::string Figure(const std::string& page, const std::string& id) {
+  const size_t start = page.find("id=\"" + id + "\"");
+  if (start == std::string::npos) return "";
+  return page.substr(start, page.find("</svg>", start) - start);
+}
+
+// How often `what` occurs in `text`.
+int Count(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
 }
 
 TEST(ReportDataTest, TheMapShowsTheWorstSensorUnlessAnotherIsNamed) {
@@ -53,8 +76,9 @@ TEST(ReportDataTest, TheMapShowsTheWorstSensorUnlessAnotherIsNamed) {
   // The job's own record of its error against time and its final check
   ASSERT_TRUE(data->recorded_error.has_value());
   ASSERT_EQ(data->recorded_error->size(), static_cast<size_t>(result.best_over_time_size()));
-  EXPECT_DOUBLE_EQ(data->recorded_error->back().standard_error,
-                   result.best_over_time(result.best_over_time_size() - 1).value().standard_error());
+  EXPECT_DOUBLE_EQ(
+      data->recorded_error->back().standard_error,
+      result.best_over_time(result.best_over_time_size() - 1).value().standard_error());
   ASSERT_TRUE(data->final_check.has_value());
   EXPECT_EQ(data->final_check->size(), 6u);
 }
@@ -82,6 +106,121 @@ TEST(ReportDataTest, InconsistentResultsAreRefusedNamingTheField) {
   r = good;
   r.mutable_job()->mutable_scene()->mutable_window()->set_width_m(-1);
   EXPECT_THAT(Gather(r).message(), HasSubstr("window.width_m"));
+  // The direct-sun fields
+  const v1::JobResult sunny = WithDirectSun(good);
+  ASSERT_TRUE(Gather(sunny).ok()) << Gather(sunny);
+  r = sunny;
+  r.mutable_best_hourly()->mutable_direct_sun_lux()->RemoveLast();
+  EXPECT_THAT(Gather(r).message(), HasSubstr("best_hourly: direct_sun_lux needs 78840 values"));
+  r = sunny;
+  r.mutable_best_hourly()->mutable_blind_in_place()->RemoveLast();
+  EXPECT_THAT(Gather(r).message(), HasSubstr("blind_in_place 8760, has 78840 and 8759"));
+  r = sunny;
+  r.mutable_best_hourly()->set_direct_sun_lux(7, -1);
+  EXPECT_THAT(Gather(r).message(), HasSubstr("best_hourly.direct_sun_lux: values must be finite"));
+  r = sunny;
+  r.mutable_best_metrics()->add_sensor_sunlit_hours(3);
+  EXPECT_THAT(Gather(r).message(), HasSubstr("best_metrics.sensor_sunlit_hours: holds 10 sensors"));
+  r = sunny;
+  r.mutable_best_metrics()->set_sensor_sunlit_hours(0, -4);
+  EXPECT_THAT(Gather(r).message(), HasSubstr("best_metrics.sensor_sunlit_hours: must be >= 0"));
+}
+
+// ASE, LEED, the blind's hours, the constraints, the sunlit hours and the direct sun's map
+TEST(ReportDataTest, TheDirectSunAndTheOperatedBlindAreShown) {
+  const std::string page = Page(WithDirectSun(QuickJobResult()));
+  EXPECT_THAT(page, HasSubstr("<tr><td>ASE1000,250 (% of sensors; direct sun, exact)</td>"
+                              "<td class=\"num\">22.22 ± 0.00</td></tr>"));
+  EXPECT_THAT(page, HasSubstr("<tr><td>blind in place (% of analysed hours)</td>"
+                              "<td class=\"num\">9.86 ± 0.00</td></tr>"));
+  EXPECT_THAT(page, HasSubstr(">LEED v4.1 daylight option 1: 1 point; ASE at most 10%: no</p>"));
+  // The constraint, worked out from the metrics: the result has no best_constraints
+  EXPECT_THAT(page, HasSubstr("<tr><td>ASE1000,250</td><td>at most</td><td class=\"num\">10</td>"
+                              "<td class=\"num\">22.22 ± 0.00</td><td>no</td></tr>"));
+  EXPECT_THAT(page, HasSubstr("The best design breaks its constraint."));
+  EXPECT_THAT(page, HasSubstr("in place in the hours in which more than 2 % of the sensors get "
+                              "more than 1000 lx of direct sun through the bare window"));
+
+  // Each sensor's sunlit hours, the two ASE counts squared
+  const std::string sunlit = Figure(page, "plot-floor-sunlit");
+  ASSERT_FALSE(sunlit.empty());
+  for (const char* label : {">400 h<", ">260 h<", ">249 h<", ">10 h<"}) {
+    EXPECT_THAT(sunlit, HasSubstr(label));
+  }
+  EXPECT_EQ(Count(sunlit, "class=\"marked-sensor\""), 2);
+  EXPECT_EQ(Count(Figure(page, "plot-floor-udi"), "class=\"marked-sensor\""), 0);
+  EXPECT_THAT(page, HasSubstr("the squares mark the 2 sensors with at least 250 h"));
+  EXPECT_THAT(page, HasSubstr("<th>sunlit hours (&gt; 1000 lx direct)</th>"));
+  EXPECT_THAT(page, HasSubstr("<td class=\"num\">249</td></tr>"));
+
+  // The most sunlit sensors get 1500 lx: above the threshold, no lesser band
+  const std::string sun = Figure(page, "plot-direct-sun-map");
+  ASSERT_FALSE(sun.empty());
+  EXPECT_THAT(sun, HasSubstr("class=\"map-cell\" fill=\"#800026\""));
+  EXPECT_THAT(sun, HasSubstr("class=\"map-cell\" fill=\"#eeeeee\""));
+  for (const char* band : {"#fed976", "#fd8d3c", "#e31a1c"}) {
+    EXPECT_EQ(Count(sun, std::string("class=\"map-cell\" fill=\"") + band), 0) << band;
+  }
+  EXPECT_THAT(page, HasSubstr("In 360 of the 3650 analysed hours a sensor gets more than 1000 lx"));
+  const std::string blind = Figure(page, "plot-blind-map");
+  ASSERT_FALSE(blind.empty());
+  EXPECT_THAT(blind, HasSubstr("fill=\"#6e6e6e\""));
+  EXPECT_THAT(page, HasSubstr("in 360 of the 3650 analysed hours (9.9 %), 360 hours of the year"));
+}
+
+// The result's own verdict on each constraint is shown as it is; without one, the page works
+// it out within constraint_standard_errors of the metric's standard error
+TEST(ReportDataTest, ConstraintsHoldWithinTheirStandardErrors) {
+  v1::JobResult r = WithDirectSun(QuickJobResult());
+  const v1::Estimate udi = r.best_metrics().udi();
+  ASSERT_GT(udi.standard_error(), 0);
+  v1::Constraint& at_least = *r.mutable_job()->mutable_objective()->add_constraints();
+  at_least.set_metric(v1::METRIC_UDI);
+  at_least.set_bound(v1::Constraint::AT_LEAST);
+  at_least.set_value(udi.value() + 0.5 * udi.standard_error());
+  const std::string udi_row =
+      "<td class=\"num\">" + WithError(udi.value(), udi.standard_error()) + "</td><td>";
+  EXPECT_THAT(Page(r), HasSubstr(udi_row + "yes</td></tr>"));
+  r.mutable_job()->mutable_objective()->set_constraint_standard_errors(0.25);
+  EXPECT_THAT(Page(r), HasSubstr(udi_row + "no</td></tr>"));
+  EXPECT_THAT(Page(r), HasSubstr("The best design breaks 2 of the 2 constraints. A constraint "
+                                 "holds unless its metric is beyond the bound by more than 0.25 "
+                                 "of its standard errors."));
+
+  // best_constraints, as the job decided them
+  v1::ConstraintResult& c = *r.add_best_constraints();
+  *c.mutable_constraint() = r.job().objective().constraints(0);
+  c.mutable_estimate()->set_value(7.5);
+  c.set_holds(true);
+  const std::string page = Page(r);
+  EXPECT_THAT(page, HasSubstr("<tr><td>ASE1000,250</td><td>at most</td><td class=\"num\">10</td>"
+                              "<td class=\"num\">7.50 ± 0.00</td><td>yes</td></tr>"));
+  EXPECT_THAT(page, HasSubstr("The best design keeps its constraint."));
+  EXPECT_EQ(Count(page, "<td>at least</td>"), 0);
+}
+
+// A result from before the direct-sun fields renders without their sections
+TEST(ReportDataTest, AResultWithoutTheDirectSunLeavesItsSectionsOut) {
+  const v1::JobResult old = WithoutDirectSun(QuickJobResult());
+  const std::string page = Page(old);
+  ASSERT_THAT(page, HasSubstr("id=\"plot-temporal-map\""));
+  ASSERT_THAT(page, HasSubstr("id=\"plot-floor-udi\""));
+  for (const char* absent : {"ASE", "LEED", "blind in place", "constraints-table", "sunlit",
+                             "plot-direct-sun-map", "plot-blind-map", "marked-sensor\""}) {
+    EXPECT_THAT(page, Not(HasSubstr(absent))) << absent;
+  }
+  // A static blind, in place in every hour: no map of it, nor its share of the hours
+  v1::JobResult r = WithDirectSun(QuickJobResult());
+  r.mutable_job()->mutable_scene()->mutable_blind()->set_operation(v1::VenetianBlind::STATIC);
+  r.mutable_best_metrics()->mutable_blind_in_place()->set_value(100);
+  for (int j = 0; j < r.best_hourly().blind_in_place_size(); ++j) {
+    r.mutable_best_hourly()->set_blind_in_place(j, true);
+  }
+  const std::string static_page = Page(r);
+  EXPECT_THAT(static_page, HasSubstr("id=\"plot-direct-sun-map\""));
+  EXPECT_THAT(static_page, Not(HasSubstr("plot-blind-map")));
+  EXPECT_THAT(static_page, Not(HasSubstr("blind in place (% of analysed hours)")));
+  EXPECT_THAT(static_page, Not(HasSubstr("with the window bare")));
 }
 
 // A result without its job or hourly illuminance still makes a page that says what is missing
