@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <string_view>
 
 #include "core/optimize/final_check.h"
 
@@ -30,6 +31,38 @@ std::string Difference(const v1::Estimate& d) {
     out += fmt::format(" ({:.1f} SE)", std::abs(d.value()) / d.standard_error());
   }
   return out;
+}
+
+// A job metric as the result's lines name it: "UDI", "ASE", "blind in place", ...
+std::string_view MetricLabel(v1::Metric metric) {
+  switch (metric) {
+    case v1::METRIC_UDI_ALL_SENSORS:
+      return "UDI all sensors";
+    case v1::METRIC_DA:
+      return "DA";
+    case v1::METRIC_CDA:
+      return "cDA";
+    case v1::METRIC_SDA:
+      return "sDA";
+    case v1::METRIC_UDI_FELL_SHORT:
+      return "UDI fell short";
+    case v1::METRIC_UDI_EXCEEDED:
+      return "UDI exceeded";
+    case v1::METRIC_ASE:
+      return "ASE";
+    case v1::METRIC_BLIND_IN_PLACE:
+      return "blind in place";
+    default:
+      return "UDI";
+  }
+}
+
+// "ASE at most 10%: 4.0 +- 0.0 holds"
+std::string ConstraintLine(const v1::ConstraintResult& c) {
+  return fmt::format("{} {} {:g}%: {:.1f} +- {:.1f} {}\n", MetricLabel(c.constraint().metric()),
+                     c.constraint().bound() == v1::Constraint::AT_LEAST ? "at least" : "at most",
+                     c.constraint().value(), c.estimate().value(), c.estimate().standard_error(),
+                     c.holds() ? "holds" : "broken");
 }
 
 bool live_line = false;
@@ -111,6 +144,7 @@ std::string FormatResult(const v1::JobResult& r) {
       "sDA {} %\n",
       Value(m.udi()), Value(m.udi_fell_short()), Value(m.udi_exceeded()),
       Value(m.udi_all_sensors()), Value(m.da()), Value(m.cda()), Value(m.sda()));
+  for (const v1::ConstraintResult& c : r.best_constraints()) out += ConstraintLine(c);
   out += fmt::format(
       "{} evaluations ({}), backend {}: sky {:.2f} s, outdoor {:.2f} s, evaluations {:.2f} s, "
       "total {:.2f} s\n",

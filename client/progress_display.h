@@ -28,8 +28,9 @@ void ShowProgress(const JobProgress& progress);
 // Ends a live progress line (a newline on a terminal).
 void EndProgress();
 
-// A summary of a finished job: best design, its metrics with errors, timings, and the final
-// check with a warning when it disagrees.
+// A summary of a finished job: best design, its metrics with errors, each constraint of the
+// objective at it (whether it holds), timings, and the final check with a warning when it
+// disagrees.
 std::string FormatResult(const v1::JobResult& result);
 
 }  // namespace fenestra

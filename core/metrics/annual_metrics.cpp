@@ -15,7 +15,7 @@
 namespace fenestra {
 namespace {
 
-constexpr std::array<std::pair<SceneMetric, std::string_view>, 11> kSceneMetricNames = {{
+constexpr std::array<std::pair<SceneMetric, std::string_view>, 12> kSceneMetricNames = {{
     {SceneMetric::kUdiAll, "udi_all"},
     {SceneMetric::kUdiAllFellShort, "udi_all_fell_short"},
     {SceneMetric::kUdiAllExceeded, "udi_all_exceeded"},
@@ -27,6 +27,7 @@ constexpr std::array<std::pair<SceneMetric, std::string_view>, 11> kSceneMetricN
     {SceneMetric::kSda, "sda"},
     {SceneMetric::kAse, "ase"},
     {SceneMetric::kMeanIlluminance, "mean_illuminance"},
+    {SceneMetric::kBlindInPlace, "blind_in_place"},
 }};
 
 }  // namespace
@@ -55,6 +56,8 @@ double SceneMetricValue(const SceneMetrics& s, SceneMetric metric) {
       return s.ase_percent;
     case SceneMetric::kMeanIlluminance:
       return s.mean_illuminance_lux;
+    case SceneMetric::kBlindInPlace:
+      return 100;  // a static blind is always in place
   }
   return 0;
 }

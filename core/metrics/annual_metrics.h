@@ -89,13 +89,14 @@ enum class SceneMetric {
   kSda,
   kAse,
   kMeanIlluminance,
+  kBlindInPlace,
 };
 
 double SceneMetricValue(const SceneMetrics& scene, SceneMetric metric);
 
 // Stable lower-case names: "udi_all", "udi_all_fell_short", "udi_all_exceeded", "udi_mean",
 // "udi_mean_fell_short", "udi_mean_exceeded", "da_mean", "cda_mean", "sda", "ase",
-// "mean_illuminance".
+// "mean_illuminance", "blind_in_place".
 std::string_view SceneMetricName(SceneMetric metric);
 // InvalidArgument listing the valid names when `name` is none of them.
 absl::StatusOr<SceneMetric> SceneMetricFromName(std::string_view name);

@@ -211,6 +211,8 @@ Racer::Setting RacerSetting(const v1::Sampling& sampling, const Lanes& lanes,
           .analysed_hours = setting.analysed_hours,
           .metric = setting.metric,
           .objective = search.options.objective,
+          .constraints = search.options.constraints,
+          .constraint_metrics = search.constraint_metrics,
           .racing = {.rounds = {sampling.racing_rounds().begin(), sampling.racing_rounds().end()},
                      .standard_errors = sampling.racing_standard_errors()},
           .enabled =
@@ -276,7 +278,8 @@ absl::StatusOr<VnsResult> RunJobSearch(const PreparedJob& job, const SearchSetti
   if (so_far != nullptr) {
     for (auto step = so_far->history.rbegin(); step != so_far->history.rend(); ++step) {
       if (!step->improved) continue;
-      racer.SetIncumbent(DesignAt(job, step->x));
+      racer.SetIncumbent(DesignAt(job, step->x),
+                         Feasible(search.options.constraints, step->evaluation));
       break;
     }
   }
@@ -291,7 +294,7 @@ absl::StatusOr<VnsResult> RunJobSearch(const PreparedJob& job, const SearchSetti
     const VnsRecord& step = state.history.back();
     v1::Evaluation& e = *checkpoint.add_history() = EvaluationProto(job, step, search_start);
     if (!step.cached) e.set_paths_fraction(racer.PathsFraction(DesignAt(job, step.x)));
-    if (step.improved) racer.SetIncumbent(DesignAt(job, step.x));
+    if (step.improved) racer.SetIncumbent(DesignAt(job, step.x), step.feasible);
     if (step.improved) {
       if (const auto* metrics = std::any_cast<AnnualMetricsEstimate>(&step.evaluation.payload)) {
         *checkpoint.mutable_best_metrics() = MetricsProto(*metrics);

@@ -45,6 +45,9 @@ absl::StatusOr<VnsRecord> ResumedStep(const v1::Evaluation& e,
   record.evaluation.value = e.value().value();
   record.evaluation.standard_error = e.value().standard_error();
   record.evaluation.partial = e.raced_out();
+  for (const v1::Estimate& c : e.constraints()) {
+    record.evaluation.constraints.push_back({c.value(), c.standard_error()});
+  }
   record.evaluation_seconds = e.seconds();
   record.elapsed_seconds = e.elapsed_seconds() - search_start;
   record.cached = e.cached();
@@ -108,8 +111,13 @@ absl::StatusOr<SearchStart> StartOfSearch(const PreparedJob& job, const SearchSe
     return start;
   }
   FENESTRA_ASSIGN_OR_RETURN(so_far, ResumedSearch(JobContentHash(job), settings, *resume));
-  start.so_far = std::move(so_far);
   start.checkpoint = *resume;
+  // Each step's feasibility as this search takes it, from the constraints' values it holds
+  for (int i = 0; i < start.checkpoint.history_size(); ++i) {
+    start.checkpoint.mutable_history(i)->set_feasible(
+        Feasible(settings.options.constraints, so_far.history[i].evaluation));
+  }
+  start.so_far = std::move(so_far);
   start.resumed_seconds = resume->history(resume->history_size() - 1).elapsed_seconds();
   return start;
 }

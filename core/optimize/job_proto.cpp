@@ -27,6 +27,36 @@ void AddBestOverTime(v1::JobResult& result) {
   }
 }
 
+// The objective's constraints into the search: its options' bounds and the metrics the
+// evaluations return (the job validated: every metric known).
+void AddConstraints(const v1::Objective& objective, SearchSettings& search) {
+  Constraints& constraints = search.options.constraints;
+  for (const v1::Constraint& c : objective.constraints()) {
+    search.constraints.push_back(c);
+    search.constraint_metrics.push_back(ToSceneMetric(c.metric()).value_or(SceneMetric::kUdiMean));
+    constraints.bounds.push_back({c.bound() == v1::Constraint::AT_LEAST ? ConstraintBound::kAtLeast
+                                                                        : ConstraintBound::kAtMost,
+                                  c.value()});
+  }
+  if (objective.constraint_standard_errors() > 0) {
+    constraints.standard_errors = objective.constraint_standard_errors();
+  }
+}
+
+// Each constraint at the best design, whether it holds (within the search's standard errors).
+void AddBestConstraints(const SearchSettings& settings, const VnsResult& search,
+                        v1::JobResult& result) {
+  const Constraints& constraints = settings.options.constraints;
+  const std::vector<Estimated>& values = search.best.constraints;
+  for (size_t c = 0; c < settings.constraints.size() && c < values.size(); ++c) {
+    v1::ConstraintResult& out = *result.add_best_constraints();
+    *out.mutable_constraint() = settings.constraints[c];
+    SetEstimate(out.mutable_estimate(), values[c].value, values[c].standard_error);
+    out.set_holds(!ConstraintsBroken({&constraints.bounds[c], 1}, {&values[c], 1},
+                                     constraints.standard_errors));
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<v1::Job> ReadJobFile(const std::string& path) {
@@ -59,6 +89,7 @@ SearchSettings MakeSearchSettings(const v1::Job& spec) {
     default:
       vns.objective.sense = ObjectiveSense::kMaximize;
   }
+  AddConstraints(spec.objective(), search);
   vns.max_evaluations = spec.budget().max_evaluations();
   vns.max_seconds = spec.budget().max_seconds();
   vns.failed_cycles_to_stop = std::max(0, spec.budget().failed_cycles_to_stop());
@@ -83,6 +114,10 @@ absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric) {
       return SceneMetric::kUdiMeanFellShort;
     case v1::METRIC_UDI_EXCEEDED:
       return SceneMetric::kUdiMeanExceeded;
+    case v1::METRIC_ASE:
+      return SceneMetric::kAse;
+    case v1::METRIC_BLIND_IN_PLACE:
+      return SceneMetric::kBlindInPlace;
     default:
       return InvalidJobField("objective.metric", "unknown metric");
   }
@@ -123,6 +158,10 @@ v1::Evaluation EvaluationProto(const PreparedJob& job, const VnsRecord& record,
   e.set_neighborhood(record.neighborhood);
   e.set_elapsed_seconds(search_start_seconds + record.elapsed_seconds);
   e.set_raced_out(record.evaluation.partial);
+  e.set_feasible(record.feasible);
+  for (const Estimated& c : record.evaluation.constraints) {
+    SetEstimate(e.add_constraints(), c.value, c.standard_error);
+  }
   return e;
 }
 
@@ -203,6 +242,7 @@ void AddSearch(const SearchSettings& settings, const VnsResult& search,
   if (checkpoint.has_best_metrics()) *result.mutable_best_metrics() = checkpoint.best_metrics();
   result.mutable_history()->Swap(checkpoint.mutable_history());
   AddBestOverTime(result);
+  AddBestConstraints(settings, search, result);
   result.set_evaluations(search.evaluations);
   result.set_stop_reason(std::string(StopReasonName(search.stop_reason)));
   result.mutable_timings()->set_evaluation_seconds(search.evaluation_seconds);

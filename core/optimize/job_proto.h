@@ -24,14 +24,18 @@ namespace fenestra {
 struct SearchSettings {
   std::vector<DesignVariable> variables;
   VnsOptions options;
+  // The objective's constraints as the job gives them, and the scene metric of each (what
+  // the evaluations return in Evaluation::constraints), in the job's order.
+  std::vector<v1::Constraint> constraints;
+  std::vector<SceneMetric> constraint_metrics;
 };
 
-// The search `spec` asks for: its variables, neighborhoods, objective, budget and seed (the
-// job validated, its defaults filled in). The lookahead is left at one.
+// The search `spec` asks for: its variables, neighborhoods, objective with its constraints,
+// budget and seed (the job validated, its defaults filled in). The lookahead is left at one.
 SearchSettings MakeSearchSettings(const v1::Job& spec);
 
-// The scene metric of an objective's metric; InvalidArgument "job objective.metric" for an
-// unknown one.
+// The scene metric of an objective's (or a constraint's) metric; InvalidArgument "job
+// objective.metric" for an unknown one.
 absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric);
 
 // The indoor stage of the job's designs: its sampling's paths, bounces, seed, basis, window
@@ -60,9 +64,9 @@ void DescribeRun(const v1::Job& spec, const Scene& scene, const EpwLocation& loc
 // What racing did (its rounds, test, candidates, rejections and paths), into `result`.
 void AddRacing(const Racer& racer, v1::JobResult& result);
 
-// The search into `result`: the best design and its value and metrics, every step (moved
-// from `checkpoint`, which holds them in the job's terms), the best value against time, the
-// counts and why it stopped.
+// The search into `result`: the best design and its value, metrics and constraints, every
+// step (moved from `checkpoint`, which holds them in the job's terms), the best value against
+// time, the counts and why it stopped.
 void AddSearch(const SearchSettings& settings, const VnsResult& search,
                v1::SearchCheckpoint& checkpoint, v1::JobResult& result);
 

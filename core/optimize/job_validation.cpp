@@ -15,6 +15,7 @@
 #include "core/metrics/occupancy.h"
 #include "core/optimize/design_variables.h"
 #include "core/optimize/job.h"
+#include "core/optimize/job_proto.h"
 #include "core/optimize/racing.h"
 #include "core/optimize/vns.h"
 #include "core/trace/path.h"
@@ -31,6 +32,9 @@ constexpr int kMaxBounces = 1000;
 constexpr int kDefaultBasisCells = 288;
 // Whether a job checks its best design by the one-stage method when its sampling does not say.
 constexpr bool kFinalCheckByDefault = true;
+// Constraints of an objective, and the most standard errors a design may be beyond a bound.
+constexpr int kMaxConstraints = 8;
+constexpr double kMaxConstraintStandardErrors = 100;
 
 bool AllFinite(std::initializer_list<double> values) {
   return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
@@ -186,6 +190,45 @@ absl::Status CheckObjective(const v1::Objective& objective) {
     return InvalidJobField(
         "objective.target_tolerance",
         absl::StrCat("must be in [0, 100] %, got ", objective.target_tolerance()));
+  }
+  return absl::OkStatus();
+}
+
+// The objective's constraints checked, constraint_standard_errors filled in where there are
+// any (job.proto; the default in vns.h).
+absl::Status FillConstraints(v1::Objective& objective) {
+  if (objective.constraints_size() > kMaxConstraints) {
+    return InvalidJobField("objective.constraints",
+                           absl::StrCat("at most ", kMaxConstraints, " constraints, got ",
+                                        objective.constraints_size()));
+  }
+  for (int i = 0; i < objective.constraints_size(); ++i) {
+    const v1::Constraint& c = objective.constraints(i);
+    const std::string field = absl::StrCat("objective.constraints[", i, "]");
+    if (!v1::Metric_IsValid(c.metric()) || !ToSceneMetric(c.metric()).ok()) {
+      return InvalidJobField(field + ".metric",
+                             absl::StrCat("unknown metric ", static_cast<int>(c.metric())));
+    }
+    if (c.bound() != v1::Constraint::AT_MOST && c.bound() != v1::Constraint::AT_LEAST) {
+      return InvalidJobField(field + ".bound", absl::StrCat("must be AT_MOST or AT_LEAST, got ",
+                                                            static_cast<int>(c.bound())));
+    }
+    // Every metric a job takes is a share [%]
+    if (!(c.value() >= 0 && c.value() <= 100)) {
+      return InvalidJobField(field + ".value",
+                             absl::StrCat("must be in [0, 100] % (the metric's range), got ",
+                                          c.value()));
+    }
+  }
+  const double k = objective.constraint_standard_errors();
+  if (!(k >= 0 && k <= kMaxConstraintStandardErrors)) {
+    return InvalidJobField("objective.constraint_standard_errors",
+                           absl::StrCat("must be in (0, ", kMaxConstraintStandardErrors,
+                                        "] (0 = the default, ", kDefaultConstraintStandardErrors,
+                                        "), got ", k));
+  }
+  if (k == 0 && objective.constraints_size() > 0) {
+    objective.set_constraint_standard_errors(kDefaultConstraintStandardErrors);
   }
   return absl::OkStatus();
 }
@@ -352,6 +395,7 @@ absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& b
   FENESTRA_RETURN_IF_ERROR(FillMetricSettings(*filled.mutable_metrics()));
   FENESTRA_RETURN_IF_ERROR(CheckNeighborhoods(filled));
   FENESTRA_RETURN_IF_ERROR(CheckObjective(filled.objective()));
+  FENESTRA_RETURN_IF_ERROR(FillConstraints(*filled.mutable_objective()));
   FENESTRA_RETURN_IF_ERROR(CheckWindowCells(filled.sampling(), prepared.scene.window));
   FENESTRA_RETURN_IF_ERROR(CheckRoomAtEveryDesign(prepared));
   return prepared;

@@ -22,6 +22,14 @@ bool Rejects(const PairedDifference& difference, const RacingSettings& settings)
   return difference.difference < -settings.standard_errors * difference.standard_error;
 }
 
+bool RoundRejects(std::span<const double> candidate, std::span<const Estimated> constraints,
+                  std::span<const double> incumbent, bool incumbent_feasible,
+                  std::span<const Constraint> bounds, const RacingSettings& settings) {
+  if (!incumbent_feasible) return false;
+  return Rejects(Paired(candidate, incumbent), settings) ||
+         ConstraintsBroken(bounds, constraints, settings.standard_errors);
+}
+
 Racer::Racer(Setting setting)
     : s_(std::move(setting)),
       threads_(std::make_unique<StandingThreads>(static_cast<int>(s_.lanes.size()))) {
@@ -39,7 +47,7 @@ absl::StatusOr<Racer::Scored> Racer::ScoreTallies(const std::vector<HourTally>& 
   for (const AnnualMetrics& m : version_metrics) {
     scored.scores.push_back(Score(s_.objective, SceneMetricValue(m.scene, s_.metric)));
   }
-  scored.evaluation = MetricEvaluation(std::move(metrics), s_.metric);
+  scored.evaluation = MetricEvaluation(std::move(metrics), s_.metric, s_.constraint_metrics);
   scored.evaluation.partial = partial;
   return scored;
 }
@@ -61,7 +69,7 @@ absl::Status Racer::PrepareIncumbent() {
   }
   if (s_.audit && !incumbent_full_) {
     FENESTRA_ASSIGN_OR_RETURN(full, FullScores(lane, incumbent_));
-    incumbent_full_ = std::move(full);
+    incumbent_full_ = std::move(full.scores);
   }
   return absl::OkStatus();
 }
@@ -77,7 +85,8 @@ absl::Status Racer::Race(DesignTallies& lane, Candidate& c) const {
     FENESTRA_ASSIGN_OR_RETURN(versions, lane.Tally(c.design, s_.options, s_.racing.rounds[r]));
     FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, true));
     c.rounds.push_back(std::move(scored.scores));
-    if (against && Rejects(Paired(c.rounds[r], (*incumbent_rounds_)[r]), s_.racing)) {
+    if (against && RoundRejects(c.rounds[r], scored.evaluation.constraints, (*incumbent_rounds_)[r],
+                                incumbent_feasible_, s_.constraints.bounds, s_.racing)) {
       c.stats.rejected[r] = 1;
       c.stats.parts_traced = s_.racing.rounds[r];
       c.paths_fraction = static_cast<double>(s_.racing.rounds[r]) / kDesignParts;
@@ -130,11 +139,10 @@ void Racer::TraceTogether(DesignTallies& lane, const std::vector<Candidate*>& ca
   }
 }
 
-absl::StatusOr<std::vector<double>> Racer::FullScores(DesignTallies& lane,
-                                                      const BlindDesign& design) const {
+absl::StatusOr<Racer::Scored> Racer::FullScores(DesignTallies& lane,
+                                                const BlindDesign& design) const {
   FENESTRA_ASSIGN_OR_RETURN(versions, lane.Tally(design, s_.options, kDesignParts));
-  FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, false));
-  return std::move(scored.scores);
+  return ScoreTallies(versions, false);
 }
 
 // Traces the rejected candidate to the end and counts whether a full evaluation would have
@@ -142,8 +150,10 @@ absl::StatusOr<std::vector<double>> Racer::FullScores(DesignTallies& lane,
 absl::Status Racer::Audit(DesignTallies& lane, Candidate& c) const {
   FENESTRA_ASSIGN_OR_RETURN(full, FullScores(lane, c.design));
   c.stats.rejected_audited = 1;
-  // The search accepts any strict improvement of the score (the job's VnsOptions)
-  const PairedDifference difference = Paired(full, *incumbent_full_);
+  // The search accepts any strict improvement of the score (the job's VnsOptions) of a
+  // feasible design (a round rejects only against a feasible incumbent)
+  if (!Feasible(s_.constraints, full.evaluation)) return absl::OkStatus();
+  const PairedDifference difference = Paired(full.scores, *incumbent_full_);
   if (difference.difference > 0) c.stats.rejected_would_improve = 1;
   if (difference.difference > difference.standard_error) c.stats.rejected_better_beyond_error = 1;
   return absl::OkStatus();
@@ -206,9 +216,10 @@ double Racer::PathsFraction(const BlindDesign& design) const {
   return 0;
 }
 
-void Racer::SetIncumbent(const BlindDesign& design) {
+void Racer::SetIncumbent(const BlindDesign& design, bool feasible) {
   incumbent_ = design;
   incumbent_set_ = true;
+  incumbent_feasible_ = feasible;
   incumbent_rounds_.reset();
   incumbent_full_.reset();
   for (const Candidate& c : last_batch_) {

@@ -10,6 +10,12 @@
 // same random numbers (common random numbers), so most of the noise cancels in the
 // difference and a small share of the paths decides most candidates. A candidate that is not
 // rejected is traced to the end: every value the search may accept has full precision.
+//
+// With constraints (VnsOptions::constraints) a round rejects only where the incumbent is
+// feasible: by the paired difference (a worse objective loses to a feasible incumbent
+// whatever the candidate's feasibility), or where the candidate breaks a constraint by more
+// than RacingSettings::standard_errors of its standard errors at that round (it would be
+// infeasible). Against an infeasible incumbent no round rejects (RoundRejects).
 #pragma once
 
 #include <cstdint>
@@ -53,6 +59,15 @@ PairedDifference Paired(std::span<const double> candidate, std::span<const doubl
 // Whether `difference` (candidate - incumbent, in scores) rejects the candidate.
 bool Rejects(const PairedDifference& difference, const RacingSettings& settings);
 
+// Whether a round rejects a candidate whose scores per version are `candidate` and whose
+// constraints' values at the round are `constraints` (Evaluation::constraints), against an
+// incumbent with `incumbent` scores at the same round: never where the incumbent is
+// infeasible; else by the paired difference (Rejects), or where the candidate breaks one of
+// `bounds` by more than settings.standard_errors of its standard errors.
+bool RoundRejects(std::span<const double> candidate, std::span<const Estimated> constraints,
+                  std::span<const double> incumbent, bool incumbent_feasible,
+                  std::span<const Constraint> bounds, const RacingSettings& settings);
+
 // A design's scores per version after each round but the last: rounds[r][v].
 using RoundScores = std::vector<std::vector<double>>;
 
@@ -87,6 +102,9 @@ class Racer {
     int analysed_hours = 0;
     SceneMetric metric = SceneMetric::kUdiMean;
     Objective objective;
+    // The search's constraints (VnsOptions::constraints), and the metric of each bound.
+    Constraints constraints = {};
+    std::vector<SceneMetric> constraint_metrics = {};
     RacingSettings racing;
     bool enabled = true;  // false: every design in one round
     // Trace rejected candidates to the end too, and count those a full evaluation would
@@ -100,10 +118,10 @@ class Racer {
   absl::StatusOr<Evaluation> Evaluate(const BlindDesign& design);
   // The evaluations of `designs` in their order, the lanes tracing at once.
   std::vector<absl::StatusOr<Evaluation>> EvaluateBatch(const std::vector<BlindDesign>& designs);
-  // The search's incumbent changed to `design`: one of the last batch's (its round scores
-  // are kept) or, after a resume, unknown here (then traced again when the next candidate
-  // needs them).
-  void SetIncumbent(const BlindDesign& design);
+  // The search's incumbent changed to `design`, `feasible` or not (vns.h, Feasible): one of
+  // the last batch's (its round scores are kept) or, after a resume, unknown here (then
+  // traced again when the next candidate needs them).
+  void SetIncumbent(const BlindDesign& design, bool feasible);
 
   // Whether candidates are traced in rounds (enabled, and the tallies trace in parts).
   bool Races() const {
@@ -132,8 +150,7 @@ class Racer {
   };
   absl::StatusOr<Scored> ScoreTallies(const std::vector<HourTally>& versions, bool partial) const;
   absl::Status PrepareIncumbent();
-  absl::StatusOr<std::vector<double>> FullScores(DesignTallies& lane,
-                                                 const BlindDesign& design) const;
+  absl::StatusOr<Scored> FullScores(DesignTallies& lane, const BlindDesign& design) const;
   absl::Status Race(DesignTallies& lane, Candidate& c) const;
   void StartStats(Candidate& c) const;
   absl::Status TakeFull(const std::vector<HourTally>& versions, uint64_t rays, Candidate& c) const;
@@ -147,6 +164,7 @@ class Racer {
   std::vector<Candidate> last_batch_;
   BlindDesign incumbent_;
   bool incumbent_set_ = false;
+  bool incumbent_feasible_ = true;
   std::optional<RoundScores> incumbent_rounds_;
   std::optional<std::vector<double>> incumbent_full_;  // (audit)
 };

@@ -74,7 +74,26 @@ absl::Status CheckInputs(std::span<const DesignVariable> variables, const VnsOpt
         "min_improvement_standard_errors and target_tolerance must not be negative, "
         "max_consecutive_cache_hits must be positive and the target finite");
   }
+  for (size_t c = 0; c < o.constraints.bounds.size(); ++c) {
+    if (!std::isfinite(o.constraints.bounds[c].value)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "constraint ", c + 1, ": bound ", o.constraints.bounds[c].value, " is not finite"));
+    }
+  }
+  if (!(o.constraints.standard_errors > 0) || !std::isfinite(o.constraints.standard_errors)) {
+    return absl::InvalidArgumentError(absl::StrCat("constraints' standard_errors ",
+                                                   o.constraints.standard_errors,
+                                                   ": must be positive and finite"));
+  }
   return absl::OkStatus();
+}
+
+// Whether every value and standard error of an evaluation is finite.
+bool AllFinite(const Evaluation& e) {
+  if (!std::isfinite(e.value) || !std::isfinite(e.standard_error)) return false;
+  return std::all_of(e.constraints.begin(), e.constraints.end(), [](const Estimated& c) {
+    return std::isfinite(c.value) && std::isfinite(c.standard_error);
+  });
 }
 
 // Brings a moved coordinate back into the box, then onto the variable's grid.
@@ -153,6 +172,7 @@ class Search {
   std::vector<double> StartDesign() const;
   std::vector<double> Propose(Walk& walk) const;
   absl::StatusOr<VnsRecord> Evaluate(std::vector<double> x, int neighborhood);
+  void Assess(VnsRecord& record) const;
   int Lookahead() const;
   void EvaluateAhead(const std::vector<double>& x, bool start);
   void DropAhead();
@@ -261,6 +281,8 @@ absl::StatusOr<VnsRecord> Search::Evaluate(std::vector<double> x, int neighborho
     const VnsRecord& earlier = state_.history[hit->second];
     record.evaluation = earlier.evaluation;
     record.score = earlier.score;
+    record.feasible = earlier.feasible;
+    record.violation = earlier.violation;
     record.cached = true;
   } else {
     auto ahead =
@@ -278,16 +300,30 @@ absl::StatusOr<VnsRecord> Search::Evaluate(std::vector<double> x, int neighborho
                           absl::StrCat("evaluating x = (", absl::StrJoin(x, ", "),
                                        "): ", evaluation.status().message()));
     }
-    if (!std::isfinite(evaluation->value) || !std::isfinite(evaluation->standard_error)) {
-      return absl::InvalidArgumentError(absl::StrCat("the objective returned ", evaluation->value,
-                                                     " +- ", evaluation->standard_error,
-                                                     " at x = (", absl::StrJoin(x, ", "), ")"));
+    if (!AllFinite(*evaluation)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "the objective returned ", evaluation->value, " +- ", evaluation->standard_error,
+          " at x = (", absl::StrJoin(x, ", "), "), or a constraint's value that is not finite"));
+    }
+    if (evaluation->constraints.size() != options_.constraints.bounds.size()) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("the objective returned ", evaluation->constraints.size(),
+                       " constraint values for ", options_.constraints.bounds.size(),
+                       " constraints at x = (", absl::StrJoin(x, ", "), ")"));
     }
     record.evaluation = *std::move(evaluation);
-    record.score = Score(options_.objective, record.evaluation.value);
+    Assess(record);
   }
   record.x = std::move(x);
   return record;
+}
+
+// The record's score and standing against the constraints, from its evaluation.
+void Search::Assess(VnsRecord& record) const {
+  record.score = Score(options_.objective, record.evaluation.value);
+  record.feasible = Feasible(options_.constraints, record.evaluation);
+  record.violation =
+      ConstraintViolation(options_.constraints.bounds, record.evaluation.constraints);
 }
 
 // Appends a step to the history: whether it moves the incumbent (the start does), and where
@@ -303,12 +339,7 @@ void Search::Record(VnsRecord record) {
   if (record.neighborhood < 0) {
     record.improved = true;
   } else {
-    const VnsRecord& best = state_.history[state_.best_index];
-    const double margin =
-        std::max(options_.min_improvement,
-                 options_.min_improvement_standard_errors *
-                     std::hypot(record.evaluation.standard_error, best.evaluation.standard_error));
-    record.improved = !record.evaluation.partial && record.score > best.score + margin;
+    record.improved = Improves(options_, record, state_.history[state_.best_index]);
     walk_.Advance(record.improved, record.cached, static_cast<int>(options_.neighborhoods.size()));
     if (record.improved) {
       ++state_.improvements;
@@ -375,9 +406,12 @@ absl::Status Search::Replay(const VnsResult& so_far) {
     if (done.x != (i == 0 ? StartDesign() : Propose(walk_))) {
       return differs(absl::StrCat("design (", absl::StrJoin(done.x, ", "), ")"));
     }
-    if (!std::isfinite(done.evaluation.value) || !std::isfinite(done.evaluation.standard_error) ||
-        !std::isfinite(done.evaluation_seconds) || !std::isfinite(done.elapsed_seconds)) {
+    if (!AllFinite(done.evaluation) || !std::isfinite(done.evaluation_seconds) ||
+        !std::isfinite(done.elapsed_seconds)) {
       return differs("a value or time that is not finite");
+    }
+    if (done.evaluation.constraints.size() != options_.constraints.bounds.size()) {
+      return differs(absl::StrCat(done.evaluation.constraints.size(), " constraint values"));
     }
     const auto hit = cache_.find(done.x);
     if (done.cached != (hit != cache_.end())) return differs("cache hit");
@@ -385,12 +419,13 @@ absl::Status Search::Replay(const VnsResult& so_far) {
       const Evaluation& earlier = state_.history[hit->second].evaluation;
       if (done.evaluation.value != earlier.value ||
           done.evaluation.standard_error != earlier.standard_error ||
-          done.evaluation.partial != earlier.partial) {
+          done.evaluation.partial != earlier.partial ||
+          done.evaluation.constraints != earlier.constraints) {
         return differs("a cache hit with another value than its design's evaluation");
       }
     }
     VnsRecord step = done;
-    step.score = Score(options_.objective, step.evaluation.value);
+    Assess(step);
     Record(std::move(step));
     if (state_.history.back().improved != done.improved) return differs("improvement");
   }
@@ -418,6 +453,7 @@ std::optional<StopReason> Search::StopBeforeStep() {
   }
   if (free_.empty()) return StopReason::kNoFreeVariables;
   if (options_.objective.sense == ObjectiveSense::kTarget &&
+      state_.history[state_.best_index].feasible &&
       -state_.best_score <= options_.objective.target_tolerance) {
     return StopReason::kTargetReached;
   }
@@ -455,6 +491,48 @@ double Score(const Objective& objective, double value) {
       return -std::abs(value - objective.target);
   }
   return value;
+}
+
+double ConstraintExcess(const Constraint& constraint, double value) {
+  const double excess = constraint.bound == ConstraintBound::kAtMost ? value - constraint.value
+                                                                     : constraint.value - value;
+  return std::max(0.0, excess);
+}
+
+bool ConstraintsBroken(std::span<const Constraint> constraints, std::span<const Estimated> values,
+                       double standard_errors) {
+  for (size_t c = 0; c < constraints.size() && c < values.size(); ++c) {
+    if (ConstraintExcess(constraints[c], values[c].value) >
+        standard_errors * values[c].standard_error) {
+      return true;
+    }
+  }
+  return false;
+}
+
+double ConstraintViolation(std::span<const Constraint> constraints,
+                           std::span<const Estimated> values) {
+  double violation = 0;
+  for (size_t c = 0; c < constraints.size() && c < values.size(); ++c) {
+    violation += ConstraintExcess(constraints[c], values[c].value);
+  }
+  return violation;
+}
+
+bool Feasible(const Constraints& constraints, const Evaluation& evaluation) {
+  return !ConstraintsBroken(constraints.bounds, evaluation.constraints,
+                            constraints.standard_errors);
+}
+
+bool Improves(const VnsOptions& options, const VnsRecord& candidate, const VnsRecord& incumbent) {
+  if (candidate.evaluation.partial) return false;
+  if (candidate.feasible != incumbent.feasible) return candidate.feasible;
+  if (!candidate.feasible) return candidate.violation < incumbent.violation;
+  const double margin = std::max(
+      options.min_improvement,
+      options.min_improvement_standard_errors *
+          std::hypot(candidate.evaluation.standard_error, incumbent.evaluation.standard_error));
+  return candidate.score > incumbent.score + margin;
 }
 
 std::vector<Neighborhood> DefaultNeighborhoods() {

@@ -8,6 +8,13 @@
 // consecutive cycles in which every neighborhood failed, the target reached (target mode),
 // or cancellation.
 //
+// With constraints (VnsOptions::constraints: bounds on other metrics, which the objective
+// function returns beside its value), a design is infeasible when it breaks one by more than
+// Constraints::standard_errors of its standard errors, and the incumbent moves by Deb's
+// feasibility rules (`Improves`): a feasible design beats an infeasible one, two infeasible
+// ones compare by their total violation, two feasible ones by their scores. Without
+// constraints every design is feasible and the search is the unconstrained one.
+//
 // Moves are clamped to the box by default, so optima on a bound (a blind fully open, a
 // tilt of 0) are reached exactly; BoundaryRule::kReflect mirrors them back instead. A
 // variable with a `step` is then snapped to lower + k x step (and clamped again).
@@ -78,16 +85,39 @@ enum class ObjectiveSense {
   kTarget,    // score = -|value - target| (the inverse problem)
 };
 
+enum class ConstraintBound { kAtMost, kAtLeast };
+
+// A bound on one of a design's metrics besides the objective's (core/README.md,
+// "Constraints"); the objective function returns the metric with its standard error
+// (Evaluation::constraints).
+struct Constraint {
+  ConstraintBound bound = ConstraintBound::kAtMost;
+  double value = 0;  // the bound, in the metric's units
+};
+
+// A design breaks a constraint when its metric is beyond the bound by more than this many of
+// its standard errors (Constraints::standard_errors; job.proto's default).
+inline constexpr double kDefaultConstraintStandardErrors = 1;
+
+// The bounds a design must keep to be feasible (Deb's feasibility rules, `Improves`); none:
+// every design is feasible and the search is the unconstrained one.
+struct Constraints {
+  std::vector<Constraint> bounds = {};
+  // A design breaks a bound when beyond it by more than this many standard errors; > 0.
+  double standard_errors = kDefaultConstraintStandardErrors;
+};
+
 struct Objective {
   ObjectiveSense sense = ObjectiveSense::kMaximize;
   double target = 0;            // kTarget only
-  double target_tolerance = 0;  // kTarget: stop once |value - target| <= this
+  double target_tolerance = 0;  // kTarget: stop once |value - target| <= this (feasible)
 };
 
 struct VnsOptions {
   std::vector<Neighborhood> neighborhoods = DefaultNeighborhoods();
   BoundaryRule boundary = BoundaryRule::kClamp;
   Objective objective;
+  Constraints constraints;    // the objective function returns their metrics
   int max_evaluations = 150;  // objective calls, the start included; >= 1
   double max_seconds = 0;     // wall-clock budget [s]; 0 = none
   // Stop after this many consecutive cycles in which every neighborhood failed; 1 = at the
@@ -120,6 +150,13 @@ inline constexpr int kMaxLookahead = 64;
 inline constexpr int kRecentEvaluations = 20;
 inline constexpr int kBusyImprovements = 2;
 
+// A value with its Monte Carlo standard error, in the value's units.
+struct Estimated {
+  double value = 0;
+  double standard_error = 0;
+  bool operator==(const Estimated&) const = default;
+};
+
 // What the objective returns for one design.
 struct Evaluation {
   double value = 0;           // the metric, e.g. UDI [%]
@@ -128,6 +165,8 @@ struct Evaluation {
   // core/optimize/racing.h): such an evaluation never becomes the incumbent.
   bool partial = false;
   std::any payload;  // anything the caller wants back (e.g. all metrics)
+  // The metric of each of VnsOptions::constraints' bounds, in their order (empty without).
+  std::vector<Estimated> constraints = {};
 };
 
 // Evaluates one design (one coordinate per variable, fixed ones included). An error status
@@ -151,6 +190,8 @@ struct VnsRecord {
   bool cached = false;            // served from the cache, not evaluated
   bool improved = false;          // became the incumbent (the start does)
   int neighborhood = -1;          // index into VnsOptions::neighborhoods; -1 = start
+  bool feasible = true;           // keeps every constraint (ConstraintsBroken)
+  double violation = 0;           // ConstraintViolation: 0 within every bound
 };
 
 struct VnsProgress {
@@ -176,6 +217,29 @@ enum class StopReason {
 
 // What the search maximizes for `value`: value, -value or -|value - target|.
 double Score(const Objective& objective, double value);
+
+// How far `value` lies beyond the bound of `constraint` (0 within it), in its units.
+double ConstraintExcess(const Constraint& constraint, double value);
+
+// Whether some constraint's value (`values`, one per constraint) is beyond its bound by
+// more than `standard_errors` times its standard error: the design is then infeasible.
+bool ConstraintsBroken(std::span<const Constraint> constraints, std::span<const Estimated> values,
+                       double standard_errors);
+
+// The sum of the constraints' excesses beyond their bounds (ConstraintExcess), in the
+// metrics' units: what two infeasible designs compare by.
+double ConstraintViolation(std::span<const Constraint> constraints,
+                           std::span<const Estimated> values);
+
+// Whether `evaluation` keeps `constraints` (none broken beyond their standard_errors).
+bool Feasible(const Constraints& constraints, const Evaluation& evaluation);
+
+// Whether step `candidate` moves the incumbent `incumbent` (Deb 2000, "An efficient
+// constraint handling method for genetic algorithms"): never when partial; a feasible design
+// beats an infeasible one; of two infeasible ones the smaller violation wins; of two feasible
+// ones the score, by more than max(min_improvement, min_improvement_standard_errors x
+// sqrt(se_new^2 + se_best^2)). Reads the records' score, feasible and violation.
+bool Improves(const VnsOptions& options, const VnsRecord& candidate, const VnsRecord& incumbent);
 
 // Stable snake_case names: "evaluation_budget", "time_budget", "all_neighborhoods_failed",
 // "target_reached", "cancelled", "no_free_variables", "space_exhausted".

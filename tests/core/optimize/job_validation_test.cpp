@@ -244,6 +244,64 @@ TEST(JobValidationTest, RacingSettings) {
   EXPECT_TRUE(ValidateJob(custom, kOffice).ok()) << ErrorOf(custom);
 }
 
+// A constraint's metric known, its bound set, its value a share; at most 8 of them; the
+// standard errors a design may be beyond a bound in (0, 100], the default filled in where
+// there are constraints.
+TEST(JobValidationTest, Constraints) {
+  const auto with = [](v1::Metric metric, v1::Constraint::Bound bound, double value) {
+    v1::Job job = QuickJob();
+    v1::Constraint& c = *job.mutable_objective()->add_constraints();
+    c.set_metric(metric);
+    c.set_bound(bound);
+    c.set_value(value);
+    return job;
+  };
+  v1::Job job = with(v1::METRIC_ASE, v1::Constraint::AT_MOST, 10);
+  absl::StatusOr<PreparedJob> prepared = ValidateJob(job, kOffice);
+  ASSERT_TRUE(prepared.ok()) << prepared.status();
+  EXPECT_EQ(prepared->job.objective().constraint_standard_errors(), 1);
+  prepared = ValidateJob(QuickJob(), kOffice);  // no constraints: left unset
+  ASSERT_TRUE(prepared.ok()) << prepared.status();
+  EXPECT_EQ(prepared->job.objective().constraint_standard_errors(), 0);
+
+  EXPECT_THAT(ErrorOf(with(static_cast<v1::Metric>(99), v1::Constraint::AT_MOST, 10)),
+              HasSubstr("job objective.constraints[0].metric: unknown metric 99"));
+  EXPECT_THAT(ErrorOf(with(v1::METRIC_DA, v1::Constraint::BOUND_UNSPECIFIED, 10)),
+              HasSubstr("job objective.constraints[0].bound: must be AT_MOST or AT_LEAST"));
+  EXPECT_THAT(ErrorOf(with(v1::METRIC_DA, static_cast<v1::Constraint::Bound>(5), 10)),
+              HasSubstr("job objective.constraints[0].bound"));
+  for (const double bad : {kNaN, -0.5, 100.5, std::numeric_limits<double>::infinity()}) {
+    EXPECT_THAT(ErrorOf(with(v1::METRIC_SDA, v1::Constraint::AT_LEAST, bad)),
+                HasSubstr("job objective.constraints[0].value: must be in [0, 100] %"))
+        << bad;
+  }
+  job = with(v1::METRIC_SDA, v1::Constraint::AT_LEAST, 50);
+  *job.mutable_objective()->add_constraints() = job.objective().constraints(0);
+  job.mutable_objective()->mutable_constraints(1)->set_value(101);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job objective.constraints[1].value"));
+  job = QuickJob();
+  for (int i = 0; i < 9; ++i) {
+    *job.mutable_objective()->add_constraints() =
+        with(v1::METRIC_UDI_EXCEEDED, v1::Constraint::AT_MOST, 5).objective().constraints(0);
+  }
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job objective.constraints: at most 8 constraints, got 9"));
+  job.mutable_objective()->mutable_constraints()->RemoveLast();
+  EXPECT_TRUE(ValidateJob(job, kOffice).ok()) << ErrorOf(job);
+
+  for (const double k : {kNaN, -1.0, 100.5, std::numeric_limits<double>::infinity()}) {
+    job = with(v1::METRIC_ASE, v1::Constraint::AT_MOST, 10);
+    job.mutable_objective()->set_constraint_standard_errors(k);
+    EXPECT_THAT(ErrorOf(job), HasSubstr("job objective.constraint_standard_errors: must be in "
+                                        "(0, 100] (0 = the default, 1)"))
+        << k;
+  }
+  job = with(v1::METRIC_ASE, v1::Constraint::AT_MOST, 10);
+  job.mutable_objective()->set_constraint_standard_errors(2.5);
+  prepared = ValidateJob(job, kOffice);
+  ASSERT_TRUE(prepared.ok()) << prepared.status();
+  EXPECT_EQ(prepared->job.objective().constraint_standard_errors(), 2.5);
+}
+
 TEST(JobValidationTest, CandidatesAtOnce) {
   for (const int n : {-1, kMaxCandidatesAtOnce + 1, 1 << 30, INT32_MIN}) {
     v1::Job job = QuickJob();
