@@ -164,7 +164,7 @@ struct WatchingOutdoor {
   mutable bool escapes = false;
   template <class Sink>
   void Score(const TraceWindow& window, const HemisphereBasis&, Vec3f p, Vec3f o, int cell,
-             double value, Sink* sink) const {
+             double value, bool, Sink* sink) const {
     point = p, omega = o, escapes = view.Escapes(p, window.normal, o);
     sink->Add(cell, value);
   }

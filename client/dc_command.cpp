@@ -249,12 +249,15 @@ void AddDcCommand(CLI::App& app) {
   command->add_option("-o,--output", args->output, "Output matrix D [sr]")->required();
   command->add_option("--stderr", args->standard_error,
                       "Also write the standard error of each coefficient [sr]");
-  command->add_option("--outdoor-matrix", args->outdoor_matrix,
-                      "Two-stage: also write O ((window cells + 146) x 146: the window cells' "
-                      "reflected radiance, then the identity for the direct columns) [-]");
-  command->add_option("--indoor-matrix", args->indoor_matrix,
-                      "Two-stage: also write I (sensors x (window cells + 146): light through the "
-                      "window cells, then straight from each sky bin) [sr]");
+  command->add_option(
+      "--outdoor-matrix", args->outdoor_matrix,
+      "Two-stage: also write O ((window cells + 292) x 146: the window cells' "
+      "reflected radiance, then the identity for each block of direct columns) [-]");
+  command->add_option(
+      "--indoor-matrix", args->indoor_matrix,
+      "Two-stage: also write I (sensors x (window cells + 292): light through the "
+      "window cells, then straight from each sky bin: light reflected in the room, then "
+      "the sensor's own view) [sr]");
   command->add_option("--format", args->format, "Matrix format")
       ->check(CLI::IsMember({"ascii", "float"}))
       ->capture_default_str();

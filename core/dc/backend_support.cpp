@@ -108,13 +108,19 @@ void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum
     const double mean = total / n;
     return std::sqrt(std::max(0.0, (total_squares / n - mean * mean) / (n - 1)));
   };
+  result->direct_coefficients.resize(sensor_count, kDaylightBins);
   for (int s = 0; s < sensor_count; ++s) {
     double sky = 0;
     for (int b = 0; b < kDaylightBins; ++b) {
-      const size_t k = static_cast<size_t>(s) * kDaylightBins + b;
-      result->coefficients(s, b) = sum[k] / n;
-      result->standard_error(s, b) = standard_error(sum[k], sum_squares[k]);
-      if (b > 0) sky += sum[k];
+      // Both blocks of the bin (OneStageBin): a path scores in one of them only, so their
+      // squares add up to the square of its score
+      const size_t k = static_cast<size_t>(s) * kOneStageBins + b;
+      const double total = sum[k] + sum[k + kDaylightBins];
+      result->coefficients(s, b) = total / n;
+      result->standard_error(s, b) =
+          standard_error(total, sum_squares[k] + sum_squares[k + kDaylightBins]);
+      result->direct_coefficients(s, b) = sum[k + kDaylightBins] / n;
+      if (b > 0) sky += total;
     }
     result->sky_sum(s) = sky / n;
     result->sky_sum_standard_error(s) = standard_error(sky, sky_sum_squares[s]);
@@ -125,17 +131,21 @@ void FillFromSums(const std::vector<double>& sum, const std::vector<double>& sum
 void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int batches, int64_t paths,
                  OneStageResult* result) {
   result->batch_coefficients.clear();
+  result->batch_direct_coefficients.clear();
   if (batches < 2) return;
   for (int b = 0; b < batches; ++b) {
     const double n =
         static_cast<double>(BatchStart(paths, batches, b + 1) - BatchStart(paths, batches, b));
-    Matrix d(sensor_count, kDaylightBins);
+    Matrix d(sensor_count, kDaylightBins), direct(sensor_count, kDaylightBins);
     for (int s = 0; s < sensor_count; ++s) {
+      const double* row = &batch_sum[(static_cast<size_t>(s) * batches + b) * kOneStageBins];
       for (int bin = 0; bin < kDaylightBins; ++bin) {
-        d(s, bin) = batch_sum[(static_cast<size_t>(s) * batches + b) * kDaylightBins + bin] / n;
+        d(s, bin) = (row[bin] + row[bin + kDaylightBins]) / n;
+        direct(s, bin) = row[bin + kDaylightBins] / n;
       }
     }
     result->batch_coefficients.push_back(std::move(d));
+    result->batch_direct_coefficients.push_back(std::move(direct));
   }
 }
 
@@ -209,11 +219,15 @@ absl::Status CheckProductSet(const AnnualProduct* product) {
 }
 
 absl::Status CheckSkyRows(const Matrix& sky) {
-  if (sky.rows() != kDaylightBins) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("the outdoor matrix has ", kDaylightBins, " sky bins, the sky ", sky.rows()));
+  if (sky.rows() != kDaylightBins && sky.rows() != kSplitSkyRows) {
+    return absl::InvalidArgumentError(absl::StrCat("the outdoor matrix has ", kDaylightBins,
+                                                   " sky bins, the sky ", sky.rows(), " rows"));
   }
   return absl::OkStatus();
+}
+
+Matrix UnreflectedOf(const Matrix& stacked_indoor) {
+  return stacked_indoor.rightCols(kDaylightBins);
 }
 
 absl::Status CheckPairs(const std::vector<Matrix>& indoor_batches,
@@ -227,16 +241,20 @@ absl::Status CheckPairs(const std::vector<Matrix>& indoor_batches,
 }
 
 Matrix ThroughWindow(const std::vector<Matrix>& indoor_batches,
-                     const std::vector<Matrix>& outdoor_batches) {
+                     const std::vector<Matrix>& outdoor_batches, bool unreflected) {
   const Eigen::Index sensors = indoor_batches.empty() ? 0 : indoor_batches[0].rows();
+  const Eigen::Index bins = outdoor_batches.empty() ? 0 : outdoor_batches[0].cols();
   // One blocked product per batch, the batches on all cores, each into its own rows: six
   // times faster than a rank-one update per column of I (bench/README.md, "The annual
   // products on the CPU")
   Matrix through(sensors * static_cast<Eigen::Index>(indoor_batches.size()),
-                 outdoor_batches.empty() ? 0 : outdoor_batches[0].cols());
+                 unreflected ? 2 * bins : bins);
   ParallelFor(indoor_batches.size(), ResolveThreadCount(0), [&](uint64_t b) {
-    through.middleRows(static_cast<Eigen::Index>(b) * sensors, sensors).noalias() =
-        indoor_batches[b] * outdoor_batches[b];
+    const Eigen::Index first = static_cast<Eigen::Index>(b) * sensors;
+    through.block(first, 0, sensors, bins).noalias() = indoor_batches[b] * outdoor_batches[b];
+    if (unreflected) {
+      through.block(first, bins, sensors, bins) = indoor_batches[b].rightCols(bins);
+    }
   });
   return through;
 }

@@ -47,8 +47,13 @@ int64_t PilotPathsPerSensor(const OneStageOptions& options, size_t sensor_count)
 // InvalidArgument unless every batch has the same rows and `cells` columns.
 absl::StatusOr<Matrix> StackIndoorBatches(const std::vector<Matrix>& batches, Eigen::Index cells);
 
-// A sky for the annual product: 146 sky bins as rows; or InvalidArgument.
+// A sky for the annual product: 146 sky bins as rows, or a split sky (kSplitSkyRows); or
+// InvalidArgument.
 absl::Status CheckSkyRows(const Matrix& sky);
+
+// The rows through which a split sky's second block multiplies: the indoor rows' unreflected
+// direct columns (the last kTregenzaBinCount of I, or of a one-stage [D | D_0]).
+Matrix UnreflectedOf(const Matrix& stacked_indoor);
 
 // The outdoor batches of an annual product: at least 2, of equal shape, 146 sky bins as
 // columns like the sky's rows; or InvalidArgument.
@@ -64,9 +69,10 @@ absl::Status CheckPairs(const std::vector<Matrix>& indoor_batches,
 
 // The batches' light through the window, I_b O_b for every b, one above the other
 // ((B x sensors) x 146), for batches that pair up (CheckPairs): a blocked matrix product per
-// batch, the batches on all cores.
+// batch, the batches on all cores. With `unreflected`, their unreflected direct columns
+// beside it ((B x sensors) x 292), for a split sky.
 Matrix ThroughWindow(const std::vector<Matrix>& indoor_batches,
-                     const std::vector<Matrix>& outdoor_batches);
+                     const std::vector<Matrix>& outdoor_batches, bool unreflected = false);
 
 // a b, parts of b's columns on all cores. Eigen's own products are single-threaded here: its
 // OpenMP threads, forking and joining for every small product, stalled whenever other

@@ -11,6 +11,7 @@
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
 #include "core/dc/dc_backend.h"
+#include "core/dc/direct_sun.h"
 #include "core/dc/two_stage.h"
 #include "core/metrics/metric_errors.h"
 #include "core/trace/one_stage_cpu.h"
@@ -138,70 +139,89 @@ class CudaAnnualProduct : public AnnualProduct {
     }
     FENESTRA_RETURN_IF_ERROR(annual->SetProduct(batches, static_cast<int>(outdoor[0].rows()),
                                                 sky.data(), static_cast<int>(sky.cols()),
-                                                from_device));
+                                                static_cast<int>(sky.rows()), from_device));
     return std::unique_ptr<CudaAnnualProduct>(new CudaAnnualProduct(
-        std::move(annual), static_cast<int>(outdoor.size()), outdoor[0].rows(), sky.cols()));
+        std::move(annual), static_cast<int>(outdoor.size()), outdoor[0].rows(), sky));
   }
   // The product of the sky alone (DcBackend::MakeSkyProduct).
   static absl::StatusOr<std::unique_ptr<CudaAnnualProduct>> MakeSky(int device, const Matrix& sky) {
     FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
     FENESTRA_ASSIGN_OR_RETURN(annual, NewTally(device));
-    FENESTRA_RETURN_IF_ERROR(annual->SetSkyProduct(sky.data(), static_cast<int>(sky.cols())));
+    FENESTRA_RETURN_IF_ERROR(annual->SetSkyProduct(sky.data(), static_cast<int>(sky.cols()),
+                                                   static_cast<int>(sky.rows())));
     return std::unique_ptr<CudaAnnualProduct>(
-        new CudaAnnualProduct(std::move(annual), kAnyBatches, kDaylightBins, sky.cols()));
+        new CudaAnnualProduct(std::move(annual), kAnyBatches, sky.rows(), sky));
   }
 
-  absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) override {
-    return Illuminance(indoor_batches, nullptr);
-  }
   absl::StatusOr<std::vector<Matrix>> ApplyToSky(const std::vector<Matrix>& indoor_batches,
-                                                 const Matrix& sky) override {
+                                                 const Matrix& sky,
+                                                 std::span<const SunEntry> sun) override {
     FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
-    return Illuminance(indoor_batches, &sky);
+    if (sky.rows() != sky_.rows()) {
+      return absl::InvalidArgumentError("the sky of a call has other rows than the product's");
+    }
+    FENESTRA_RETURN_IF_ERROR(CheckSunEntries(sun, indoor_batches, sky));
+    FENESTRA_ASSIGN_OR_RETURN(e, Illuminance(indoor_batches, &sky));
+    return WithSun(std::move(e), indoor_batches.size(), sun);
   }
 
   // E is formed and tallied on the device; only the tallies come back.
   absl::StatusOr<std::vector<HourTally>> Tally(const std::vector<Matrix>& indoor_batches,
-                                               const MetricOptions& options) override {
+                                               const MetricOptions& options,
+                                               std::span<const SunEntry> sun) override {
     const int batches = static_cast<int>(indoor_batches.size());
     FENESTRA_RETURN_IF_ERROR(CheckBatchCount(batches));
     FENESTRA_RETURN_IF_ERROR(CheckErrorBatches(batches));
+    FENESTRA_RETURN_IF_ERROR(CheckSunEntries(sun, indoor_batches, sky_));
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
     const int sensors = static_cast<int>(indoor_batches[0].rows());
     DeviceTallies tallies(batches, sensors, options);
-    FENESTRA_RETURN_IF_ERROR(annual_->Tally(stacked.data(), batches, sensors, tallies.request));
-    return tallies.Versions(steps_);
+    FENESTRA_RETURN_IF_ERROR(annual_->Tally(stacked.data(), batches, sensors, tallies.request,
+                                            {sun.data(), sun.size()}));
+    return tallies.Versions(sky_.cols());
   }
+  const Matrix& Sky() const override { return sky_; }
 
   // E_b through `sky` (as ApplyToSky) of one design's indoor sums on the device
   // (CudaTracer::DeviceSums), batch b's divided by batch_paths[b].
   absl::StatusOr<std::vector<Matrix>> ApplyToSkySums(const double* device_sums, int sensors,
                                                      const std::vector<uint64_t>& batch_paths,
-                                                     const Matrix& sky) {
+                                                     const Matrix& sky,
+                                                     std::span<const SunEntry> sun) {
     FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
+    if (sky.rows() != sky_.rows()) {
+      return absl::InvalidArgumentError("the sky of a call has other rows than the product's");
+    }
+    FENESTRA_RETURN_IF_ERROR(CheckSunEntries(sun, std::vector<Matrix>{Matrix(sensors, 0)}, sky));
     Matrix illuminance(Eigen::Index{batches_} * sensors, sky.cols());
     FENESTRA_RETURN_IF_ERROR(
         annual_->IlluminanceOfSums(device_sums, batches_, sensors, batch_paths.data(), sky.data(),
                                    static_cast<int>(sky.cols()), illuminance.data()));
+    AddSunEntries(sun, sensors, illuminance);
     return SplitBatches(illuminance, batches_);
   }
 
   // The tallies of `designs` designs' indoor sums on the device (CudaTracer::DeviceSums),
   // design k's at device_sums + k * design_sums, batch b's divided by batch_paths[b].
+  // Design k's direct sun is sun[k] (none where `sun` is shorter).
   std::vector<absl::StatusOr<std::vector<HourTally>>> TallySums(
       const double* device_sums, size_t design_sums, int designs, int sensors,
-      const std::vector<uint64_t>& batch_paths, const MetricOptions& options) {
+      const std::vector<uint64_t>& batch_paths, const MetricOptions& options,
+      const std::vector<std::vector<SunEntry>>& sun) {
     std::vector<std::unique_ptr<DeviceTallies>> tallies;
     std::vector<CudaAnnualTally::TallyRequest> requests;
+    std::vector<SunEntries> entries(designs);
     for (int k = 0; k < designs; ++k) {
       tallies.push_back(std::make_unique<DeviceTallies>(batches_, sensors, options));
       requests.push_back(tallies.back()->request);
+      if (k < static_cast<int>(sun.size())) entries[k] = {sun[k].data(), sun[k].size()};
     }
-    const absl::Status tallied = annual_->TallySums(device_sums, design_sums, designs, batches_,
-                                                    sensors, batch_paths.data(), requests.data());
+    const absl::Status tallied =
+        annual_->TallySums(device_sums, design_sums, designs, batches_, sensors, batch_paths.data(),
+                           requests.data(), entries.data());
     std::vector<absl::StatusOr<std::vector<HourTally>>> out;
     for (int k = 0; k < designs; ++k) {
-      out.push_back(tallied.ok() ? tallies[k]->Versions(steps_) : tallied);
+      out.push_back(tallied.ok() ? tallies[k]->Versions(sky_.cols()) : tallied);
     }
     return out;
   }
@@ -217,8 +237,17 @@ class CudaAnnualProduct : public AnnualProduct {
   }
 
   CudaAnnualProduct(std::unique_ptr<CudaAnnualTally> annual, int batches, Eigen::Index rows,
-                    Eigen::Index steps)
-      : annual_(std::move(annual)), batches_(batches), rows_(rows), steps_(steps) {}
+                    Matrix sky)
+      : annual_(std::move(annual)), batches_(batches), rows_(rows), sky_(std::move(sky)) {}
+
+  // E's batches with the direct sun added on the host.
+  static std::vector<Matrix> WithSun(std::vector<Matrix> e, size_t batches,
+                                     std::span<const SunEntry> sun) {
+    if (sun.empty() || e.empty()) return e;
+    for (Matrix& batch : e) AddSunEntries(sun, static_cast<int>(batch.rows()), batch);
+    (void)batches;
+    return e;
+  }
 
   absl::Status CheckBatchCount(size_t batches) const {
     if (batches_ == kAnyBatches || static_cast<int>(batches) == batches_) return absl::OkStatus();
@@ -232,7 +261,7 @@ class CudaAnnualProduct : public AnnualProduct {
                                                   const Matrix* other_sky) {
     FENESTRA_RETURN_IF_ERROR(CheckBatchCount(indoor_batches.size()));
     FENESTRA_ASSIGN_OR_RETURN(stacked, StackIndoorBatches(indoor_batches, rows_));
-    const Eigen::Index steps = other_sky != nullptr ? other_sky->cols() : steps_;
+    const Eigen::Index steps = other_sky != nullptr ? other_sky->cols() : sky_.cols();
     Matrix illuminance(stacked.rows(), steps);
     FENESTRA_RETURN_IF_ERROR(annual_->Illuminance(
         stacked.data(), static_cast<int>(stacked.rows()), illuminance.data(),
@@ -242,8 +271,8 @@ class CudaAnnualProduct : public AnnualProduct {
 
   std::unique_ptr<CudaAnnualTally> annual_;
   int batches_;
-  Eigen::Index rows_;   // of each O_b
-  Eigen::Index steps_;  // S's columns
+  Eigen::Index rows_;  // of each O_b
+  Matrix sky_;         // S, as uploaded
 };
 
 // The tracer's outdoor scene (TracerSlot), shared by the indoor stages of one backend.
@@ -484,8 +513,10 @@ class CudaDesignTallies : public DesignTallies {
     } else {
       FENESTRA_RETURN_IF_ERROR(TraceInFull(design, nullptr));
     }
-    return std::move(
-        product_->TallySums(tracer_->DeviceSums(), 0, 1, sensor_count, batch_paths, options)[0]);
+    const std::vector<SunEntry> sun = SunOf(design);
+    return WithSunlitHours(std::move(product_->TallySums(tracer_->DeviceSums(), 0, 1, sensor_count,
+                                                         batch_paths, options, {sun})[0]),
+                           sun, options);
   }
   absl::StatusOr<std::vector<Matrix>> IndoorBatches(const BlindDesign& design) override {
     held_parts_ = 0;  // the tracer's sums become this design's
@@ -530,14 +561,18 @@ class CudaDesignTallies : public DesignTallies {
           {scenes.begin() + first, scenes.begin() + first + count}, &counters);
       rays_ += counters.rays;
       std::vector<absl::StatusOr<std::vector<HourTally>>> tallies;
+      std::vector<std::vector<SunEntry>> sun;
+      for (size_t k = 0; k < count; ++k) sun.push_back(SunOf(designs[traced[first + k]]));
       if (replayed.ok()) {
         tallies = product_->TallySums(
             tracer_->DeviceSums(), tracer_->DesignSums(), static_cast<int>(count),
-            static_cast<int>(scene_.sensors.size()), FullBatchPaths(), options);
+            static_cast<int>(scene_.sensors.size()), FullBatchPaths(), options, sun);
       } else {
         tallies.assign(count, replayed);
       }
-      for (size_t k = 0; k < count; ++k) out[traced[first + k]] = std::move(tallies[k]);
+      for (size_t k = 0; k < count; ++k) {
+        out[traced[first + k]] = WithSunlitHours(std::move(tallies[k]), sun[k], options);
+      }
     }
     return out;
   }
@@ -548,7 +583,7 @@ class CudaDesignTallies : public DesignTallies {
     FENESTRA_RETURN_IF_ERROR(CheckProductSet(product_.get()));
     FENESTRA_RETURN_IF_ERROR(Replay(design, kDesignParts));
     return product_->ApplyToSkySums(tracer_->DeviceSums(), static_cast<int>(scene_.sensors.size()),
-                                    FullBatchPaths(), sky);
+                                    FullBatchPaths(), sky, {});
   }
   AnnualProduct* Product() override { return product_.get(); }
   int DesignsAtOnce() const override { return replay_ != nullptr ? kReplayDesignsAtOnce : 1; }
@@ -679,7 +714,7 @@ class CudaBackend : public DcBackend {
 
     // Trace per (sensor, batch), then fold the batches
     const size_t rows = static_cast<size_t>(sensor_count) * batches;
-    std::vector<double> batch_sum(rows * kDaylightBins), batch_squares(rows * kDaylightBins);
+    std::vector<double> batch_sum(rows * kOneStageBins), batch_squares(rows * kOneStageBins);
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(tracer_->OneStage(
         local.data(), sensor_count, static_cast<uint64_t>(options.paths_per_sensor), batches,
@@ -687,17 +722,17 @@ class CudaBackend : public DcBackend {
     OneStageTally tally;
     tally.sensor_count = sensor_count;
     tally.batches = batches;
-    tally.sum.assign(sensor_count * kDaylightBins, 0.0);
+    tally.sum.assign(sensor_count * kOneStageBins, 0.0);
     tally.sum_squares.assign(tally.sum.size(), 0.0);
     tally.sky_sum_squares.assign(sensor_count, 0.0);
     for (int s = 0; s < sensor_count; ++s) {
       for (int b = 0; b < batches; ++b) {
-        for (int bin = 0; bin < kDaylightBins; ++bin) {
-          const size_t k = (static_cast<size_t>(s) * batches + b) * kDaylightBins + bin;
-          tally.sum[s * kDaylightBins + bin] += batch_sum[k];
-          tally.sum_squares[s * kDaylightBins + bin] += batch_squares[k];
+        for (int bin = 0; bin < kOneStageBins; ++bin) {
+          const size_t k = (static_cast<size_t>(s) * batches + b) * kOneStageBins + bin;
+          tally.sum[s * kOneStageBins + bin] += batch_sum[k];
+          tally.sum_squares[s * kOneStageBins + bin] += batch_squares[k];
           // A path scores one bin, so its sky total's square is its bin's square
-          if (bin > 0) tally.sky_sum_squares[s] += batch_squares[k];
+          if (IsOneStageSkyBin(bin)) tally.sky_sum_squares[s] += batch_squares[k];
         }
       }
     }
@@ -724,10 +759,10 @@ class CudaBackend : public DcBackend {
     CudaTracer::OutdoorOutput out;
     o.batches.reserve(batches);
     for (int b = 0; b < batches; ++b) {
-      o.batches.emplace_back(cells + kDaylightBins, kDaylightBins);
+      o.batches.emplace_back(OutdoorRowCount(cells), kDaylightBins);
       out.batches.push_back(o.batches.back().data());
     }
-    o.mean.resize(cells + kDaylightBins, kDaylightBins);
+    o.mean.resize(OutdoorRowCount(cells), kDaylightBins);
     o.standard_error.resize(o.mean.rows(), o.mean.cols());
     o.first_escapes.resize(cells);
     out.mean = o.mean.data();

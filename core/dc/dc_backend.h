@@ -3,11 +3,13 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/common/radiance_matrix.h"
+#include "core/dc/sun_entry.h"
 #include "core/geometry/hemisphere_basis.h"
 #include "core/geometry/mesh.h"
 #include "core/geometry/scene.h"
@@ -17,11 +19,18 @@
 
 namespace fenestra {
 
+class DirectSun;
 class IndoorStages;
 struct IndoorOptions;
 
 // Number of daylight-coefficient columns: bin 0 = ground, 1..145 = Tregenza sky patches.
 inline constexpr int kDaylightBins = 146;
+// Rows of a split sky (core/README.md, "Direct sun"): S, then -S_sun, the sun as the sky
+// matrix spreads it over patches, which multiplies the coefficients' unreflected direct part
+// D_0 (the last 146 columns of I, or of a one-stage [D | D_0]), so that E = D S - D_0 S_sun
+// and the direct sun, traced to its position (SunEntry, core/dc/direct_sun.h), takes its
+// place.
+inline constexpr int kSplitSkyRows = 2 * kDaylightBins;
 
 // Matrices a GPU holds, one after the other, each laid out as the host's copy of it: on GPU
 // `device`, freed when the last holder lets go. A backend on that GPU takes them from there
@@ -32,7 +41,7 @@ struct DeviceMatrices {
 };
 
 // The outdoor stage's matrix O in batches, as a backend forms it from its sums
-// (FormOutdoorBatches): per batch (window cells + 146) x 146, the reflected light per window
+// (FormOutdoorBatches): per batch (window cells + 292) x 146, the reflected light per window
 // cell over its paths whose first segment met a surface, then the identity for the direct
 // columns; their mean and its standard error.
 struct OutdoorBatches {
@@ -56,8 +65,9 @@ struct OneStageOptions {
   // Surface reflections a path may make (Radiance's -ab is one more); 0 = none (the direct
   // component), kUnlimitedBounces = ended by Russian roulette only (unbiased).
   int max_bounces = kUnlimitedBounces;
-  uint64_t seed = kDefaultSeed;  // a path's random stream is a function of (seed, sensor, path index)
-  int threads = 0;    // CPU threads; 0 = every hardware thread
+  uint64_t seed =
+      kDefaultSeed;  // a path's random stream is a function of (seed, sensor, path index)
+  int threads = 0;   // CPU threads; 0 = every hardware thread
   // Russian roulette: required when unlimited; optional (still unbiased) with a limit.
   bool russian_roulette = true;
   // Path weight below which roulette plays, in (0, 1]: such a path survives with
@@ -88,6 +98,11 @@ struct OneStageResult {
   Eigen::VectorXd sky_sum_standard_error;  // its standard error [sr]
   // With options.batches = B > 1: D of each batch; `coefficients` is their mean.
   std::vector<Matrix> batch_coefficients;
+  // The part of D that reaches the sensor without a reflection (its direct component, which
+  // the direct sun replaces; core/README.md, "Direct sun"), sensors x 146 [sr], and per batch
+  // as batch_coefficients.
+  Matrix direct_coefficients;
+  std::vector<Matrix> batch_direct_coefficients;
   int64_t paths_per_sensor = 0;
   uint64_t rays_traced = 0;         // closest-hit queries, all sensors, pilot included
   uint64_t branches = 0;            // paths plus weight-window splits
@@ -108,20 +123,29 @@ struct OneStageResult {
 // indoor stage's (I_b sensors x columns, O_b columns x 146, core/dc/two_stage.h; S 146 x
 // steps with the luminous efficacy folded in, so E is in lux). Made once per job by
 // DcBackend::MakeAnnualProduct, applied once per design.
+// S may be a split sky (kSplitSkyRows); the sun's entries a call passes (their columns S's)
+// are then added to every batch's E.
 class AnnualProduct {
  public:
   virtual ~AnnualProduct() = default;
   // InvalidArgument when a batch's columns are not O's rows, or the batch counts differ.
-  virtual absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) = 0;
-  // Apply with `sky` (146 x any steps) in S's place for this call; S stays. InvalidArgument
-  // as Apply, or for a sky of other rows.
+  absl::StatusOr<std::vector<Matrix>> Apply(const std::vector<Matrix>& indoor_batches) {
+    return ApplyToSky(indoor_batches, Sky());
+  }
+  // Apply with `sky` (146 or kSplitSkyRows x any steps) in S's place for this call, the
+  // sun's `entries` in its columns; S stays. InvalidArgument as Apply, or for a sky of other
+  // rows.
   virtual absl::StatusOr<std::vector<Matrix>> ApplyToSky(const std::vector<Matrix>& indoor_batches,
-                                                         const Matrix& sky) = 0;
+                                                         const Matrix& sky,
+                                                         std::span<const SunEntry> sun = {}) = 0;
   // The tallies of E of the mean of the B >= 2 batches, then of each leave-one-out mean
   // (TallyBatchVersions in core/metrics/metric_errors.h), every column of S an analysed hour;
   // a GPU tallies where E is. InvalidArgument as Apply, or B < 2.
   virtual absl::StatusOr<std::vector<HourTally>> Tally(const std::vector<Matrix>& indoor_batches,
-                                                       const MetricOptions& options) = 0;
+                                                       const MetricOptions& options,
+                                                       std::span<const SunEntry> sun = {}) = 0;
+  // S as set.
+  virtual const Matrix& Sky() const = 0;
 };
 
 // A design's indoor paths in rounds (racing, core/optimize/racing.h): each batch's paths
@@ -182,6 +206,22 @@ class DesignTallies {
   virtual bool RacesByDefault() const { return TracesInParts(); }
   // Closest-hit queries of every Tally so far.
   virtual uint64_t RaysTraced() const = 0;
+
+  // The direct sun every design's E gets (core/dc/direct_sun.h: its columns the product's),
+  // with a split sky as the product's S; also each tally's sunlit hours (ASE). Null: none.
+  void SetDirectSun(std::shared_ptr<const DirectSun> sun) { sun_ = std::move(sun); }
+  const DirectSun* Sun() const { return sun_.get(); }
+
+ protected:
+  // `design`'s direct sun in the product's columns; empty without SetDirectSun.
+  std::vector<SunEntry> SunOf(const BlindDesign& design) const;
+  // `versions` (tallies of E) with the sunlit hours of `sun` (SunOf), where there is a sun.
+  absl::StatusOr<std::vector<HourTally>> WithSunlitHours(
+      absl::StatusOr<std::vector<HourTally>> versions, const std::vector<SunEntry>& sun,
+      const MetricOptions& options) const;
+
+ private:
+  std::shared_ptr<const DirectSun> sun_;
 };
 
 // A tracer backend for daylight coefficients (Embree on the CPU, CUDA on a GPU), chosen at

@@ -11,6 +11,7 @@
 #include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/dc/backend_support.h"
+#include "core/dc/direct_sun.h"
 #include "core/trace/trace_geometry.h"
 #include "core/trace/two_stage_cpu.h"
 #include "core/trace/two_stage_modes.h"
@@ -65,13 +66,15 @@ OutdoorBatches FormOutdoorBatches(const OutdoorTally& tally) {
   const int cells = tally.cells;
   o.first_escapes = Eigen::VectorXd::Zero(cells);
   for (int b = 0; b < tally.batches; ++b) {
-    Matrix batch(cells + kDaylightBins, kDaylightBins);
+    Matrix batch(OutdoorRowCount(cells), kDaylightBins);
     const double paths = static_cast<double>(tally.batch_paths[b]);
     for (int k = 0; k < cells; ++k) {
       const double* row = &tally.sum[(static_cast<size_t>(b) * cells + k) * kOutdoorRowSize];
       for (int j = 0; j < kDaylightBins; ++j) batch(k, j) = OutdoorCoefficient(row, paths, j);
       o.first_escapes(k) += row[kFirstEscapeEntry];
     }
+    // The identity for each block of direct columns (IndoorColumnCount)
+    batch.middleRows(cells, kDaylightBins).setIdentity();
     batch.bottomRows(kDaylightBins).setIdentity();
     o.batches.push_back(std::move(batch));
   }
@@ -225,7 +228,7 @@ absl::Status CheckOutdoorFitsIndoor(const std::vector<Matrix>& outdoor_batches,
                                     const IndoorOptions& options) {
   FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
   const Eigen::Index columns =
-      Eigen::Index{options.parts.columns} * options.parts.rows * basis.cell_count + kDaylightBins;
+      OutdoorRowCount(options.parts.columns * options.parts.rows * basis.cell_count);
   const Eigen::Index rows = outdoor_batches.empty() ? 0 : outdoor_batches[0].rows();
   if (rows != columns || static_cast<int>(outdoor_batches.size()) != options.batches) {
     return absl::InvalidArgumentError(
@@ -378,7 +381,8 @@ class StagedDesignTallies : public DesignTallies {
       if (parts != kDesignParts) return stages_->TraceParts(design, 0, parts).status();
       FENESTRA_ASSIGN_OR_RETURN(indoor, stages_->Compute(design));
       rays_ += indoor.rays_traced;
-      return product_->Tally(indoor.batches, options);
+      const std::vector<SunEntry> sun = SunOf(design);
+      return WithSunlitHours(product_->Tally(indoor.batches, options, sun), sun, options);
     }
     // The parts not traced yet: all of them for another design
     const bool goes_on = held_parts_ > 0 && design == held_design_ && parts > held_parts_;
@@ -392,7 +396,10 @@ class StagedDesignTallies : public DesignTallies {
     }
     held_design_ = design;
     held_parts_ = parts;
-    return product_->Tally(IndoorResultFromTally(held_, options_).batches, options);
+    const std::vector<SunEntry> sun = SunOf(design);
+    return WithSunlitHours(
+        product_->Tally(IndoorResultFromTally(held_, options_).batches, options, sun), sun,
+        options);
   }
   absl::StatusOr<std::vector<Matrix>> IndoorBatches(const BlindDesign& design) override {
     FENESTRA_ASSIGN_OR_RETURN(indoor, stages_->Compute(design));
@@ -416,6 +423,21 @@ class StagedDesignTallies : public DesignTallies {
 };
 
 }  // namespace
+
+std::vector<SunEntry> DesignTallies::SunOf(const BlindDesign& design) const {
+  return sun_ != nullptr ? sun_->Entries(design) : std::vector<SunEntry>{};
+}
+
+absl::StatusOr<std::vector<HourTally>> DesignTallies::WithSunlitHours(
+    absl::StatusOr<std::vector<HourTally>> versions, const std::vector<SunEntry>& sun,
+    const MetricOptions& options) const {
+  if (sun_ == nullptr || !versions.ok()) return versions;
+  // Exact: the same in every version
+  std::vector<int64_t> sunlit(sun_->Sensors(), 0);
+  for (const SunEntry& e : sun) sunlit[e.sensor] += e.lux > options.ase_threshold_lux;
+  for (HourTally& v : *versions) v.sunlit = sunlit;
+  return versions;
+}
 
 std::vector<absl::StatusOr<std::vector<HourTally>>> DesignTallies::TallyDesigns(
     const std::vector<BlindDesign>& designs, const MetricOptions& options) {

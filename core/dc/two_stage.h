@@ -1,8 +1,8 @@
 #pragma once
 
 // The two-stage method (core/README.md, "Two-stage method"): the outdoor matrix O ((window
-// cells + 146) x 146 sky bins) once per site, the indoor matrix I (sensors x (window cells +
-// 146)) per design, and D = I O. The outdoor stage sees only outdoor surfaces, the indoor
+// cells + 292) x 146 sky bins) once per site, the indoor matrix I (sensors x (window cells +
+// 292)) per design, and D = I O. The outdoor stage sees only outdoor surfaces, the indoor
 // stage only indoor surfaces and the blind; each builds its own acceleration structure from
 // them.
 //
@@ -19,9 +19,10 @@
 // direct part), and only light whose view meets an outdoor surface goes through the window
 // cells and O (core/trace/two_stage_modes.h). O's rows are the window cells (the mean
 // radiance of what the cell sees, given that it sees a surface), then the identity for
-// the direct columns: D = I O. Averaged over a cell, the sky's edge against the buildings
-// moved a sensor by 3.6% (6.4% with a black city) where slats in the window plane let it
-// see each cell only in strips (bench/results/two_stage_bias_cpu2.txt).
+// each block of direct columns (light reflected in the room, then the sensor's own view of
+// the sky, which the direct sun replaces): D = I O. Averaged over a cell, the sky's edge against
+// the buildings moved a sensor by 3.6% (6.4% with a black city) where slats in the window plane let
+// it see each cell only in strips (bench/results/two_stage_bias_cpu2.txt).
 //
 // Errors: both stages are traced in the same number B of independent batches, and batch b
 // of D is I_b O_b, so D (their mean) and every metric's jackknife see the noise of both
@@ -71,7 +72,7 @@ inline constexpr int kMaxBatches = 64;
 // Window parts per side, at most.
 inline constexpr int kMaxWindowPartsPerSide = 16;
 // The outdoor matrix in memory with its batches, its mean and its standard error, at most:
-// (window cells + 146) x 146 entries of 8 bytes each, batches + 2 times [bytes]. The default
+// (window cells + 292) x 146 entries of 8 bytes each, batches + 2 times [bytes]. The default
 // sampling (288 direction cells, 4 x 3 parts, 8 batches) needs 41 MB.
 inline constexpr int64_t kMaxOutdoorMatrixBytes = int64_t{4} << 30;
 
@@ -92,12 +93,13 @@ struct OutdoorOptions {
 
 // O: per unit radiance of each sky bin [-], rows part * basis_cells + direction cell: the
 // mean radiance arriving at the window part from the direction cell where its view meets an
-// outdoor surface; then one row per sky bin, the identity, for I's direct columns. The mean
+// outdoor surface; then per block of I's direct columns (IndoorColumnCount) one row per sky
+// bin, the identity. The mean
 // of independent batch estimates, with the standard error of that mean.
 struct OutdoorResult {
-  Matrix coefficients;               // (window cells + 146) x 146
-  Matrix standard_error;             // (window cells + 146) x 146
-  std::vector<Matrix> batches;       // per batch: (window cells + 146) x 146
+  Matrix coefficients;               // (window cells + 292) x 146
+  Matrix standard_error;             // (window cells + 292) x 146
+  std::vector<Matrix> batches;       // per batch: (window cells + 292) x 146
   DeviceMatrices batches_on_device;  // the batches where a GPU formed them, else empty
   // Per window cell: the fraction of its paths whose first segment reached the sky.
   Eigen::VectorXd sky_view;
@@ -130,9 +132,9 @@ struct IndoorOptions {
 // estimates.
 struct IndoorResult {
   WindowParts parts;
-  Matrix coefficients;          // sensors x (window cells + 146)
-  Matrix standard_error;        // sensors x (window cells + 146), from the batches
-  std::vector<Matrix> batches;  // per batch: sensors x (window cells + 146)
+  Matrix coefficients;          // sensors x (window cells + 292)
+  Matrix standard_error;        // sensors x (window cells + 292), from the batches
+  std::vector<Matrix> batches;  // per batch: sensors x (window cells + 292)
   int64_t paths_per_sensor = 0;
   uint64_t rays_traced = 0;
   size_t triangles = 0;      // indoor triangles traced against (blind included)

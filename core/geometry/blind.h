@@ -41,6 +41,9 @@ struct BlindSpec {
   ParameterRange tilt_rad, slat_width_m, slat_spacing_m, slat_thickness_m;
   double wall_gap_m = 0.01;  // clearance between wall and slat at any tilt [m]
   double side_margin_m = 0;  // extra slat length beyond the opening at each end [m]
+  // In place only in the hours IES LM-83's rule closes it (scene.proto, AUTOMATED_SUN),
+  // retracted otherwise; false: in place in every hour.
+  bool automated_sun = false;
 };
 
 // One design: the free values of the blind.

@@ -390,6 +390,12 @@ absl::StatusOr<BlindSpec> BuildBlind(const v1::VenetianBlind& b,
   FENESTRA_RETURN_IF_ERROR(
       CheckLength(b.side_margin_m(), kMaxSideMarginM, "blind.side_margin_m", check));
   spec.side_margin_m = b.side_margin_m();
+  if (!v1::VenetianBlind::Operation_IsValid(b.operation())) {
+    return check.Error("blind.operation",
+                       absl::StrCat("unknown operation ", static_cast<int>(b.operation()),
+                                    " (STATIC or AUTOMATED_SUN)"));
+  }
+  spec.automated_sun = b.operation() == v1::VenetianBlind::AUTOMATED_SUN;
   if (absl::Status fits = CheckBlindFits(spec, window); !fits.ok()) {
     return check.Error("blind", std::string(fits.message()));
   }

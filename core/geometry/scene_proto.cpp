@@ -39,6 +39,8 @@ void SetBlind(const Scene& scene, v1::VenetianBlind& out) {
   SetParameter(spec.slat_thickness_m, out.mutable_slat_thickness_m());
   out.set_wall_gap_m(spec.wall_gap_m);
   out.set_side_margin_m(spec.side_margin_m);
+  out.set_operation(spec.automated_sun ? v1::VenetianBlind::AUTOMATED_SUN
+                                       : v1::VenetianBlind::STATIC);
 }
 
 }  // namespace

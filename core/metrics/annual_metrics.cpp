@@ -57,7 +57,7 @@ double SceneMetricValue(const SceneMetrics& s, SceneMetric metric) {
     case SceneMetric::kMeanIlluminance:
       return s.mean_illuminance_lux;
     case SceneMetric::kBlindInPlace:
-      return 100;  // a static blind is always in place
+      return s.blind_in_place_percent;
   }
   return 0;
 }
@@ -157,6 +157,36 @@ HourTally TallyHours(const Matrix& illuminance_lux, const MetricOptions& options
   return builder.Finish();
 }
 
+int LeedDaylightPoints(double sda_percent) {
+  return sda_percent >= 75 ? 3 : sda_percent >= 55 ? 2 : sda_percent >= 40 ? 1 : 0;
+}
+
+std::vector<int64_t> SunlitHours(const Matrix& direct_illuminance_lux,
+                                 const MetricOptions& options) {
+  std::vector<int64_t> hours(direct_illuminance_lux.rows());
+  for (Eigen::Index i = 0; i < direct_illuminance_lux.rows(); ++i) {
+    hours[i] = (direct_illuminance_lux.row(i).array() > options.ase_threshold_lux).count();
+  }
+  return hours;
+}
+
+namespace {
+
+// ASE in `metrics` from each sensor's sunlit hours.
+void SetAse(const std::vector<int64_t>& sunlit, const MetricOptions& options,
+            AnnualMetrics* metrics) {
+  metrics->has_ase = true;
+  double sensors_with_ase = 0;
+  for (size_t i = 0; i < metrics->sensors.size() && i < sunlit.size(); ++i) {
+    metrics->sensors[i].ase_hours = static_cast<double>(sunlit[i]);
+    sensors_with_ase += sunlit[i] >= options.ase_min_hours;
+  }
+  metrics->scene.ase_percent =
+      sensors_with_ase * (100.0 * (1.0 / static_cast<double>(metrics->sensors.size())));
+}
+
+}  // namespace
+
 AnnualMetrics MetricsFromTally(const HourTally& tally, int analysed_hours,
                                const MetricOptions& options) {
   const double dark_hours = analysed_hours - static_cast<double>(tally.hours);
@@ -205,22 +235,16 @@ AnnualMetrics MetricsFromTally(const HourTally& tally, int analysed_hours,
   scene.udi_all_percent = all_in * to_percent;
   scene.udi_all_fell_short_percent = all_below * to_percent;
   scene.udi_all_exceeded_percent = static_cast<double>(tally.any_above) * to_percent;
+  if (!tally.sunlit.empty()) SetAse(tally.sunlit, options, &result);
+  if (tally.blind_hours >= 0) {
+    scene.blind_in_place_percent = static_cast<double>(tally.blind_hours) * to_percent;
+  }
   return result;
 }
 
 void AddAse(const Matrix& direct_illuminance_lux, const MetricOptions& options,
             AnnualMetrics* metrics) {
-  metrics->has_ase = true;
-  double sensors_with_ase = 0;
-  for (size_t i = 0; i < metrics->sensors.size(); ++i) {
-    const Eigen::Index row = static_cast<Eigen::Index>(i);
-    const int sun_hours = static_cast<int>(
-        (direct_illuminance_lux.row(row).array() > options.ase_threshold_lux).count());
-    metrics->sensors[i].ase_hours = sun_hours;
-    sensors_with_ase += sun_hours >= options.ase_min_hours;
-  }
-  metrics->scene.ase_percent =
-      sensors_with_ase * (100.0 * (1.0 / static_cast<double>(metrics->sensors.size())));
+  SetAse(SunlitHours(direct_illuminance_lux, options), options, metrics);
 }
 
 absl::StatusOr<AnnualMetrics> ComputeAnnualMetrics(const Matrix& illuminance_lux,

@@ -38,6 +38,10 @@ struct MetricOptions {
   double sda_min_da_percent = 50;   // a sensor counts towards sDA when its DA >= it
   double ase_threshold_lux = 1000;  // direct-only E > it counts towards ASE
   int ase_min_hours = 250;          // a sensor counts towards ASE at >= this many hours
+  // An operated blind (IES LM-83) is in place in an hour in which more than this share of the
+  // sensors [%] gets more than operation_threshold_lux of direct sun through the bare window.
+  double operation_sensor_percent = 2;
+  double operation_threshold_lux = 1000;
   HourBasis hours = HourBasis::kOccupied;
 };
 
@@ -64,9 +68,10 @@ struct SceneMetrics {
   double udi_mean_exceeded_percent = 0;
   double da_mean_percent = 0;
   double cda_mean_percent = 0;
-  double sda_percent = 0;           // sensors with DA >= sda_min_da_percent
-  double ase_percent = 0;           // sensors with ase_hours >= ase_min_hours; 0 without input
-  double mean_illuminance_lux = 0;  // over sensors and analysed hours
+  double sda_percent = 0;               // sensors with DA >= sda_min_da_percent
+  double ase_percent = 0;               // sensors with ase_hours >= ase_min_hours; 0 without input
+  double blind_in_place_percent = 100;  // analysed hours with the blind in place
+  double mean_illuminance_lux = 0;      // over sensors and analysed hours
 };
 
 struct AnnualMetrics {
@@ -93,6 +98,11 @@ enum class SceneMetric {
 };
 
 double SceneMetricValue(const SceneMetrics& scene, SceneMetric metric);
+
+// LEED v4.1 daylight option 1 points from sDA300/50% [% of the sensors, all of equal area]:
+// 1 from 40%, 2 from 55%, 3 from 75% (as Honeybee's LEED post-processing counts them); LEED
+// asks ASE1000,250 to be at most 10% besides.
+int LeedDaylightPoints(double sda_percent);
 
 // Stable lower-case names: "udi_all", "udi_all_fell_short", "udi_all_exceeded", "udi_mean",
 // "udi_mean_fell_short", "udi_mean_exceeded", "da_mean", "cda_mean", "sda", "ase",
@@ -124,7 +134,16 @@ struct HourTally {
   std::vector<SensorHourTally> sensors;
   int64_t hours = 0;
   int64_t all_in = 0, any_below = 0, any_above = 0;
+  // Per sensor, where the direct sun is known (exactly, core/dc/direct_sun.h): the analysed
+  // hours whose direct-sun illuminance exceeds ase_threshold_lux, for ASE; empty otherwise.
+  std::vector<int64_t> sunlit;
+  // Analysed hours with the blind in place (an operated blind); -1: all of them (static).
+  int64_t blind_hours = -1;
 };
+
+// Per sensor, the hours of a sensors x hours direct-sun illuminance above the ASE threshold.
+std::vector<int64_t> SunlitHours(const Matrix& direct_illuminance_lux,
+                                 const MetricOptions& options);
 
 // The tally of `illuminance_lux` (n sensors x hours, lx), every column an analysed hour.
 // Assumes valid options (CheckMetricOptions).
@@ -146,7 +165,8 @@ class HourTallyBuilder {
 };
 
 // The metrics of a tally over `analysed_hours` >= tally.hours (> 0) hours, those beyond the
-// tally being dark (E = 0). Without ASE (has_ase false; see AddAse). Assumes valid options.
+// tally being dark (E = 0); ASE where the tally has its sunlit hours (else has_ase false; see
+// AddAse). Assumes valid options.
 AnnualMetrics MetricsFromTally(const HourTally& tally, int analysed_hours,
                                const MetricOptions& options);
 

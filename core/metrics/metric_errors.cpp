@@ -34,6 +34,7 @@ constexpr std::array kSceneFields = {
     &SceneMetrics::sda_percent,
     &SceneMetrics::ase_percent,
     &SceneMetrics::mean_illuminance_lux,
+    &SceneMetrics::blind_in_place_percent,
 };
 
 // Every number of `m` in a fixed order: the scene's, then each sensor's.

@@ -46,6 +46,10 @@ class DewPointMean {
 
 }  // namespace
 
+Vec3d SunDirection(const SkyStep& step) {
+  return DirectionFromAltAz(step.solar_altitude_rad, step.solar_azimuth_rad);
+}
+
 double StepCentreHours(const EpwRecord& record, int records_per_hour) {
   if (records_per_hour <= 1) return record.hour - 0.5;
   const double interval_minutes = 60.0 / records_per_hour;
@@ -148,9 +152,13 @@ absl::StatusOr<SkyMatrix> BuildSkyMatrix(const EpwData& weather, const SkyMatrix
       column[0] = options.ground_reflectance * horizontal_illuminance /
                   (std::numbers::pi * kWhiteEfficacyLmPerW);
     }
-    if (options.include_sun && condition.direct_illuminance > 1e-4) {
-      AddSunToPatches(patches, DirectionFromAltAz(sun.altitude_rad, sun.azimuth_rad),
-                      condition.direct_illuminance / kWhiteEfficacyLmPerW, column);
+    if (condition.direct_illuminance > kMinDirectIlluminanceLux) {
+      const double direct_normal = condition.direct_illuminance / kWhiteEfficacyLmPerW;
+      sky.steps[t].direct_normal = direct_normal;  // each step is written by one thread
+      if (options.include_sun) {
+        AddSunToPatches(patches, DirectionFromAltAz(sun.altitude_rad, sun.azimuth_rad),
+                        direct_normal, column);
+      }
     }
     for (int bin = 0; bin < bins; ++bin) sky.radiance(bin, t) = column[bin];
   });

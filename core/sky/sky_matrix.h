@@ -40,7 +40,17 @@ struct SkyStep {
   bool sun_in_sky = false;  // part of the solar disc above the horizon
   double solar_altitude_rad = 0;
   double solar_azimuth_rad = 0;  // from north towards east
+  // The sun's direct normal irradiance in the matrix's quantity [W m-2] (visible: direct
+  // normal illuminance / 179), whether or not the matrix holds the sun; 0 without one (at
+  // most kMinDirectIlluminanceLux).
+  double direct_normal = 0;
 };
+
+// Direct normal illuminance below which a step has no sun [lx], as gendaymtx.
+inline constexpr double kMinDirectIlluminanceLux = 1e-4;
+
+// The unit direction towards the sun of `step` (x east, y north, z up).
+Vec3d SunDirection(const SkyStep& step);
 
 struct SkyMatrix {
   // Rows = bins (0 = ground), columns = time steps; radiance [W sr-1 m-2], visible

@@ -37,10 +37,10 @@ struct OneStageCpuRun {
   std::vector<float> window_scale;
 };
 
-// Sums over paths, per sensor and bin: sum[s * kTregenzaBinCount + bin] of the path's
+// Sums over paths, per sensor and bin: sum[s * kOneStageBins + bin] of the path's
 // score in that bin (pi * weight, summed over its branches) and sum_squares of its square:
 // the per-path second moment. sky_sum_squares[s]: the square of each path's score over the
-// sky bins 1..145, summed. Sums are in double, per fixed chunk of paths and then over
+// sky bins (IsOneStageSkyBin), summed. Sums are in double, per fixed chunk of paths and then over
 // chunks in order, so they are bitwise identical for any thread count.
 struct OneStageTally {
   int sensor_count = 0;
@@ -48,7 +48,7 @@ struct OneStageTally {
   std::vector<double> sum;
   std::vector<double> sum_squares;
   std::vector<double> sky_sum_squares;
-  // With batches > 1: batch_sum[(s * batches + b) * kTregenzaBinCount + bin] over the paths
+  // With batches > 1: batch_sum[(s * batches + b) * kOneStageBins + bin] over the paths
   // [b N / batches, (b + 1) N / batches) of sensor s.
   int batches = 1;
   std::vector<double> batch_sum;
@@ -79,8 +79,8 @@ struct ChunkSink {
   double* sum;
   double* sum_squares;
   double sky_sum_squares = 0;
-  double path_score[kTregenzaBinCount] = {};
-  int touched[kTregenzaBinCount] = {};
+  double path_score[kOneStageBins] = {};
+  int touched[kOneStageBins] = {};
   int touched_count = 0;
 
   void Add(int bin, double value) {
@@ -94,7 +94,7 @@ struct ChunkSink {
       const double v = path_score[bin];
       sum[bin] += v;
       sum_squares[bin] += v * v;
-      if (bin > 0) sky += v;
+      if (IsOneStageSkyBin(bin)) sky += v;
       path_score[bin] = 0.0;
     }
     sky_sum_squares += sky * sky;
@@ -106,8 +106,8 @@ struct Chunk {
   uint32_t sensor;
   int batch;
   uint64_t first, last;  // paths [first, last)
-  double sum[kTregenzaBinCount];
-  double sum_squares[kTregenzaBinCount];
+  double sum[kOneStageBins];
+  double sum_squares[kOneStageBins];
   double sky_sum_squares;
   uint64_t rays;
   uint64_t branches;
@@ -176,15 +176,15 @@ OneStageTally TraceOneStageCpu(const Intersector& scene, const SurfaceTable& sur
   });
 
   // Combine the chunks in a fixed order: into batches, then batches into the total
-  const size_t bins = sensors.size() * kTregenzaBinCount;
+  const size_t bins = sensors.size() * kOneStageBins;
   tally.sum.assign(bins, 0.0);
   tally.sum_squares.assign(bins, 0.0);
   tally.sky_sum_squares.assign(sensors.size(), 0.0);
   std::vector<double> batch_sum(bins * batches, 0.0);
   for (const Chunk& chunk : chunks) {
-    double* batch = &batch_sum[(chunk.sensor * batches + chunk.batch) * kTregenzaBinCount];
-    double* sum_squares = &tally.sum_squares[chunk.sensor * kTregenzaBinCount];
-    for (int b = 0; b < kTregenzaBinCount; ++b) {
+    double* batch = &batch_sum[(chunk.sensor * batches + chunk.batch) * kOneStageBins];
+    double* sum_squares = &tally.sum_squares[chunk.sensor * kOneStageBins];
+    for (int b = 0; b < kOneStageBins; ++b) {
       batch[b] += chunk.sum[b];
       sum_squares[b] += chunk.sum_squares[b];
     }
@@ -196,9 +196,8 @@ OneStageTally TraceOneStageCpu(const Intersector& scene, const SurfaceTable& sur
   }
   for (size_t s = 0; s < sensors.size(); ++s) {
     for (int b = 0; b < batches; ++b) {
-      for (int bin = 0; bin < kTregenzaBinCount; ++bin) {
-        tally.sum[s * kTregenzaBinCount + bin] +=
-            batch_sum[(s * batches + b) * kTregenzaBinCount + bin];
+      for (int bin = 0; bin < kOneStageBins; ++bin) {
+        tally.sum[s * kOneStageBins + bin] += batch_sum[(s * batches + b) * kOneStageBins + bin];
       }
     }
   }

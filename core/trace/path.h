@@ -55,6 +55,15 @@ namespace fenestra {
 
 // Bins of the Tregenza sky plus the ground (bin 0).
 inline constexpr int kTregenzaBinCount = 146;
+// The one-stage tallies' bins: each sky bin twice, first for light reflected at least once,
+// then for the sensor's own view of it (no reflection: the direct component, which the
+// direct sun replaces; core/README.md, "Direct sun").
+inline constexpr int kOneStageBins = 2 * kTregenzaBinCount;
+FENESTRA_CPU_GPU inline int OneStageBin(int bin, bool unreflected) {
+  return bin + (unreflected ? kTregenzaBinCount : 0);
+}
+// Whether a one-stage bin is a sky bin (not the ground) of either block.
+FENESTRA_CPU_GPU inline bool IsOneStageSkyBin(int bin) { return bin % kTregenzaBinCount != 0; }
 
 // Surface properties as the tracer sees them.
 struct TraceMaterial {
@@ -318,7 +327,8 @@ FENESTRA_CPU_GPU inline PathStats TracePath(const Intersector& scene, const Surf
 }
 
 // One-stage daylight coefficients: paths from one sensor, scored by escape bin.
-//   Sink  void Add(int bin, double value);   value = pi * weight, per escaping branch
+//   Sink  void Add(int bin, double value);   value = pi * weight, per escaping branch, into
+//                                            OneStageBin(sky bin, no reflection yet)
 //         void EndPath();                    the path's branches are done
 template <class Sink>
 struct OneStageMode {
@@ -340,7 +350,8 @@ struct OneStageMode {
 
   // With cosine sampling, D[i, j] = pi * mean(weight of paths escaping through j).
   FENESTRA_CPU_GPU void Escape(const PathState& path) {
-    sink->Add(TregenzaBin(path.direction), kPi * static_cast<double>(path.weight));
+    sink->Add(OneStageBin(TregenzaBin(path.direction), path.reflections == 0),
+              kPi * static_cast<double>(path.weight));
   }
 
   FENESTRA_CPU_GPU void Finish(const PathStats&) { sink->EndPath(); }

@@ -151,10 +151,21 @@ FENESTRA_CPU_GPU inline double OutdoorCoefficient(const double* row, double path
   return met > 0 ? row[bin] / met : 0.0;
 }
 
-// Columns of the indoor matrix: the window cells, then the sky bins' direct columns.
+// Columns of the indoor matrix: the window cells, then the sky bins' direct columns twice:
+// first for light reflected in the room at least once, then for the sensor's own view of the
+// sky through the window (no reflection: the direct component, which the direct sun replaces;
+// core/README.md, "Direct sun"). O's rows below the cells are the identity for each block.
+inline constexpr int kIndoorDirectColumns = 2 * kTregenzaBinCount;
 FENESTRA_CPU_GPU inline int IndoorColumnCount(const TraceWindow& window,
                                               const HemisphereBasis& basis) {
-  return WindowCellCount(window, basis) + kTregenzaBinCount;
+  return WindowCellCount(window, basis) + kIndoorDirectColumns;
+}
+// Rows of O for `cells` window cells: the cells, then an identity row per direct column.
+FENESTRA_CPU_GPU inline int OutdoorRowCount(int cells) { return cells + kIndoorDirectColumns; }
+// The direct column of sky bin `bin` for light reflected in the room (`unreflected` false) or
+// seen straight from the sensor.
+FENESTRA_CPU_GPU inline int DirectColumn(int cells, int bin, bool unreflected) {
+  return cells + bin + (unreflected ? kTregenzaBinCount : 0);
 }
 
 // The outdoor surfaces as the indoor stage sees them: whether the view from a window
@@ -173,13 +184,17 @@ struct OutdoorView {
   }
 
   // Light arriving through the window at `point` from `omega` (window cell `cell`), worth
-  // `value` per unit radiance: into the direct column of omega's sky bin when the view
-  // reaches the sky, else into the window cell. Sink: void Add(int column, double value).
+  // `value` per unit radiance, `unreflected` when it reaches the sensor without a reflection
+  // in the room: into the direct column of omega's sky bin when the view reaches the sky,
+  // else into the window cell. Sink: void Add(int column, double value).
   template <class Sink>
   FENESTRA_CPU_GPU void Score(const TraceWindow& window, const HemisphereBasis& basis, Vec3f point,
-                              Vec3f omega, int cell, double value, Sink* sink) const {
+                              Vec3f omega, int cell, double value, bool unreflected,
+                              Sink* sink) const {
     const bool direct = !SurelyMet(cell) && Escapes(point, window.normal, omega);
-    sink->Add(direct ? WindowCellCount(window, basis) + TregenzaBin(omega) : cell, value);
+    sink->Add(direct ? DirectColumn(WindowCellCount(window, basis), TregenzaBin(omega), unreflected)
+                     : cell,
+              value);
   }
 };
 
@@ -235,7 +250,7 @@ struct IndoorMode {
   FENESTRA_CPU_GPU PathState Start(const Intersector& scene, const PathRandom& random) {
     const Vec3f origin = OffsetRayOrigin(sensor_position, sensor_normal);
     Connect(scene, sensor_position, origin, sensor_normal, 1.0f,
-            random.Draw(0, kWindowSamplePurpose));
+            random.Draw(0, kWindowSamplePurpose), true);
     const Uniform4 u = random.Draw(0, 0);
     const Vec3f direction = SampleCosineHemisphere(sensor_normal, u.u[0], u.u[1]);
     return PathState{origin, direction, 1.0f, 0, 0, Dot(sensor_normal, direction)};
@@ -247,7 +262,8 @@ struct IndoorMode {
                                      const ReflectionVertex& vertex, const PathRandom& random) {
     if (max_bounces >= 0 && path.reflections >= max_bounces) return;
     Connect(scene, vertex.position, OffsetRayOrigin(vertex.position, vertex.normal), vertex.normal,
-            path.weight * vertex.reflectance, random.Draw(path.vertex, kWindowSamplePurpose));
+            path.weight * vertex.reflectance, random.Draw(path.vertex, kWindowSamplePurpose),
+            false);
   }
 
   // A bounce ray that leaves through the window scores pi w in the cell it leaves by.
@@ -264,13 +280,14 @@ struct IndoorMode {
             ? PowerHeuristic(path.cosine * kInvPiF, WindowDensity(distance * distance, cos_window))
             : 1.0f;
     Score(point, path.direction, window.PartAt(point) * basis->cell_count + cell,
-          kPi * static_cast<double>(path.weight * mis));
+          kPi * static_cast<double>(path.weight * mis), path.reflections == 0);
   }
 
   // Light reaching the window at `point` from `omega` (window cell `cell`), worth `value`
-  // per unit radiance: the outdoor surfaces tell its column (OutdoorView::Score).
-  FENESTRA_CPU_GPU void Score(Vec3f point, Vec3f omega, int cell, double value) {
-    outdoor->Score(window, *basis, point, omega, cell, value, sink);
+  // per unit radiance, `unreflected` when no reflection in the room lies between: the outdoor
+  // surfaces tell its column (OutdoorView::Score).
+  FENESTRA_CPU_GPU void Score(Vec3f point, Vec3f omega, int cell, double value, bool unreflected) {
+    outdoor->Score(window, *basis, point, omega, cell, value, unreflected, sink);
   }
 
   FENESTRA_CPU_GPU void Finish(const PathStats&) const {}
@@ -282,10 +299,11 @@ struct IndoorMode {
   }
 
   // Next-event estimation from `position` (rays leave from `origin`, offset off its
-  // surface) towards a uniform window point; `factor` is what the path carries here.
+  // surface) towards a uniform window point; `factor` is what the path carries here;
+  // `unreflected` at the sensor itself.
   template <class Intersector>
   FENESTRA_CPU_GPU void Connect(const Intersector& scene, Vec3f position, Vec3f origin,
-                                Vec3f normal, float factor, const Uniform4& u) {
+                                Vec3f normal, float factor, const Uniform4& u, bool unreflected) {
     const Vec3f point = window.Point(u.u[0], u.u[1]);
     const Vec3f to_window = point - position;
     const float distance_squared = Dot(to_window, to_window);
@@ -306,7 +324,8 @@ struct IndoorMode {
         PowerHeuristic(WindowDensity(distance_squared, cos_window), cos_vertex * kInvPiF);
     Score(point, omega, window.PartOf(u.u[0], u.u[1]) * basis->cell_count + cell,
           static_cast<double>(factor * cos_vertex * cos_window * window.Area() / distance_squared *
-                              mis));
+                              mis),
+          unreflected);
   }
 };
 

@@ -27,8 +27,8 @@ constexpr int kTile = 16;
 // memory; each thread takes a column of B (the warp's loads coalesced) and forms that
 // column's kRows entries of C, every entry of A read by the whole warp at once.
 constexpr int kRows = 16, kMultiplyThreads = 128;
+template <int k>
 __global__ void MultiplyKernel(const double* a, const double* b, double* c, int m, int n) {
-  constexpr int k = kTregenzaBinCount;
   __shared__ double a_rows[kRows * k];
   const int first_row = static_cast<int>(blockIdx.y) * kRows;
   const int rows = min(kRows, m - first_row);
@@ -203,10 +203,40 @@ cudaError_t MultiplyTransposed(const double* a, const double* b, double* c, int 
   return cudaGetLastError();
 }
 
-// C = A B for A of m x kTregenzaBinCount (MultiplyKernel).
-void Multiply(const double* a, const double* b, double* c, int m, int n) {
+// C = A B for A of m x `bins` (MultiplyKernel): the sky's bins, or a split sky's rows.
+void Multiply(const double* a, const double* b, double* c, int m, int n, int bins) {
   const dim3 grid((n + kMultiplyThreads - 1) / kMultiplyThreads, (m + kRows - 1) / kRows);
-  MultiplyKernel<<<grid, kMultiplyThreads>>>(a, b, c, m, n);
+  if (bins == 2 * kTregenzaBinCount) {
+    MultiplyKernel<2 * kTregenzaBinCount><<<grid, kMultiplyThreads>>>(a, b, c, m, n);
+  } else {
+    MultiplyKernel<kTregenzaBinCount><<<grid, kMultiplyThreads>>>(a, b, c, m, n);
+  }
+}
+
+// For a split sky: row r of `split` (rows x 2 kTregenzaBinCount) is row r of `through`, then
+// the last kTregenzaBinCount columns of row r of `indoor` (rows x cells), its unreflected
+// direct light.
+__global__ void SplitRowsKernel(const double* through, const double* indoor, int cells,
+                                double* split) {
+  const int j = static_cast<int>(threadIdx.x);
+  const size_t row = blockIdx.x;
+  if (j >= 2 * kTregenzaBinCount) return;
+  split[row * 2 * kTregenzaBinCount + j] =
+      j < kTregenzaBinCount ? through[row * kTregenzaBinCount + j]
+                            : indoor[row * cells + cells - 2 * kTregenzaBinCount + j];
+}
+
+// Adds each design's direct-sun entries to its E in every batch: entry e of design k to row
+// (b * designs + k) * sensors + sensor, for every b.
+__global__ void AddSunKernel(const SunEntry* entries, const int* design_of, int count, int designs,
+                             int batches, int sensors, int steps, double* e) {
+  const int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  if (i >= count) return;
+  const SunEntry entry = entries[i];
+  for (int b = 0; b < batches; ++b) {
+    const size_t row = (static_cast<size_t>(b) * designs + design_of[i]) * sensors + entry.sensor;
+    e[row * steps + entry.column] += entry.lux;
+  }
 }
 
 // Each batch's rows x columns matrix `in` (row-major, batch after batch) transposed into
@@ -325,6 +355,15 @@ __global__ void TallyKernel(const double* e, int designs, int batches, int senso
   }
 }
 
+absl::Status CheckBins(int bins) {
+  if (bins != kTregenzaBinCount && bins != 2 * kTregenzaBinCount) {
+    return absl::InvalidArgumentError(absl::StrCat("CUDA annual product: a sky of ", bins,
+                                                   " rows, not ", kTregenzaBinCount, " or ",
+                                                   2 * kTregenzaBinCount));
+  }
+  return absl::OkStatus();
+}
+
 absl::Status NoProduct() {
   return absl::FailedPreconditionError("CUDA annual product: no outdoor matrix and sky set");
 }
@@ -335,15 +374,19 @@ struct CudaAnnualTally::Impl {
   int device = 0;
   // O_b as uploaded and transposed, S, the indoor rows, I_b O_b and E; E's tallies
   DeviceBuffer<double> outdoor_rows, outdoor_transposed, sky, indoor, through_window, illuminance;
+  DeviceBuffer<double> split_rows;  // through the window beside the unreflected light (split sky)
+  DeviceBuffer<SunEntry> sun_entries;
+  DeviceBuffer<int> sun_designs;
   DeviceBuffer<double> other_sky;  // a sky for one call to Illuminance
   // E's tallies in one buffer, zeroed and downloaded at once (TallyLayout per design)
   DeviceBuffer<unsigned long long> tallies;
   std::vector<unsigned long long> host_tallies;
   PinnedBuffer staging;
-  int cells = 0, steps = 0;   // cells: columns of I, rows of O_b
-  int outdoor_batches = 0;    // the O_b; 0 for the sky's product (sky_only)
-  bool tensor_cores = false;  // I_b O_b by MultiplyTransposedMmaKernel
-  bool sky_only = false;      // the O_b are the identity: E_b = I_b S (SetSkyProduct)
+  int cells = 0, steps = 0;      // cells: columns of I, rows of O_b
+  int bins = kTregenzaBinCount;  // rows of S: the sky's bins, or a split sky's
+  int outdoor_batches = 0;       // the O_b; 0 for the sky's product (sky_only)
+  bool tensor_cores = false;     // I_b O_b by MultiplyTransposedMmaKernel
+  bool sky_only = false;         // the O_b are the identity: E_b = I_b S (SetSkyProduct)
 
   absl::Status UploadIndoor(const double* host_indoor, int rows) {
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(device));
@@ -376,7 +419,7 @@ struct CudaAnnualTally::Impl {
     int sky_steps = steps;
     if (other_sky != nullptr) {
       FENESTRA_CUDA_RETURN_IF_ERROR(
-          this->other_sky.Upload(other_sky, static_cast<size_t>(kTregenzaBinCount) * other_steps));
+          this->other_sky.Upload(other_sky, static_cast<size_t>(bins) * other_steps));
       sky_matrix = this->other_sky.get();
       sky_steps = other_steps;
     }
@@ -402,17 +445,53 @@ struct CudaAnnualTally::Impl {
           MultiplyTransposed(indoor.get(), outdoor_transposed.get(), through_window.get(), rows,
                              cells, kTregenzaBinCount, rows / batches, tensor_cores));
       through = through_window.get();
+      if (bins != kTregenzaBinCount) {
+        FENESTRA_CUDA_RETURN_IF_ERROR(split_rows.Reserve(static_cast<size_t>(rows) * bins));
+        SplitRowsKernel<<<rows, 2 * kTregenzaBinCount>>>(through, indoor.get(), cells,
+                                                         split_rows.get());
+        through = split_rows.get();
+      }
     }
-    Multiply(through, sky_matrix, illuminance.get(), rows, sky_steps);
+    Multiply(through, sky_matrix, illuminance.get(), rows, sky_steps, bins);
+    FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
+    return absl::OkStatus();
+  }
+  // Adds design k's direct-sun entries sun[k] to its E (`designs` designs' rows as the
+  // tallies lay them out) in every batch.
+  absl::Status AddSun(const SunEntries* sun, int designs, int batches, int sensors, int sky_steps) {
+    std::vector<SunEntry> entries;
+    std::vector<int> design_of;
+    for (int k = 0; k < designs; ++k) {
+      for (size_t i = 0; i < sun[k].count; ++i) {
+        const SunEntry& e = sun[k].entries[i];
+        if (e.sensor < 0 || e.sensor >= sensors || e.column < 0 || e.column >= sky_steps) {
+          return absl::InvalidArgumentError("CUDA annual product: a direct-sun entry out of range");
+        }
+        entries.push_back(e);
+        design_of.push_back(k);
+      }
+    }
+    if (entries.empty()) return absl::OkStatus();
+    if (bins != 2 * kTregenzaBinCount) {
+      return absl::InvalidArgumentError("CUDA annual product: the direct sun needs a split sky");
+    }
+    FENESTRA_CUDA_RETURN_IF_ERROR(sun_entries.Upload(entries.data(), entries.size()));
+    FENESTRA_CUDA_RETURN_IF_ERROR(sun_designs.Upload(design_of.data(), design_of.size()));
+    const int count = static_cast<int>(entries.size()), threads = 256;
+    AddSunKernel<<<(count + threads - 1) / threads, threads>>>(sun_entries.get(), sun_designs.get(),
+                                                               count, designs, batches, sensors,
+                                                               sky_steps, illuminance.get());
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
     return absl::OkStatus();
   }
   // The tallies of E from `indoor` (BatchMeanKernel's rows) for `designs` designs of `batches`
-  // batches each, design k's into requests[k].
-  absl::Status Tally(int designs, int batches, int sensors, const TallyRequest* requests) {
+  // batches each, design k's into requests[k], its direct sun sun[k] added.
+  absl::Status Tally(int designs, int batches, int sensors, const TallyRequest* requests,
+                     const SunEntries* sun) {
     const int versions = batches + 1;
     const size_t per_sensor = static_cast<size_t>(versions) * sensors;
     FENESTRA_RETURN_IF_ERROR(FormIlluminance(designs * batches * sensors, batches));
+    FENESTRA_RETURN_IF_ERROR(AddSun(sun, designs, batches, sensors, steps));
     static_assert(sizeof(double) == sizeof(unsigned long long));
     static_assert(sizeof(int64_t) == sizeof(unsigned long long));
     const TallyLayout layout{3 * per_sensor, 4 * static_cast<size_t>(versions),
@@ -458,7 +537,8 @@ void CudaAnnualTally::UseTensorCores(bool use) {
 bool CudaAnnualTally::UsesTensorCores() const { return impl_->tensor_cores; }
 
 absl::Status CudaAnnualTally::SetProduct(const std::vector<const double*>& outdoor, int cells,
-                                         const double* sky, int steps, bool outdoor_on_device) {
+                                         const double* sky, int steps, int bins,
+                                         bool outdoor_on_device) {
   Impl& d = *impl_;
   const int batches = static_cast<int>(outdoor.size());
   if (batches < 1 || batches > kMaxTallyBatches) {
@@ -480,10 +560,12 @@ absl::Status CudaAnnualTally::SetProduct(const std::vector<const double*>& outdo
   TransposeKernel<<<grid, dim3(kTile, kTile)>>>(d.outdoor_rows.get(), d.outdoor_transposed.get(),
                                                 cells, kTregenzaBinCount);
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
-  FENESTRA_CUDA_RETURN_IF_ERROR(d.sky.Upload(sky, static_cast<size_t>(kTregenzaBinCount) * steps));
+  FENESTRA_RETURN_IF_ERROR(CheckBins(bins));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.sky.Upload(sky, static_cast<size_t>(bins) * steps));
   // Done before it returns (a pageable upload may return before its copy lands), so that
   // any host thread's stream may use the product
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaStreamSynchronize(cudaStreamPerThread));
+  d.bins = bins;
   d.cells = cells;
   d.steps = steps;
   d.outdoor_batches = batches;
@@ -491,13 +573,15 @@ absl::Status CudaAnnualTally::SetProduct(const std::vector<const double*>& outdo
   return absl::OkStatus();
 }
 
-absl::Status CudaAnnualTally::SetSkyProduct(const double* sky, int steps) {
+absl::Status CudaAnnualTally::SetSkyProduct(const double* sky, int steps, int bins) {
   Impl& d = *impl_;
+  FENESTRA_RETURN_IF_ERROR(CheckBins(bins));
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
-  FENESTRA_CUDA_RETURN_IF_ERROR(d.sky.Upload(sky, static_cast<size_t>(kTregenzaBinCount) * steps));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.sky.Upload(sky, static_cast<size_t>(bins) * steps));
   // Done before it returns, as SetProduct
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaStreamSynchronize(cudaStreamPerThread));
-  d.cells = kTregenzaBinCount;
+  d.bins = bins;
+  d.cells = bins;
   d.steps = steps;
   d.outdoor_batches = 0;
   d.sky_only = true;
@@ -514,20 +598,21 @@ absl::Status CudaAnnualTally::Illuminance(const double* indoor, int rows, double
                                                    d.outdoor_batches, " batches"));
   }
   FENESTRA_RETURN_IF_ERROR(d.UploadIndoor(indoor, rows));
-  return d.DownloadIlluminance(rows, d.outdoor_batches, illuminance, other_sky, other_steps);
+  return d.DownloadIlluminance(rows, d.sky_only ? 1 : d.outdoor_batches, illuminance, other_sky,
+                               other_steps);
 }
 
 absl::Status CudaAnnualTally::Tally(const double* indoor, int batches, int sensors,
-                                    const TallyRequest& request) {
+                                    const TallyRequest& request, SunEntries sun) {
   Impl& d = *impl_;
   FENESTRA_RETURN_IF_ERROR(CheckPairs(d.cells, batches));
   FENESTRA_RETURN_IF_ERROR(d.UploadIndoor(indoor, batches * sensors));
-  return d.Tally(1, batches, sensors, &request);
+  return d.Tally(1, batches, sensors, &request, &sun);
 }
 
 absl::Status CudaAnnualTally::TallySums(const double* device_sums, size_t design_sums, int designs,
                                         int batches, int sensors, const uint64_t* batch_paths,
-                                        const TallyRequest* requests) {
+                                        const TallyRequest* requests, const SunEntries* sun) {
   Impl& d = *impl_;
   FENESTRA_RETURN_IF_ERROR(CheckPairs(d.cells, batches));
   if (designs < 1) {
@@ -536,7 +621,7 @@ absl::Status CudaAnnualTally::TallySums(const double* device_sums, size_t design
   }
   FENESTRA_RETURN_IF_ERROR(
       d.MeanOfSums(device_sums, design_sums, designs, batches, sensors, batch_paths));
-  return d.Tally(designs, batches, sensors, requests);
+  return d.Tally(designs, batches, sensors, requests, sun);
 }
 
 absl::Status CudaAnnualTally::IlluminanceOfSums(const double* device_sums, int batches, int sensors,

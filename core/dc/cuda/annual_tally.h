@@ -12,8 +12,17 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "core/dc/sun_entry.h"
 
 namespace fenestra {
+
+// A design's direct-sun entries (core/dc/direct_sun.h), added to its E in every batch; the
+// sky must then be split (2 x kTregenzaBinCount rows: S, then -S_sun for the indoor rows'
+// unreflected direct columns, the last kTregenzaBinCount of each).
+struct SunEntries {
+  const SunEntry* entries = nullptr;
+  size_t count = 0;
+};
 
 class CudaAnnualTally {
  public:
@@ -24,18 +33,21 @@ class CudaAnnualTally {
   CudaAnnualTally& operator=(const CudaAnnualTally&) = delete;
 
   // Uploads the O_b (each cells x kTregenzaBinCount, row-major, one per batch; cells = the
-  // columns of I) and S (kTregenzaBinCount x steps, row-major). The device keeps them until
-  // the next SetProduct. With `outdoor_on_device` the O_b lie on this device already (a
-  // tracer's, CudaTracer::OutdoorOutput) and are copied from there.
+  // columns of I) and S (`bins` x steps, row-major: kTregenzaBinCount, or twice that for a
+  // split sky). The device keeps them until the next SetProduct. With `outdoor_on_device` the
+  // O_b lie on this device already (a tracer's, CudaTracer::OutdoorOutput) and are copied
+  // from there.
   absl::Status SetProduct(const std::vector<const double*>& outdoor, int cells, const double* sky,
-                          int steps, bool outdoor_on_device = false);
-  // Uploads S alone, the O_b being the identity (kTregenzaBinCount cells): E_b = I_b S for
-  // indoor rows whose columns are the sky's bins already (one-stage daylight coefficients), in
-  // any number of batches from 2 to the most SetProduct takes. Kept until the next SetProduct.
-  absl::Status SetSkyProduct(const double* sky, int steps);
+                          int steps, int bins, bool outdoor_on_device = false);
+  // Uploads S alone (`bins` rows), the O_b being the identity (`bins` cells): E_b = I_b S for
+  // indoor rows whose columns are the sky's rows already (one-stage daylight coefficients, D or
+  // [D | D_0]), in any number of batches from 2 to the most SetProduct takes. Kept until the
+  // next SetProduct.
+  absl::Status SetSkyProduct(const double* sky, int steps, int bins);
   // `rows` stacked indoor rows (rows x cells, batch-major, rows / B per batch) through the
-  // product into `illuminance` (rows x steps). With `other_sky` (kTregenzaBinCount x
-  // `other_steps`, row-major) that sky takes S's place for this call, S staying uploaded.
+  // product into `illuminance` (rows x steps). With `other_sky` (as S's rows x `other_steps`,
+  // row-major) that sky takes S's place for this call, S staying uploaded. The direct sun is
+  // the caller's to add.
   absl::Status Illuminance(const double* indoor, int rows, double* illuminance,
                            const double* other_sky = nullptr, int other_steps = 0);
 
@@ -53,17 +65,21 @@ class CudaAnnualTally {
   };
   // The tallies of E_b = (I_b O_b) S for the host's `indoor`, batches x sensors stacked rows
   // (batch-major), as many batches as the product's.
-  absl::Status Tally(const double* indoor, int batches, int sensors, const TallyRequest& request);
+  absl::Status Tally(const double* indoor, int batches, int sensors, const TallyRequest& request,
+                     SunEntries sun = {});
   // The same for `designs` designs at once from indoor sums on this device (a tracer's,
   // CudaTracer::DeviceSums): design k's row (b, s) at device_sums + k * design_sums +
   // (b * sensors + s) * cells, divided by batch_paths[b], the paths summed into batch b; its
   // tallies into requests[k]. One product takes every design's rows (a batch's rows
-  // together), and the tallies come back in one download. 1 <= designs.
+  // together), and the tallies come back in one download; design k's direct sun sun[k] is
+  // added to its E. 1 <= designs.
   absl::Status TallySums(const double* device_sums, size_t design_sums, int designs, int batches,
-                         int sensors, const uint64_t* batch_paths, const TallyRequest* requests);
+                         int sensors, const uint64_t* batch_paths, const TallyRequest* requests,
+                         const SunEntries* sun);
   // E_b = (I_b O_b) S' of one design's indoor sums on this device, as TallySums takes them,
   // into `illuminance` (batches x sensors rows, batch-major, x `other_steps`), with
-  // `other_sky` (kTregenzaBinCount x other_steps, row-major) as S' for this call.
+  // `other_sky` (as S's rows x other_steps, row-major) as S' for this call; the direct sun is
+  // the caller's to add.
   absl::Status IlluminanceOfSums(const double* device_sums, int batches, int sensors,
                                  const uint64_t* batch_paths, const double* other_sky,
                                  int other_steps, double* illuminance);

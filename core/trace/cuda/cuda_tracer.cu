@@ -181,23 +181,23 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
                    const TraceSensor* sensors, uint64_t paths_per_sensor, int batches,
                    uint64_t seed, double* sum, double* sum_squares, unsigned long long* counters,
                    unsigned long long* next_path) {
-  __shared__ double row[2 * kTregenzaBinCount];
+  __shared__ double row[2 * kOneStageBins];
   __shared__ unsigned long long block_counters[kCounters];
-  BeginRow(row, 2 * kTregenzaBinCount, block_counters);
+  BeginRow(row, 2 * kOneStageBins, block_counters);
   const uint32_t s = blockIdx.y / batches;
   const uint32_t b = blockIdx.y % batches;
   const uint64_t first = BatchFirst(paths_per_sensor, batches, b);
   const uint64_t last = BatchFirst(paths_per_sensor, batches, b + 1);
-  SharedSink sink{row, row + kTregenzaBinCount};
+  SharedSink sink{row, row + kOneStageBins};
   OneStageMode<SharedSink> mode{sensors[s].position, sensors[s].normal, &sink};
   ThreadCounts counts;
   TracePaths(scene, surfaces, settings, mode, seed, s, first, last, next_path + blockIdx.y, counts);
   counts.Flush(block_counters);
-  const size_t offset = static_cast<size_t>(blockIdx.y) * kTregenzaBinCount;
-  EndRow(row, kTregenzaBinCount, sum + offset, block_counters, counters);
-  for (int i = threadIdx.x; i < kTregenzaBinCount; i += blockDim.x) {
-    if (row[kTregenzaBinCount + i] != 0.0) {
-      atomicAdd(&sum_squares[offset + i], row[kTregenzaBinCount + i]);
+  const size_t offset = static_cast<size_t>(blockIdx.y) * kOneStageBins;
+  EndRow(row, kOneStageBins, sum + offset, block_counters, counters);
+  for (int i = threadIdx.x; i < kOneStageBins; i += blockDim.x) {
+    if (row[kOneStageBins + i] != 0.0) {
+      atomicAdd(&sum_squares[offset + i], row[kOneStageBins + i]);
     }
   }
 }
@@ -249,20 +249,21 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
 }
 
 // O from the outdoor sums (CudaTracer::Outdoor), one thread per entry (row k, bin j) of the
-// row-major (cells + kTregenzaBinCount) x kTregenzaBinCount matrices of `entries` values:
+// row-major OutdoorRowCount(cells) x kTregenzaBinCount matrices of `entries` values:
 // each batch's at formed + b * entries, then their mean and its standard error, then per
 // window cell its first segments that reached the sky, over all batches.
 __global__ void FormOutdoorKernel(const double* sum, int cells, uint64_t paths_per_cell,
                                   int batches, double* formed) {
-  const int rows = cells + kTregenzaBinCount;
+  const int rows = OutdoorRowCount(cells);
   const size_t entries = static_cast<size_t>(rows) * kTregenzaBinCount;
   const size_t e = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
   if (e >= entries) return;
   const int k = static_cast<int>(e / kTregenzaBinCount);
   const int j = static_cast<int>(e % kTregenzaBinCount);
-  // A window cell's row of batch b; below the cells, the identity
+  // A window cell's row of batch b; below the cells, the identity for each block of direct
+  // columns
   const auto value = [&](int b) {
-    if (k >= cells) return k - cells == j ? 1.0 : 0.0;
+    if (k >= cells) return (k - cells) % kTregenzaBinCount == j ? 1.0 : 0.0;
     const double paths = static_cast<double>(BatchFirst(paths_per_cell, batches, b + 1) -
                                              BatchFirst(paths_per_cell, batches, b));
     return OutdoorCoefficient(sum + (static_cast<size_t>(b) * cells + k) * kOutdoorRowSize, paths,
@@ -931,7 +932,7 @@ absl::Status CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
   const dim3 grid(d.BlocksPerRow(OneStageKernel, 0, paths_per_sensor / batches + 1, rows), rows);
   return d.Run(
-      rows, static_cast<size_t>(rows) * kTregenzaBinCount, true,
+      rows, static_cast<size_t>(rows) * kOneStageBins, true,
       [&] {
         OneStageKernel<<<grid, kThreads>>>(
             d.Scene(), d.Surfaces(), path, d.sensors.get(), paths_per_sensor, batches, seed,
@@ -967,7 +968,7 @@ absl::Status CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasi
       },
       nullptr, nullptr, counters));
   // O formed where the sums lie; each part downloaded straight to its place
-  const size_t entries = static_cast<size_t>(cells + kTregenzaBinCount) * kTregenzaBinCount;
+  const size_t entries = static_cast<size_t>(OutdoorRowCount(cells)) * kTregenzaBinCount;
   FENESTRA_CUDA_RETURN_IF_ERROR(d.formed.Reserve((batches + 2) * entries + cells));
   FormOutdoorKernel<<<static_cast<unsigned int>((entries + kThreads - 1) / kThreads), kThreads>>>(
       d.sum.get(), cells, paths_per_cell, batches, d.formed.get());

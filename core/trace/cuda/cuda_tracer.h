@@ -66,13 +66,13 @@ class CudaTracer {
                              bool same_ray_per_warp, float* distance, double* kernel_seconds);
 
   // One-stage paths of each sensor in `batches` contiguous batches; sum and sum_squares
-  // get [(sensor * batches + batch) * kTregenzaBinCount + bin].
+  // get [(sensor * batches + batch) * kOneStageBins + bin] (OneStageBin).
   absl::Status OneStage(const TraceSensor* sensors, int sensor_count, uint64_t paths_per_sensor,
                         int batches, uint64_t seed, const PathSettings& path, double* sum,
                         double* sum_squares, CudaCounters* counters);
 
   // Where Outdoor puts O: each batch, their mean and its standard error, row-major
-  // (window cells + kTregenzaBinCount) x kTregenzaBinCount as FormOutdoorBatches makes them
+  // OutdoorRowCount(window cells) x kTregenzaBinCount as FormOutdoorBatches makes them
   // (core/dc/dc_backend.h), and per window cell its paths whose first segment reached the sky.
   struct OutdoorOutput {
     std::vector<double*> batches;

@@ -80,7 +80,10 @@ void ExpectFormedAsOnTheHost(const OutdoorResult& o) {
   EXPECT_LE((o.standard_error - standard_error).cwiseAbs().maxCoeff(),
             1e-9 * standard_error.maxCoeff());
   EXPECT_GT(standard_error.maxCoeff(), 0.0);
-  for (const Matrix& b : o.batches) EXPECT_TRUE(b.bottomRows(kDaylightBins).isIdentity(0));
+  for (const Matrix& b : o.batches) {
+    EXPECT_TRUE(b.bottomRows(kDaylightBins).isIdentity(0));
+    EXPECT_TRUE(b.middleRows(b.rows() - kIndoorDirectColumns, kDaylightBins).isIdentity(0));
+  }
 }
 
 TEST(CudaBackendTest, MissingGpuIsAClearError) {
@@ -154,8 +157,8 @@ TEST(CudaBackendTest, TwoStageMatchesEmbree) {
   ExpectParity(i_cpu->coefficients, i_cpu->standard_error, i_gpu->coefficients,
                i_gpu->standard_error, "indoor matrix");
   // Both tell direct light from light through the window cells alike
-  const double direct_cpu = i_cpu->coefficients.rightCols(kDaylightBins).sum();
-  const double direct_gpu = i_gpu->coefficients.rightCols(kDaylightBins).sum();
+  const double direct_cpu = i_cpu->coefficients.rightCols(kIndoorDirectColumns).sum();
+  const double direct_gpu = i_gpu->coefficients.rightCols(kIndoorDirectColumns).sum();
   EXPECT_GT(direct_cpu, 0.1 * i_cpu->coefficients.sum());
   EXPECT_NEAR(direct_gpu, direct_cpu, 0.02 * direct_cpu);
   absl::StatusOr<TwoStageResult> d_cpu = CombineStages(*i_cpu, *o_cpu);
@@ -175,7 +178,7 @@ struct RandomInputs {
   std::vector<Matrix> indoor;
 };
 RandomInputs RandomProduct(int steps) {
-  const int rows = 3456 + kDaylightBins, sensors = 9, batches = 8;
+  const int rows = 3456 + kIndoorDirectColumns, sensors = 9, batches = 8;
   RandomInputs inputs{{}, Matrix::Random(kDaylightBins, steps).cwiseAbs(), {}};
   for (int b = 0; b < batches; ++b) {
     inputs.outdoor.push_back(Matrix::Random(rows, kDaylightBins).cwiseAbs());
@@ -241,6 +244,57 @@ TEST(CudaBackendTest, AnnualProductMatchesCpu) {
     EXPECT_LT(((*e_again)[b] - (*e_gpu)[b]).cwiseAbs().maxCoeff(),
               1e-12 * (*e_gpu)[b].cwiseAbs().maxCoeff());
   }
+}
+
+// With a split sky (S, then -S_sun for the unreflected direct columns) and the direct sun's
+// entries, the GPU's E and its tallies equal the CPU's: two-stage rows and one-stage [D | D_0]
+// rows alike.
+TEST(CudaBackendTest, SplitSkyAndDirectSunMatchCpu) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const int steps = 2000;
+  auto [outdoor, sky, indoor] = RandomProduct(steps);
+  Matrix split(kSplitSkyRows, steps);
+  split << 1000 * sky, -300 * Matrix::Random(kDaylightBins, steps).cwiseAbs();
+  std::vector<SunEntry> sun;
+  for (int i = 0; i < 9; ++i) {
+    for (int t = i; t < steps; t += 7) sun.push_back({i, t, 40.0 * t});
+  }
+  std::unique_ptr<DcBackend> cpu = MakeEmbreeBackend();
+  const MetricOptions options;
+  // Two-stage
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> on_cpu = cpu->MakeAnnualProduct(outdoor, split);
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> on_gpu = gpu->MakeAnnualProduct(outdoor, split);
+  ASSERT_TRUE(on_cpu.ok() && on_gpu.ok()) << on_gpu.status();
+  absl::StatusOr<std::vector<Matrix>> e_cpu = (*on_cpu)->ApplyToSky(indoor, split, sun);
+  absl::StatusOr<std::vector<Matrix>> e_gpu = (*on_gpu)->ApplyToSky(indoor, split, sun);
+  ASSERT_TRUE(e_cpu.ok() && e_gpu.ok()) << e_gpu.status();
+  for (size_t b = 0; b < indoor.size(); ++b) {
+    EXPECT_LT(((*e_gpu)[b] - (*e_cpu)[b]).cwiseAbs().maxCoeff(),
+              1e-12 * (*e_cpu)[b].cwiseAbs().maxCoeff());
+  }
+  absl::StatusOr<std::vector<HourTally>> t_cpu = (*on_cpu)->Tally(indoor, options, sun);
+  absl::StatusOr<std::vector<HourTally>> t_gpu = (*on_gpu)->Tally(indoor, options, sun);
+  ASSERT_TRUE(t_cpu.ok() && t_gpu.ok()) << t_gpu.status();
+  ExpectSameTallies(*t_gpu, *t_cpu);
+  // One-stage rows [D | D_0] through the split sky alone
+  std::vector<Matrix> dc;
+  for (int b = 0; b < 8; ++b) dc.push_back(Matrix::Random(9, kSplitSkyRows).cwiseAbs());
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> sky_cpu = cpu->MakeSkyProduct(split);
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> sky_gpu = gpu->MakeSkyProduct(split);
+  ASSERT_TRUE(sky_cpu.ok() && sky_gpu.ok()) << sky_gpu.status();
+  absl::StatusOr<std::vector<HourTally>> s_cpu = (*sky_cpu)->Tally(dc, options, sun);
+  absl::StatusOr<std::vector<HourTally>> s_gpu = (*sky_gpu)->Tally(dc, options, sun);
+  ASSERT_TRUE(s_cpu.ok() && s_gpu.ok()) << s_gpu.status();
+  ExpectSameTallies(*s_gpu, *s_cpu);
+  // Entries out of range, or without a split sky, are refused on both
+  const std::vector<SunEntry> bad = {{9, 0, 1.0}};
+  EXPECT_EQ((*on_gpu)->Tally(indoor, options, bad).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  absl::StatusOr<std::unique_ptr<AnnualProduct>> plain = gpu->MakeAnnualProduct(outdoor, sky);
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ((*plain)->Tally(indoor, options, sun).status().code(),
+            absl::StatusCode::kInvalidArgument);
 }
 
 // Tallies of E formed and reduced on the device equal the CPU's tallies of the same E.

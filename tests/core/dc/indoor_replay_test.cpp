@@ -60,7 +60,7 @@ TEST(IndoorReplayTest, RoundsEndAsOneTrace) {
   options.paths_per_sensor = 16'000;
   options.parts = {2, 2};
   options.batches = 4;
-  const int columns = 4 * 288 + kDaylightBins;
+  const int columns = 4 * 288 + kIndoorDirectColumns;
   std::vector<Matrix> outdoor;
   for (int b = 0; b < options.batches; ++b) {
     outdoor.push_back(Matrix::Random(columns, kDaylightBins).cwiseAbs());

@@ -13,11 +13,14 @@ namespace fenestra {
 namespace {
 
 // Collects the escapes of the paths it sees.
+// Sums per sky bin (both blocks of OneStageBin) and, apart, the unreflected block's.
 struct RecordingSink {
   std::vector<double> sum = std::vector<double>(kTregenzaBinCount, 0.0);
+  std::vector<double> unreflected = std::vector<double>(kTregenzaBinCount, 0.0);
   int escapes = 0;
   void Add(int bin, double value) {
-    sum[bin] += value;
+    sum[bin % kTregenzaBinCount] += value;
+    if (bin >= kTregenzaBinCount) unreflected[bin - kTregenzaBinCount] += value;
     ++escapes;
   }
   void EndPath() {}
@@ -181,6 +184,9 @@ TEST(TracePathTest, GlazingTransmitsStraightAndReflectsDiffusely) {
   const double se = 0.7 * kPi * std::sqrt(p_sky * (1 - p_sky) / kPaths);
   EXPECT_NEAR(sky / kPaths, 0.6 * kPi, 4 * se);
   EXPECT_NEAR(sink.sum[0] / kPaths, 0.1 * kPi, 4 * se);
+  // Straight through the pane is the direct component; the reflected light is not
+  for (int b = 1; b < kTregenzaBinCount; ++b) EXPECT_EQ(sink.unreflected[b], sink.sum[b]);
+  EXPECT_EQ(sink.unreflected[0], 0.0);
 }
 
 }  // namespace

@@ -30,7 +30,8 @@ TEST(CudaAnnualTallyTest, BothKernelsOfIOGiveTheCpuProduct) {
     outdoor_data.push_back(outdoor.back().data());
   }
   const Matrix sky = Matrix::Random(kTregenzaBinCount, steps).cwiseAbs();
-  ASSERT_EQ(tally->SetProduct(outdoor_data, cells, sky.data(), steps), absl::OkStatus());
+  ASSERT_EQ(tally->SetProduct(outdoor_data, cells, sky.data(), steps, kTregenzaBinCount),
+            absl::OkStatus());
   std::printf("the tensor cores' kernel runs on this device: %s\n",
               tally->UsesTensorCores() ? "yes" : "no (compute capability below 8.0)");
   for (const int sensors : {9, 40}) {
