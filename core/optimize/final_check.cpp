@@ -24,14 +24,23 @@ int64_t RoundUp(int64_t n, int64_t multiple) { return (n + multiple - 1) / multi
 // One one-stage trace of `design` without a reflection limit, reduced to the metric.
 absl::StatusOr<Evaluation> TraceMetric(const Scene& scene, const BlindDesign& design,
                                        int64_t paths_per_sensor, uint64_t seed, int batches,
-                                       const DaylightMetric& metric, DcBackend* backend) {
+                                       bool with_direct_part, const DaylightMetric& metric,
+                                       DcBackend* backend) {
   OneStageOptions options;
   options.paths_per_sensor = paths_per_sensor;
   options.max_bounces = kUnlimitedBounces;  // Russian roulette alone ends the paths
   options.seed = seed;
   options.batches = batches;
   FENESTRA_ASSIGN_OR_RETURN(result, ComputeOneStage(scene, design, options, backend));
-  return metric(result.batch_coefficients);
+  if (!with_direct_part) return metric(result.batch_coefficients);
+  std::vector<Matrix> split;
+  for (size_t b = 0; b < result.batch_coefficients.size(); ++b) {
+    const Matrix& d = result.batch_coefficients[b];
+    Matrix both(d.rows(), 2 * d.cols());
+    both << d, result.batch_direct_coefficients[b];
+    split.push_back(std::move(both));
+  }
+  return metric(split);
 }
 
 }  // namespace
@@ -85,9 +94,9 @@ absl::StatusOr<FinalCheckOutcome> RunFinalCheck(const Scene& scene, const BlindD
 
   // The pilot: how the one-stage metric's error goes with paths
   if (cancelled()) return absl::CancelledError("cancelled before the final check");
-  FENESTRA_ASSIGN_OR_RETURN(pilot,
-                            TraceMetric(scene, design, pilot_paths, options.seed ^ kPilotSeedKey,
-                                        kFinalCheckPilotBatches, metric, backend));
+  FENESTRA_ASSIGN_OR_RETURN(
+      pilot, TraceMetric(scene, design, pilot_paths, options.seed ^ kPilotSeedKey,
+                         kFinalCheckPilotBatches, options.with_direct_part, metric, backend));
   bool limited = false;
   const int64_t paths =
       CheckPathsPerSensor(pilot_paths, pilot.standard_error, two_stage.standard_error(), max_paths,
@@ -97,7 +106,7 @@ absl::StatusOr<FinalCheckOutcome> RunFinalCheck(const Scene& scene, const BlindD
   if (cancelled()) return absl::CancelledError("cancelled during the final check");
   FENESTRA_ASSIGN_OR_RETURN(
       one_stage, TraceMetric(scene, design, paths, options.seed ^ kCheckSeedKey, options.batches,
-                             metric, backend));
+                             options.with_direct_part, metric, backend));
   v1::Estimate estimate;
   estimate.set_value(one_stage.value);
   estimate.set_standard_error(one_stage.standard_error);

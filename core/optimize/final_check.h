@@ -39,12 +39,16 @@ inline constexpr int kFinalCheckPilotBatches = 32;
 inline constexpr int64_t kFinalCheckMaxPaths = 5'000'000;
 
 // The metric and its standard error from B >= 2 batch estimates of the daylight
-// coefficients D (each sensors x 146, core/dc/one_stage.h), as the job computes them.
+// coefficients D (each sensors x 146, core/dc/one_stage.h; with
+// FinalCheckOptions::with_direct_part [D | D_0], sensors x 292), as the job computes them.
 using DaylightMetric =
     std::function<absl::StatusOr<Evaluation>(std::span<const Matrix> dc_batches)>;
 
 struct FinalCheckOptions {
   int batches = kDefaultBatches;  // independent batches of paths, for the jackknife; >= 2
+  // Hand the metric each batch's D with its unreflected part D_0 beside it, for a split sky
+  // (core/README.md, "Direct sun").
+  bool with_direct_part = false;
   // The job's seed: the check's streams are derived from it, apart from the two stages'.
   uint64_t seed = kDefaultSeed;
   // Polled before each trace; true leaves the check out (Cancelled).

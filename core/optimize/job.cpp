@@ -16,6 +16,7 @@
 #include "core/common/seconds.h"
 #include "core/common/status_macros.h"
 #include "core/common/thread_pool.h"
+#include "core/dc/direct_sun.h"
 #include "core/dc/two_stage.h"
 #include "core/metrics/annual_metrics.h"
 #include "core/metrics/illuminance.h"
@@ -26,6 +27,7 @@
 #include "core/optimize/job_checkpoint.h"
 #include "core/optimize/job_proto.h"
 #include "core/optimize/metric_objective.h"
+#include "core/optimize/operated_blind.h"
 #include "core/optimize/racing.h"
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
@@ -43,7 +45,12 @@ struct AnnualSetting {
   std::shared_ptr<const SkyMatrix> sky;
   std::vector<bool> occupied;
   std::vector<int> columns;  // lit analysed steps, ascending
-  Matrix lit_sky;            // S over those steps, in lux (146 x columns)
+  // S over those steps, in lux, split (kSplitSkyRows x columns; core/README.md, "Direct sun"):
+  // the coefficients' direct component leaves the sun to the direct sun
+  Matrix lit_sky;
+  std::vector<SunColumn> suns;  // the sun of each of those columns that has one
+  // The direct sun of those columns through the scene within the job's ranges
+  std::shared_ptr<const DirectSun> sun;
   int analysed_hours = 0;
   MetricOptions options;
   SceneMetric metric = SceneMetric::kUdiMean;
@@ -67,11 +74,18 @@ absl::StatusOr<AnnualSetting> MakeAnnualSetting(const PreparedJob& job) {
     if (hour_basis == HourBasis::kAllHours || setting.occupied[c]) setting.columns.push_back(c);
   }
   setting.analysed_hours = AnalysedHours(setting.occupied, hour_basis);
-  setting.lit_sky = SkyColumnsInLux(setting.sky->radiance, setting.columns);
+  FENESTRA_ASSIGN_OR_RETURN(split, SplitSkyColumnsInLux(*setting.sky, setting.columns));
+  setting.lit_sky = std::move(split);
+  setting.suns = SunColumnsOf(*setting.sky, setting.columns);
+  FENESTRA_ASSIGN_OR_RETURN(sun, DirectSun::Trace(WithJobRanges(job.scene, job.job), setting.suns,
+                                                  static_cast<int>(setting.columns.size())));
+  setting.sun = std::move(sun);
   setting.options.udi_lower_lux = m.udi_lower_lux();
   setting.options.udi_upper_lux = m.udi_upper_lux();
   setting.options.da_threshold_lux = m.da_threshold_lux();
   setting.options.sda_min_da_percent = m.sda_time_fraction_percent();
+  setting.options.ase_threshold_lux = m.ase_threshold_lux();
+  setting.options.ase_min_hours = m.ase_min_hours();
   setting.options.hours = hour_basis;
   FENESTRA_ASSIGN_OR_RETURN(metric, ToSceneMetric(job.job.objective().metric()));
   setting.metric = metric;
@@ -80,7 +94,10 @@ absl::StatusOr<AnnualSetting> MakeAnnualSetting(const PreparedJob& job) {
 
 // The final check (final_check.h) of design `x` against `two_stage`, the one-stage metrics
 // taken as the search takes the two-stage ones. Cancelled as RunFinalCheck.
+// With an operated blind (`operation`), over its closed hours, the bare window's open ones
+// added (WithOpenHours; the same in both estimates, so the check's error is on the safe side).
 absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualSetting& setting,
+                                           const BlindOperation* operation,
                                            const std::vector<double>& x,
                                            const v1::Estimate& two_stage, DcBackend* backend,
                                            const std::function<bool()>& cancelled) {
@@ -89,14 +106,25 @@ absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualS
   // check's 32 pilot batches take a product there instead of one on the host), made once
   // for the pilot and the check
   std::unique_ptr<AnnualProduct> product;
+  const DirectSun& sun = operation != nullptr ? *operation->closed_sun : *setting.sun;
+  const Matrix& sky = operation != nullptr ? operation->closed_sky : setting.lit_sky;
+  const std::vector<SunEntry> direct = sun.Entries(DesignAt(job, x));
+  const std::vector<int64_t> sunlit =
+      SunlitHours(sun.Illuminance(DesignAt(job, x)), setting.options);
   const DaylightMetric metric =
       [&](std::span<const Matrix> dc_batches) -> absl::StatusOr<Evaluation> {
     if (product == nullptr) {
-      FENESTRA_ASSIGN_OR_RETURN(made, backend->MakeSkyProduct(setting.lit_sky));
+      FENESTRA_ASSIGN_OR_RETURN(made, backend->MakeSkyProduct(sky));
       product = std::move(made);
     }
-    FENESTRA_ASSIGN_OR_RETURN(
-        versions, product->Tally({dc_batches.begin(), dc_batches.end()}, setting.options));
+    absl::StatusOr<std::vector<HourTally>> tallied =
+        product->Tally({dc_batches.begin(), dc_batches.end()}, setting.options, direct);
+    if (tallied.ok()) {
+      for (HourTally& v : *tallied) v.sunlit = sunlit;
+    }
+    FENESTRA_ASSIGN_OR_RETURN(versions, operation != nullptr
+                                            ? WithOpenHours(std::move(tallied), *operation)
+                                            : std::move(tallied));
     FENESTRA_ASSIGN_OR_RETURN(
         metrics, AnnualMetricsFromTallies(versions, setting.analysed_hours, setting.options));
     return MetricEvaluation(std::move(metrics), setting.metric);
@@ -105,6 +133,7 @@ absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualS
   options.batches = job.job.sampling().batches();
   options.seed = job.job.sampling().seed();
   options.cancelled = cancelled;
+  options.with_direct_part = true;  // [D_b | D_0,b] for the split sky
   absl::StatusOr<FinalCheckOutcome> outcome =
       RunFinalCheck(job.scene, DesignAt(job, x), two_stage, metric, options, backend);
   if (absl::IsCancelled(outcome.status())) return outcome.status();
@@ -128,13 +157,15 @@ struct JobClock {
 
 // The final check of the search's best design into `result` (which holds the search's
 // history), then reported once more with the check. A cancel during the check leaves it out.
+// An operated blind never in place leaves every design the bare window: nothing to check.
 absl::Status CheckBestDesign(const PreparedJob& job, const AnnualSetting& setting,
-                             const VnsResult& search, DcBackend* backend,
-                             const JobCallbacks& callbacks, const JobClock& clock,
-                             v1::JobResult& result) {
+                             const BlindOperation* operation, const VnsResult& search,
+                             DcBackend* backend, const JobCallbacks& callbacks,
+                             const JobClock& clock, v1::JobResult& result) {
+  if (operation != nullptr && operation->closed.empty()) return absl::OkStatus();
   if (callbacks.stage) callbacks.stage("check");
-  absl::StatusOr<v1::FinalCheck> check =
-      CheckDesign(job, setting, search.best_x, result.best_value(), backend, callbacks.cancelled);
+  absl::StatusOr<v1::FinalCheck> check = CheckDesign(
+      job, setting, operation, search.best_x, result.best_value(), backend, callbacks.cancelled);
   if (absl::IsCancelled(check.status())) return absl::OkStatus();
   if (!check.ok()) return check.status();
   *result.mutable_final_check() = *check;
@@ -154,10 +185,12 @@ absl::Status CheckBestDesign(const PreparedJob& job, const AnnualSetting& settin
 // The best design's hourly illuminance, for reports and other tools, by the search's replay
 // and annual product (`tallies`, its O_b already on the device), on a thread of its own; beside
 // it, on a backend of its own, the final check of the best design by the one-stage method.
+// With an operated blind, each step is the design's where the rule puts the blind in place and
+// the bare window's elsewhere.
 absl::Status HourlyAndCheck(const PreparedJob& job, const AnnualSetting& setting,
-                            const VnsResult& search, DesignTallies& tallies,
-                            const JobCallbacks& callbacks, const JobClock& clock,
-                            v1::JobResult& result) {
+                            const BlindOperation* operation, const VnsResult& search,
+                            DesignTallies& tallies, const JobCallbacks& callbacks,
+                            const JobClock& clock, v1::JobResult& result) {
   if (search.stop_reason == StopReason::kCancelled) return absl::OkStatus();
   double hourly_seconds = 0;
   std::future<absl::StatusOr<v1::HourlyIlluminance>> hourly;
@@ -168,9 +201,28 @@ absl::Status HourlyAndCheck(const PreparedJob& job, const AnnualSetting& setting
         std::launch::async,
         [&, design = DesignAt(job, search.best_x)]() -> absl::StatusOr<v1::HourlyIlluminance> {
           const auto hourly_start = std::chrono::steady_clock::now();
-          absl::StatusOr<v1::HourlyIlluminance> values = DesignHourlyIlluminance(
-              job.scene, *setting.sky,
-              [&](const Matrix& sky) { return tallies.DesignIlluminance(design, sky); });
+          // The direct sun of every step (the search's covers only the analysed ones)
+          std::vector<int> steps(setting.sky->steps.size());
+          for (size_t t = 0; t < steps.size(); ++t) steps[t] = static_cast<int>(t);
+          FENESTRA_ASSIGN_OR_RETURN(sun, DirectSun::Trace(WithJobRanges(job.scene, job.job),
+                                                          SunColumnsOf(*setting.sky, steps),
+                                                          static_cast<int>(steps.size())));
+          FENESTRA_ASSIGN_OR_RETURN(
+              values, DesignHourlyIlluminance(
+                          job.scene, *setting.sky,
+                          [&](const Matrix& sky) { return tallies.DesignIlluminance(design, sky); },
+                          sun->Entries(design)));
+          if (operation != nullptr) {
+            FENESTRA_ASSIGN_OR_RETURN(bare, DesignHourlyIlluminance(
+                                                job.scene, *setting.sky,
+                                                [&](const Matrix& sky) {
+                                                  return tallies.Product()->ApplyToSky(
+                                                      operation->bare_indoor, sky);
+                                                },
+                                                sun->Entries(design, /*blind=*/false)));
+            MixOperatedHours(BlindInPlace(sun->Illuminance(design, false), setting.options), bare,
+                             values);
+          }
           hourly_seconds = SecondsSince(hourly_start);
           return values;
         });
@@ -178,7 +230,7 @@ absl::Status HourlyAndCheck(const PreparedJob& job, const AnnualSetting& setting
   if (job.job.sampling().final_check()) {
     FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(job.job.sampling().backend()));
     FENESTRA_RETURN_IF_ERROR(
-        CheckBestDesign(job, setting, search, backend.get(), callbacks, clock, result));
+        CheckBestDesign(job, setting, operation, search, backend.get(), callbacks, clock, result));
   }
   if (hourly.valid()) {
     FENESTRA_ASSIGN_OR_RETURN(values, hourly.get());
@@ -266,6 +318,32 @@ absl::Status SetLaneProducts(Lanes& lanes, const OutdoorMatrix& outdoor, const M
   return absl::OkStatus();
 }
 
+// Once the outdoor stage and the sky are there: every lane's annual product and direct sun;
+// for an operated blind (core/optimize/operated_blind.h) over its closed hours, the lanes'
+// tallies then adding the bare window's open ones. Null: a static blind.
+absl::StatusOr<std::shared_ptr<const BlindOperation>> SetLaneEvaluation(
+    const PreparedJob& job, const AnnualSetting& setting, const OutdoorMatrix& matrix,
+    const Scene& ranged, const IndoorOptions& indoor, DcBackend& backend, Lanes& lanes) {
+  if (!job.scene.blind || !job.scene.blind->automated_sun) {
+    FENESTRA_RETURN_IF_ERROR(SetLaneProducts(lanes, matrix, setting.lit_sky));
+    for (const auto& tallies : lanes.tallies) tallies->SetDirectSun(setting.sun);
+    return std::shared_ptr<const BlindOperation>();
+  }
+  FENESTRA_ASSIGN_OR_RETURN(made, OperateBlind(ranged, setting.lit_sky, setting.suns, *setting.sun,
+                                               matrix.batches, indoor, setting.options, backend));
+  auto operation = std::make_shared<const BlindOperation>(std::move(made));
+  // A blind never in place leaves the tallies nothing to trace; its product still serves the
+  // hourly illuminance
+  const bool never = operation->closed.empty();
+  FENESTRA_RETURN_IF_ERROR(
+      SetLaneProducts(lanes, matrix, never ? setting.lit_sky : operation->closed_sky));
+  for (auto& tallies : lanes.tallies) {
+    tallies->SetDirectSun(never ? setting.sun : operation->closed_sun);
+    tallies = std::make_unique<OperatedDesignTallies>(std::move(tallies), operation);
+  }
+  return operation;
+}
+
 // The job's search from the start or from `so_far`, keeping `checkpoint` (that of `so_far`,
 // else new) up to date after each step and handing it out with the progress; `racer`
 // evaluates the designs and learns of each new incumbent.
@@ -340,7 +418,8 @@ absl::StatusOr<PreparedJob> PrepareJob(const v1::Job& job, const std::string& ba
 }
 
 double OutdoorMeanRelativeError(const OutdoorMatrix& matrix) {
-  const Eigen::Index cells = std::max<Eigen::Index>(0, matrix.coefficients.rows() - kDaylightBins);
+  const Eigen::Index cells =
+      std::max<Eigen::Index>(0, matrix.coefficients.rows() - kIndoorDirectColumns);
   if (cells == 0 || matrix.standard_error.rows() != matrix.coefficients.rows()) return 0;
   return MeanRelativeError(matrix.coefficients.topRows(cells), matrix.standard_error.topRows(cells),
                            0.01, false);
@@ -492,7 +571,8 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   const OutdoorMatrix& matrix = outdoor != nullptr ? *outdoor : computed;
   FENESTRA_RETURN_IF_ERROR(CheckOutdoorMatchesIndoor(matrix, indoor_options));
   FENESTRA_RETURN_IF_ERROR(recorded);
-  FENESTRA_RETURN_IF_ERROR(SetLaneProducts(lanes, matrix, setting.lit_sky));
+  FENESTRA_ASSIGN_OR_RETURN(
+      operation, SetLaneEvaluation(job, setting, matrix, ranged, indoor_options, *backend, lanes));
   computed.batches_on_device = {};  // the lanes hold their own copies
   // The outdoor matrix's mean relative error, for the result: a pass over O and its errors
   // (5-15 ms at the job's end) made beside the search
@@ -516,8 +596,8 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   AddSearch(search_settings, search, checkpoint, result);
   result.set_outdoor_mean_relative_standard_error(outdoor_error.get());
   result.set_backend(backend->Name());
-  FENESTRA_RETURN_IF_ERROR(
-      HourlyAndCheck(job, setting, search, *lanes.tallies.front(), callbacks, clock, result));
+  FENESTRA_RETURN_IF_ERROR(HourlyAndCheck(job, setting, operation.get(), search,
+                                          *lanes.tallies.front(), callbacks, clock, result));
   lanes.tallies.clear();  // the search's paths are no longer needed
   result.mutable_timings()->set_total_seconds(clock.Seconds());
   return result;
@@ -533,7 +613,7 @@ absl::StatusOr<v1::FinalCheck> CheckJobDesign(
   }
   FENESTRA_ASSIGN_OR_RETURN(setting, MakeAnnualSetting(job));
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(job.job.sampling().backend()));
-  return CheckDesign(job, setting, x, two_stage, backend.get(), {});
+  return CheckDesign(job, setting, nullptr, x, two_stage, backend.get(), {});
 }
 
 }  // namespace fenestra

@@ -25,7 +25,7 @@ namespace fenestra {
 // The outdoor matrix O of a site: (window cells, then one identity row per sky bin) x 146 sky
 // bins [-], with its standard error, its batches and how it was made.
 struct OutdoorMatrix {
-  Matrix coefficients;  // O (core/dc/two_stage.h): window cells + 146 rows
+  Matrix coefficients;  // O (core/dc/two_stage.h): window cells + 292 rows
   Matrix standard_error;
   std::vector<Matrix> batches;  // O_b, paired with the indoor batches
   // The batches where a GPU formed them, while the job that traced them uses them (see

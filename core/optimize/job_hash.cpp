@@ -14,7 +14,7 @@ namespace fenestra {
 
 std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
   ContentHash hash;
-  hash.String("fenestra outdoor matrix v2");
+  hash.String("fenestra outdoor matrix v3");
   const TriangleMesh& mesh = scene.fixed;
   for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
     if (mesh.side[t] != Side::kOutdoor) continue;

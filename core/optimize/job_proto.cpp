@@ -177,6 +177,12 @@ v1::Metrics MetricsProto(const AnnualMetricsEstimate& m) {
   SetEstimate(out.mutable_da(), v.da_mean_percent, se.da_mean_percent);
   SetEstimate(out.mutable_cda(), v.cda_mean_percent, se.cda_mean_percent);
   SetEstimate(out.mutable_sda(), v.sda_percent, se.sda_percent);
+  SetEstimate(out.mutable_ase(), v.ase_percent, se.ase_percent);
+  SetEstimate(out.mutable_blind_in_place(), v.blind_in_place_percent, se.blind_in_place_percent);
+  out.set_leed_points(LeedDaylightPoints(v.sda_percent));
+  for (const SensorMetrics& s : m.value.sensors) {
+    out.add_sensor_sunlit_hours(static_cast<int32_t>(s.ase_hours));
+  }
   for (size_t s = 0; s < m.value.sensors.size(); ++s) {
     SetEstimate(out.add_sensor_udi(), m.value.sensors[s].udi_percent,
                 m.standard_error.sensors[s].udi_percent);

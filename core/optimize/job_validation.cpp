@@ -132,6 +132,9 @@ absl::Status CheckLux(double value, const std::string& field, bool zero_allowed)
   return absl::OkStatus();
 }
 
+// Hours of a leap year: the most an ASE count can reach.
+constexpr int kMaxAseHours = 8784;
+
 absl::Status FillMetricSettings(v1::MetricSettings& m) {
   const MetricOptions defaults;
   const OccupancySchedule occupancy;
@@ -144,6 +147,25 @@ absl::Status FillMetricSettings(v1::MetricSettings& m) {
   if (m.occupied_start_h() == 0 && m.occupied_end_h() == 0) {
     m.set_occupied_start_h(occupancy.start_hour);
     m.set_occupied_end_h(occupancy.end_hour);
+  }
+  if (m.ase_threshold_lux() == 0) m.set_ase_threshold_lux(defaults.ase_threshold_lux);
+  if (m.ase_min_hours() == 0) m.set_ase_min_hours(defaults.ase_min_hours);
+  if (m.operation_sensor_percent() == 0) {
+    m.set_operation_sensor_percent(defaults.operation_sensor_percent);
+  }
+  if (m.operation_threshold_lux() == 0) {
+    m.set_operation_threshold_lux(defaults.operation_threshold_lux);
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckLux(m.ase_threshold_lux(), "ase_threshold_lux", false));
+  FENESTRA_RETURN_IF_ERROR(CheckLux(m.operation_threshold_lux(), "operation_threshold_lux", false));
+  if (!(m.ase_min_hours() >= 1 && m.ase_min_hours() <= kMaxAseHours)) {
+    return InvalidJobField("metrics.ase_min_hours", absl::StrCat("must be in [1, ", kMaxAseHours,
+                                                                 "] h, got ", m.ase_min_hours()));
+  }
+  if (!(m.operation_sensor_percent() > 0 && m.operation_sensor_percent() <= 100)) {
+    return InvalidJobField(
+        "metrics.operation_sensor_percent",
+        absl::StrCat("must be in (0, 100] %, got ", m.operation_sensor_percent()));
   }
   FENESTRA_RETURN_IF_ERROR(CheckLux(m.udi_lower_lux(), "udi_lower_lux", true));
   FENESTRA_RETURN_IF_ERROR(CheckLux(m.udi_upper_lux(), "udi_upper_lux", false));
@@ -215,17 +237,17 @@ absl::Status FillConstraints(v1::Objective& objective) {
     }
     // Every metric a job takes is a share [%]
     if (!(c.value() >= 0 && c.value() <= 100)) {
-      return InvalidJobField(field + ".value",
-                             absl::StrCat("must be in [0, 100] % (the metric's range), got ",
-                                          c.value()));
+      return InvalidJobField(
+          field + ".value",
+          absl::StrCat("must be in [0, 100] % (the metric's range), got ", c.value()));
     }
   }
   const double k = objective.constraint_standard_errors();
   if (!(k >= 0 && k <= kMaxConstraintStandardErrors)) {
-    return InvalidJobField("objective.constraint_standard_errors",
-                           absl::StrCat("must be in (0, ", kMaxConstraintStandardErrors,
-                                        "] (0 = the default, ", kDefaultConstraintStandardErrors,
-                                        "), got ", k));
+    return InvalidJobField(
+        "objective.constraint_standard_errors",
+        absl::StrCat("must be in (0, ", kMaxConstraintStandardErrors, "] (0 = the default, ",
+                     kDefaultConstraintStandardErrors, "), got ", k));
   }
   if (k == 0 && objective.constraints_size() > 0) {
     objective.set_constraint_standard_errors(kDefaultConstraintStandardErrors);
@@ -334,7 +356,7 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
   const int64_t most_cells =
       int64_t{s.basis_cells()} * side(s.window_columns()) * side(s.window_rows());
   const int64_t matrix_bytes =
-      (most_cells + kTregenzaBinCount) * kTregenzaBinCount * 8 * (int64_t{s.batches()} + 2);
+      (most_cells + kIndoorDirectColumns) * kTregenzaBinCount * 8 * (int64_t{s.batches()} + 2);
   if (matrix_bytes > kMaxOutdoorMatrixBytes) {
     return InvalidJobField(
         "sampling",

@@ -121,7 +121,7 @@ TEST(HourlyIlluminanceTest, StandardErrorsMatchTheSpreadBetweenSeeds) {
     ASSERT_TRUE(product.ok()) << product.status();
     absl::StatusOr<v1::HourlyIlluminance> hourly = DesignHourlyIlluminance(
         scene, *sky,
-        [&](const Matrix& lux) { return (*product)->ApplyToSky(indoor->batches, lux); });
+        [&](const Matrix& lux) { return (*product)->ApplyToSky(indoor->batches, lux); }, {});
     ASSERT_TRUE(hourly.ok()) << hourly.status();
     runs.push_back(*std::move(hourly));
   }
@@ -157,14 +157,14 @@ TEST(HourlyIlluminanceTest, NeedsTwoBatchesOfTheSensorsAndLitSteps) {
     };
   };
   const Matrix one_step = Matrix::Constant(sensors, 1, 100.0);
-  EXPECT_EQ(DesignHourlyIlluminance(scene, sky, returning({one_step})).status().code(),
+  EXPECT_EQ(DesignHourlyIlluminance(scene, sky, returning({one_step}), {}).status().code(),
             absl::StatusCode::kInvalidArgument);
-  EXPECT_EQ(DesignHourlyIlluminance(scene, sky, returning({one_step, Matrix::Zero(sensors, 2)}))
+  EXPECT_EQ(DesignHourlyIlluminance(scene, sky, returning({one_step, Matrix::Zero(sensors, 2)}), {})
                 .status()
                 .code(),
             absl::StatusCode::kInvalidArgument);
   absl::StatusOr<v1::HourlyIlluminance> hourly =
-      DesignHourlyIlluminance(scene, sky, returning({one_step, 3 * one_step}));
+      DesignHourlyIlluminance(scene, sky, returning({one_step, 3 * one_step}), {});
   ASSERT_TRUE(hourly.ok()) << hourly.status();
   // The mean of 100 and 300 lx at the lit step, nothing at the others
   ASSERT_EQ(hourly->illuminance_lux_size(), 3 * sensors);

@@ -203,7 +203,7 @@ TEST(JobValidationTest, BudgetObjectiveAndSampling) {
   job.mutable_sampling()->set_outdoor_paths(100'000'000);
   EXPECT_THAT(ErrorOf(job),
               HasSubstr("job sampling: the outdoor matrix with its batches could take "
-                        "21691 MiB (1152 direction cells x 16x16 window parts at "
+                        "21702 MiB (1152 direction cells x 16x16 window parts at "
                         "most, automatic x 64 batches), more than the 4096 MiB"));
   job.mutable_sampling()->set_window_columns(4);
   job.mutable_sampling()->set_window_rows(3);
