@@ -9,7 +9,7 @@
 namespace fenestra {
 
 // The job: `evaluations` designs, 2000 indoor paths per sensor, 40000 outdoor paths, the
-// window in one part: 288 + 146 columns of I and rows of O instead of the 12 parts' 3602.
+// window in one part: 288 + 292 columns of I and rows of O instead of the 12 parts' 3748.
 inline v1::Job QuickJob(int evaluations = 4) {
   absl::StatusOr<v1::Job> job =
       ReadJobFile(FENESTRA_SOURCE_DIR "/examples/city_office/alpha_max_quick.json");

@@ -95,7 +95,9 @@ absl::StatusOr<AnnualSetting> MakeAnnualSetting(const PreparedJob& job) {
 // The final check (final_check.h) of design `x` against `two_stage`, the one-stage metrics
 // taken as the search takes the two-stage ones. Cancelled as RunFinalCheck.
 // With an operated blind (`operation`), over its closed hours, the bare window's open ones
-// added (WithOpenHours; the same in both estimates, so the check's error is on the safe side).
+// added as their mean (WithOpenMean): the same light in both estimates, so the difference is
+// the closed hours', and its error, which counts the two-stage estimate's open hours too, is
+// on the safe side.
 absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualSetting& setting,
                                            const BlindOperation* operation,
                                            const std::vector<double>& x,
@@ -123,7 +125,7 @@ absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualS
       for (HourTally& v : *tallied) v.sunlit = sunlit;
     }
     FENESTRA_ASSIGN_OR_RETURN(versions, operation != nullptr
-                                            ? WithOpenHours(std::move(tallied), *operation)
+                                            ? WithOpenMean(std::move(tallied), *operation)
                                             : std::move(tallied));
     FENESTRA_ASSIGN_OR_RETURN(
         metrics, AnnualMetricsFromTallies(versions, setting.analysed_hours, setting.options));

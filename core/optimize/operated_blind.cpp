@@ -143,6 +143,15 @@ absl::StatusOr<std::vector<HourTally>> WithOpenHours(absl::StatusOr<std::vector<
   return out;
 }
 
+absl::StatusOr<std::vector<HourTally>> WithOpenMean(absl::StatusOr<std::vector<HourTally>> closed,
+                                                    const BlindOperation& op) {
+  if (!closed.ok()) return closed;
+  if (op.open.empty()) return absl::InvalidArgumentError("the bare window has no tallies");
+  BlindOperation mean = op;
+  mean.open.assign(closed->size(), op.open[0]);
+  return WithOpenHours(std::move(closed), mean);
+}
+
 namespace {
 
 // The tallies of no hour, as many versions as `op`'s.

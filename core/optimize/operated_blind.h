@@ -63,6 +63,12 @@ void MixOperatedHours(const std::vector<bool>& in_place, const v1::HourlyIllumin
 absl::StatusOr<std::vector<HourTally>> WithOpenHours(absl::StatusOr<std::vector<HourTally>> closed,
                                                      const BlindOperation& op);
 
+// The same with the bare window's tallies of its mean (op.open[0]) added to every version of
+// `closed`, in any number: where the bare window's hours are the same in both estimates a
+// comparison takes (the final check's), so that its batches need not pair with the design's.
+absl::StatusOr<std::vector<HourTally>> WithOpenMean(absl::StatusOr<std::vector<HourTally>> closed,
+                                                    const BlindOperation& op);
+
 // Design tallies of an operated blind: `closed`'s (its product over op.closed, its direct sun
 // there; core/optimize/job.cpp sets them) with the open hours added (WithOpenHours).
 class OperatedDesignTallies : public DesignTallies {

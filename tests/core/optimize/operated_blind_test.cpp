@@ -6,6 +6,7 @@
 
 #include "core/metrics/annual_metrics.h"
 #include "core/metrics/metric_errors.h"
+#include "core/optimize/job.h"
 
 namespace fenestra {
 namespace {
@@ -91,6 +92,52 @@ TEST(OperatedBlindTest, OperatedSdaAddsTheBareWindowsOpenHours) {
   EXPECT_DOUBLE_EQ(metrics->value.scene.ase_percent, 0);
   // Versions that do not pair are refused
   EXPECT_FALSE(WithOpenHours(std::vector<HourTally>(2, design[0]), op).ok());
+}
+
+}  // namespace
+}  // namespace fenestra
+
+namespace fenestra {
+namespace {
+
+// The sunny office with its blind operated by LM-83's rule, two designs of its quick job: the
+// share of occupied hours with the blind in place is that of the steps the hourly output marks,
+// exact; ASE is exact; the final check agrees with the two-stage value and counts the same
+// hours in place and the same ASE.
+TEST(OperatedBlindJobTest, TheBlindIsInPlaceInTheRulesHoursOnly) {
+  absl::StatusOr<v1::Job> job =
+      ReadJobFile(FENESTRA_SOURCE_DIR "/examples/sunny_office/leed_quick.json");
+  ASSERT_TRUE(job.ok()) << job.status();
+  job->mutable_budget()->set_max_evaluations(2);
+  job->mutable_sampling()->set_backend("cpu");
+  absl::StatusOr<PreparedJob> prepared =
+      PrepareJob(*job, FENESTRA_SOURCE_DIR "/examples/sunny_office");
+  ASSERT_TRUE(prepared.ok()) << prepared.status();
+  absl::StatusOr<v1::JobResult> result = RunJob(*prepared, nullptr);
+  ASSERT_TRUE(result.ok()) << result.status();
+  const v1::Metrics& m = result->best_metrics();
+  // Phoenix's sun closes the blind in a good share of the occupied hours, not all
+  EXPECT_GT(m.blind_in_place().value(), 20);
+  EXPECT_LT(m.blind_in_place().value(), 80);
+  EXPECT_EQ(m.blind_in_place().standard_error(), 0);
+  EXPECT_EQ(m.ase().standard_error(), 0);
+  // Per step: the hours in place are those the occupied share counts
+  const v1::HourlyIlluminance& h = result->best_hourly();
+  ASSERT_EQ(h.blind_in_place_size(), h.hour_size());
+  int occupied = 0, in_place = 0;
+  for (int t = 0; t < h.hour_size(); ++t) {
+    const bool counted = h.hour(t) >= 8 && h.hour(t) < 18;
+    occupied += counted;
+    in_place += counted && h.blind_in_place(t);
+  }
+  EXPECT_NEAR(m.blind_in_place().value(), 100.0 * in_place / occupied, 1e-9);
+  // The one-stage check counts the same hours in place and the same (bare window's) ASE
+  ASSERT_TRUE(result->has_final_check());
+  EXPECT_FALSE(result->final_check().disagrees())
+      << result->final_check().one_stage().value() << " against " << result->best_value().value();
+  EXPECT_EQ(result->final_check().one_stage_metrics().blind_in_place().value(),
+            m.blind_in_place().value());
+  EXPECT_EQ(result->final_check().one_stage_metrics().ase().value(), m.ase().value());
 }
 
 }  // namespace
