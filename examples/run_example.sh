@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Installs the dependencies, builds Fenestra and runs the main job end to end on the
-# embedded example (the city office in Montevideo): starts fenestrad on localhost with a
-# temporary data directory, registers the site (its outdoor matrix is traced once and
-# cached), submits the tilt experiment with the client, shows its progress and the best
-# design, then stops the daemon and prints its lines on the site and the job (its whole log
-# when a step fails).
-# Usage: examples/run_example.sh [JOB.json]   (default: examples/city_office/alpha_max.json;
-#        examples/city_office/alpha_max_quick.json takes seconds)
+# embedded example (the sunny office in Phoenix, its blind operated by IES LM-83's rule):
+# starts fenestrad on localhost with a temporary data directory, registers the site (its
+# outdoor matrix is traced once and cached), submits the tilt optimization with the client
+# (maximize UDI keeping sDA at least 55%), shows its progress and the best design with ASE,
+# sDA and the constraint, then stops the daemon and prints its lines on the site and the job
+# (its whole log when a step fails).
+# Usage: examples/run_example.sh [JOB.json]   (default: examples/sunny_office/leed_quick.json;
+#        examples/city_office/alpha_max.json is the source publication's tilt experiment)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash deploy/debian_packages.sh
@@ -16,7 +17,7 @@ fi
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$(nproc)"
 fenestra=build/client/fenestra
-job="${1:-examples/city_office/alpha_max.json}"
+job="${1:-examples/sunny_office/leed_quick.json}"
 data=$(mktemp -d)
 pid=""
 stop_daemon() {
@@ -40,7 +41,9 @@ finish() {
 }
 trap finish EXIT
 
-$fenestra scene check examples/city_office/scene.json
+# The job's scene (its sceneFile, relative to the job's folder)
+scene=$(sed -n 's/.*"sceneFile": *"\([^"]*\)".*/\1/p' "$job" | head -1)
+$fenestra scene check "$(dirname "$job")/$scene"
 
 # The daemon, on a free localhost port; auth none: every caller is the local user
 # (allowed on loopback only)
