@@ -162,7 +162,7 @@ class CudaAnnualProduct : public AnnualProduct {
     }
     FENESTRA_RETURN_IF_ERROR(CheckSunEntries(sun, indoor_batches, sky));
     FENESTRA_ASSIGN_OR_RETURN(e, Illuminance(indoor_batches, &sky));
-    return WithSun(std::move(e), indoor_batches.size(), sun);
+    return WithSun(std::move(e), sun);
   }
 
   // E is formed and tallied on the device; only the tallies come back.
@@ -241,11 +241,8 @@ class CudaAnnualProduct : public AnnualProduct {
       : annual_(std::move(annual)), batches_(batches), rows_(rows), sky_(std::move(sky)) {}
 
   // E's batches with the direct sun added on the host.
-  static std::vector<Matrix> WithSun(std::vector<Matrix> e, size_t batches,
-                                     std::span<const SunEntry> sun) {
-    if (sun.empty() || e.empty()) return e;
+  static std::vector<Matrix> WithSun(std::vector<Matrix> e, std::span<const SunEntry> sun) {
     for (Matrix& batch : e) AddSunEntries(sun, static_cast<int>(batch.rows()), batch);
-    (void)batches;
     return e;
   }
 

@@ -79,10 +79,10 @@ absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(
   const int64_t steps = static_cast<int64_t>(sky.steps.size());
   out.mutable_illuminance_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
   out.mutable_standard_error_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
-  out.mutable_direct_sun_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
-  for (int64_t t = 0; t < steps; ++t) {
-    out.add_blind_in_place(blind_in_place.empty() || blind_in_place[t]);
-  }
+  // Only where there is something to say: a static blind is always in place, and a design
+  // the sun never reaches has no direct sun
+  for (const bool b : blind_in_place) out.add_blind_in_place(b);
+  if (!sun.empty()) out.mutable_direct_sun_lux()->Resize(static_cast<int>(sensors * steps), 0.0f);
   for (const SunEntry& e : sun) {
     if (e.sensor < 0 || e.sensor >= sensors || e.column < 0 || e.column >= steps) {
       return absl::InvalidArgumentError("a direct-sun entry out of range");

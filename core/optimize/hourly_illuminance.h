@@ -46,8 +46,9 @@ using DesignIlluminanceOf = std::function<absl::StatusOr<std::vector<Matrix>>(co
 // over the paired batches with its standard error (both stages' noise), from the design's
 // E_b over the steps with daylight (`illuminance`, with the random streams of the search and
 // the O_b of its outdoor stage) through the split sky, plus the design's direct sun `sun`
-// (its columns the steps of `sky`; exact, so without error), also given apart. Which steps
-// have the blind in place: `blind_in_place` per step, or every step where it is empty.
+// (its columns the steps of `sky`; exact, so without error), also given apart (none where
+// `sun` is empty). Which steps have the blind in place: `blind_in_place` per step, or every
+// step where it is empty (then none is listed).
 // InvalidArgument for fewer than 2 batches or a sun entry out of range; errors as
 // `illuminance`.
 absl::StatusOr<v1::HourlyIlluminance> DesignHourlyIlluminance(

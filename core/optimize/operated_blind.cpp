@@ -116,11 +116,19 @@ void MixOperatedHours(const std::vector<bool>& in_place, const v1::HourlyIllumin
                       v1::HourlyIlluminance& design) {
   const int steps = static_cast<int>(in_place.size());
   if (steps == 0 || design.illuminance_lux_size() != bare.illuminance_lux_size()) return;
-  for (int k = 0; k < design.illuminance_lux_size(); ++k) {
+  // The direct sun of either where there is any
+  const int values = design.illuminance_lux_size();
+  if (design.direct_sun_lux_size() != values && bare.direct_sun_lux_size() == values) {
+    design.mutable_direct_sun_lux()->Resize(values, 0.0f);
+  }
+  const bool bare_sun = bare.direct_sun_lux_size() == values;
+  for (int k = 0; k < values; ++k) {
     if (in_place[k % steps]) continue;
     design.set_illuminance_lux(k, bare.illuminance_lux(k));
     design.set_standard_error_lux(k, bare.standard_error_lux(k));
-    design.set_direct_sun_lux(k, bare.direct_sun_lux(k));
+    if (design.direct_sun_lux_size() == values) {
+      design.set_direct_sun_lux(k, bare_sun ? bare.direct_sun_lux(k) : 0.0f);
+    }
   }
   design.clear_blind_in_place();
   for (const bool b : in_place) design.add_blind_in_place(b);

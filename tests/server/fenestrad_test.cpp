@@ -893,9 +893,9 @@ TEST_F(FenestradStorageTest, UploadsAreKeptOnlyWhileASiteOrUnfinishedJobUsesThem
 }
 
 TEST_F(FenestradStorageTest, DataDirectoryLimitEvictsUnusedMatricesThenRefusesNamingTheLimit) {
-  // 8.0 MB: a weather file is 1.6 MB, a tiny job's outdoor matrix 5.1 MB (O, its standard
-  // errors and its 8 batches, each 434 x 146 doubles)
-  auto d = StartDaemon({"--max-data-dir-bytes", "8005472"});
+  // 9.7 MB: a weather file is 1.6 MB, a tiny job's outdoor matrix 6.8 MB (O, its standard
+  // errors and its 8 batches, each 580 x 146 doubles)
+  auto d = StartDaemon({"--max-data-dir-bytes", "9710752"});
   const std::string outdoor = d->data_dir() + "/outdoor";
   v1::SiteInfo first;
   ASSERT_TRUE(Register(*d, SiteRequest(TinyJob(), Weather()), &first).ok());
@@ -921,7 +921,7 @@ TEST_F(FenestradStorageTest, DataDirectoryLimitEvictsUnusedMatricesThenRefusesNa
   request.set_weather_epw(Weather(2));
   const grpc::Status refused = SubmitRequest(*d, request);
   EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-  EXPECT_THAT(refused.error_message(), HasSubstr("max_data_dir_bytes = 8005472"));
+  EXPECT_THAT(refused.error_message(), HasSubstr("max_data_dir_bytes = 9710752"));
   EXPECT_THAT(refused.error_message(), testing::Not(HasSubstr(dir_)));
   EXPECT_EQ(FileNames(outdoor), second_matrix);
   EXPECT_EQ(FileNames(d->data_dir() + "/weather").size(), 1u);
@@ -936,7 +936,7 @@ TEST_F(FenestradStorageTest, DataDirectoryLimitEvictsUnusedMatricesThenRefusesNa
 }
 
 TEST_F(FenestradStorageTest, FullDiskKeepsReadsRefusesWritesStoresFinalStatesAndStarts) {
-  MountTmpfs(dir_ + "/data", "64m");  // a tiny job's outdoor matrix is 5 MB
+  MountTmpfs(dir_ + "/data", "64m");  // a tiny job's outdoor matrix is 7 MB
   auto d = StartDaemon();
   v1::SiteInfo site;
   ASSERT_TRUE(Register(*d, SiteRequest(TinyJob(), Weather()), &site).ok());
@@ -1093,9 +1093,10 @@ TEST_F(FenestradStorageTest, LargeRegistrationMemoryIsBoundedAndGivenBack) {
                after = ProcessStatusMiB(d->pid(), "VmRSS");
   std::cout << "fenestrad resident memory: " << before << " MiB before, " << peak
             << " MiB at the peak, " << after << " MiB after\n";
-  // Measured 650-770 MiB at the peak and 30-35 MiB after (bench/results/registration_memory_cpu2.txt).
-  // Under AddressSanitizer the allocator pads every block and holds freed ones in quarantine,
-  // so resident memory measures the sanitizer: the plain build checks the bounds.
+  // Measured 650-770 MiB at the peak and 30-35 MiB after
+  // (bench/results/registration_memory_cpu2.txt). Under AddressSanitizer the allocator pads every
+  // block and holds freed ones in quarantine, so resident memory measures the sanitizer: the plain
+  // build checks the bounds.
 #if !FENESTRA_SANITIZE
   EXPECT_LT(peak, 1500);
   EXPECT_LT(after, 150);
