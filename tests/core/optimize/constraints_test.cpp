@@ -12,6 +12,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/optimize/vns.h"
+#include "tests/core/optimize/same_search.h"
 
 namespace fenestra {
 namespace {
@@ -226,28 +227,6 @@ std::vector<DesignVariable> GriddedVariables() {
   return vars;
 }
 
-void ExpectSameSteps(const VnsResult& a, const VnsResult& b) {
-  ASSERT_EQ(a.history.size(), b.history.size());
-  for (size_t i = 0; i < a.history.size(); ++i) {
-    SCOPED_TRACE(absl::StrCat("step ", i));
-    const VnsRecord &x = a.history[i], &y = b.history[i];
-    EXPECT_EQ(x.x, y.x);
-    EXPECT_EQ(x.evaluation.value, y.evaluation.value);
-    EXPECT_EQ(x.evaluation.constraints, y.evaluation.constraints);
-    EXPECT_EQ(x.evaluation.partial, y.evaluation.partial);
-    EXPECT_EQ(x.cached, y.cached);
-    EXPECT_EQ(x.improved, y.improved);
-    EXPECT_EQ(x.feasible, y.feasible);
-    EXPECT_EQ(x.violation, y.violation);
-    EXPECT_EQ(x.neighborhood, y.neighborhood);
-  }
-  EXPECT_EQ(a.best_x, b.best_x);
-  EXPECT_EQ(a.best_index, b.best_index);
-  EXPECT_EQ(a.evaluations, b.evaluations);
-  EXPECT_EQ(a.improvements, b.improvements);
-  EXPECT_EQ(a.stop_reason, b.stop_reason);
-}
-
 // Designs evaluated ahead, several at a time: the steps of the search one design at a time,
 // infeasible incumbents (the start) and moves by violation included.
 TEST(ConstraintsTest, LookaheadTakesTheStepsOfOneAtATime) {
@@ -275,7 +254,7 @@ TEST(ConstraintsTest, LookaheadTakesTheStepsOfOneAtATime) {
     };
     absl::StatusOr<VnsResult> ahead = RunVns(vars, batch, options);
     ASSERT_TRUE(ahead.ok()) << ahead.status();
-    ExpectSameSteps(*one, *ahead);
+    ExpectSameSearch(*one, *ahead);
     EXPECT_GT(ahead->discarded, 0);
   }
 }
@@ -306,7 +285,7 @@ TEST(ConstraintsTest, ResumedFromAnyStepTheSearchEndsAsTheUninterruptedOne) {
     };
     absl::StatusOr<VnsResult> resumed = RunVns(vars, counted, options, {}, &checkpoint);
     ASSERT_TRUE(resumed.ok()) << resumed.status();
-    ExpectSameSteps(*resumed, *full);
+    ExpectSameSearch(*resumed, *full);
   }
 
   VnsResult other = checkpoints.back();

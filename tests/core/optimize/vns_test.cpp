@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "tests/core/optimize/same_search.h"
 
 namespace fenestra {
 namespace {
@@ -462,30 +463,6 @@ std::vector<ResumeCase> ResumeCases() {
   gridded[0].step = 0.1;
   cases.push_back({"space exhausted", exhausted, StopReason::kSpaceExhausted, gridded});
   return cases;
-}
-
-void ExpectSameSearch(const VnsResult& a, const VnsResult& b) {
-  ASSERT_EQ(a.history.size(), b.history.size());
-  for (size_t i = 0; i < a.history.size(); ++i) {
-    const VnsRecord &x = a.history[i], &y = b.history[i];
-    EXPECT_EQ(x.index, y.index);
-    EXPECT_EQ(x.x, y.x) << "step " << i;
-    EXPECT_EQ(x.evaluation.value, y.evaluation.value) << "step " << i;
-    EXPECT_EQ(x.evaluation.standard_error, y.evaluation.standard_error);
-    EXPECT_EQ(x.score, y.score);
-    EXPECT_EQ(x.cached, y.cached) << "step " << i;
-    EXPECT_EQ(x.improved, y.improved) << "step " << i;
-    EXPECT_EQ(x.neighborhood, y.neighborhood) << "step " << i;
-  }
-  EXPECT_EQ(a.best_x, b.best_x);
-  EXPECT_EQ(a.best.value, b.best.value);
-  EXPECT_EQ(a.best.standard_error, b.best.standard_error);
-  EXPECT_EQ(a.best_score, b.best_score);
-  EXPECT_EQ(a.best_index, b.best_index);
-  EXPECT_EQ(a.evaluations, b.evaluations);
-  EXPECT_EQ(a.cache_hits, b.cache_hits);
-  EXPECT_EQ(a.improvements, b.improvements);
-  EXPECT_EQ(a.stop_reason, b.stop_reason);
 }
 
 // Resumed from the checkpoint of every step, the search ends as the uninterrupted one: the
