@@ -17,15 +17,6 @@
 namespace fenestra {
 namespace {
 
-DesignVariable BoxVariable(std::string name, double lower, double upper, double start) {
-  DesignVariable v;
-  v.name = std::move(name);
-  v.lower = lower;
-  v.upper = upper;
-  v.start = start;
-  return v;
-}
-
 // A step with `score` (maximized), standing against the constraints as given.
 VnsRecord Step(double score, bool feasible, double violation, double standard_error = 0) {
   VnsRecord r;

@@ -1,11 +1,25 @@
 #pragma once
 
-// Whether two searches took the same steps to the same end, for the tests of the search.
+// Helpers of the search's tests: design variables, and whether two searches took the same
+// steps to the same end.
 #include <gtest/gtest.h>
+
+#include <string>
+#include <utility>
 
 #include "core/optimize/vns.h"
 
 namespace fenestra {
+
+// A design variable in [lower, upper] starting at `start`.
+inline DesignVariable BoxVariable(std::string name, double lower, double upper, double start) {
+  DesignVariable v;
+  v.name = std::move(name);
+  v.lower = lower;
+  v.upper = upper;
+  v.start = start;
+  return v;
+}
 
 // Every step (design, value, error, constraints, score, feasibility and what the search made
 // of it) and the end (incumbent, counts, stopping rule) equal.

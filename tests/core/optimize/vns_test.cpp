@@ -19,15 +19,6 @@
 namespace fenestra {
 namespace {
 
-DesignVariable Var(std::string name, double lower, double upper, double start) {
-  DesignVariable v;
-  v.name = std::move(name);
-  v.lower = lower;
-  v.upper = upper;
-  v.start = start;
-  return v;
-}
-
 Evaluation Value(double value, double standard_error = 0) {
   Evaluation e;
   e.value = value;
@@ -57,7 +48,7 @@ absl::StatusOr<Evaluation> Bowl(const std::vector<double>& x) {
 }
 
 TEST(VnsTest, FindsTheTopOfASmoothBowl) {
-  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0), Var("y", 0, 1, 0)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0), BoxVariable("y", 0, 1, 0)};
   VnsOptions options;
   options.max_evaluations = 200;
   absl::StatusOr<VnsResult> r = RunVns(vars, Bowl, options);
@@ -75,7 +66,7 @@ TEST(VnsTest, FindsTheTopOfASmoothBowl) {
 // A partial evaluation (a candidate racing stopped) never becomes the incumbent, however
 // high its value, and a resume replays that.
 TEST(VnsTest, PartialEvaluationsNeverBecomeTheIncumbent) {
-  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0.5)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0.5)};
   VnsOptions options;
   options.max_evaluations = 30;
   options.failed_cycles_to_stop = 0;
@@ -121,7 +112,8 @@ absl::StatusOr<Evaluation> Plateau(const std::vector<double>& x) {
 }
 
 TEST(VnsTest, NoisyPlateauStaysOnThePlateauAndReportsTheNoise) {
-  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0.5), Var("y", 0, 1, 0.5)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0.5),
+                                            BoxVariable("y", 0, 1, 0.5)};
   VnsOptions options;
   options.max_evaluations = 100;
   absl::StatusOr<VnsResult> r = RunVns(vars, Plateau, options);
@@ -144,7 +136,8 @@ TEST(VnsTest, NoisyPlateauStaysOnThePlateauAndReportsTheNoise) {
 }
 
 TEST(VnsTest, FixedVariableNeverChanges) {
-  std::vector<DesignVariable> vars = {Var("a", 0, 1, 0), Var("b", 0, 1, 0.4), Var("c", 0, 1, 1)};
+  std::vector<DesignVariable> vars = {BoxVariable("a", 0, 1, 0), BoxVariable("b", 0, 1, 0.4),
+                                      BoxVariable("c", 0, 1, 1)};
   vars[1].fixed = true;
   auto f = [](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     return Value(-std::abs(x[0] - 0.5) - std::abs(x[1] - 0.9) - std::abs(x[2] - 0.5));
@@ -158,7 +151,7 @@ TEST(VnsTest, FixedVariableNeverChanges) {
 }
 
 TEST(VnsTest, ZeroWidthRangeBehavesAsFixed) {
-  const std::vector<DesignVariable> vars = {Var("a", 0, 1, 0.5), Var("w", 2, 2, 2)};
+  const std::vector<DesignVariable> vars = {BoxVariable("a", 0, 1, 0.5), BoxVariable("w", 2, 2, 2)};
   int calls = 0;
   auto f = [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     ++calls;
@@ -172,7 +165,7 @@ TEST(VnsTest, ZeroWidthRangeBehavesAsFixed) {
   EXPECT_EQ(calls, r->evaluations);
 
   // Nothing free at all: only the start is evaluated
-  const std::vector<DesignVariable> none = {Var("w", 2, 2, 2)};
+  const std::vector<DesignVariable> none = {BoxVariable("w", 2, 2, 2)};
   absl::StatusOr<VnsResult> only = RunVns(none, f, options);
   ASSERT_TRUE(only.ok());
   EXPECT_EQ(only->evaluations, 1);
@@ -180,7 +173,8 @@ TEST(VnsTest, ZeroWidthRangeBehavesAsFixed) {
 }
 
 TEST(VnsTest, BudgetOfOneEvaluatesOnlyTheStart) {
-  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0.1), Var("y", 0, 1, 0.9)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0.1),
+                                            BoxVariable("y", 0, 1, 0.9)};
   VnsOptions options;
   options.max_evaluations = 1;
   absl::StatusOr<VnsResult> r = RunVns(vars, Bowl, options);
@@ -197,7 +191,7 @@ TEST(VnsTest, TargetModeReachesTheTarget) {
   auto f = [](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     return Value(40 - 100 * std::abs(x[0] - 0.6), 0.1);
   };
-  const std::vector<DesignVariable> vars = {Var("alpha", 0, 1, 0)};
+  const std::vector<DesignVariable> vars = {BoxVariable("alpha", 0, 1, 0)};
   VnsOptions options;
   options.objective.sense = ObjectiveSense::kTarget;
   options.objective.target = 32;
@@ -220,7 +214,7 @@ TEST(VnsTest, MinimizeMode) {
   auto f = [](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     return Value((x[0] - 0.25) * (x[0] - 0.25));
   };
-  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 1)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 1)};
   VnsOptions options;
   options.objective.sense = ObjectiveSense::kMinimize;
   absl::StatusOr<VnsResult> r = RunVns(vars, f, options);
@@ -229,8 +223,8 @@ TEST(VnsTest, MinimizeMode) {
 }
 
 TEST(VnsTest, SameSeedSameRunOtherSeedOtherRun) {
-  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0), Var("y", 0, 1, 0),
-                                            Var("z", -1, 1, 0)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0), BoxVariable("y", 0, 1, 0),
+                                            BoxVariable("z", -1, 1, 0)};
   VnsOptions options;
   options.max_evaluations = 50;
   options.seed = 42;
@@ -250,7 +244,7 @@ TEST(VnsTest, SameSeedSameRunOtherSeedOtherRun) {
 
 TEST(VnsTest, RepeatedDesignIsServedFromTheCache) {
   // A grid of 5 x 5 designs: the search soon proposes designs it has seen
-  std::vector<DesignVariable> vars = {Var("x", 0, 1, 0), Var("y", 0, 1, 0)};
+  std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0), BoxVariable("y", 0, 1, 0)};
   for (DesignVariable& v : vars) v.step = 0.25;
   std::set<std::vector<double>> seen;
   int calls = 0;
@@ -281,7 +275,7 @@ TEST(VnsTest, RepeatedDesignIsServedFromTheCache) {
 }
 
 TEST(VnsTest, CancellationStopsAtACheckpoint) {
-  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0), Var("y", 0, 1, 0)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0), BoxVariable("y", 0, 1, 0)};
   std::atomic<bool> cancel = false;
   int reports = 0;
   VnsCallbacks callbacks;
@@ -305,7 +299,7 @@ TEST(VnsTest, CancellationStopsAtACheckpoint) {
 }
 
 TEST(VnsTest, ProgressReportsTheIncumbent) {
-  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0), Var("y", 0, 1, 0)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0), BoxVariable("y", 0, 1, 0)};
   double best_so_far = -1e300;
   int last_evaluations = 0;
   VnsCallbacks callbacks;
@@ -326,7 +320,7 @@ TEST(VnsTest, ProgressReportsTheIncumbent) {
 }
 
 TEST(VnsTest, StopsWhenAllNeighborhoodsFail) {
-  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0.5)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0.5)};
   auto flat = [](const std::vector<double>&) -> absl::StatusOr<Evaluation> { return Value(1); };
   VnsOptions options;
   options.failed_cycles_to_stop = 1;
@@ -344,7 +338,7 @@ TEST(VnsTest, StopsWhenAllNeighborhoodsFail) {
 }
 
 TEST(VnsTest, TimeBudget) {
-  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0)};
   auto slow = [](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
     return Value(x[0]);
@@ -361,7 +355,8 @@ TEST(VnsTest, TimeBudget) {
 }
 
 TEST(VnsTest, ReflectKeepsMovesInsideTheBox) {
-  const std::vector<DesignVariable> vars = {Var("x", -1, 1, 1), Var("y", 0, 0.5, 0)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", -1, 1, 1),
+                                            BoxVariable("y", 0, 0.5, 0)};
   VnsOptions options;
   options.boundary = BoundaryRule::kReflect;
   options.neighborhoods = {{2, 3.0}};
@@ -380,7 +375,7 @@ TEST(VnsTest, ReflectKeepsMovesInsideTheBox) {
 }
 
 TEST(VnsTest, ObjectiveErrorAbortsTheRun) {
-  const std::vector<DesignVariable> vars = {Var("x", 0, 1, 0)};
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0)};
   int calls = 0;
   auto f = [&](const std::vector<double>& x) -> absl::StatusOr<Evaluation> {
     if (++calls == 3) return absl::ResourceExhaustedError("out of device memory");
@@ -399,11 +394,11 @@ TEST(VnsTest, ObjectiveErrorAbortsTheRun) {
 
 TEST(VnsTest, RejectsBadVariablesAndOptions) {
   EXPECT_FALSE(RunVns({}, Bowl).ok());
-  const std::vector<DesignVariable> outside = {Var("x", 0, 1, 2)};
+  const std::vector<DesignVariable> outside = {BoxVariable("x", 0, 1, 2)};
   EXPECT_EQ(RunVns(outside, Bowl).status().code(), absl::StatusCode::kInvalidArgument);
-  const std::vector<DesignVariable> inverted = {Var("x", 1, 0, 0.5)};
+  const std::vector<DesignVariable> inverted = {BoxVariable("x", 1, 0, 0.5)};
   EXPECT_FALSE(RunVns(inverted, Bowl).ok());
-  const std::vector<DesignVariable> ok = {Var("x", 0, 1, 0), Var("y", 0, 1, 0)};
+  const std::vector<DesignVariable> ok = {BoxVariable("x", 0, 1, 0), BoxVariable("y", 0, 1, 0)};
   VnsOptions no_budget;
   no_budget.max_evaluations = 0;
   EXPECT_FALSE(RunVns(ok, Bowl, no_budget).ok());
@@ -427,7 +422,8 @@ absl::StatusOr<Evaluation> NoisyBowl(const std::vector<double>& x) {
 }
 
 std::vector<DesignVariable> ResumeVariables() {
-  std::vector<DesignVariable> vars = {Var("a", 0, 1, 0), Var("b", 0, 1, 0.5), Var("c", 2, 3, 2.5)};
+  std::vector<DesignVariable> vars = {BoxVariable("a", 0, 1, 0), BoxVariable("b", 0, 1, 0.5),
+                                      BoxVariable("c", 2, 3, 2.5)};
   vars[1].step = 0.05;
   vars[2].fixed = true;
   return vars;
@@ -691,14 +687,14 @@ class LookaheadTest : public ::testing::Test {
     EXPECT_EQ(a.improvements, b.improvements);
   }
 
-  std::vector<DesignVariable> vars_ = {Var("x", 0, 1, 0.1), GridVar("y", 0, 1, 0.5, 0.05)};
+  std::vector<DesignVariable> vars_ = {BoxVariable("x", 0, 1, 0.1), GridVar("y", 0, 1, 0.5, 0.05)};
   std::vector<std::vector<std::vector<double>>> batches_;
   std::set<std::vector<double>> failing_;
 
  private:
   static DesignVariable GridVar(std::string name, double lower, double upper, double start,
                                 double step) {
-    DesignVariable v = Var(std::move(name), lower, upper, start);
+    DesignVariable v = BoxVariable(std::move(name), lower, upper, start);
     v.step = step;
     return v;
   }
