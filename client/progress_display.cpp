@@ -144,6 +144,15 @@ std::string FormatResult(const v1::JobResult& r) {
       "sDA {} %\n",
       Value(m.udi()), Value(m.udi_fell_short()), Value(m.udi_exceeded()),
       Value(m.udi_all_sensors()), Value(m.da()), Value(m.cda()), Value(m.sda()));
+  if (m.has_ase()) {
+    const v1::MetricSettings& s = r.job().metrics();
+    out += fmt::format("ASE{:g},{} {} % of the sensors (LEED v4.1 daylight option 1: {} points)",
+                       s.ase_threshold_lux(), s.ase_min_hours(), Value(m.ase()), m.leed_points());
+    if (m.has_blind_in_place() && m.blind_in_place().value() < 100) {
+      out += fmt::format(", blind in place {} % of the hours", Value(m.blind_in_place()));
+    }
+    out += "\n";
+  }
   for (const v1::ConstraintResult& c : r.best_constraints()) out += ConstraintLine(c);
   out += fmt::format(
       "{} evaluations ({}), backend {}: sky {:.2f} s, outdoor {:.2f} s, evaluations {:.2f} s, "

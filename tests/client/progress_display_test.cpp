@@ -32,5 +32,24 @@ TEST(ProgressDisplayTest, ResultShowsEachConstraint) {
   EXPECT_THAT(text, HasSubstr("\nsDA at least 55%: 50.0 +- 2.5 broken\n"));
 }
 
+// ASE with its thresholds and the LEED points; the hours with the blind in place only for a
+// blind that is not always there.
+TEST(ProgressDisplayTest, ResultShowsAseAndTheBlindsHours) {
+  v1::JobResult result;
+  EXPECT_THAT(FormatResult(result), Not(HasSubstr("ASE")));
+  result.mutable_job()->mutable_metrics()->set_ase_threshold_lux(1000);
+  result.mutable_job()->mutable_metrics()->set_ase_min_hours(250);
+  v1::Metrics& m = *result.mutable_best_metrics();
+  m.mutable_ase()->set_value(40);
+  m.set_leed_points(3);
+  m.mutable_blind_in_place()->set_value(100);
+  EXPECT_THAT(FormatResult(result),
+              HasSubstr("\nASE1000,250 40.00 ± 0.00 % of the sensors (LEED v4.1 daylight option 1: "
+                        "3 points)\n"));
+  m.mutable_blind_in_place()->set_value(39.23);
+  EXPECT_THAT(FormatResult(result),
+              HasSubstr("points), blind in place 39.23 ± 0.00 % of the hours\n"));
+}
+
 }  // namespace
 }  // namespace fenestra
