@@ -11,6 +11,7 @@
 #include "client/cli_util.h"
 #include "client/commands.h"
 #include "core/geometry/obj_io.h"
+#include "core/geometry/rad_io.h"
 #include "core/geometry/scene.h"
 #include "core/trace/room_check.h"
 
@@ -82,19 +83,38 @@ void AddSceneCommand(CLI::App& app) {
   });
 
   struct ExportArgs {
-    std::string file, obj, set;
+    std::string file, obj, rad, pts, set;
   };
   auto args = std::make_shared<ExportArgs>();
-  CLI::App* exp = scene->add_subcommand("export", "Write the assembled geometry as OBJ");
+  CLI::App* exp = scene->add_subcommand(
+      "export", "Write the assembled geometry as OBJ, or as a Radiance scene with its sensors");
   exp->add_option("FILE", args->file, "Scene file (JSON)")->required();
-  exp->add_option("--obj", args->obj, "Output OBJ file")->required();
+  CLI::Option* obj = exp->add_option("--obj", args->obj, "Output OBJ file");
+  CLI::Option* rad = exp->add_option(
+      "--rad", args->rad, "Output Radiance scene: the materials as plastic or trans, polygons");
+  exp->add_option("--pts", args->pts, "Output sensors as a Radiance points file (with --rad)")
+      ->needs(rad);
+  obj->excludes(rad);
   exp->add_option("--set", args->set, "Design values, e.g. alpha=0.5,width=0.12");
   exp->callback([args] {
+    if (args->obj.empty() && args->rad.empty()) {
+      Fail(absl::InvalidArgumentError("scene export needs --obj or --rad"));
+    }
     const Scene s = ValueOrFail(LoadScene(args->file));
     const BlindDesign design =
         ValueOrFail(DesignWithOverrides(s, ValueOrFail(ParseDesignValues(args->set))));
-    const size_t triangles = ValueOrFail(WriteSceneObj(args->obj, s, design));
-    fmt::print("wrote {} triangles to {}\n", triangles, args->obj);
+    if (!args->obj.empty()) {
+      const size_t triangles = ValueOrFail(WriteSceneObj(args->obj, s, design));
+      fmt::print("wrote {} triangles to {}\n", triangles, args->obj);
+      return;
+    }
+    const size_t polygons = ValueOrFail(WriteSceneRad(args->rad, s, design));
+    fmt::print("wrote {} materials and {} polygons to {}\n", s.materials.size(), polygons,
+               args->rad);
+    if (!args->pts.empty()) {
+      if (absl::Status written = WriteScenePoints(args->pts, s); !written.ok()) Fail(written);
+      fmt::print("wrote {} sensors to {}\n", s.sensors.size(), args->pts);
+    }
   });
 }
 

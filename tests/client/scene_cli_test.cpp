@@ -1,8 +1,10 @@
 // fenestra scene, run as a user would.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include "core/geometry/obj_io.h"
@@ -14,6 +16,11 @@ namespace {
 namespace fs = std::filesystem;
 
 using SceneCliTest = CliTest;
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
 
 TEST_F(SceneCliTest, ExportLightwellGives42Triangles) {
   const std::string obj = (dir_ / "x.obj").string();
@@ -33,6 +40,33 @@ TEST_F(SceneCliTest, ExportWithDesignValues) {
   ASSERT_TRUE(read.ok()) << read.status();
   // 126 fixed triangles + 15 slats (1 + ceil((1.5 - 0.1) / 0.1)) of 12
   EXPECT_EQ(read->group.size(), 126u + 15u * 12u);
+}
+
+// The Radiance export of the city office at a design: its 4 materials as plastic, a polygon per
+// triangle (126 fixed ones and 15 slats of 12), the 9 sensors as points.
+TEST_F(SceneCliTest, ExportsRadianceMaterialsPolygonsAndSensors) {
+  const std::string rad = (dir_ / "office.rad").string(), pts = (dir_ / "office.pts").string();
+  const std::string scene = kExamples + "/city_office/scene.json";
+  const CliRun run =
+      Fenestra("scene export " + scene + " --rad " + rad + " --pts " + pts + " --set width=0.1");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const std::string text = ReadText(rad);
+  EXPECT_NE(text.find("void plastic m0_office\n0\n0\n5 0.8 0.8 0.8 0 0\n"), std::string::npos)
+      << text.substr(0, 400);
+  EXPECT_NE(text.find("void plastic m1_office_floor\n"), std::string::npos);
+  size_t polygons = 0;
+  for (size_t at = text.find(" polygon t"); at != std::string::npos;
+       at = text.find(" polygon t", at + 1)) {
+    ++polygons;
+  }
+  EXPECT_EQ(polygons, 126u + 15u * 12u);
+  const std::string points = ReadText(pts);
+  EXPECT_EQ(std::count(points.begin(), points.end(), '\n'), 9);
+  EXPECT_EQ(points.substr(0, points.find('\n')), "-1 -1 6.7 0 0 1");
+  // One of --obj and --rad, and --pts only with --rad
+  EXPECT_NE(Fenestra("scene export " + scene).exit_code, 0);
+  EXPECT_NE(Fenestra("scene export " + scene + " --obj x.obj --rad y.rad").exit_code, 0);
+  EXPECT_NE(Fenestra("scene export " + scene + " --pts " + pts).exit_code, 0);
 }
 
 TEST_F(SceneCliTest, CheckPrintsASummary) {
