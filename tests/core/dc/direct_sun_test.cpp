@@ -106,6 +106,38 @@ TEST(DirectSunTest, SlatsCutTheSunOffAboveTheirCutOffAngle) {
   EXPECT_GT(bare_above, 100);
 }
 
+// Stiff cases: closed slats (touching, in the window plane) let no line through at any angle;
+// a grazing sun (0.01 degrees above the horizon, or lying along the sensor's plane) gives
+// finite, non-negative values; a sun behind the sensor nothing; bad suns are refused.
+TEST(DirectSunTest, ClosedSlatsGrazingSunsAndBadInput) {
+  Scene scene = LoadExample("city_office");
+  scene.sensors = SensorsBehindBlind(scene);
+  absl::StatusOr<BlindDesign> closed = DesignWithOverrides(
+      scene, {{"alpha", 0}, {"width", 0.15}, {"spacing", 0}, {"thickness", 0.01}});
+  ASSERT_TRUE(closed.ok()) << closed.status();
+  std::vector<SunColumn> suns;
+  for (double a = 0.01; a < 89; a += 1.0) {
+    const double phi = a * kDegree;
+    suns.push_back({static_cast<int>(suns.size()), {0, std::cos(phi), std::sin(phi)}, 1e5});
+  }
+  suns.push_back({static_cast<int>(suns.size()), {0, -1, 0}, 1e5});  // behind the sensors
+  suns.push_back({static_cast<int>(suns.size()), {1, 0, 0}, 1e5});   // along their plane
+  absl::StatusOr<std::unique_ptr<DirectSun>> sun =
+      DirectSun::Trace(scene, suns, static_cast<int>(suns.size()));
+  ASSERT_TRUE(sun.ok()) << sun.status();
+  EXPECT_TRUE((*sun)->Entries(*closed).empty());
+  const Matrix bare = (*sun)->Illuminance(*closed, /*blind=*/false);
+  EXPECT_TRUE(bare.allFinite());
+  EXPECT_GE(bare.minCoeff(), 0.0);
+  EXPECT_GT(bare.maxCoeff(), 0.0);  // the bare window lets some of those lines in
+  EXPECT_EQ(bare.col(suns.size() - 2).sum(), 0.0);
+  EXPECT_EQ(bare.col(suns.size() - 1).sum(), 0.0);
+  // A column out of range, a direction that is not unit, negative light
+  EXPECT_FALSE(DirectSun::Trace(scene, {{5, {0, 0, 1}, 1}}, 5).ok());
+  EXPECT_FALSE(DirectSun::Trace(scene, {{0, {0, 0, 2}, 1}}, 1).ok());
+  EXPECT_FALSE(DirectSun::Trace(scene, {{0, {0, 0, 1}, -1}}, 1).ok());
+}
+
 // Where nothing can cut the sun, the direct sun traced to its position is the beam's
 // E_dn sin(altitude) at an upward sensor, and the coefficients' direct part through the sky
 // matrix's sun patches (D_0 S_sun, the sun smeared over 4 patches), from the same paths as

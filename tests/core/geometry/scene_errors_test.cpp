@@ -192,6 +192,8 @@ TEST_F(SceneErrorsTest, UnknownEnumValues) {
               {"surfaces[0].side", "must be SIDE_INDOOR or SIDE_OUTDOOR, got 99"});
   ExpectError(Scene(R"("material": "slat",)", R"("material": "slat", "orientation": 7,)"),
               {"blind.orientation", "must be HORIZONTAL or VERTICAL, got 7"});
+  ExpectError(Scene(R"("material": "slat",)", R"("material": "slat", "operation": 42,)"),
+              {"blind.operation", "unknown operation 42 (STATIC or AUTOMATED_SUN)"});
 }
 
 TEST_F(SceneErrorsTest, BadNames) {

@@ -173,6 +173,32 @@ TEST(JobValidationTest, MetricSettings) {
               HasSubstr("metrics.udi_upper_lux"));
   EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_da_threshold_lux(-300); }),
               HasSubstr("job metrics.da_threshold_lux: must be in (0, 1e+06] lx"));
+  // The direct sun's settings: ASE's thresholds and an operated blind's rule
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_ase_threshold_lux(-1000); }),
+              HasSubstr("job metrics.ase_threshold_lux: must be in (0, 1e+06] lx"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_ase_threshold_lux(kNaN); }),
+              HasSubstr("metrics.ase_threshold_lux"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_ase_threshold_lux(1e300); }),
+              HasSubstr("metrics.ase_threshold_lux"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_ase_min_hours(-5); }),
+              HasSubstr("job metrics.ase_min_hours: must be in [1, 8784] h, got -5"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_ase_min_hours(2147483647); }),
+              HasSubstr("job metrics.ase_min_hours"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_operation_sensor_percent(150); }),
+              HasSubstr("job metrics.operation_sensor_percent: must be in (0, 100] %"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_operation_sensor_percent(kNaN); }),
+              HasSubstr("metrics.operation_sensor_percent"));
+  EXPECT_THAT(with([](v1::MetricSettings& m) { m.set_operation_threshold_lux(-1); }),
+              HasSubstr("job metrics.operation_threshold_lux"));
+  // Unset: the defaults, from MetricOptions
+  absl::StatusOr<PreparedJob> prepared =
+      ValidateJob(QuickJob(), FENESTRA_SOURCE_DIR "/examples/city_office");
+  ASSERT_TRUE(prepared.ok()) << prepared.status();
+  const MetricOptions defaults;
+  EXPECT_EQ(prepared->job.metrics().ase_threshold_lux(), defaults.ase_threshold_lux);
+  EXPECT_EQ(prepared->job.metrics().ase_min_hours(), defaults.ase_min_hours);
+  EXPECT_EQ(prepared->job.metrics().operation_sensor_percent(), defaults.operation_sensor_percent);
+  EXPECT_EQ(prepared->job.metrics().operation_threshold_lux(), defaults.operation_threshold_lux);
 }
 
 TEST(JobValidationTest, BudgetObjectiveAndSampling) {
