@@ -28,20 +28,6 @@ VnsRecord Step(double score, bool feasible, double violation, double standard_er
   return r;
 }
 
-// Deterministic noise of unit variance for a design (common random numbers).
-double SaltedNoise(const std::vector<double>& x, uint64_t salt) {
-  uint64_t h = 1469598103934665603ull ^ salt;
-  for (double v : x) {
-    uint64_t bits;
-    std::memcpy(&bits, &v, sizeof bits);
-    h = (h ^ bits) * 1099511628211ull;
-    h ^= h >> 29;
-  }
-  const double u1 = ((h >> 11) + 0.5) * 0x1.0p-53;
-  const double u2 = (((h * 6364136223846793005ull) >> 11) + 0.5) * 0x1.0p-53;
-  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
-}
-
 // A bowl with its top (100) at (0.3, 0.7) and, as its one constraint's metric, g = 100 (x + y)
 // with standard error kConstraintError (noise of that size on g). With g at most 80 the top
 // is infeasible and the constrained optimum is the top's projection onto x + y = 0.8,
@@ -51,7 +37,7 @@ absl::StatusOr<Evaluation> ConstrainedBowl(const std::vector<double>& x) {
   const double dx = x[0] - 0.3, dy = x[1] - 0.7;
   Evaluation e;
   e.value = 100 - 1000 * (dx * dx + dy * dy);
-  e.constraints = {{100 * (x[0] + x[1]) + kConstraintError * SaltedNoise(x, 1), kConstraintError}};
+  e.constraints = {{100 * (x[0] + x[1]) + kConstraintError * DesignNoise(x, 1), kConstraintError}};
   return e;
 }
 
@@ -206,7 +192,7 @@ TEST(ConstraintsTest, RefusesMissingOrBadConstraintValues) {
 // gridded variable for cache hits.
 absl::StatusOr<Evaluation> PartlyRaced(const std::vector<double>& x) {
   absl::StatusOr<Evaluation> e = ConstrainedBowl(x);
-  e->value += SaltedNoise(x, 2);
+  e->value += DesignNoise(x, 2);
   e->standard_error = 1;
   e->partial = x[0] > 0.9;
   return e;

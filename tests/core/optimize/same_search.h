@@ -4,8 +4,13 @@
 // steps to the same end.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <numbers>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "core/optimize/vns.h"
 
@@ -19,6 +24,21 @@ inline DesignVariable BoxVariable(std::string name, double lower, double upper, 
   v.upper = upper;
   v.start = start;
   return v;
+}
+
+// Deterministic noise of unit variance for a design (like common random numbers: the same
+// design and salt always get the same error).
+inline double DesignNoise(const std::vector<double>& x, uint64_t salt = 0) {
+  uint64_t h = 1469598103934665603ull ^ salt;
+  for (double v : x) {
+    uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    h = (h ^ bits) * 1099511628211ull;
+    h ^= h >> 29;
+  }
+  const double u1 = ((h >> 11) + 0.5) * 0x1.0p-53;
+  const double u2 = (((h * 6364136223846793005ull) >> 11) + 0.5) * 0x1.0p-53;
+  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
 }
 
 // Every step (design, value, error, constraints, score, feasibility and what the search made

@@ -26,21 +26,6 @@ Evaluation Value(double value, double standard_error = 0) {
   return e;
 }
 
-// Deterministic noise of unit variance for a design (like common random numbers: the same
-// design always gets the same error).
-double Noise(const std::vector<double>& x) {
-  uint64_t h = 1469598103934665603ull;
-  for (double v : x) {
-    uint64_t bits;
-    std::memcpy(&bits, &v, sizeof bits);
-    h = (h ^ bits) * 1099511628211ull;
-    h ^= h >> 29;
-  }
-  const double u1 = ((h >> 11) + 0.5) * 0x1.0p-53;
-  const double u2 = (((h * 6364136223846793005ull) >> 11) + 0.5) * 0x1.0p-53;
-  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
-}
-
 // A bowl with its top (100) at (0.3, 0.7).
 absl::StatusOr<Evaluation> Bowl(const std::vector<double>& x) {
   const double dx = x[0] - 0.3, dy = x[1] - 0.7;
@@ -108,7 +93,7 @@ TEST(VnsTest, PartialEvaluationsNeverBecomeTheIncumbent) {
 absl::StatusOr<Evaluation> Plateau(const std::vector<double>& x) {
   double outside = 0;
   for (double v : x) outside += std::max({0.0, 0.2 - v, v - 0.8});
-  return Value(50 - 500 * outside + Noise(x), 1.0);
+  return Value(50 - 500 * outside + DesignNoise(x), 1.0);
 }
 
 TEST(VnsTest, NoisyPlateauStaysOnThePlateauAndReportsTheNoise) {
@@ -415,8 +400,8 @@ TEST(VnsTest, RejectsBadVariablesAndOptions) {
 // Resuming: a noisy bowl over a continuous variable starting on its bound, a gridded one
 // (cache hits) and a fixed one; the payload is the design's first coordinate.
 absl::StatusOr<Evaluation> NoisyBowl(const std::vector<double>& x) {
-  Evaluation e =
-      Value(10 - 30 * (std::pow(x[0] - 0.7, 2) + std::pow(x[1] - 0.35, 2)) + 0.2 * Noise(x), 0.2);
+  Evaluation e = Value(
+      10 - 30 * (std::pow(x[0] - 0.7, 2) + std::pow(x[1] - 0.35, 2)) + 0.2 * DesignNoise(x), 0.2);
   e.payload = x[0];
   return e;
 }
