@@ -40,12 +40,14 @@ double Transmission(const EmbreeIntersector& scene, const TraceGeometry& geometr
     if (!scene.Intersect(origin, direction, &hit)) return transmission;
     const TraceMaterial m = geometry.materials[geometry.triangle_material[hit.triangle]];
     const bool own = crossing == 0 && Length(hit.position - origin) < kOwnSurfaceM;
+    const Vec3f normal = Normalize(Dot(hit.normal, direction) > 0.0f ? hit.normal : -hit.normal);
     if (!own) {
-      if (!(m.transmittance > 0.0f)) return 0;
-      transmission *= m.transmittance;
+      // Only glazing's straight pass leaves the beam where it was (trans scatters it)
+      const float t = m.straight_scatters ? 0.0f : StraightTransmittance(m, Dot(normal, direction));
+      if (!(t > 0.0f)) return 0;
+      transmission *= t;
     }
-    const Vec3f normal = Dot(hit.normal, direction) > 0.0f ? hit.normal : -hit.normal;
-    origin = OffsetRayOrigin(hit.position, Normalize(normal));
+    origin = OffsetRayOrigin(hit.position, normal);
   }
   return 0;
 }
@@ -95,7 +97,8 @@ absl::StatusOr<std::unique_ptr<DirectSun>> DirectSun::Trace(const Scene& scene,
   if (scene.blind) {
     envelope = LocalEnvelopeOfBlind(data->geometry, scene);
     const Material& slat = scene.materials[scene.blind->material];
-    data->slat_transmittance = static_cast<float>(slat.transmittance);
+    data->slat_transmittance =
+        slat.kind == MaterialKind::kTrans ? 0.0f : static_cast<float>(std::max(slat.transmittance, 0.0));
   }
   // Each sensor's lines on a thread of its own, kept in sensor order
   std::vector<std::vector<SunEntry>> always(data->sensors);

@@ -242,7 +242,7 @@ struct PilotMode {
                     const PathRandom&) {
     if (records == kMaxRecords) return;
     keys[records] = CellKey(vertex.position, vertex.normal, inverse_cell_m);
-    weights[records] = path.weight * vertex.reflectance;
+    weights[records] = path.weight * vertex.scatter->total;
     ++records;
   }
   void Escape(const PathState& path) { score += kPi * static_cast<double>(path.weight); }

@@ -50,6 +50,7 @@
 #include "core/trace/philox.h"
 #include "core/trace/ray_offset.h"
 #include "core/trace/sampling.h"
+#include "core/trace/scatter.h"
 
 namespace fenestra {
 
@@ -64,12 +65,6 @@ FENESTRA_CPU_GPU inline int OneStageBin(int bin, bool unreflected) {
 }
 // Whether a one-stage bin is a sky bin (not the ground) of either block.
 FENESTRA_CPU_GPU inline bool IsOneStageSkyBin(int bin) { return bin % kTregenzaBinCount != 0; }
-
-// Surface properties as the tracer sees them.
-struct TraceMaterial {
-  float reflectance;    // Lambertian reflectance in [0, 1)
-  float transmittance;  // straight-through glazing transmittance; < 0 = opaque
-};
 
 // Per-triangle materials: materials[triangle_material[triangle]].
 struct SurfaceTable {
@@ -120,17 +115,18 @@ struct PathState {
   float weight;         // throughput so far, <= 1
   int32_t reflections;  // surface reflections so far
   uint32_t vertex;      // interactions so far (0 = start); indexes random draws
-  // Cosine between `direction` and the normal of the point it leaves (its cosine-sampling
-  // density is cosine / pi); 0 where no other technique samples the direction (after
-  // straight-through transmission). Only the indoor stage's MIS reads it.
-  float cosine = 0.0f;
+  // Solid-angle density with which the point it leaves drew `direction` (ScatterSample::pdf;
+  // cosine / pi at a sensor); 0 where no other technique samples the direction (after a delta
+  // part: a mirror, straight-through transmission). Only the indoor stage's MIS reads it.
+  float pdf = 0.0f;
 };
 
-// A diffuse reflection about to happen, for modes that connect vertices (indoor stage).
+// A vertex whose surface has smooth parts (SurfaceScatter::Smooth), before the path scatters
+// there, for modes that connect vertices (indoor stage).
 struct ReflectionVertex {
-  Vec3f position;     // on the surface (local frame)
-  Vec3f normal;       // unit, on the side the path arrived from and leaves to
-  float reflectance;  // of the surface
+  Vec3f position;                 // on the surface (local frame)
+  Vec3f normal;                   // unit, on the side the path arrived from
+  const SurfaceScatter* scatter;  // what the surface does there
 };
 
 // How a path ended.
@@ -185,28 +181,24 @@ FENESTRA_CPU_GPU inline bool StepBranch(const Intersector& scene, const SurfaceT
   Vec3f normal = hit.normal * (1.0f / sqrtf(length_squared));
   if (Dot(normal, path.direction) > 0.0f) normal = -normal;
 
-  // Choose transmission or reflection; glazing picks by probability tau / (tau + rho)
+  // The surface's parts here; a mode may connect the vertex through its smooth parts before
+  // the path picks one (core/trace/scatter.h)
   const TraceMaterial material = surfaces.materials[surfaces.triangle_material[hit.triangle]];
-  const Uniform4 u = random.Draw(path.vertex, 0);
-  float factor = material.reflectance;
-  bool transmit = false;
-  if (material.transmittance > 0.0f) {
-    const float total = material.reflectance + material.transmittance;
-    transmit = u.u[3] * total < material.transmittance;
-    factor = total < 1.0f ? total : 1.0f;
+  const SurfaceScatter scatter = ScatterAt(material, normal, -path.direction);
+  if (scatter.Smooth()) {
+    mode.AtReflection(scene, path, ReflectionVertex{hit.position, normal, &scatter}, random);
   }
-  if (!transmit) {
-    mode.AtReflection(scene, path, ReflectionVertex{hit.position, normal, material.reflectance},
-                      random);
-    if (settings.max_bounces >= 0 && path.reflections >= settings.max_bounces) {
-      return Ended(end, PathEnd::kBounceLimit);
-    }
+  const Uniform4 u = random.Draw(path.vertex, 0);
+  const ScatterSample sample = Sample(scatter, u);
+  if (sample.scatters && settings.max_bounces >= 0 && path.reflections >= settings.max_bounces) {
+    return Ended(end, PathEnd::kBounceLimit);
   }
 
   // Weight by the surface. Roulette below the threshold: survive with probability
   // w / threshold and carry the threshold on. Weight windows take the threshold from the
-  // importance map and split heavy paths. Either way the mean is unchanged and w <= 1.
-  float weight = path.weight * factor;
+  // importance map and split heavy paths (at Lambertian reflections only). Either way the mean
+  // is unchanged.
+  float weight = path.weight * sample.factor;
   if (!(weight > 0.0f)) return Ended(end, PathEnd::kAbsorbed);
   float threshold = settings.roulette_threshold;
   if (settings.importance != nullptr) {
@@ -216,11 +208,12 @@ FENESTRA_CPU_GPU inline bool StepBranch(const Intersector& scene, const SurfaceT
             ? (settings.window_scale < importance ? settings.window_scale / importance : 1.0f)
             : 1.0f;
   }
+  const bool lambertian = scatter.total == scatter.diffuse;
   int copies = 1;
   if (settings.russian_roulette && weight < threshold) {
     if (!(u.u[2] * threshold < weight)) return Ended(end, PathEnd::kRoulette);
     weight = threshold;
-  } else if (settings.importance != nullptr && !transmit && weight > 2.0f * threshold) {
+  } else if (settings.importance != nullptr && lambertian && weight > 2.0f * threshold) {
     copies = static_cast<int>(weight / threshold);
     if (copies > kMaxSplit) copies = kMaxSplit;
     if (copies > pending_capacity - *pending_count + 1) {
@@ -231,23 +224,18 @@ FENESTRA_CPU_GPU inline bool StepBranch(const Intersector& scene, const SurfaceT
   path.weight = weight;
   if (weight > stats->max_weight) stats->max_weight = weight;
 
-  // Continue straight through, or cosine-sampled about the incoming side's normal; the
-  // copies of a split leave the same point in directions of their own
-  if (transmit) {
-    path.origin = OffsetRayOrigin(hit.position, -normal);
-    path.cosine = 0.0f;
-    return true;
-  }
-  path.origin = OffsetRayOrigin(hit.position, normal);
-  path.direction = SampleCosineHemisphere(normal, u.u[0], u.u[1]);
-  path.cosine = Dot(normal, path.direction);
-  ++path.reflections;
+  // Go on from the side the part leaves by; the copies of a split leave the same point in
+  // directions of their own
+  path.origin = OffsetRayOrigin(hit.position, sample.through ? -normal : normal);
+  path.direction = sample.direction;
+  path.pdf = sample.pdf;
+  if (sample.scatters) ++path.reflections;
   for (int c = 1; c < copies; ++c) {
     PathState copy = path;
     copy.vertex = ++*interactions;
     const Uniform4 v = random.Draw(copy.vertex, 0);
     copy.direction = SampleCosineHemisphere(normal, v.u[0], v.u[1]);
-    copy.cosine = Dot(normal, copy.direction);
+    copy.pdf = Dot(normal, copy.direction) * SurfaceScatter::kInvPi;
     pending[(*pending_count)++] = copy;
   }
   return true;

@@ -5,6 +5,8 @@
 #include <limits>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
+#include "core/trace/glass.h"
 
 namespace fenestra {
 namespace {
@@ -16,6 +18,40 @@ bool IsFinite(Vec3d v) { return std::isfinite(v.x) && std::isfinite(v.y) && std:
 Vec3f TraceGeometry::ToLocal(Vec3d world) const {
   const Vec3d d = world - origin;
   return {static_cast<float>(d.x), static_cast<float>(d.y), static_cast<float>(d.z)};
+}
+
+absl::StatusOr<TraceMaterial> ToTraceMaterial(const Material& material) {
+  const double rho = material.reflectance, tau = std::max(material.transmittance, 0.0);
+  const double specular = material.specular, through = material.through;
+  const auto error = [&](const char* what, double value) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("material '", material.name, "': ", what, ", got ", value));
+  };
+  if (!(rho >= 0 && rho < 1)) return error("reflectance must be in [0, 1)", rho);
+  if (!(specular >= 0 && specular < 1)) return error("specular must be in [0, 1)", specular);
+  if (!(material.roughness >= 0 && material.roughness <= 1)) {
+    return error("roughness must be in [0, 1]", material.roughness);
+  }
+  if (!(through >= 0 && through <= 1)) return error("through must be in [0, 1]", through);
+  if (!(material.transmittance <= 1)) return error("transmittance above 1", tau);
+  if (!(rho + specular < 1)) return error("reflectance + specular must be below 1", rho + specular);
+  if (!(rho + specular + tau + through <= 1)) {
+    return error("transmittance must be at most 1 - reflectance", rho + specular + tau + through);
+  }
+  TraceMaterial trace{static_cast<float>(rho), material.transmittance >= 0
+                                                   ? static_cast<float>(material.transmittance)
+                                                   : -1.0f};
+  trace.specular = static_cast<float>(specular);
+  trace.roughness = static_cast<float>(material.roughness);
+  trace.through = static_cast<float>(through);
+  trace.straight_scatters = material.kind == MaterialKind::kTrans;
+  if (material.kind == MaterialKind::kGlass) {
+    if (!(rho == 0 && specular == 0 && through == 0 && tau > 0 && tau <= kMaxGlassTransmittance)) {
+      return error("glass transmits at normal incidence in (0, 0.9]", tau);
+    }
+    trace.glass = GlassPane::TransmissivityFor(static_cast<float>(tau));
+  }
+  return trace;
 }
 
 bool HasArea(const TraceGeometry& geometry, size_t i) {
@@ -31,19 +67,8 @@ absl::StatusOr<TraceGeometry> PrepareTraceGeometry(const TriangleMesh& mesh,
   TraceGeometry geometry;
   // Check the materials
   for (size_t m = 0; m < materials.size(); ++m) {
-    const Material& material = materials[m];
-    const double rho = material.reflectance, tau = material.transmittance;
-    if (!(rho >= 0 && rho < 1)) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("material '", material.name, "': reflectance must be in [0, 1), got ", rho));
-    }
-    if (tau >= 0 && !(tau <= 1 && rho + tau <= 1)) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("material '", material.name,
-                       "': transmittance must be at most 1 - reflectance, got ", tau));
-    }
-    geometry.materials.push_back(
-        {static_cast<float>(rho), tau >= 0 ? static_cast<float>(tau) : -1.0f});
+    FENESTRA_ASSIGN_OR_RETURN(trace, ToTraceMaterial(materials[m]));
+    geometry.materials.push_back(trace);
   }
 
   // Check the triangles and find the bounding box

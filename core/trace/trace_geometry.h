@@ -26,6 +26,15 @@ struct TraceGeometry {
   SurfaceTable Surfaces() const { return {materials.data(), triangle_material.data()}; }
 };
 
+// Highest normal transmittance of a glass pane: a bare pane of index 1.52 transmits 0.916
+// (its surfaces' reflection alone).
+inline constexpr double kMaxGlassTransmittance = 0.9;
+
+// `material` as the tracer sees it. InvalidArgument for a part outside [0, 1], reflectance or
+// reflectance + specular at 1 or above (a closed room would never lose light), parts summing
+// above 1, or a glass that no pane of index 1.52 can be.
+absl::StatusOr<TraceMaterial> ToTraceMaterial(const Material& material);
+
 // Whether triangle `i` of `geometry` has a nonzero, finite area in float.
 bool HasArea(const TraceGeometry& geometry, size_t i);
 

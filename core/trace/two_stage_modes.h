@@ -248,22 +248,25 @@ struct IndoorMode {
 
   template <class Intersector>
   FENESTRA_CPU_GPU PathState Start(const Intersector& scene, const PathRandom& random) {
-    const Vec3f origin = OffsetRayOrigin(sensor_position, sensor_normal);
-    Connect(scene, sensor_position, origin, sensor_normal, 1.0f,
-            random.Draw(0, kWindowSamplePurpose), true);
+    // The sensor connects as a Lambertian surface of albedo 1: pi f cos = cos
+    SurfaceScatter sensor;
+    sensor.normal = sensor_normal;
+    sensor.view = sensor_normal;
+    sensor.diffuse = sensor.total = 1.0f;
+    Connect(scene, sensor_position, sensor, 1.0f, random.Draw(0, kWindowSamplePurpose), true);
     const Uniform4 u = random.Draw(0, 0);
     const Vec3f direction = SampleCosineHemisphere(sensor_normal, u.u[0], u.u[1]);
-    return PathState{origin, direction, 1.0f, 0, 0, Dot(sensor_normal, direction)};
+    return PathState{OffsetRayOrigin(sensor_position, sensor_normal), direction, 1.0f, 0, 0,
+                     Dot(sensor_normal, direction) * kInvPiF};
   }
 
-  // Light reflected here reaches the sensor after path.reflections + 1 reflections.
+  // Light scattered here reaches the sensor after path.reflections + 1 reflections.
   template <class Intersector>
   FENESTRA_CPU_GPU void AtReflection(const Intersector& scene, const PathState& path,
                                      const ReflectionVertex& vertex, const PathRandom& random) {
     if (max_bounces >= 0 && path.reflections >= max_bounces) return;
-    Connect(scene, vertex.position, OffsetRayOrigin(vertex.position, vertex.normal), vertex.normal,
-            path.weight * vertex.reflectance, random.Draw(path.vertex, kWindowSamplePurpose),
-            false);
+    Connect(scene, vertex.position, *vertex.scatter, path.weight,
+            random.Draw(path.vertex, kWindowSamplePurpose), false);
   }
 
   // A bounce ray that leaves through the window scores pi w in the cell it leaves by.
@@ -275,10 +278,9 @@ struct IndoorMode {
                                              Dot(path.direction, window.up), cos_window});
     if (cell < 0) return;
     const Vec3f point = path.origin + path.direction * distance;
-    const float mis =
-        path.cosine > 0.0f
-            ? PowerHeuristic(path.cosine * kInvPiF, WindowDensity(distance * distance, cos_window))
-            : 1.0f;
+    const float mis = path.pdf > 0.0f
+                          ? PowerHeuristic(path.pdf, WindowDensity(distance * distance, cos_window))
+                          : 1.0f;
     Score(point, path.direction, window.PartAt(point) * basis->cell_count + cell,
           kPi * static_cast<double>(path.weight * mis), path.reflections == 0);
   }
@@ -298,32 +300,35 @@ struct IndoorMode {
     return r2 / (window.Area() * cos_window);
   }
 
-  // Next-event estimation from `position` (rays leave from `origin`, offset off its
-  // surface) towards a uniform window point; `factor` is what the path carries here;
-  // `unreflected` at the sensor itself.
+  // Next-event estimation from `position` towards a uniform window point, through the smooth
+  // parts of `scatter` (on either side of the surface: the ray leaves from the side it goes
+  // to); `weight` is what the path carries here; `unreflected` at the sensor itself.
   template <class Intersector>
-  FENESTRA_CPU_GPU void Connect(const Intersector& scene, Vec3f position, Vec3f origin,
-                                Vec3f normal, float factor, const Uniform4& u, bool unreflected) {
+  FENESTRA_CPU_GPU void Connect(const Intersector& scene, Vec3f position,
+                                const SurfaceScatter& scatter, float weight, const Uniform4& u,
+                                bool unreflected) {
     const Vec3f point = window.Point(u.u[0], u.u[1]);
     const Vec3f to_window = point - position;
     const float distance_squared = Dot(to_window, to_window);
     if (!(distance_squared > 0.0f)) return;
     const Vec3f omega = to_window * (1.0f / sqrtf(distance_squared));
-    const float cos_vertex = Dot(normal, omega);
     const float cos_window = Dot(window.normal, omega);
-    if (!(cos_vertex > 0.0f) || !(cos_window > 0.0f)) return;
+    if (!(cos_window > 0.0f)) return;
+    float pdf;
+    const float value = scatter.Value(omega, &pdf);
+    if (!(value > 0.0f)) return;
     // The window point itself lies in the opening, where there is no surface: anything
     // short of it (less a relative margin) blocks the segment
     const float distance = sqrtf(distance_squared);
-    if (scene.Occluded(origin, omega, distance * 0.9999995f)) return;
+    const Vec3f side = Dot(scatter.normal, omega) > 0.0f ? scatter.normal : -scatter.normal;
+    if (scene.Occluded(OffsetRayOrigin(position, side), omega, distance * 0.9999995f)) return;
     // The direction's cell only for light that arrives (omega is above the window's plane)
     const int cell =
         BasisCell(*basis, Vec3f{Dot(omega, window.across), Dot(omega, window.up), cos_window});
     if (cell < 0) return;
-    const float mis =
-        PowerHeuristic(WindowDensity(distance_squared, cos_window), cos_vertex * kInvPiF);
+    const float mis = PowerHeuristic(WindowDensity(distance_squared, cos_window), pdf);
     Score(point, omega, window.PartOf(u.u[0], u.u[1]) * basis->cell_count + cell,
-          static_cast<double>(factor * cos_vertex * cos_window * window.Area() / distance_squared *
+          static_cast<double>(weight * value * cos_window * window.Area() / distance_squared *
                               mis),
           unreflected);
   }

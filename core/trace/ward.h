@@ -43,7 +43,8 @@ struct WardLobe {
     const Vec3f h = v + l;
     const float hn = Dot(h, n), hh = Dot(h, h);
     const float a2 = alpha * alpha;
-    const float tan2 = (hh - hn * hn) / (hn * hn);
+    const Vec3f across = Cross(h, n);  // |h x n|^2 = hh - hn^2, without the cancellation
+    const float tan2 = Dot(across, across) / (hn * hn);
     return specular * expf(-tan2 / a2) * hh / (kPiF * a2 * hn * hn * hn * hn);
   }
 
@@ -57,7 +58,8 @@ struct WardLobe {
     const float cos_hl = Dot(h, l) / length;
     if (!(cos_d > 0.0f) || !(cos_hl > 0.0f)) return 0.0f;
     const float a2 = alpha * alpha;
-    const float tan2 = (1.0f - cos_d * cos_d) / (cos_d * cos_d);
+    const Vec3f across = Cross(h, n);
+    const float tan2 = Dot(across, across) / (Dot(h, n) * Dot(h, n));
     const float half_pdf = expf(-tan2 / a2) / (kPiF * a2 * cos_d * cos_d * cos_d);
     return half_pdf / (4.0f * cos_hl);
   }

@@ -1244,7 +1244,9 @@ absl::Status CudaTracer::ReplayIndoorDesigns(const std::vector<DesignScene>& sce
       d.design_triangle_material.Upload(triangle_material.data(), triangle_material.size()));
   // The materials change with the job, not with its designs
   const auto same = [](const TraceMaterial& a, const TraceMaterial& b) {
-    return a.reflectance == b.reflectance && a.transmittance == b.transmittance;
+    return a.reflectance == b.reflectance && a.transmittance == b.transmittance &&
+           a.specular == b.specular && a.roughness == b.roughness && a.through == b.through &&
+           a.glass == b.glass && a.straight_scatters == b.straight_scatters;
   };
   if (!std::equal(materials.begin(), materials.end(), d.design_materials_held.begin(),
                   d.design_materials_held.end(), same)) {
