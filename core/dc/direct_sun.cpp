@@ -97,8 +97,9 @@ absl::StatusOr<std::unique_ptr<DirectSun>> DirectSun::Trace(const Scene& scene,
   if (scene.blind) {
     envelope = LocalEnvelopeOfBlind(data->geometry, scene);
     const Material& slat = scene.materials[scene.blind->material];
-    data->slat_transmittance =
-        slat.kind == MaterialKind::kTrans ? 0.0f : static_cast<float>(std::max(slat.transmittance, 0.0));
+    data->slat_transmittance = slat.kind == MaterialKind::kTrans
+                                   ? 0.0f
+                                   : static_cast<float>(std::max(slat.transmittance, 0.0));
   }
   // Each sensor's lines on a thread of its own, kept in sensor order
   std::vector<std::vector<SunEntry>> always(data->sensors);

@@ -37,13 +37,13 @@ namespace fenestra {
 // only; plain glazing adds transmittance; Radiance's materials set the rest
 // (PrepareTraceGeometry converts core/geometry/mesh.h's Material).
 struct TraceMaterial {
-  float reflectance;            // Lambertian reflectance
-  float transmittance;          // straight-through transmittance; < 0 = opaque
-  float specular = 0.0f;        // reflectance of the specular part (lobe or mirror)
-  float roughness = 0.0f;       // the lobe's roughness (Ward's alpha)
-  float through = 0.0f;         // Lambertian transmittance
-  float glass = 0.0f;           // > 0: Radiance glass of this transmissivity (its t_n):
-                                // mirror reflection and straight transmission by the angle
+  float reflectance;               // Lambertian reflectance
+  float transmittance;             // straight-through transmittance; < 0 = opaque
+  float specular = 0.0f;           // reflectance of the specular part (lobe or mirror)
+  float roughness = 0.0f;          // the lobe's roughness (Ward's alpha)
+  float through = 0.0f;            // Lambertian transmittance
+  float glass = 0.0f;              // > 0: Radiance glass of this transmissivity (its t_n):
+                                   // mirror reflection and straight transmission by the angle
   bool straight_scatters = false;  // straight transmission counts as a scattering event (trans)
 };
 
@@ -91,18 +91,17 @@ struct SurfaceScatter {
 
 // What Sample drew.
 struct ScatterSample {
-  Vec3f direction;       // unit
-  float factor;          // multiplies the path's weight (0: the path ends)
-  float pdf;             // of `direction` among the smooth parts; 0 after a delta part
-  bool straight;         // went straight through
-  bool through;          // left on the far side (straight or Lambertian transmission)
-  bool scatters;         // counts as a reflection (everything but a plain straight pass)
+  Vec3f direction;  // unit
+  float factor;     // multiplies the path's weight (0: the path ends)
+  float pdf;        // of `direction` among the smooth parts; 0 after a delta part
+  bool straight;    // went straight through
+  bool through;     // left on the far side (straight or Lambertian transmission)
+  bool scatters;    // counts as a reflection (everything but a plain straight pass)
 };
 
 // The parts of `m` where a ray arriving along -view meets a surface of unit normal `normal`
 // (turned to the ray's side).
-FENESTRA_CPU_GPU inline SurfaceScatter ScatterAt(const TraceMaterial& m, Vec3f normal,
-                                                 Vec3f view) {
+FENESTRA_CPU_GPU inline SurfaceScatter ScatterAt(const TraceMaterial& m, Vec3f normal, Vec3f view) {
   SurfaceScatter s;
   s.normal = normal;
   s.view = view;
@@ -148,8 +147,8 @@ FENESTRA_CPU_GPU inline ScatterSample Sample(const SurfaceScatter& s, const Unif
     Vec3f t, b;
     OrthonormalBasis(s.normal, &t, &b);
     float weight;
-    out.direction = WardLobe{0.0f, s.lobe, s.alpha}.SampleLobe(s.normal, t, b, s.view, u.u[0],
-                                                               u.u[1], &weight);
+    out.direction =
+        WardLobe{0.0f, s.lobe, s.alpha}.SampleLobe(s.normal, t, b, s.view, u.u[0], u.u[1], &weight);
     if (!(weight > 0.0f)) return out;  // below the surface: nothing
     out.direction = Normalize(out.direction);
   } else {
@@ -161,8 +160,8 @@ FENESTRA_CPU_GPU inline ScatterSample Sample(const SurfaceScatter& s, const Unif
     out.factor = out.pdf > 0.0f ? value / (kPiF * out.pdf) : 0.0f;
   } else {
     const float cos_l = Dot(s.normal, out.direction);
-    out.pdf = (out.through ? s.through : s.diffuse) / s.total * fabsf(cos_l) *
-              SurfaceScatter::kInvPi;
+    out.pdf =
+        (out.through ? s.through : s.diffuse) / s.total * fabsf(cos_l) * SurfaceScatter::kInvPi;
     out.factor = s.total;
   }
   return out;

@@ -328,8 +328,7 @@ struct IndoorMode {
     if (cell < 0) return;
     const float mis = PowerHeuristic(WindowDensity(distance_squared, cos_window), pdf);
     Score(point, omega, window.PartOf(u.u[0], u.u[1]) * basis->cell_count + cell,
-          static_cast<double>(weight * value * cos_window * window.Area() / distance_squared *
-                              mis),
+          static_cast<double>(weight * value * cos_window * window.Area() / distance_squared * mis),
           unreflected);
   }
 };
