@@ -5,7 +5,9 @@
 // combined standard error, per design the scene's UDI of both with jackknife errors, and
 // the times; then the sensor sums of one design over independent seeds of both stages,
 // for the calibration of the errors (z-scores). Meant for the GPU:
-//   two_stage_grid_bench [cuda|cpu] [--quick] [--seeds N]
+//   two_stage_grid_bench [cuda|cpu] [--quick] [--seeds N] [--slats lambertian|metal|plastic]
+// --slats gives the blind's slats Radiance's metal (0.8 grey, specularity 0.9, roughness 0.05)
+// or plastic (0.8, 0.05, 0.1) instead of the scene's Lambertian 0.8.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -91,6 +93,7 @@ struct Args {
   std::string backend_name = "cuda";
   bool quick = false;
   int seeds = 40;
+  std::string slats = "lambertian";
 };
 
 // The command line: the backend's name, --quick, --seeds N.
@@ -102,11 +105,31 @@ Args Parse(int argc, char** argv) {
       a.quick = true;
     } else if (arg == "--seeds" && i + 1 < argc) {
       a.seeds = std::atoi(argv[++i]);
+    } else if (arg == "--slats" && i + 1 < argc) {
+      a.slats = argv[++i];
     } else {
       a.backend_name = arg;
     }
   }
   return a;
+}
+
+// `scene` with its slats of the finish `slats` names (Args::slats).
+Scene WithSlats(Scene scene, const std::string& slats) {
+  Material m{.name = "slats_" + slats};
+  if (slats == "metal") {  // c 0.8, s 0.9, a 0.05: diffuse c (1 - s), lobe c s
+    m.reflectance = 0.08, m.specular = 0.72, m.roughness = 0.05, m.kind = MaterialKind::kMetal;
+  } else if (slats == "plastic") {  // c 0.8, s 0.05, a 0.1: diffuse c (1 - s), lobe s
+    m.reflectance = 0.76, m.specular = 0.05, m.roughness = 0.1, m.kind = MaterialKind::kPlastic;
+  } else if (slats != "lambertian") {
+    std::fprintf(stderr, "--slats: lambertian, metal or plastic, not %s\n", slats.c_str());
+    std::exit(2);
+  } else {
+    return scene;
+  }
+  scene.materials.push_back(m);
+  scene.blind->material = static_cast<uint32_t>(scene.materials.size() - 1);
+  return scene;
 }
 
 // The scene's blind at design d.
@@ -285,18 +308,20 @@ int main(int argc, char** argv) {
   const Args args = Parse(argc, argv);
   const bool quick = args.quick;
   std::unique_ptr<DcBackend> backend = ValueOrExit(MakeBackend(args.backend_name));
-  const Scene scene = ValueOrExit(LoadScene(kRoot + "/examples/city_office/scene.json"));
+  const Scene scene =
+      WithSlats(ValueOrExit(LoadScene(kRoot + "/examples/city_office/scene.json")), args.slats);
   const AnnualSky sky = CityOfficeSky();
   const WindowParts parts = AutomaticWindowParts(scene.window);
   const int64_t one_stage_paths = quick ? 200'000 : 10'000'000;
   const int64_t outdoor_paths = quick ? 2'000'000 : 200'000'000;
   const int64_t indoor_paths = quick ? 200'000 : 2'000'000;
   std::printf(
-      "backend: %s\ncity office, bounces unlimited (roulette) in both methods; one-stage %lld "
+      "backend: %s\ncity office, slats %s, bounces unlimited (roulette) in both methods; one-stage "
+      "%lld "
       "paths per sensor (plain roulette, threshold 0.25, 8 batches); two-stage: outdoor %lld "
       "paths once for all designs, indoor %lld paths per sensor, %dx%d window parts x 288 "
       "direction cells, 8 batches paired\n",
-      backend->Name().c_str(), static_cast<long long>(one_stage_paths),
+      backend->Name().c_str(), args.slats.c_str(), static_cast<long long>(one_stage_paths),
       static_cast<long long>(outdoor_paths), static_cast<long long>(indoor_paths), parts.columns,
       parts.rows);
 

@@ -189,5 +189,42 @@ TEST(TracePathTest, GlazingTransmitsStraightAndReflectsDiffusely) {
   EXPECT_EQ(sink.unreflected[0], 0.0);
 }
 
+// A plate with two faces of their own, top white (Lambertian 0.8) and bottom a mirror (0.9),
+// or the other way round: a sensor under it facing up gets, all through the ground bin, what
+// the bottom face sends down; one above it facing down gets, all through the sky, what the
+// top sends up. Every path scatters once and escapes, so each sum is exact.
+TEST(TracePathTest, TwoFacedPlateSendsEachFacesLight) {
+  std::vector<Vec3f> vertices;
+  AddSquare(vertices, 1e4f, 1.0f);   // bottom face: triangles 0, 1
+  AddSquare(vertices, 1e4f, 1.01f);  // top face: triangles 2, 3
+  const BruteForceIntersector scene{vertices.data(), 4};
+  TraceMaterial mirror{0.0f, -1.0f};
+  mirror.specular = 0.9f;
+  const TraceMaterial materials[2] = {{0.8f, -1.0f}, mirror};
+  const PathSettings settings{-1, false, 1.0f, 100};
+  for (const bool mirror_below : {true, false}) {
+    const uint32_t bottom = mirror_below ? 1 : 0, top = mirror_below ? 0 : 1;
+    const uint32_t triangle_material[] = {bottom, bottom, top, top};
+    const SurfaceTable surfaces{materials, triangle_material};
+    const double below = mirror_below ? 0.9 : 0.8, above = mirror_below ? 0.8 : 0.9;
+    for (const bool up : {true, false}) {
+      RecordingSink sink;
+      OneStageMode<RecordingSink> mode{{0, 0, up ? 0.0f : 2.0f}, {0, 0, up ? 1.0f : -1.0f}, &sink};
+      const int kPaths = 20000;
+      for (int p = 0; p < kPaths; ++p) {
+        const PathStats stats = TracePath(scene, surfaces, settings, PathRandom(21, 0, p), mode);
+        ASSERT_EQ(stats.end, PathEnd::kEscaped);
+        ASSERT_EQ(stats.rays, 2u);
+      }
+      double sky = 0, unreflected = 0;
+      for (int b = 1; b < kTregenzaBinCount; ++b) sky += sink.sum[b];
+      for (int b = 0; b < kTregenzaBinCount; ++b) unreflected += sink.unreflected[b];
+      EXPECT_NEAR(sink.sum[0] / kPaths, up ? below * kPi : 0.0, 1e-5);
+      EXPECT_NEAR(sky / kPaths, up ? 0.0 : above * kPi, 1e-5);
+      EXPECT_EQ(unreflected, 0.0);  // a mirror's light is reflected light
+    }
+  }
+}
+
 }  // namespace
 }  // namespace fenestra
