@@ -91,7 +91,7 @@ void AddSceneCommand(CLI::App& app) {
   exp->add_option("FILE", args->file, "Scene file (JSON)")->required();
   CLI::Option* obj = exp->add_option("--obj", args->obj, "Output OBJ file");
   CLI::Option* rad = exp->add_option(
-      "--rad", args->rad, "Output Radiance scene: the materials as plastic or trans, polygons");
+      "--rad", args->rad, "Output Radiance scene: the materials as Radiance reads them, polygons");
   exp->add_option("--pts", args->pts, "Output sensors as a Radiance points file (with --rad)")
       ->needs(rad);
   obj->excludes(rad);

@@ -10,6 +10,7 @@
 #include "client/report/sections.h"
 #include "client/report/svg.h"
 #include "core/geometry/blind.h"
+#include "core/geometry/material.h"
 
 namespace fenestra {
 namespace {
@@ -246,7 +247,10 @@ std::string DetailFigure(const BlindCut& s, const BlindDesign& design) {
 
 std::string BlindTable(const Scene& scene, const BlindCut& s, const BlindDesign& d) {
   const BlindSpec& spec = *scene.blind;
-  const Material& m = scene.materials[spec.material];
+  const auto material = [&](uint32_t index) {
+    const Material& m = scene.materials[index];
+    return fmt::format("{} ({})", m.name, DescribeMaterial(m));
+  };
   return HtmlTable(
       "blind-table", {"quantity", "value"},
       {{"orientation", s.vertical ? "vertical slats" : "horizontal slats"},
@@ -263,7 +267,8 @@ std::string BlindTable(const Scene& scene, const BlindCut& s, const BlindDesign&
        {"clearance to the wall", fmt::format("{:.1f} mm", 1000 * spec.wall_gap_m)},
        {"slat length beyond the opening, each end",
         fmt::format("{:.1f} mm", 1000 * spec.side_margin_m)},
-       {"slat material", fmt::format("{} (reflectance {:.2f})", m.name, m.reflectance)},
+       {"slat material", material(spec.material)},
+       {"slat material, outer faces (to the window at α = 0)", material(spec.OuterMaterial())},
        {"window opening",
         fmt::format("{:.2f} × {:.2f} m, wall {:.2f} m thick", scene.window.width_m,
                     scene.window.height_m, scene.window.depth_m)}});

@@ -341,8 +341,12 @@ class CudaReplay {
     const std::vector<Vec3f> corners = LocalSlatCorners(room_, scene_, design);
     *bvh = BvhWithSlats(room_bvh_, corners, static_cast<uint32_t>(room_.TriangleCount()));
     *triangle_material = room_.triangle_material;
-    triangle_material->resize(room_.TriangleCount() + kTrianglesPerSlat * corners.size() / 8,
-                              scene_.blind->material);
+    triangle_material->reserve(room_.TriangleCount() + kTrianglesPerSlat * corners.size() / 8);
+    for (size_t slat = 0; slat < corners.size() / 8; ++slat) {
+      for (int t = 0; t < kTrianglesPerSlat; ++t) {
+        triangle_material->push_back(SlatTriangleMaterial(*scene_.blind, t));
+      }
+    }
     triangles_ = triangle_material->size();
     return CudaTracer::DesignScene{bvh, triangle_material,
                                    LocalSlatsOfBlind(room_, scene_, design)};

@@ -96,10 +96,16 @@ absl::StatusOr<std::unique_ptr<DirectSun>> DirectSun::Trace(const Scene& scene,
   std::optional<LocalEnvelope> envelope;
   if (scene.blind) {
     envelope = LocalEnvelopeOfBlind(data->geometry, scene);
-    const Material& slat = scene.materials[scene.blind->material];
-    data->slat_transmittance = slat.kind == MaterialKind::kTrans
-                                   ? 0.0f
-                                   : static_cast<float>(std::max(slat.transmittance, 0.0));
+    // A line through a slat crosses both broad faces, and which it meets first is not kept:
+    // slats whose two materials differ in straight transmittance count as opaque, as trans
+    // slats do (their straight part scatters)
+    const auto straight = [&](uint32_t index) {
+      const Material& slat = scene.materials[index];
+      return slat.kind == MaterialKind::kTrans ? 0.0 : std::max(slat.transmittance, 0.0);
+    };
+    const double inner = straight(scene.blind->material);
+    data->slat_transmittance =
+        inner == straight(scene.blind->OuterMaterial()) ? static_cast<float>(inner) : 0.0f;
   }
   // Each sensor's lines on a thread of its own, kept in sensor order
   std::vector<std::vector<SunEntry>> always(data->sensors);

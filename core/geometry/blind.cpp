@@ -139,8 +139,8 @@ BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const Bli
       const Vec3d& b = corner[SlatBoxes::FaceCorner(f, 1)];
       const Vec3d& c = corner[SlatBoxes::FaceCorner(f, 2)];
       const Vec3d& d = corner[SlatBoxes::FaceCorner(f, 3)];
-      mesh.Add(a, b, c, spec.material, Side::kIndoor, part_index);
-      mesh.Add(a, c, d, spec.material, Side::kIndoor, part_index);
+      mesh.Add(a, b, c, SlatTriangleMaterial(spec, 2 * f), Side::kIndoor, part_index);
+      mesh.Add(a, c, d, SlatTriangleMaterial(spec, 2 * f + 1), Side::kIndoor, part_index);
     }
   }
   return layout;

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <numbers>
+#include <optional>
 
 #include "absl/status/status.h"
 #include "core/common/vec3.h"
@@ -36,7 +37,9 @@ inline constexpr double kMaxWallGapM = 1.0;
 
 // The Venetian blind's fixed description (from the scene).
 struct BlindSpec {
-  uint32_t material = 0;  // index into the scene's materials
+  uint32_t material = 0;  // index into the scene's materials: every face but the outer ones
+  // The material of the slats' outer broad faces (kSlatOuterFace); absent: `material`
+  std::optional<uint32_t> outer_material;
   bool vertical = false;  // slats vertical (stacked across the window) instead of horizontal
   ParameterRange tilt_rad, slat_width_m, slat_spacing_m, slat_thickness_m;
   double wall_gap_m = 0.01;  // clearance between wall and slat at any tilt [m]
@@ -44,6 +47,8 @@ struct BlindSpec {
   // In place only in the hours IES LM-83's rule closes it (scene.proto, AUTOMATED_SUN),
   // retracted otherwise; false: in place in every hour.
   bool automated_sun = false;
+
+  uint32_t OuterMaterial() const { return outer_material.value_or(material); }
 };
 
 // One design: the free values of the blind.
@@ -103,8 +108,16 @@ SlatStack StackOfBlind(const Window& window, const BlindSpec& spec, const BlindD
 // The slats' boxes (core/geometry/slat_boxes.h) of a stack.
 SlatBoxes BoxesOfStack(const SlatStack& slats);
 
-// Triangles GenerateBlind makes per slat (its box's 6 faces).
+// Triangles GenerateBlind makes per slat (its box's 6 faces, two each, in SlatBoxes's order).
 inline constexpr int kTrianglesPerSlat = 12;
+// The slats' outer broad face (SlatBoxes's face 4, the -thickness side): it faces the window at
+// tilt 0 and turns towards the stacking axis as the tilt grows towards π/2.
+inline constexpr int kSlatOuterFace = 4;
+
+// The material of triangle `triangle` (0 <= triangle < kTrianglesPerSlat) of every slat.
+inline uint32_t SlatTriangleMaterial(const BlindSpec& spec, int triangle) {
+  return triangle / 2 == kSlatOuterFace ? spec.OuterMaterial() : spec.material;
+}
 
 // Appends the slats (kTrianglesPerSlat each, indoor) to `mesh` under part `part_index`.
 BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design,

@@ -1,23 +1,54 @@
 #include "core/geometry/rad_io.h"
 
 #include <cctype>
+#include <initializer_list>
 #include <ostream>
 
 #include "core/common/atomic_file.h"
+#include "core/geometry/material.h"
+#include "core/trace/glass.h"  // header-only: the pane's formulas, shared with the tracer
 
 namespace fenestra {
 namespace {
 
+// Writes `void <type> <name>`, no string or integer arguments, then `values` (each grey
+// colour three times where the caller repeats it).
+void WriteModifier(std::ostream& out, const char* type, const std::string& name,
+                   std::initializer_list<double> values) {
+  out << "void " << type << ' ' << name << "\n0\n0\n" << values.size();
+  for (const double v : values) out << ' ' << v;
+  out << "\n\n";
+}
+
 void WriteMaterial(std::ostream& out, uint32_t index, const Material& m) {
   const std::string name = RadianceName(index, m.name);
-  if (m.transmittance > 0) {
-    const double c = m.reflectance + m.transmittance;
-    out << "void trans " << name << "\n0\n0\n7 " << c << ' ' << c << ' ' << c << " 0 0 "
-        << m.transmittance / c << " 1\n\n";
-    return;
+  const RadianceParameters p = ParametersOfKind(m);
+  const double c = p.colour, s = p.specularity, a = p.roughness;
+  switch (m.kind) {
+    case MaterialKind::kLambertian:
+      if (m.transmittance > 0) {
+        const double g = m.reflectance + m.transmittance;
+        WriteModifier(out, "trans", name, {g, g, g, 0, 0, m.transmittance / g, 1});
+      } else {
+        WriteModifier(out, "plastic", name, {m.reflectance, m.reflectance, m.reflectance, 0, 0});
+      }
+      break;
+    case MaterialKind::kPlastic:
+      WriteModifier(out, "plastic", name, {c, c, c, s, a});
+      break;
+    case MaterialKind::kMetal:
+      WriteModifier(out, "metal", name, {c, c, c, s, a});
+      break;
+    case MaterialKind::kTrans:
+      WriteModifier(out, "trans", name, {c, c, c, s, a, p.transmissivity, p.transmitted_specular});
+      break;
+    case MaterialKind::kGlass: {
+      // The tracer's pane (ToTraceMaterial): the same transmissivity, in float
+      const double t = GlassPane::TransmissivityFor(static_cast<float>(m.transmittance));
+      WriteModifier(out, "glass", name, {t, t, t});
+      break;
+    }
   }
-  const double r = m.reflectance;
-  out << "void plastic " << name << "\n0\n0\n5 " << r << ' ' << r << ' ' << r << " 0 0\n\n";
 }
 
 }  // namespace

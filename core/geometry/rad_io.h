@@ -7,7 +7,9 @@
 // Materials: an opaque Lambertian reflectance rho is `plastic` rho rho rho with specularity 0;
 // glazing (rho, straight-through transmittance tau) is `trans` with colour c = rho + tau,
 // specularity 0, transmissivity tau / c and all of it specular (Radiance's trans then reflects
-// c (1 - tau / c) = rho diffusely and transmits c tau / c = tau straight through).
+// c (1 - tau / c) = rho diffusely and transmits c tau / c = tau straight through). A plastic,
+// metal or trans is itself with the scene's parameters (ParametersOfKind), a glass is `glass`
+// of the transmissivity the tracer gives its pane (GlassPane::TransmissivityFor).
 #include <string>
 
 #include "absl/status/statusor.h"

@@ -10,6 +10,7 @@
 #include "core/common/json_proto.h"
 #include "core/common/status_macros.h"
 #include "core/common/text.h"
+#include "core/geometry/material.h"
 #include "core/geometry/obj_io.h"
 
 namespace fenestra {
@@ -81,6 +82,103 @@ class Checker {
 
 double TriangleArea(Vec3d a, Vec3d b, Vec3d c) { return 0.5 * Length(Cross(b - a, c - a)); }
 
+// Checks that `value` lies in [0, 1], or in [0, 1) when `below_one`.
+absl::Status CheckFraction(double value, bool below_one, const std::string& field,
+                           const Checker& check) {
+  if (value >= 0 && (below_one ? value < 1 : value <= 1)) return absl::OkStatus();
+  return check.Error(field,
+                     absl::StrCat("must be in [0, 1", below_one ? ")" : "]", ", got ", value));
+}
+
+// The colour, specularity and roughness of a plastic, metal or trans `k` at `field`, checked.
+template <typename Kind>
+absl::StatusOr<RadianceParameters> LobeParameters(const Kind& k, const std::string& field,
+                                                  const Checker& check) {
+  FENESTRA_RETURN_IF_ERROR(CheckFraction(k.reflectance(), false, field + ".reflectance", check));
+  FENESTRA_RETURN_IF_ERROR(CheckFraction(k.specularity(), true, field + ".specularity", check));
+  FENESTRA_RETURN_IF_ERROR(CheckFraction(k.roughness(), false, field + ".roughness", check));
+  return RadianceParameters{k.reflectance(), k.specularity(), k.roughness()};
+}
+
+// The parts of a Lambertian material (with plain glazing's transmittance), its fields checked.
+absl::StatusOr<Material> LambertianParts(const v1::Material& m, const std::string& field,
+                                         const Checker& check) {
+  Material out;
+  out.reflectance = m.reflectance();
+  FENESTRA_RETURN_IF_ERROR(CheckFraction(out.reflectance, true, field + ".reflectance", check));
+  if (m.has_transmittance()) {
+    out.transmittance = m.transmittance();
+    FENESTRA_RETURN_IF_ERROR(
+        CheckFraction(out.transmittance, false, field + ".transmittance", check));
+  }
+  return out;
+}
+
+// The parts (mesh.h) of material `m`, Lambertian or of a kind, its fields checked; `field`
+// names `m`, or its kind's message.
+absl::StatusOr<Material> MaterialParts(const v1::Material& m, const std::string& field,
+                                       const Checker& check) {
+  switch (m.kind_case()) {
+    case v1::Material::kPlastic: {
+      FENESTRA_ASSIGN_OR_RETURN(p, LobeParameters(m.plastic(), field, check));
+      return MaterialOfKind(MaterialKind::kPlastic, p);
+    }
+    case v1::Material::kMetal: {
+      FENESTRA_ASSIGN_OR_RETURN(p, LobeParameters(m.metal(), field, check));
+      return MaterialOfKind(MaterialKind::kMetal, p);
+    }
+    case v1::Material::kTrans: {
+      const v1::Material::Trans& t = m.trans();
+      FENESTRA_ASSIGN_OR_RETURN(p, LobeParameters(t, field, check));
+      FENESTRA_RETURN_IF_ERROR(
+          CheckFraction(t.transmissivity(), false, field + ".transmissivity", check));
+      FENESTRA_RETURN_IF_ERROR(
+          CheckFraction(t.transmitted_specular(), false, field + ".transmitted_specular", check));
+      p.transmissivity = t.transmissivity();
+      p.transmitted_specular = t.transmitted_specular();
+      return MaterialOfKind(MaterialKind::kTrans, p);
+    }
+    case v1::Material::kGlass: {
+      Material glass;
+      glass.kind = MaterialKind::kGlass;
+      glass.transmittance = m.glass().transmittance();
+      if (!(glass.transmittance > 0 && glass.transmittance <= kMaxGlassNormalTransmittance)) {
+        return check.Error(field + ".transmittance",
+                           absl::StrCat("must be in (0, ", kMaxGlassNormalTransmittance,
+                                        "] (a pane of index 1.52 at normal incidence), got ",
+                                        glass.transmittance));
+      }
+      return glass;
+    }
+    default:
+      return LambertianParts(m, field, check);
+  }
+}
+
+// Material `m` at `field` as its parts: one meaning per setting (Lambertian fields or one
+// kind), every parameter in its range, and parts the tracer takes.
+absl::StatusOr<Material> BuildMaterial(const v1::Material& m, const std::string& field,
+                                       const Checker& check) {
+  const bool lambertian = m.kind_case() == v1::Material::KIND_NOT_SET;
+  const std::string kind =
+      lambertian ? "" : m.GetDescriptor()->FindFieldByNumber(m.kind_case())->name();
+  const std::string parts_field = lambertian ? field : field + "." + kind;
+  if (!lambertian && (m.has_reflectance() || m.has_transmittance())) {
+    return check.Error(field + (m.has_reflectance() ? ".reflectance" : ".transmittance"),
+                       absl::StrCat("a material is Lambertian (reflectance, transmittance) or "
+                                    "one of plastic, metal, trans and glass, not both: this "
+                                    "one also gives ",
+                                    kind));
+  }
+  FENESTRA_ASSIGN_OR_RETURN(material, MaterialParts(m, parts_field, check));
+  material.name = m.name();
+  if (const absl::Status parts = CheckMaterialParts(material); !parts.ok()) {
+    return check.Error(
+        parts_field, absl::StrCat("as diffuse, specular and transmitted parts: ", parts.message()));
+  }
+  return material;
+}
+
 absl::StatusOr<std::vector<Material>> BuildMaterials(const v1::Scene& proto, const Checker& check) {
   std::vector<Material> materials;
   for (int i = 0; i < proto.materials_size(); ++i) {
@@ -92,22 +190,8 @@ absl::StatusOr<std::vector<Material>> BuildMaterials(const v1::Scene& proto, con
         return check.Error(field + ".name", absl::StrCat("duplicate material '", m.name(), "'"));
       }
     }
-    if (!(m.reflectance() >= 0 && m.reflectance() < 1)) {
-      return check.Error(field + ".reflectance",
-                         absl::StrCat("must be in [0, 1), got ", m.reflectance()));
-    }
-    double transmittance = -1;
-    if (m.has_transmittance()) {
-      transmittance = m.transmittance();
-      if (!(transmittance >= 0 && transmittance <= 1)) {
-        return check.Error(field + ".transmittance",
-                           absl::StrCat("must be in [0, 1], got ", transmittance));
-      }
-      if (!(m.reflectance() + transmittance <= 1)) {
-        return check.Error(field, "reflectance + transmittance must not exceed 1");
-      }
-    }
-    materials.push_back({m.name(), m.reflectance(), transmittance});
+    FENESTRA_ASSIGN_OR_RETURN(material, BuildMaterial(m, field, check));
+    materials.push_back(std::move(material));
   }
   if (materials.empty()) return check.Error("materials", "at least one material is required");
   return materials;
@@ -120,6 +204,19 @@ absl::StatusOr<uint32_t> FindMaterial(const std::vector<Material>& materials,
     if (materials[i].name == name) return i;
   }
   return check.Error(field, absl::StrCat("unknown material '", name, "'"));
+}
+
+// The slats' material `name` at `field`: any but a glass.
+absl::StatusOr<uint32_t> FindSlatMaterial(const std::vector<Material>& materials,
+                                          const std::string& name, const std::string& field,
+                                          const Checker& check) {
+  FENESTRA_ASSIGN_OR_RETURN(index, FindMaterial(materials, name, field, check));
+  if (materials[index].kind == MaterialKind::kGlass) {
+    return check.Error(field, absl::StrCat("'", name,
+                                           "' is a glass: slats of glass make no blind (trans "
+                                           "makes translucent slats)"));
+  }
+  return index;
 }
 
 // `surface` names the surface (surfaces[i]); the polygon's own names are made only for an
@@ -366,8 +463,13 @@ absl::StatusOr<BlindSpec> BuildBlind(const v1::VenetianBlind& b,
                                      const Checker& check) {
   BlindSpec spec;
   FENESTRA_ASSIGN_OR_RETURN(material,
-                            FindMaterial(materials, b.material(), "blind.material", check));
+                            FindSlatMaterial(materials, b.material(), "blind.material", check));
   spec.material = material;
+  if (b.has_outer_material()) {
+    FENESTRA_ASSIGN_OR_RETURN(
+        outer, FindSlatMaterial(materials, b.outer_material(), "blind.outer_material", check));
+    spec.outer_material = outer;
+  }
   FENESTRA_ASSIGN_OR_RETURN(vertical, IsVertical(b, check));
   spec.vertical = vertical;
   FENESTRA_ASSIGN_OR_RETURN(

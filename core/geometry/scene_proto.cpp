@@ -1,5 +1,7 @@
 #include "core/geometry/scene_proto.h"
 
+#include "core/geometry/material.h"
+
 namespace fenestra {
 namespace {
 
@@ -29,9 +31,44 @@ void AddSurfaces(const Scene& scene, v1::Scene& out) {
   }
 }
 
+// The colour, specularity and roughness of a plastic, metal or trans.
+template <typename Kind>
+void SetLobe(const RadianceParameters& p, Kind* out) {
+  out->set_reflectance(p.colour);
+  out->set_specularity(p.specularity);
+  out->set_roughness(p.roughness);
+}
+
+// Material `m` as the scene gave it: Lambertian fields, or its kind's parameters.
+void SetMaterial(const Material& m, v1::Material* out) {
+  out->set_name(m.name);
+  const RadianceParameters p = ParametersOfKind(m);
+  switch (m.kind) {
+    case MaterialKind::kLambertian:
+      if (m.reflectance != 0) out->set_reflectance(m.reflectance);
+      if (m.transmittance >= 0) out->set_transmittance(m.transmittance);
+      break;
+    case MaterialKind::kPlastic:
+      SetLobe(p, out->mutable_plastic());
+      break;
+    case MaterialKind::kMetal:
+      SetLobe(p, out->mutable_metal());
+      break;
+    case MaterialKind::kTrans:
+      SetLobe(p, out->mutable_trans());
+      out->mutable_trans()->set_transmissivity(p.transmissivity);
+      out->mutable_trans()->set_transmitted_specular(p.transmitted_specular);
+      break;
+    case MaterialKind::kGlass:
+      out->mutable_glass()->set_transmittance(m.transmittance);
+      break;
+  }
+}
+
 void SetBlind(const Scene& scene, v1::VenetianBlind& out) {
   const BlindSpec& spec = *scene.blind;
   out.set_material(scene.materials[spec.material].name);
+  if (spec.outer_material) out.set_outer_material(scene.materials[*spec.outer_material].name);
   out.set_orientation(spec.vertical ? v1::VenetianBlind::VERTICAL : v1::VenetianBlind::HORIZONTAL);
   SetParameter(spec.tilt_rad, out.mutable_tilt_rad());
   SetParameter(spec.slat_width_m, out.mutable_slat_width_m());
@@ -48,12 +85,7 @@ void SetBlind(const Scene& scene, v1::VenetianBlind& out) {
 v1::Scene SelfContainedSceneProto(const Scene& scene) {
   v1::Scene out;
   out.set_name(scene.name);
-  for (const Material& m : scene.materials) {
-    v1::Material& material = *out.add_materials();
-    material.set_name(m.name);
-    material.set_reflectance(m.reflectance);
-    if (m.transmittance >= 0) material.set_transmittance(m.transmittance);
-  }
+  for (const Material& m : scene.materials) SetMaterial(m, out.add_materials());
   AddSurfaces(scene, out);
 
   const Window& w = scene.window;

@@ -14,7 +14,7 @@ namespace fenestra {
 
 std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
   ContentHash hash;
-  hash.String("fenestra outdoor matrix v3");
+  hash.String("fenestra outdoor matrix v4");
   const TriangleMesh& mesh = scene.fixed;
   for (size_t t = 0; t < mesh.TriangleCount(); ++t) {
     if (mesh.side[t] != Side::kOutdoor) continue;
@@ -23,7 +23,8 @@ std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
       hash.Value(v.x), hash.Value(v.y), hash.Value(v.z);
     }
     const Material& m = scene.materials[mesh.material[t]];
-    hash.Value(m.reflectance), hash.Value(m.transmittance);
+    hash.Value(m.reflectance), hash.Value(m.transmittance), hash.Value(m.specular);
+    hash.Value(m.roughness), hash.Value(m.through), hash.Value(static_cast<int>(m.kind));
   }
   const Window& w = scene.window;
   for (const Vec3d& v : {w.center, w.normal, w.up})

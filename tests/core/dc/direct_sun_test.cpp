@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -136,6 +137,41 @@ TEST(DirectSunTest, ClosedSlatsGrazingSunsAndBadInput) {
   EXPECT_FALSE(DirectSun::Trace(scene, {{5, {0, 0, 1}, 1}}, 5).ok());
   EXPECT_FALSE(DirectSun::Trace(scene, {{0, {0, 0, 2}, 1}}, 1).ok());
   EXPECT_FALSE(DirectSun::Trace(scene, {{0, {0, 0, 1}, -1}}, 1).ok());
+}
+
+// Slats of glazing let the sun through by their transmittance; slats whose outer faces'
+// material transmits otherwise than the rest count as opaque (which face a line meets first
+// is not kept), and ones whose two materials transmit alike pass it as one.
+TEST(DirectSunTest, SlatsWhoseFacesTransmitOtherwiseAreOpaque) {
+  Scene scene = LoadExample("city_office");
+  scene.sensors = SensorsBehindBlind(scene);
+  const auto add = [&](const char* name, double reflectance, double transmittance) {
+    scene.materials.push_back({name, reflectance, transmittance});
+    return static_cast<uint32_t>(scene.materials.size() - 1);
+  };
+  const uint32_t half = add("half", 0.1, 0.5), alike = add("alike", 0.3, 0.5),
+                 less = add("less", 0.1, 0.3);
+  absl::StatusOr<BlindDesign> closed = DesignWithOverrides(
+      scene, {{"alpha", 0}, {"width", 0.15}, {"spacing", 0}, {"thickness", 0.01}});
+  ASSERT_TRUE(closed.ok()) << closed.status();
+  std::vector<SunColumn> suns;
+  for (double a = 5; a < 80; a += 5) {
+    const double phi = a * kDegree;
+    suns.push_back({static_cast<int>(suns.size()), {0, std::cos(phi), std::sin(phi)}, 1e5});
+  }
+  const auto through = [&](uint32_t material, std::optional<uint32_t> outer) {
+    scene.blind->material = material;
+    scene.blind->outer_material = outer;
+    absl::StatusOr<std::unique_ptr<DirectSun>> sun =
+        DirectSun::Trace(scene, suns, static_cast<int>(suns.size()));
+    EXPECT_TRUE(sun.ok()) << sun.status();
+    const double bare = (*sun)->Illuminance(*closed, /*blind=*/false).sum();
+    EXPECT_GT(bare, 0);
+    return (*sun)->Illuminance(*closed).sum() / bare;
+  };
+  EXPECT_NEAR(through(half, std::nullopt), 0.5, 1e-6);
+  EXPECT_NEAR(through(half, alike), 0.5, 1e-6);
+  EXPECT_EQ(through(half, less), 0.0);
 }
 
 // Where nothing can cut the sun, the direct sun traced to its position is the beam's

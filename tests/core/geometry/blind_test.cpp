@@ -179,6 +179,33 @@ TEST(BlindTest, VerticalSlatsStackAcrossTheWindow) {
   }
 }
 
+// The outer material's faces (face 4, two triangles of every slat's twelve) face the window at
+// tilt 0 and turn up as horizontal slats tilt towards π/2; the other broad face (5) the other
+// way.
+TEST(BlindTest, OuterMaterialFacesTheWindowThenTurnsUp) {
+  BlindSpec spec;
+  spec.material = 3;
+  spec.outer_material = 7;
+  for (const double tilt : {0.0, 0.5, std::numbers::pi / 2}) {
+    BlindLayout layout;
+    const TriangleMesh mesh = Slats(Design(tilt, 0.15, 0, 0.01), &layout, spec);
+    ASSERT_EQ(mesh.TriangleCount(), 12u * layout.slat_count);
+    for (int k = 0; k < layout.slat_count; ++k) {
+      // Each face's centre, from the mean of its two triangles' vertices
+      Vec3d centre[6] = {};
+      for (int t = 0; t < kTrianglesPerSlat; ++t) {
+        const size_t triangle = static_cast<size_t>(kTrianglesPerSlat * k + t);
+        EXPECT_EQ(mesh.material[triangle], t / 2 == kSlatOuterFace ? 7u : 3u);
+        for (int v = 0; v < 3; ++v) centre[t / 2] += mesh.vertices[3 * triangle + v] * (1.0 / 6);
+      }
+      // The outer face lies towards the window (+y) and up (+z) by the slat's thickness
+      const Vec3d across = centre[kSlatOuterFace] - centre[5];
+      EXPECT_NEAR(across.y, 0.01 * std::cos(tilt), 1e-12) << "tilt " << tilt << " slat " << k;
+      EXPECT_NEAR(across.z, 0.01 * std::sin(tilt), 1e-12) << "tilt " << tilt << " slat " << k;
+    }
+  }
+}
+
 // The envelope holds every slat of every design within the ranges, horizontal or vertical,
 // tilted either way, and no more than it must along the depth.
 TEST(BlindTest, EnvelopeHoldsTheBlindOfEveryDesignInRange) {

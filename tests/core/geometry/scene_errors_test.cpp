@@ -4,7 +4,11 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <utility>
+#include <vector>
 
+#include "core/geometry/material.h"
 #include "core/geometry/scene.h"
 
 namespace fenestra {
@@ -31,6 +35,12 @@ class SceneErrorsTest : public ::testing::Test {
 
   // A valid scene with `replace` substituted for `find` (the first occurrence).
   std::string Scene(const std::string& find = "", const std::string& replace = "") {
+    if (find.empty()) return Scene(std::vector<std::pair<std::string, std::string>>{});
+    return Scene(std::vector<std::pair<std::string, std::string>>{{find, replace}});
+  }
+
+  // A valid scene with each of `edits` (find, replace) applied in turn.
+  std::string Scene(const std::vector<std::pair<std::string, std::string>>& edits) {
     std::string text = R"({
       "name": "box",
       "materials": [{"name": "wall", "reflectance": 0.5}, {"name": "slat", "reflectance": 0.8}],
@@ -46,10 +56,10 @@ class SceneErrorsTest : public ::testing::Test {
                 "slatSpacingM": {"value": 0, "min": 0, "max": 0.1},
                 "slatThicknessM": {"value": 0.01, "min": 0.01, "max": 0.02}}
     })";
-    if (!find.empty()) {
+    for (const auto& [find, replace] : edits) {
       const size_t at = text.find(find);
       EXPECT_NE(at, std::string::npos) << find;
-      text.replace(at, find.size(), replace);
+      if (at != std::string::npos) text.replace(at, find.size(), replace);
     }
     return Write("scene.json", text);
   }
@@ -270,6 +280,124 @@ TEST_F(SceneErrorsTest, BlindsOutsidePhysicalSense) {
               {"blind.wall_gap_m", "must be in [0, 1] m"});
   ExpectError(Scene(R"("tiltRad": {"value": 0,)", R"("tiltRad": {"value": "NaN",)"),
               {"blind.tilt_rad", "finite"});
+}
+
+// Radiance's materials of every kind, the blind's slats of metal with white outer faces.
+constexpr char kRadianceMaterials[] = R"({"name": "slat", "metal": {"reflectance": 0.8,
+                                     "specularity": 0.9, "roughness": 0.05}},
+    {"name": "paint", "plastic": {"reflectance": 0.5, "specularity": 0.04, "roughness": 0.1}},
+    {"name": "fabric", "trans": {"reflectance": 0.6, "specularity": 0.02, "roughness": 0.2,
+                                 "transmissivity": 0.5, "transmittedSpecular": 0.25}},
+    {"name": "pane", "glass": {"transmittance": 0.88}},
+    {"name": "white", "reflectance": 0.9})";
+
+void ExpectParts(const Material& m, MaterialKind kind, double reflectance, double specular,
+                 double roughness, double through, double transmittance) {
+  SCOPED_TRACE(m.name);
+  EXPECT_EQ(m.kind, kind);
+  EXPECT_DOUBLE_EQ(m.reflectance, reflectance);
+  EXPECT_DOUBLE_EQ(m.specular, specular);
+  EXPECT_DOUBLE_EQ(m.roughness, roughness);
+  EXPECT_DOUBLE_EQ(m.through, through);
+  EXPECT_DOUBLE_EQ(m.transmittance, transmittance);
+}
+
+TEST_F(SceneErrorsTest, RadianceMaterialsBecomeTheirParts) {
+  absl::StatusOr<fenestra::Scene> scene =
+      LoadScene(Scene(R"({"name": "slat", "reflectance": 0.8})", kRadianceMaterials));
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  ASSERT_EQ(scene->materials.size(), 6u);
+  ExpectParts(scene->materials[0], MaterialKind::kLambertian, 0.5, 0, 0, 0, -1);
+  // Metal: diffuse c (1 - s), lobe c s
+  ExpectParts(scene->materials[1], MaterialKind::kMetal, 0.08, 0.72, 0.05, 0, -1);
+  // Plastic: diffuse c (1 - s), lobe s
+  ExpectParts(scene->materials[2], MaterialKind::kPlastic, 0.48, 0.04, 0.1, 0, -1);
+  // Trans: c (1 - s) = 0.588 of it diffuse, reflected (1 - T), transmitted T, of that T_s
+  // straight
+  ExpectParts(scene->materials[3], MaterialKind::kTrans, 0.294, 0.02, 0.2, 0.2205, 0.0735);
+  ExpectParts(scene->materials[4], MaterialKind::kGlass, 0, 0, 0, 0, 0.88);
+  ExpectParts(scene->materials[5], MaterialKind::kLambertian, 0.9, 0, 0, 0, -1);
+  // Described by the parameters the scene gave
+  EXPECT_EQ(DescribeMaterial(scene->materials[1]),
+            "metal: colour 0.8, specularity 0.9, roughness 0.05");
+  EXPECT_EQ(DescribeMaterial(scene->materials[3]),
+            "trans: colour 0.6, specularity 0.02, roughness 0.2, transmissivity 0.5, transmitted "
+            "specular 0.25");
+  EXPECT_EQ(DescribeMaterial(scene->materials[4]), "glass: transmittance 0.88 at normal incidence");
+}
+
+TEST_F(SceneErrorsTest, RadianceParametersOutsideTheirRanges) {
+  const std::string metal =
+      R"("metal": {"reflectance": 0.8, "specularity": 0.9, "roughness": 0.05})";
+  const auto bad = [&](const std::string& material, std::initializer_list<std::string> parts) {
+    ExpectError(
+        Scene(R"({"name": "slat", "reflectance": 0.8})", R"({"name": "slat", )" + material + "}"),
+        parts);
+  };
+  bad(R"("metal": {"reflectance": 1.2, "specularity": 0.9})",
+      {"materials[1].metal.reflectance", "must be in [0, 1], got 1.2"});
+  bad(R"("metal": {"reflectance": 0.8, "specularity": 1})",
+      {"materials[1].metal.specularity", "must be in [0, 1), got 1"});
+  bad(R"("plastic": {"reflectance": 0.5, "roughness": 1.5})",
+      {"materials[1].plastic.roughness", "must be in [0, 1], got 1.5"});
+  bad(R"("plastic": {"reflectance": "NaN"})", {"materials[1].plastic.reflectance", "got nan"});
+  bad(R"("trans": {"reflectance": 0.5, "transmissivity": -0.1})",
+      {"materials[1].trans.transmissivity", "must be in [0, 1], got -0.1"});
+  bad(R"("trans": {"reflectance": 0.5, "transmissivity": 0.5, "transmittedSpecular": 2})",
+      {"materials[1].trans.transmitted_specular", "must be in [0, 1], got 2"});
+  bad(R"("glass": {"transmittance": 0.95})",
+      {"materials[1].glass.transmittance", "must be in (0, 0.9]", "got 0.95"});
+  bad(R"("glass": {})", {"materials[1].glass.transmittance", "got 0"});
+  // Each parameter in range, but a white plastic or metal would reflect all it gets
+  bad(R"("plastic": {"reflectance": 1, "specularity": 0.1})",
+      {"materials[1].plastic:", "reflectance + specular must be below 1, got 1"});
+  bad(R"("metal": {"reflectance": 1, "specularity": 0.5})",
+      {"materials[1].metal:", "reflectance + specular must be below 1, got 1"});
+  // One meaning per setting: Lambertian fields or a kind, not both (an explicit 0 too)
+  bad(R"("reflectance": 0.8, )" + metal,
+      {"materials[1].reflectance",
+       "is Lambertian (reflectance, transmittance) or one of "
+       "plastic, metal, trans and glass, not both: this one also gives metal"});
+  bad(R"("reflectance": 0, )" + metal, {"materials[1].reflectance", "also gives metal"});
+  bad(R"("transmittance": 0.5, "glass": {"transmittance": 0.8})",
+      {"materials[1].transmittance", "also gives glass"});
+}
+
+TEST_F(SceneErrorsTest, SlatsOfGlassAreRefused) {
+  const std::string slat = R"({"name": "slat", "reflectance": 0.8})";
+  const std::string blind = R"("material": "slat",)";
+  ExpectError(Scene(slat, R"({"name": "slat", "glass": {"transmittance": 0.8}})"),
+              {"blind.material", "'slat' is a glass: slats of glass make no blind"});
+  ExpectError(Scene({{slat, slat + R"(, {"name": "pane", "glass": {"transmittance": 0.8}})"},
+                     {blind, blind + R"( "outerMaterial": "pane",)"}}),
+              {"blind.outer_material", "'pane' is a glass"});
+  ExpectError(Scene(blind, blind + R"( "outerMaterial": "brick",)"),
+              {"blind.outer_material", "unknown material 'brick'"});
+}
+
+// The outer material covers face 4 of every slat (2 of its 12 triangles), the slat material
+// the rest
+TEST_F(SceneErrorsTest, OuterMaterialCoversTheSlatsOuterFacesOnly) {
+  const std::string blind = R"("material": "slat",)";
+  absl::StatusOr<fenestra::Scene> scene =
+      LoadScene(Scene({{R"({"name": "slat", "reflectance": 0.8})", kRadianceMaterials},
+                       {blind, blind + R"( "outerMaterial": "white",)"}}));
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  ASSERT_EQ(scene->blind->material, 1u);
+  ASSERT_EQ(scene->blind->outer_material, 5u);
+  const TriangleMesh mesh = AssembleMesh(*scene, DefaultDesign(*scene));
+  const size_t first = scene->fixed.TriangleCount();
+  const size_t slats = (mesh.TriangleCount() - first) / kTrianglesPerSlat;
+  ASSERT_EQ(slats, 10u);
+  std::map<uint32_t, size_t> per_material;
+  for (size_t t = first; t < mesh.TriangleCount(); ++t) {
+    ++per_material[mesh.material[t]];
+    const int face = static_cast<int>((t - first) % kTrianglesPerSlat) / 2;
+    EXPECT_EQ(mesh.material[t], face == kSlatOuterFace ? 5u : 1u) << "triangle " << t;
+  }
+  EXPECT_EQ(per_material.size(), 2u);
+  EXPECT_EQ(per_material[5], 2 * slats);
+  EXPECT_EQ(per_material[1], 10 * slats);
 }
 
 TEST_F(SceneErrorsTest, MissingSceneFile) {
