@@ -6,6 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
+#include "core/geometry/material.h"
 #include "core/trace/glass.h"
 
 namespace fenestra {
@@ -21,34 +22,19 @@ Vec3f TraceGeometry::ToLocal(Vec3d world) const {
 }
 
 absl::StatusOr<TraceMaterial> ToTraceMaterial(const Material& material) {
-  const double rho = material.reflectance, tau = std::max(material.transmittance, 0.0);
-  const double specular = material.specular, through = material.through;
-  const auto error = [&](const char* what, double value) {
+  if (const absl::Status parts = CheckMaterialParts(material); !parts.ok()) {
     return absl::InvalidArgumentError(
-        absl::StrCat("material '", material.name, "': ", what, ", got ", value));
-  };
-  if (!(rho >= 0 && rho < 1)) return error("reflectance must be in [0, 1)", rho);
-  if (!(specular >= 0 && specular < 1)) return error("specular must be in [0, 1)", specular);
-  if (!(material.roughness >= 0 && material.roughness <= 1)) {
-    return error("roughness must be in [0, 1]", material.roughness);
+        absl::StrCat("material '", material.name, "': ", parts.message()));
   }
-  if (!(through >= 0 && through <= 1)) return error("through must be in [0, 1]", through);
-  if (!(material.transmittance <= 1)) return error("transmittance above 1", tau);
-  if (!(rho + specular < 1)) return error("reflectance + specular must be below 1", rho + specular);
-  if (!(rho + specular + tau + through <= 1)) {
-    return error("transmittance must be at most 1 - reflectance", rho + specular + tau + through);
-  }
+  const double rho = material.reflectance, tau = std::max(material.transmittance, 0.0);
   TraceMaterial trace{static_cast<float>(rho), material.transmittance >= 0
                                                    ? static_cast<float>(material.transmittance)
                                                    : -1.0f};
-  trace.specular = static_cast<float>(specular);
+  trace.specular = static_cast<float>(material.specular);
   trace.roughness = static_cast<float>(material.roughness);
-  trace.through = static_cast<float>(through);
+  trace.through = static_cast<float>(material.through);
   trace.straight_scatters = material.kind == MaterialKind::kTrans;
   if (material.kind == MaterialKind::kGlass) {
-    if (!(rho == 0 && specular == 0 && through == 0 && tau > 0 && tau <= kMaxGlassTransmittance)) {
-      return error("glass transmits at normal incidence in (0, 0.9]", tau);
-    }
     trace.glass = GlassPane::TransmissivityFor(static_cast<float>(tau));
   }
   return trace;

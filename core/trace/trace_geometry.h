@@ -26,13 +26,8 @@ struct TraceGeometry {
   SurfaceTable Surfaces() const { return {materials.data(), triangle_material.data()}; }
 };
 
-// Highest normal transmittance of a glass pane: a bare pane of index 1.52 transmits 0.916
-// (its surfaces' reflection alone).
-inline constexpr double kMaxGlassTransmittance = 0.9;
-
-// `material` as the tracer sees it. InvalidArgument for a part outside [0, 1], reflectance or
-// reflectance + specular at 1 or above (a closed room would never lose light), parts summing
-// above 1, or a glass that no pane of index 1.52 can be.
+// `material` as the tracer sees it. InvalidArgument "material '<name>': ..." where its parts
+// break CheckMaterialParts's rules (core/geometry/material.h).
 absl::StatusOr<TraceMaterial> ToTraceMaterial(const Material& material);
 
 // Whether triangle `i` of `geometry` has a nonzero, finite area in float.
