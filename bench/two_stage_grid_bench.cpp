@@ -23,6 +23,7 @@
 #include "core/dc/dc_backend.h"
 #include "core/dc/one_stage.h"
 #include "core/dc/two_stage.h"
+#include "core/geometry/material.h"
 #include "core/metrics/illuminance.h"
 #include "core/metrics/metric_errors.h"
 #include "core/metrics/occupancy.h"
@@ -114,21 +115,24 @@ Args Parse(int argc, char** argv) {
   return a;
 }
 
-// `scene` with its slats of the finish `slats` names (Args::slats).
+// `scene` with its slats (both faces) of the finish `slats` names (Args::slats).
 Scene WithSlats(Scene scene, const std::string& slats) {
-  Material m{.name = "slats_" + slats};
-  if (slats == "metal") {  // c 0.8, s 0.9, a 0.05: diffuse c (1 - s), lobe c s
-    m.reflectance = 0.08, m.specular = 0.72, m.roughness = 0.05, m.kind = MaterialKind::kMetal;
-  } else if (slats == "plastic") {  // c 0.8, s 0.05, a 0.1: diffuse c (1 - s), lobe s
-    m.reflectance = 0.76, m.specular = 0.05, m.roughness = 0.1, m.kind = MaterialKind::kPlastic;
-  } else if (slats != "lambertian") {
+  if (slats == "lambertian") return scene;
+  Material m;
+  if (slats == "metal") {
+    m = MaterialOfKind(MaterialKind::kMetal,
+                       {.colour = 0.8, .specularity = 0.9, .roughness = 0.05});
+  } else if (slats == "plastic") {
+    m = MaterialOfKind(MaterialKind::kPlastic,
+                       {.colour = 0.8, .specularity = 0.05, .roughness = 0.1});
+  } else {
     std::fprintf(stderr, "--slats: lambertian, metal or plastic, not %s\n", slats.c_str());
     std::exit(2);
-  } else {
-    return scene;
   }
+  m.name = "slats_" + slats;
   scene.materials.push_back(m);
   scene.blind->material = static_cast<uint32_t>(scene.materials.size() - 1);
+  scene.blind->outer_material.reset();
   return scene;
 }
 
