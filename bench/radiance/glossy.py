@@ -3,9 +3,9 @@
 
 Usage: glossy.py OUTDIR BACKEND
 
-Radiance: per sensor the mean of the halves' sums over bins 1..145 (rcontrib's rows are the
-daylight coefficients of the Reinhart MF 1 bins, bin 0 the ground), its standard error half
-the halves' difference (two independent estimates). Fenestra: the sky sums and standard errors
+Radiance: per sensor the mean of 16 groups' sums over bins 1..145 (rcontrib's rows are the
+daylight coefficients of the Reinhart MF 1 bins, bin 0 the ground; 8 groups of paths per
+sensor in each of two processes), its standard error from their scatter. Fenestra: the sky sums and standard errors
 `fenestra dc` prints. Each line: both, the difference in % and in combined standard errors, and
 whether it lies within 3 combined standard errors and 2%.
 """
@@ -17,14 +17,16 @@ import numpy as np
 
 
 def radiance_sums(out):
-    halves = []
+    """Per sensor the mean of the 16 groups' sky sums (8 per half) and its standard error."""
+    groups = []
     for name in ("dc_a.txt", "dc_b.txt"):
         a = np.loadtxt(os.path.join(out, name), ndmin=2)
-        if a.shape[1] != 3 * 146:
-            sys.exit(f"{name} has {a.shape[1]} columns, expected {3 * 146} (146 bins, RGB)")
-        halves.append(a[:, 0::3][:, 1:146].sum(axis=1))  # grey: the red channel
-    a, b = halves
-    return (a + b) / 2, np.abs(a - b) / 2
+        if a.shape[1] != 3 * 146 or a.shape[0] % 8:
+            sys.exit(f"{name} is {a.shape}, expected 8 rows per sensor of {3 * 146} (RGB)")
+        sums = a[:, 0::3][:, 1:146].sum(axis=1)  # grey: the red channel
+        groups.append(sums.reshape(-1, 8))
+    g = np.hstack(groups)
+    return g.mean(axis=1), g.std(axis=1, ddof=1) / np.sqrt(g.shape[1])
 
 
 def fenestra_sums(log):

@@ -5,9 +5,10 @@
 # Usage: bench/radiance/glossy.sh RADBIN SCENE DESIGN SLATS OUTDIR [PATHS] [BACKEND]
 #   SLATS    the slats' material as scene JSON, e.g.
 #            '{"metal": {"reflectance": 0.8, "specularity": 0.9, "roughness": 0.05}}'
-#   PATHS    Radiance's paths per sensor in each of two independent halves (default 500000)
-#   BACKEND  Fenestra's: cpu (default) or cuda. RADBIN "-" skips Radiance: its halves are read
-#            from OUTDIR, as an earlier run left them
+#   PATHS    Radiance's paths per sensor in each of two independent halves (default 500000, a
+#            multiple of 8)
+#   BACKEND  Fenestra's: cpu (default), cuda, or none (Radiance alone). RADBIN "-" skips
+#            Radiance: its halves are read from OUTDIR, as an earlier run left them
 # Writes OUTDIR/scene.json (SCENE with the slats' material), scene.rad and sensors.pts (by
 # `fenestra scene export --rad`), Radiance's halves dc_a.txt and dc_b.txt, Fenestra's logs
 # one_stage_BACKEND.log and two_stage_BACKEND.log, and prints the comparison (glossy.py).
@@ -54,11 +55,12 @@ skyglow source skyball
 RAD
   oconv "$OUT/scene.rad" "$OUT/skyglow.rad" > "$OUT/dc.oct"
   # -st 0: every specular lobe sampled (else Radiance folds lobes below its threshold into the
-  # diffuse part); each half its own process and seed (faketime)
+  # diffuse part); each half its own process and seed (faketime), its paths in 8
+  # groups per sensor (8 rows), so that the 16 groups' scatter gives the standard error
   half() {
     awk -v n="$PATHS" '{for (i = 0; i < n; i++) print}' "$OUT/sensors.pts" |
       faketime -f "$1 00:00:00" rcontrib -n 1 -I+ -ab 30 -ad 1 -lw 1e-6 -lr 0 -st 0 \
-        -c "$PATHS" -faa -h -e MF:1 -f reinhart.cal -b rbin -bn Nrbins -m skyglow \
+        -c $((PATHS / 8)) -faa -h -e MF:1 -f reinhart.cal -b rbin -bn Nrbins -m skyglow \
         "$OUT/dc.oct" > "$2"
   }
   t0=$(now)
@@ -68,6 +70,7 @@ RAD
   echo "$(echo "$(now) - $t0" | bc)" > "$OUT/radiance_seconds.txt"
 fi
 
+[ "$BACKEND" = none ] && exit 0
 "$FENESTRA" dc "$OUT/scene.json" --set "$DESIGN" --backend "$BACKEND" --method one-stage \
   --paths 1000000 --seed 21 -o "$OUT/one_stage_$BACKEND.txt" > "$OUT/one_stage_$BACKEND.log"
 "$FENESTRA" dc "$OUT/scene.json" --set "$DESIGN" --backend "$BACKEND" --method two-stage \

@@ -183,7 +183,7 @@ FENESTRA_CPU_GPU inline bool StepBranch(const Intersector& scene, const SurfaceT
 
   // The surface's parts here; a mode may connect the vertex through its smooth parts before
   // the path picks one (core/trace/scatter.h)
-  const TraceMaterial material = surfaces.materials[surfaces.triangle_material[hit.triangle]];
+  const TraceMaterial& material = surfaces.materials[surfaces.triangle_material[hit.triangle]];
   const SurfaceScatter scatter = ScatterAt(material, normal, -path.direction);
   if (scatter.Smooth()) {
     mode.AtReflection(scene, path, ReflectionVertex{hit.position, normal, &scatter}, random);

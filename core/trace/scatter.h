@@ -27,6 +27,7 @@
 #include "core/common/cpu_gpu.h"
 #include "core/common/vec3.h"
 #include "core/trace/glass.h"
+#include "core/trace/lobe_energy.h"
 #include "core/trace/philox.h"
 #include "core/trace/sampling.h"
 #include "core/trace/ward.h"
@@ -45,6 +46,7 @@ struct TraceMaterial {
   float glass = 0.0f;              // > 0: Radiance glass of this transmissivity (its t_n):
                                    // mirror reflection and straight transmission by the angle
   bool straight_scatters = false;  // straight transmission counts as a scattering event (trans)
+  LobeEnergy energy = {};          // what the lobe loses and gets back (lobe_energy.h)
 };
 
 // Roughness at or below which a lobe is a mirror: Radiance's, alpha^2 <= 1e-6 (normal.c).
@@ -58,6 +60,8 @@ struct SurfaceScatter {
   float alpha = 0;  // the lobe's roughness
   float total = 0;  // sum of the parts
   bool straight_scatters = false;
+  const LobeEnergy* energy = nullptr;  // the lobe's, when it has one
+  float kept = 1.0f;  // E(mu_v): the share of the lobe's light (and draws) in Ward's lobe
 
   // Whether any part has a density, so that next-event estimation can reach it.
   FENESTRA_CPU_GPU bool Smooth() const { return diffuse + lobe + through > 0.0f; }
@@ -73,9 +77,17 @@ struct SurfaceScatter {
       float value = diffuse * cos_l;
       *pdf = diffuse * inverse_total * cos_l * kInvPi;
       if (lobe > 0.0f) {
+        // Ward's lobe, drawn with probability E(mu_v), and the light it loses, drawn by the
+        // cosine
         const WardLobe ward{0.0f, lobe, alpha};
-        value += kPiF * ward.Lobe(normal, view, l) * cos_l;
-        *pdf += lobe * inverse_total * ward.LobePdf(normal, view, l);
+        float lobe_value = kPiF * ward.Lobe(normal, view, l);
+        float lobe_pdf = kept * ward.LobePdf(normal, view, l);
+        if (energy->Compensates()) {
+          lobe_value += lobe * (1.0f - kept) * energy->Lost(cos_l) / (1.0f - energy->average);
+          lobe_pdf += (1.0f - kept) * cos_l * kInvPi;
+        }
+        value += lobe_value * cos_l;
+        *pdf += lobe * inverse_total * lobe_pdf;
       }
       return value;
     }
@@ -116,6 +128,10 @@ FENESTRA_CPU_GPU inline SurfaceScatter ScatterAt(const TraceMaterial& m, Vec3f n
     s.through = m.through;
     (m.roughness > kMirrorRoughness ? s.lobe : s.mirror) = m.specular;
     s.alpha = m.roughness;
+    if (s.lobe > 0.0f) {
+      s.energy = &m.energy;
+      s.kept = m.energy.Compensates() ? m.energy.At(Dot(normal, view)) : 1.0f;
+    }
     s.straight_scatters = m.straight_scatters;
   }
   s.total = s.diffuse + s.lobe + s.mirror + s.straight + s.through;
@@ -144,13 +160,18 @@ FENESTRA_CPU_GPU inline ScatterSample Sample(const SurfaceScatter& s, const Unif
     out.direction = SampleCosineHemisphere(-s.normal, u.u[0], u.u[1]);
     out.through = true;
   } else if (pick - s.through < s.lobe) {
-    Vec3f t, b;
-    OrthonormalBasis(s.normal, &t, &b);
-    float weight;
-    out.direction =
-        WardLobe{0.0f, s.lobe, s.alpha}.SampleLobe(s.normal, t, b, s.view, u.u[0], u.u[1], &weight);
-    if (!(weight > 0.0f)) return out;  // below the surface: nothing
-    out.direction = Normalize(out.direction);
+    // Ward's lobe with probability E(mu_v) (the rest of u3's interval), else its lost light
+    if (pick - s.through < s.lobe * s.kept) {
+      Vec3f t, b;
+      OrthonormalBasis(s.normal, &t, &b);
+      float weight;
+      out.direction = WardLobe{0.0f, s.lobe, s.alpha}.SampleLobe(s.normal, t, b, s.view, u.u[0],
+                                                                 u.u[1], &weight);
+      if (!(weight > 0.0f)) return out;  // below the surface: nothing
+      out.direction = Normalize(out.direction);
+    } else {
+      out.direction = SampleCosineHemisphere(s.normal, u.u[0], u.u[1]);
+    }
   } else {
     out.direction = SampleCosineHemisphere(s.normal, u.u[0], u.u[1]);
   }

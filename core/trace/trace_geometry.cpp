@@ -34,6 +34,9 @@ absl::StatusOr<TraceMaterial> ToTraceMaterial(const Material& material) {
   trace.roughness = static_cast<float>(material.roughness);
   trace.through = static_cast<float>(material.through);
   trace.straight_scatters = material.kind == MaterialKind::kTrans;
+  if (trace.specular > 0.0f && trace.roughness > kMirrorRoughness) {
+    trace.energy = LobeEnergyOf(trace.roughness);
+  }
   if (material.kind == MaterialKind::kGlass) {
     trace.glass = GlassPane::TransmissivityFor(static_cast<float>(tau));
   }
