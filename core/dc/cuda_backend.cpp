@@ -337,14 +337,15 @@ class CudaReplay {
   // shadow rays. InvalidArgument for a design outside the recorded ranges.
   absl::StatusOr<CudaTracer::DesignScene> MakeScene(const BlindDesign& design, BvhLayout* bvh,
                                                     std::vector<uint32_t>* triangle_material) {
-    FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(*scene_.blind, design));
+    FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(scene_, design));
     const std::vector<Vec3f> corners = LocalSlatCorners(room_, scene_, design);
     *bvh = BvhWithSlats(room_bvh_, corners, static_cast<uint32_t>(room_.TriangleCount()));
     *triangle_material = room_.triangle_material;
     triangle_material->reserve(room_.TriangleCount() + kTrianglesPerSlat * corners.size() / 8);
+    const SlatFinish finish = FinishOf(*scene_.blind, design);
     for (size_t slat = 0; slat < corners.size() / 8; ++slat) {
       for (int t = 0; t < kTrianglesPerSlat; ++t) {
-        triangle_material->push_back(SlatTriangleMaterial(*scene_.blind, t));
+        triangle_material->push_back(SlatTriangleMaterial(finish, t));
       }
     }
     triangles_ = triangle_material->size();

@@ -52,6 +52,19 @@ double Transmission(const EmbreeIntersector& scene, const TraceGeometry& geometr
   return 0;
 }
 
+// What a slat of `finish` lets through along a line: a line through a slat crosses both broad
+// faces, and which it meets first is not kept, so slats whose two materials differ in straight
+// transmittance count as opaque, as trans slats do (their straight part scatters).
+float SlatTransmittance(const std::vector<Material>& materials, const SlatFinish& finish) {
+  const auto straight = [&](uint32_t index) {
+    if (index >= materials.size()) return 0.0;
+    const Material& slat = materials[index];
+    return slat.kind == MaterialKind::kTrans ? 0.0 : std::max(slat.transmittance, 0.0);
+  };
+  const double inner = straight(finish.material);
+  return inner == straight(finish.outer_material) ? static_cast<float>(inner) : 0.0f;
+}
+
 }  // namespace
 
 struct DirectSun::Data {
@@ -65,7 +78,6 @@ struct DirectSun::Data {
   int sensors = 0, columns = 0;
   std::vector<SunEntry> always;  // lines no blind of the ranges can reach
   std::vector<Line> lines;       // lines through the blind's envelope
-  float slat_transmittance = 0;  // of the blind's material: what a slat lets through
 };
 
 DirectSun::DirectSun(std::unique_ptr<Data> data) : data_(std::move(data)) {}
@@ -94,19 +106,7 @@ absl::StatusOr<std::unique_ptr<DirectSun>> DirectSun::Trace(const Scene& scene,
   FENESTRA_ASSIGN_OR_RETURN(embree, EmbreeScene::Build(data->geometry));
   const EmbreeIntersector intersector = embree->Intersector();
   std::optional<LocalEnvelope> envelope;
-  if (scene.blind) {
-    envelope = LocalEnvelopeOfBlind(data->geometry, scene);
-    // A line through a slat crosses both broad faces, and which it meets first is not kept:
-    // slats whose two materials differ in straight transmittance count as opaque, as trans
-    // slats do (their straight part scatters)
-    const auto straight = [&](uint32_t index) {
-      const Material& slat = scene.materials[index];
-      return slat.kind == MaterialKind::kTrans ? 0.0 : std::max(slat.transmittance, 0.0);
-    };
-    const double inner = straight(scene.blind->material);
-    data->slat_transmittance =
-        inner == straight(scene.blind->OuterMaterial()) ? static_cast<float>(inner) : 0.0f;
-  }
+  if (scene.blind) envelope = LocalEnvelopeOfBlind(data->geometry, scene);
   // Each sensor's lines on a thread of its own, kept in sensor order
   std::vector<std::vector<SunEntry>> always(data->sensors);
   std::vector<std::vector<Data::Line>> lines(data->sensors);
@@ -141,6 +141,8 @@ std::vector<SunEntry> DirectSun::Entries(const BlindDesign& design, bool blind) 
   out.reserve(d.always.size() + d.lines.size());
   const bool slats = blind && d.scene.blind.has_value();
   const LocalSlats local = slats ? LocalSlatsOfBlind(d.geometry, d.scene, design) : LocalSlats{};
+  const float slat_transmittance =
+      slats ? SlatTransmittance(d.scene.materials, FinishOf(*d.scene.blind, design)) : 0.0f;
   // Both lists are in sensor order, each sensor's in column order: merged by sensor, then
   // column
   size_t a = 0, l = 0;
@@ -155,7 +157,7 @@ std::vector<SunEntry> DirectSun::Entries(const BlindDesign& design, bool blind) 
     const Data::Line& line = d.lines[l++];
     SunEntry entry = line.entry;
     if (slats && local.Occluded(line.origin, line.direction, kLineLength)) {
-      entry.lux *= d.slat_transmittance;
+      entry.lux *= slat_transmittance;
     }
     if (entry.lux > 0) out.push_back(entry);
   }

@@ -46,8 +46,9 @@ class DirectSun {
   DirectSun(const DirectSun&) = delete;
   DirectSun& operator=(const DirectSun&) = delete;
 
-  // The nonzero entries at `design` (the scene's blind at those values; the bare window
-  // where the scene has no blind or `blind` is false), by sensor, then column.
+  // The nonzero entries at `design` (the scene's blind at those values and of the design's
+  // finish, FinishOf; the bare window where the scene has no blind or `blind` is false), by
+  // sensor, then column.
   std::vector<SunEntry> Entries(const BlindDesign& design, bool blind = true) const;
   // The same as a sensors x columns matrix [lx].
   Matrix Illuminance(const BlindDesign& design, bool blind = true) const;

@@ -220,13 +220,19 @@ std::vector<Vec3f> LocalSlatCorners(const TraceGeometry& geometry, const Scene& 
   return corners;
 }
 
-absl::Status CheckReplayDesign(const BlindSpec& spec, const BlindDesign& design) {
+absl::Status CheckReplayDesign(const Scene& scene, const BlindDesign& design) {
+  if (!scene.blind) return absl::InvalidArgumentError("the scene has no blind to vary");
+  const BlindSpec& spec = *scene.blind;
   if (!design.has_blind || !WithinRange(design.tilt_rad, spec.tilt_rad) ||
       !WithinRange(design.slat_width_m, spec.slat_width_m) ||
       !WithinRange(design.slat_spacing_m, spec.slat_spacing_m) ||
       !WithinRange(design.slat_thickness_m, spec.slat_thickness_m)) {
     return absl::InvalidArgumentError(
         "the design lies outside the ranges the indoor paths were recorded for");
+  }
+  const SlatFinish finish = FinishOf(spec, design);
+  if (std::max(finish.material, finish.outer_material) >= scene.materials.size()) {
+    return absl::InvalidArgumentError("the design's slat finish names no material of the scene");
   }
   return absl::OkStatus();
 }
@@ -330,8 +336,7 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
                                                      int last) const {
   const auto start = std::chrono::steady_clock::now();
   const Data& d = *data_;
-  const BlindSpec& spec = *d.scene.blind;
-  FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(spec, design));
+  FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(d.scene, design));
   FENESTRA_RETURN_IF_ERROR(CheckDesignParts(first, last));
 
   // The room with this blind in the recorded frame, and the slats' layout, shifted from the

@@ -41,9 +41,9 @@ LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
 std::vector<Vec3f> LocalSlatCorners(const TraceGeometry& geometry, const Scene& scene,
                                     const BlindDesign& design);
 
-// InvalidArgument unless `design` has a blind within the ranges of `spec`: a replay is
-// only valid there.
-absl::Status CheckReplayDesign(const BlindSpec& spec, const BlindDesign& design);
+// InvalidArgument unless `design` has a blind within the ranges of `scene`'s blind (a replay
+// is only valid there) and a finish of the scene's materials.
+absl::Status CheckReplayDesign(const Scene& scene, const BlindDesign& design);
 
 class IndoorReplay : public IndoorStages {
  public:

@@ -131,6 +131,7 @@ BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const Bli
                           uint32_t part_index, TriangleMesh& mesh) {
   const BlindLayout layout = LayoutBlind(window, spec, design);
   const SlatBoxes boxes = BoxesOfStack(StackOfBlind(window, spec, design));
+  const SlatFinish finish = FinishOf(spec, design);
   for (int k = 0; k < boxes.count; ++k) {
     Vec3d corner[8];
     for (int i = 0; i < 8; ++i) corner[i] = boxes.Corner(k, i);
@@ -139,8 +140,8 @@ BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const Bli
       const Vec3d& b = corner[SlatBoxes::FaceCorner(f, 1)];
       const Vec3d& c = corner[SlatBoxes::FaceCorner(f, 2)];
       const Vec3d& d = corner[SlatBoxes::FaceCorner(f, 3)];
-      mesh.Add(a, b, c, SlatTriangleMaterial(spec, 2 * f), Side::kIndoor, part_index);
-      mesh.Add(a, c, d, SlatTriangleMaterial(spec, 2 * f + 1), Side::kIndoor, part_index);
+      mesh.Add(a, b, c, SlatTriangleMaterial(finish, 2 * f), Side::kIndoor, part_index);
+      mesh.Add(a, c, d, SlatTriangleMaterial(finish, 2 * f + 1), Side::kIndoor, part_index);
     }
   }
   return layout;

@@ -51,12 +51,28 @@ struct BlindSpec {
   uint32_t OuterMaterial() const { return outer_material.value_or(material); }
 };
 
+// The slats' materials (indices into the scene's materials, neither a glass): of every face
+// but the outer broad ones (kSlatOuterFace), and of those.
+struct SlatFinish {
+  uint32_t material = 0;
+  uint32_t outer_material = 0;
+  bool operator==(const SlatFinish&) const = default;
+};
+
 // One design: the free values of the blind.
 struct BlindDesign {
   bool has_blind = false;
   double tilt_rad = 0, slat_width_m = 0, slat_spacing_m = 0, slat_thickness_m = 0;
+  // The slats' finish where a job chooses it (its finish variable); absent: the spec's.
+  std::optional<SlatFinish> finish;
   bool operator==(const BlindDesign&) const = default;
 };
+
+// The slats' finish at `design`: the design's, else the spec's material and outer material.
+// Everything that gives the slats their materials (meshes, replays, the direct sun) asks here.
+inline SlatFinish FinishOf(const BlindSpec& spec, const BlindDesign& design) {
+  return design.finish.value_or(SlatFinish{spec.material, spec.OuterMaterial()});
+}
 
 // How the generator laid out the slats.
 struct BlindLayout {
@@ -114,12 +130,14 @@ inline constexpr int kTrianglesPerSlat = 12;
 // tilt 0 and turns towards the stacking axis as the tilt grows towards π/2.
 inline constexpr int kSlatOuterFace = 4;
 
-// The material of triangle `triangle` (0 <= triangle < kTrianglesPerSlat) of every slat.
-inline uint32_t SlatTriangleMaterial(const BlindSpec& spec, int triangle) {
-  return triangle / 2 == kSlatOuterFace ? spec.OuterMaterial() : spec.material;
+// The material of triangle `triangle` (0 <= triangle < kTrianglesPerSlat) of every slat of
+// finish `finish` (FinishOf).
+inline uint32_t SlatTriangleMaterial(const SlatFinish& finish, int triangle) {
+  return triangle / 2 == kSlatOuterFace ? finish.outer_material : finish.material;
 }
 
-// Appends the slats (kTrianglesPerSlat each, indoor) to `mesh` under part `part_index`.
+// Appends the slats (kTrianglesPerSlat each, indoor, of the design's finish, FinishOf) to
+// `mesh` under part `part_index`.
 BlindLayout GenerateBlind(const Window& window, const BlindSpec& spec, const BlindDesign& design,
                           uint32_t part_index, TriangleMesh& mesh);
 

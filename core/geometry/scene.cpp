@@ -206,16 +206,12 @@ absl::StatusOr<uint32_t> FindMaterial(const std::vector<Material>& materials,
   return check.Error(field, absl::StrCat("unknown material '", name, "'"));
 }
 
-// The slats' material `name` at `field`: any but a glass.
+// The slats' material `name` at `field` (SlatMaterialIndex).
 absl::StatusOr<uint32_t> FindSlatMaterial(const std::vector<Material>& materials,
                                           const std::string& name, const std::string& field,
                                           const Checker& check) {
-  FENESTRA_ASSIGN_OR_RETURN(index, FindMaterial(materials, name, field, check));
-  if (materials[index].kind == MaterialKind::kGlass) {
-    return check.Error(field, absl::StrCat("'", name,
-                                           "' is a glass: slats of glass make no blind (trans "
-                                           "makes translucent slats)"));
-  }
+  absl::StatusOr<uint32_t> index = SlatMaterialIndex(materials, name);
+  if (!index.ok()) return check.Error(field, std::string(index.status().message()));
   return index;
 }
 
@@ -676,6 +672,19 @@ absl::StatusOr<BlindDesign> DesignWithOverrides(const Scene& scene,
     *match->value = value;
   }
   return design;
+}
+
+absl::StatusOr<uint32_t> SlatMaterialIndex(const std::vector<Material>& materials,
+                                           const std::string& name) {
+  for (uint32_t i = 0; i < materials.size(); ++i) {
+    if (materials[i].name != name) continue;
+    if (materials[i].kind == MaterialKind::kGlass) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "'", name, "' is a glass: slats of glass make no blind (trans makes translucent slats)"));
+    }
+    return i;
+  }
+  return absl::InvalidArgumentError(absl::StrCat("unknown material '", name, "'"));
 }
 
 }  // namespace fenestra

@@ -102,8 +102,14 @@ bool IsDegenerateTriangle(Vec3d a, Vec3d b, Vec3d c);
 BlindDesign DefaultDesign(const Scene& scene);
 
 // Applies name=value overrides (alpha, width, spacing, thickness) to the scene's design,
-// checking each against its range.
+// checking each against its range. A job's finish needs its job (JobDesignWithOverrides,
+// core/optimize/design_variables.h).
 absl::StatusOr<BlindDesign> DesignWithOverrides(const Scene& scene,
                                                 const std::map<std::string, double>& values);
+
+// The index of material `name` among `materials` as the slats' material: InvalidArgument
+// "unknown material 'NAME'" or "'NAME' is a glass: ..." (the caller adds the field).
+absl::StatusOr<uint32_t> SlatMaterialIndex(const std::vector<Material>& materials,
+                                           const std::string& name);
 
 }  // namespace fenestra

@@ -604,6 +604,42 @@ TEST(CudaBackendTest, ReplayOfSlatsWithDarkOuterFacesIsTheIndoorStage) {
   }
 }
 
+// A design's finish on the GPU's replay: its slats take the finish's materials, as the full
+// trace's mesh of the design does (GenerateBlind), and as the replay of a scene whose blind is
+// of those materials; designs of two finishes traced in one launch are each traced as alone.
+TEST(CudaBackendTest, ReplayOfADesignFinishIsTheIndoorStage) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  Scene scene = LoadExample("city_office");
+  scene.materials.push_back({"dark", 0.05, -1});
+  const uint32_t dark = static_cast<uint32_t>(scene.materials.size() - 1);
+  Scene dark_scene = scene;
+  dark_scene.blind->material = dark;
+  IndoorOptions options;
+  options.paths_per_sensor = 10'000;
+  options.parts = {2, 2};
+  absl::StatusOr<std::unique_ptr<IndoorStages>> stages = gpu->MakeIndoorStages(scene, options);
+  absl::StatusOr<std::unique_ptr<IndoorStages>> dark_stages =
+      gpu->MakeIndoorStages(dark_scene, options);
+  ASSERT_TRUE(stages.ok() && dark_stages.ok()) << stages.status() << dark_stages.status();
+  absl::StatusOr<BlindDesign> plain =
+      DesignWithOverrides(scene, {{"alpha", 0.8}, {"spacing", 0.02}});
+  ASSERT_TRUE(plain.ok()) << plain.status();
+  BlindDesign finished = *plain;
+  finished.finish = SlatFinish{dark, dark};
+  absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(scene, finished, options, gpu.get());
+  absl::StatusOr<IndoorResult> replayed = (*stages)->Compute(finished);
+  absl::StatusOr<IndoorResult> of_scene = (*dark_stages)->Compute(*plain);
+  absl::StatusOr<IndoorResult> light = (*stages)->Compute(*plain);
+  ASSERT_TRUE(traced.ok() && replayed.ok() && of_scene.ok() && light.ok());
+  EXPECT_NE(replayed->backend.find("replay"), std::string::npos) << replayed->backend;
+  std::printf(
+      "dark finish: replay against full trace %.3g relative L1, against the dark "
+      "scene's replay %.3g\n",
+      ExpectReplayEqualsTrace(*traced, *replayed), ExpectReplayEqualsTrace(*of_scene, *replayed));
+  EXPECT_LT(replayed->coefficients.sum(), 0.98 * light->coefficients.sum());
+}
+
 // The stiff scenes of the one-stage tests, on the GPU: finite, and matching the CPU.
 TEST(CudaBackendTest, StiffScenesStayFiniteAndMatch) {
   std::unique_ptr<DcBackend> gpu = Gpu();

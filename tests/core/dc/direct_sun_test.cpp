@@ -174,6 +174,56 @@ TEST(DirectSunTest, SlatsWhoseFacesTransmitOtherwiseAreOpaque) {
   EXPECT_EQ(through(half, less), 0.0);
 }
 
+// One trace serves every finish: a design's finish gives the slats its materials' straight
+// transmittance, as a scene whose blind is of those materials does (bit for bit); without one
+// the scene's slats hold.
+TEST(DirectSunTest, DesignFinishGivesTheSlatsTransmittance) {
+  Scene scene = LoadExample("city_office");
+  scene.sensors = SensorsBehindBlind(scene);
+  const auto add = [&](const char* name, double reflectance, double transmittance) {
+    scene.materials.push_back({name, reflectance, transmittance});
+    return static_cast<uint32_t>(scene.materials.size() - 1);
+  };
+  const uint32_t opaque = scene.blind->material, half = add("half", 0.1, 0.5),
+                 less = add("less", 0.1, 0.3);
+  absl::StatusOr<BlindDesign> closed = DesignWithOverrides(
+      scene, {{"alpha", 0}, {"width", 0.15}, {"spacing", 0}, {"thickness", 0.01}});
+  ASSERT_TRUE(closed.ok()) << closed.status();
+  std::vector<SunColumn> suns;
+  for (double a = 5; a < 80; a += 5) {
+    const double phi = a * kDegree;
+    suns.push_back({static_cast<int>(suns.size()), {0, std::cos(phi), std::sin(phi)}, 1e5});
+  }
+  const auto traced = [&](const Scene& s) {
+    absl::StatusOr<std::unique_ptr<DirectSun>> sun =
+        DirectSun::Trace(s, suns, static_cast<int>(suns.size()));
+    EXPECT_TRUE(sun.ok()) << sun.status();
+    return sun.ok() ? *std::move(sun) : nullptr;
+  };
+  const std::unique_ptr<DirectSun> sun = traced(scene);
+  ASSERT_NE(sun, nullptr);
+  const double bare = sun->Illuminance(*closed, /*blind=*/false).sum();
+  ASSERT_GT(bare, 0);
+  EXPECT_EQ(sun->Illuminance(*closed).sum(), 0.0);  // the scene's opaque slats
+  for (const SlatFinish finish : {SlatFinish{half, half}, SlatFinish{less, less},
+                                  SlatFinish{half, less}, SlatFinish{opaque, opaque}}) {
+    BlindDesign design = *closed;
+    design.finish = finish;
+    Scene alike = scene;
+    alike.blind->material = finish.material;
+    alike.blind->outer_material = finish.outer_material;
+    const std::unique_ptr<DirectSun> of_scene = traced(alike);
+    ASSERT_NE(of_scene, nullptr);
+    const Matrix e = sun->Illuminance(design);
+    EXPECT_EQ(e, of_scene->Illuminance(*closed));
+    const double share = finish.material != finish.outer_material ? 0.0
+                         : finish.material == half                ? 0.5
+                         : finish.material == less                ? 0.3
+                                                                  : 0.0;
+    EXPECT_NEAR(e.sum() / bare, share, 1e-6) << finish.material << " " << finish.outer_material;
+  }
+}
+
 // Where nothing can cut the sun, the direct sun traced to its position is the beam's
 // E_dn sin(altitude) at an upward sensor, and the coefficients' direct part through the sky
 // matrix's sun patches (D_0 S_sun, the sun smeared over 4 patches), from the same paths as

@@ -140,7 +140,7 @@ TEST(ExtremeScenesTest, GeneratedBlindsWithZeroSpacingStayFinite) {
   double closed_sum = 0;
   for (double tilt : {0.0, 0.3, kPi / 2}) {
     TriangleMesh mesh = AssembleMesh(scene, DefaultDesign(scene));
-    const BlindDesign design{true, tilt, 0.15, 0.0, 0.01};
+    const BlindDesign design{true, tilt, 0.15, 0.0, 0.01, {}};
     const BlindLayout layout = GenerateBlind(scene.window, spec, design,
                                              static_cast<uint32_t>(mesh.part_names.size()), mesh);
     const auto result =

@@ -51,6 +51,43 @@ TEST(IndoorReplayTest, EqualsTheIndoorStage) {
   EXPECT_EQ((*replay)->Compute(wide).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
+// The records serve every finish: a design's finish replays as the scene whose blind is of its
+// materials (bit for bit), and as the design's full trace; dark slats get less light into the
+// room than the scene's light ones. A finish of materials the scene lacks is refused.
+TEST(IndoorReplayTest, DesignFinishReplaysAsSlatsOfItsMaterials) {
+  Scene scene = LoadExample("city_office");
+  scene.materials.push_back({"dark", 0.05, -1});
+  const uint32_t dark = static_cast<uint32_t>(scene.materials.size() - 1);
+  Scene dark_scene = scene;
+  dark_scene.blind->material = dark;
+  IndoorOptions options;
+  options.paths_per_sensor = 10'000;
+  options.parts = {2, 2};
+  absl::StatusOr<std::unique_ptr<IndoorReplay>> replay = IndoorReplay::Record(scene, options);
+  absl::StatusOr<std::unique_ptr<IndoorReplay>> dark_replay =
+      IndoorReplay::Record(dark_scene, options);
+  ASSERT_TRUE(replay.ok() && dark_replay.ok()) << replay.status() << dark_replay.status();
+  for (const double alpha : {0.3, 0.8}) {
+    SCOPED_TRACE(alpha);
+    absl::StatusOr<BlindDesign> plain =
+        DesignWithOverrides(scene, {{"alpha", alpha}, {"spacing", 0.02}});
+    ASSERT_TRUE(plain.ok()) << plain.status();
+    BlindDesign finished = *plain;
+    finished.finish = SlatFinish{dark, dark};
+    absl::StatusOr<IndoorResult> replayed = (*replay)->Compute(finished);
+    absl::StatusOr<IndoorResult> of_scene = (*dark_replay)->Compute(*plain);
+    absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(scene, finished, options);
+    absl::StatusOr<IndoorResult> light = (*replay)->Compute(*plain);
+    ASSERT_TRUE(replayed.ok() && of_scene.ok() && traced.ok() && light.ok());
+    EXPECT_TRUE(replayed->coefficients == of_scene->coefficients);
+    ExpectReplayEqualsTrace(*traced, *replayed);
+    EXPECT_LT(replayed->coefficients.sum(), 0.98 * light->coefficients.sum());
+  }
+  BlindDesign unknown = DefaultDesign(scene);
+  unknown.finish = SlatFinish{99, 99};
+  EXPECT_EQ((*replay)->Compute(unknown).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
 // A search's designs in rounds on the CPU (racing): each round traces only the parts it
 // adds, and the last ends where one full trace does; designs asked together are traced as
 // alone; a design's I from the tallies is its full trace's.

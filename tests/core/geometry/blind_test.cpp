@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -24,7 +25,7 @@ Window OfficeWindow() {
   return w;
 }
 
-BlindDesign Design(double tilt, double w, double s, double t) { return {true, tilt, w, s, t}; }
+BlindDesign Design(double tilt, double w, double s, double t) { return {true, tilt, w, s, t, {}}; }
 
 TriangleMesh Slats(const BlindDesign& design, BlindLayout* layout = nullptr, BlindSpec spec = {}) {
   TriangleMesh mesh;
@@ -204,6 +205,43 @@ TEST(BlindTest, OuterMaterialFacesTheWindowThenTurnsUp) {
       EXPECT_NEAR(across.z, 0.01 * std::sin(tilt), 1e-12) << "tilt " << tilt << " slat " << k;
     }
   }
+}
+
+// A design's finish overrides the spec's materials on every slat, the outer broad faces taking
+// its outer material and every other face its material; without one the spec's hold.
+TEST(BlindTest, DesignFinishGivesTheSlatsItsMaterials) {
+  BlindSpec spec;
+  spec.material = 3;
+  spec.outer_material = 7;
+  EXPECT_EQ(FinishOf(spec, Design(0.5, 0.15, 0, 0.01)), (SlatFinish{3, 7}));
+  for (const SlatFinish finish : {SlatFinish{1, 1}, SlatFinish{2, 5}, SlatFinish{5, 2}}) {
+    BlindDesign design = Design(0.5, 0.15, 0.02, 0.01);
+    design.finish = finish;
+    EXPECT_EQ(FinishOf(spec, design), finish);
+    BlindLayout layout;
+    const TriangleMesh mesh = Slats(design, &layout, spec);
+    ASSERT_EQ(mesh.TriangleCount(), 12u * layout.slat_count);
+    std::map<uint32_t, size_t> per_material;
+    for (size_t triangle = 0; triangle < mesh.TriangleCount(); ++triangle) {
+      const int t = static_cast<int>(triangle % kTrianglesPerSlat);
+      EXPECT_EQ(mesh.material[triangle],
+                t / 2 == kSlatOuterFace ? finish.outer_material : finish.material);
+      ++per_material[mesh.material[triangle]];
+    }
+    EXPECT_EQ(per_material.count(3) + per_material.count(7), 0u);
+    // The same geometry as the spec's finish: only the materials differ
+    const TriangleMesh plain = Slats(Design(0.5, 0.15, 0.02, 0.01), nullptr, spec);
+    ASSERT_EQ(mesh.vertices.size(), plain.vertices.size());
+    for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+      EXPECT_EQ(Length(mesh.vertices[v] - plain.vertices[v]), 0.0);
+    }
+  }
+  // Designs that differ only by their finish are different designs
+  BlindDesign white = Design(0.5, 0.15, 0, 0.01), black = white;
+  white.finish = SlatFinish{1, 1};
+  black.finish = SlatFinish{0, 0};
+  EXPECT_NE(white, black);
+  EXPECT_NE(white, Design(0.5, 0.15, 0, 0.01));
 }
 
 // The envelope holds every slat of every design within the ranges, horizontal or vertical,
