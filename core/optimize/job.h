@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/common/radiance_matrix.h"
@@ -51,6 +52,9 @@ inline constexpr int kMaxCandidatesAtOnce = 16;
 struct PreparedJob {
   v1::Job job;  // with defaults filled in and paths resolved
   Scene scene;
+  // The finishes of the job's finish variable, by index, as the scene's materials (empty
+  // without one).
+  std::vector<SlatFinish> finishes;
   std::string weather_file;
   EpwData weather;  // parsed (PrepareJob only)
   // The sky matrix of `weather` for this job (JobSkyMatrix) where the caller holds it already
@@ -69,7 +73,8 @@ absl::StatusOr<v1::Job> ReadJobFile(const std::string& path);
 
 // The door for jobs: validates everything but the weather and fills in defaults. Every
 // string (CheckMessageText), the scene (BuildScene; a relative scene_file is taken from
-// `base_dir`), design variables (at least one) within a real blind's bounds, budget,
+// `base_dir`), design variables (at least one) within a real blind's bounds (a finish
+// variable: its finishes the scene's slat materials, its range their indices), budget,
 // sampling, metric settings, objective and neighborhoods (finite, in range, known enum
 // values), then the room (CheckRoom) with the blind at every design of the job's ranges.
 // InvalidArgument naming the field and the reason.

@@ -68,7 +68,8 @@ absl::StatusOr<v1::Job> ReadJobFile(const std::string& path) {
 SearchSettings MakeSearchSettings(const v1::Job& spec) {
   SearchSettings search;
   for (const v1::DesignVariable& v : spec.variables()) {
-    search.variables.push_back({v.name(), v.lower(), v.upper(), v.start(), v.fixed(), v.step()});
+    search.variables.push_back({v.name(), v.lower(), v.upper(), v.start(), v.fixed(), v.step(),
+                                v.name() == kFinishVariable});
   }
   VnsOptions& vns = search.options;
   if (spec.neighborhoods_size() > 0) {
@@ -138,7 +139,11 @@ IndoorOptions JobIndoorOptions(const PreparedJob& job) {
 BlindDesign DesignAt(const PreparedJob& job, const std::vector<double>& x) {
   BlindDesign design = DefaultDesign(job.scene);
   for (int i = 0; i < job.job.variables_size(); ++i) {
-    design.*(FindDesignVariable(job.job.variables(i).name())->field) = x[i];
+    if (const DesignVariableInfo* info = FindDesignVariable(job.job.variables(i).name())) {
+      design.*(info->field) = x[i];
+    } else if (!job.finishes.empty()) {
+      design.finish = FinishAt(job.finishes, x[i]);
+    }
   }
   return design;
 }

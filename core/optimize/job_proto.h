@@ -42,8 +42,9 @@ absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric);
 // parts (resolved) and batches.
 IndoorOptions JobIndoorOptions(const PreparedJob& job);
 
-// The design at the search's point `x` (a value per job variable, in the job's order), the
-// blind's other parameters at the scene's values.
+// The design at the search's point `x` (a value per job variable, in the job's order; the
+// finish's an index of PreparedJob::finishes), the blind's other parameters and, without a
+// finish variable, its finish at the scene's values.
 BlindDesign DesignAt(const PreparedJob& job, const std::vector<double>& x);
 
 // A step of the search as a result's Evaluation. `search_start_seconds`: when the search

@@ -51,8 +51,8 @@ absl::StatusOr<Scene> SceneOf(const v1::Job& job, const std::string& base_dir) {
   return BuildScene(job.scene(), (std::filesystem::path(base_dir) / "job.scene").string());
 }
 
-absl::Status CheckVariable(const v1::DesignVariable& v, const DesignVariableInfo& info,
-                           const std::string& field) {
+// The range of `v`: finite, not empty, its start within it.
+absl::Status CheckRange(const v1::DesignVariable& v, const std::string& field) {
   if (!AllFinite({v.lower(), v.upper(), v.start(), v.step()})) {
     return InvalidJobField(field, "lower, upper, start and step must be finite");
   }
@@ -64,6 +64,15 @@ absl::Status CheckVariable(const v1::DesignVariable& v, const DesignVariableInfo
     return InvalidJobField(field + ".start", absl::StrCat("start ", v.start(), " is outside [",
                                                           v.lower(), ", ", v.upper(), "]"));
   }
+  return absl::OkStatus();
+}
+
+absl::Status CheckVariable(const v1::DesignVariable& v, const DesignVariableInfo& info,
+                           const std::string& field) {
+  if (v.finishes_size() > 0) {
+    return InvalidJobField(field + ".finishes", "only the finish variable lists finishes");
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckRange(v, field));
   constexpr double kRounding = 1e-12;  // π/2 written in decimal
   if (v.lower() < info.bounds.lowest - kRounding || v.upper() > info.bounds.highest + kRounding) {
     return InvalidJobField(
@@ -74,33 +83,70 @@ absl::Status CheckVariable(const v1::DesignVariable& v, const DesignVariableInfo
   return absl::OkStatus();
 }
 
-absl::Status CheckVariables(const v1::Job& job, const Scene& scene) {
+// The finish variable `v` at `field` (job.proto): its finishes resolved into `finishes`
+// against the scene's materials, its step filled in as 1 and its range as the whole list where
+// lower and upper are both 0, every bound and the start an index of the list.
+absl::Status FillFinishVariable(v1::DesignVariable& v, const Scene& scene, const std::string& field,
+                                std::vector<SlatFinish>& finishes) {
+  const int count = v.finishes_size();
+  if (count < 1 || count > kMaxFinishes) {
+    return InvalidJobField(
+        field + ".finishes",
+        absl::StrCat("the finish variable lists 1 to ", kMaxFinishes, " finishes, got ", count));
+  }
+  FENESTRA_ASSIGN_OR_RETURN(resolved, ResolveFinishes(v, scene, field));
+  if (v.step() != 0 && v.step() != 1) {
+    return InvalidJobField(field + ".step",
+                           absl::StrCat("must be 1 or unset (the finish's values are the indices "
+                                        "of its finishes), got ",
+                                        v.step()));
+  }
+  v.set_step(1);
+  if (v.lower() == 0 && v.upper() == 0) v.set_upper(count - 1);
+  for (const auto& [value, name] : {std::pair{v.lower(), "lower"}, std::pair{v.upper(), "upper"},
+                                    std::pair{v.start(), "start"}}) {
+    if (!FinishIndex(value, static_cast<size_t>(count))) {
+      return InvalidJobField(
+          absl::StrCat(field, ".", name),
+          absl::StrCat("must be the index of one of the ", count,
+                       " finishes, a whole number in [0, ", count - 1, "], got ", value));
+    }
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckRange(v, field));
+  finishes = std::move(resolved);
+  return absl::OkStatus();
+}
+
+// The job's variables checked, its finish variable's range filled in and its finishes
+// resolved into `finishes`.
+absl::Status FillVariables(v1::Job& job, const Scene& scene, std::vector<SlatFinish>& finishes) {
   // The search needs a variable (RunVns refuses none); with every one fixed it evaluates the
   // start alone
   if (job.variables_size() == 0) {
     return InvalidJobField("variables",
                            "none given; the search needs at least one design variable (alpha, "
-                           "width, spacing or thickness; with every one fixed it evaluates the "
-                           "start design alone)");
+                           "width, spacing, thickness or finish; with every one fixed it "
+                           "evaluates the start design alone)");
   }
   if (!scene.blind) {
     return InvalidJobField("variables", "the scene has no blind to design");
   }
   std::set<std::string> seen;
   for (int i = 0; i < job.variables_size(); ++i) {
-    const v1::DesignVariable& v = job.variables(i);
+    v1::DesignVariable& v = *job.mutable_variables(i);
     const std::string field = absl::StrCat("variables[", i, "]");
     const DesignVariableInfo* info = FindDesignVariable(v.name());
-    if (!info) {
+    if (!info && v.name() != kFinishVariable) {
       return InvalidJobField(field + ".name",
                              absl::StrCat("unknown design variable '", v.name(),
-                                          "' (known: alpha, width, spacing, thickness)"));
+                                          "' (known: alpha, width, spacing, thickness, finish)"));
     }
     if (!seen.insert(v.name()).second) {
       return InvalidJobField(field + ".name",
                              absl::StrCat("variable '", v.name(), "' given twice"));
     }
-    FENESTRA_RETURN_IF_ERROR(CheckVariable(v, *info, field));
+    FENESTRA_RETURN_IF_ERROR(info ? CheckVariable(v, *info, field)
+                                  : FillFinishVariable(v, scene, field, finishes));
   }
   return absl::OkStatus();
 }
@@ -409,8 +455,8 @@ absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& b
   prepared.job = job;
   FENESTRA_ASSIGN_OR_RETURN(scene, SceneOf(job, base_dir));
   prepared.scene = std::move(scene);
-  FENESTRA_RETURN_IF_ERROR(CheckVariables(job, prepared.scene));
   v1::Job& filled = prepared.job;
+  FENESTRA_RETURN_IF_ERROR(FillVariables(filled, prepared.scene, prepared.finishes));
   FENESTRA_RETURN_IF_ERROR(FillBudget(*filled.mutable_budget()));
   FENESTRA_ASSIGN_OR_RETURN(sampling, ResolveSampling(filled.sampling()));
   *filled.mutable_sampling() = sampling;

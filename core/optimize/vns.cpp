@@ -48,6 +48,9 @@ absl::Status CheckInputs(std::span<const DesignVariable> variables, const VnsOpt
     if (!(v.step >= 0) || !std::isfinite(v.step)) {
       return absl::InvalidArgumentError(absl::StrCat(which, ": step ", v.step, " is negative"));
     }
+    if (v.categorical && !(v.step > 0)) {
+      return absl::InvalidArgumentError(absl::StrCat(which, ": a choice needs a step > 0"));
+    }
   }
   if (o.neighborhoods.empty()) return absl::InvalidArgumentError("no neighborhoods");
   for (size_t k = 0; k < o.neighborhoods.size(); ++k) {
@@ -111,6 +114,21 @@ double Constrain(const DesignVariable& v, double x, BoundaryRule rule) {
     x = std::clamp(x, v.lower, v.upper);
   }
   return x;
+}
+
+// A move of categorical `v` from `x`: to one of the other grid values at most
+// max(1, round(radius x (count - 1))) steps away, each as likely (one draw of `rng`).
+double CategoryMove(const DesignVariable& v, double x, double radius_fraction,
+                    std::mt19937_64& rng) {
+  const int64_t last = std::llround((v.upper - v.lower) / v.step);
+  const int64_t at = std::clamp<int64_t>(std::llround((x - v.lower) / v.step), 0, last);
+  const int64_t reach =
+      std::max<int64_t>(1, std::llround(radius_fraction * static_cast<double>(last)));
+  const int64_t low = std::max<int64_t>(0, at - reach), high = std::min(last, at + reach);
+  if (high == low) return x;
+  int64_t to = low + static_cast<int64_t>(UniformIndex(rng, static_cast<uint64_t>(high - low)));
+  if (to >= at) ++to;  // every value but the one it is at
+  return std::min(v.upper, v.lower + static_cast<double>(to) * v.step);
 }
 
 // Where the search goes next: the random stream and the counts the steps move on.
@@ -212,6 +230,10 @@ std::vector<double> Search::Propose(Walk& walk) const {
   for (size_t c = 0; c < count; ++c) {
     std::swap(order[c], order[c + UniformIndex(walk.rng, order.size() - c)]);
     const DesignVariable& v = variables_[order[c]];
+    if (v.categorical) {
+      x[order[c]] = CategoryMove(v, x[order[c]], n.radius_fraction, walk.rng);
+      continue;
+    }
     const double delta = (2 * Uniform01(walk.rng) - 1) * n.radius_fraction * (v.upper - v.lower);
     x[order[c]] = Constrain(v, x[order[c]] + delta, options_.boundary);
   }

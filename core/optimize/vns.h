@@ -17,7 +17,9 @@
 //
 // Moves are clamped to the box by default, so optima on a bound (a blind fully open, a
 // tilt of 0) are reached exactly; BoundaryRule::kReflect mirrors them back instead. A
-// variable with a `step` is then snapped to lower + k x step (and clamped again).
+// variable with a `step` is then snapped to lower + k x step (and clamped again). A
+// categorical variable (a choice, DesignVariable::categorical) moves to another of its values
+// instead, within the neighborhood's radius but at least one step away.
 //
 // Every evaluated design is cached by its exact coordinates after clamping and snapping;
 // proposing it again costs no evaluation and is marked `cached` in the history (`step`
@@ -62,6 +64,10 @@ struct DesignVariable {
   double start = 0;  // in [lower, upper]; evaluated first, as given
   bool fixed = false;
   double step = 0;  // grid spacing of proposed values, variable's units; 0 = continuous
+  // A choice among the values of its grid (step > 0), e.g. the slats' finish: each move goes
+  // to another value of the grid, at most radius x (upper - lower) away and at least one step
+  // (CategoryMove), where a grid variable's moves may round back to where they started.
+  bool categorical = false;
 };
 
 // How many free variables change, and by how much.

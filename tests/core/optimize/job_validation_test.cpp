@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/optimize/job.h"
@@ -110,12 +111,129 @@ TEST(JobValidationTest, AtLeastOneDesignVariable) {
   v1::Job job = QuickJob();
   job.clear_variables();
   EXPECT_THAT(ErrorOf(job), HasSubstr("job variables: none given; the search needs at least one "
-                                      "design variable (alpha, width, spacing or thickness"));
+                                      "design variable (alpha, width, spacing, thickness or "
+                                      "finish"));
   job.mutable_scene()->clear_blind();  // nothing to design either way: the variables named
   EXPECT_THAT(ErrorOf(job), HasSubstr("job variables: none given"));
   job = QuickJob();
   for (v1::DesignVariable& v : *job.mutable_variables()) v.set_fixed(true);
   EXPECT_TRUE(ValidateJob(job, kOffice).ok()) << ErrorOf(job);
+}
+
+// The quick tilt job with slat materials to choose from (white, black, a metal and a glass in
+// the scene) and a finish variable over `finishes` (material, outer material or "" for none).
+v1::Job FinishJob(const std::vector<std::pair<std::string, std::string>>& finishes) {
+  v1::Job job = QuickJob();
+  v1::Scene& scene = *job.mutable_scene();
+  v1::Material* white = scene.add_materials();
+  white->set_name("white");
+  white->set_reflectance(0.8);
+  scene.add_materials()->set_name("black");
+  v1::Material* alu = scene.add_materials();
+  alu->set_name("alu");
+  alu->mutable_metal()->set_reflectance(0.8);
+  alu->mutable_metal()->set_specularity(0.9);
+  alu->mutable_metal()->set_roughness(0.05);
+  v1::Material* pane = scene.add_materials();
+  pane->set_name("pane");
+  pane->mutable_glass()->set_transmittance(0.88);
+  v1::DesignVariable& finish = *job.add_variables();
+  finish.set_name("finish");
+  for (const auto& [material, outer] : finishes) {
+    v1::BlindFinish& f = *finish.add_finishes();
+    f.set_material(material);
+    if (!outer.empty()) f.set_outer_material(outer);
+  }
+  return job;
+}
+
+// A finish variable: its finishes resolved against the scene's materials, its range the whole
+// list and its step 1 when unset, its values checked as indices.
+TEST(JobValidationTest, FinishVariableListsTheScenesSlatMaterials) {
+  v1::Job job = FinishJob({{"white", ""}, {"black", "alu"}, {"alu", "alu"}});
+  absl::StatusOr<PreparedJob> prepared = ValidateJob(job, kOffice);
+  ASSERT_TRUE(prepared.ok()) << prepared.status();
+  const v1::DesignVariable& filled = prepared->job.variables(4);
+  EXPECT_EQ(filled.lower(), 0);
+  EXPECT_EQ(filled.upper(), 2);
+  EXPECT_EQ(filled.start(), 0);
+  EXPECT_EQ(filled.step(), 1);
+  const std::vector<Material>& materials = prepared->scene.materials;
+  ASSERT_EQ(prepared->finishes.size(), 3u);
+  const auto name = [&](uint32_t index) { return materials[index].name; };
+  EXPECT_EQ(name(prepared->finishes[0].material), "white");
+  EXPECT_EQ(name(prepared->finishes[0].outer_material), "white");  // absent: the material
+  EXPECT_EQ(name(prepared->finishes[1].material), "black");
+  EXPECT_EQ(name(prepared->finishes[1].outer_material), "alu");
+  EXPECT_EQ(name(prepared->finishes[2].outer_material), "alu");
+  // A part of the list, started within it; fixed
+  Variable(job, "finish").set_lower(1);
+  Variable(job, "finish").set_upper(2);
+  Variable(job, "finish").set_start(2);
+  Variable(job, "finish").set_step(1);
+  EXPECT_TRUE(ValidateJob(job, kOffice).ok()) << ErrorOf(job);
+  job = FinishJob({{"white", ""}, {"black", ""}});
+  Variable(job, "finish").set_fixed(true);
+  Variable(job, "finish").set_start(1);
+  prepared = ValidateJob(job, kOffice);
+  ASSERT_TRUE(prepared.ok()) << prepared.status();
+  EXPECT_EQ(prepared->job.variables(4).upper(), 1);
+  // Without a finish variable, no finishes
+  prepared = ValidateJob(QuickJob(), kOffice);
+  ASSERT_TRUE(prepared.ok()) << prepared.status();
+  EXPECT_TRUE(prepared->finishes.empty());
+}
+
+TEST(JobValidationTest, BadFinishesAreRefused) {
+  // Materials the scene does not have, or a glass
+  EXPECT_THAT(ErrorOf(FinishJob({{"white", ""}, {"brick", ""}})),
+              HasSubstr("job variables[4].finishes[1].material: unknown material 'brick'"));
+  EXPECT_THAT(ErrorOf(FinishJob({{"white", "brick"}})),
+              HasSubstr("job variables[4].finishes[0].outer_material: unknown material 'brick'"));
+  EXPECT_THAT(ErrorOf(FinishJob({{"pane", ""}})),
+              HasSubstr("job variables[4].finishes[0].material: 'pane' is a glass: slats of glass "
+                        "make no blind"));
+  EXPECT_THAT(ErrorOf(FinishJob({{"white", "pane"}})),
+              HasSubstr("job variables[4].finishes[0].outer_material: 'pane' is a glass"));
+  // None, or too many
+  EXPECT_THAT(ErrorOf(FinishJob({})),
+              HasSubstr("job variables[4].finishes: the finish variable lists 1 to 64 finishes, "
+                        "got 0"));
+  EXPECT_THAT(
+      ErrorOf(FinishJob(std::vector<std::pair<std::string, std::string>>(65, {"white", ""}))),
+      HasSubstr("lists 1 to 64 finishes, got 65"));
+  // Values that are no index of the list
+  const auto with = [](auto edit) {
+    v1::Job job = FinishJob({{"white", ""}, {"black", ""}});
+    edit(Variable(job, "finish"));
+    return ErrorOf(job);
+  };
+  EXPECT_THAT(with([](v1::DesignVariable& v) { v.set_upper(2); }),
+              HasSubstr("job variables[4].upper: must be the index of one of the 2 finishes, a "
+                        "whole number in [0, 1], got 2"));
+  EXPECT_THAT(with([](v1::DesignVariable& v) { v.set_lower(-1); }),
+              HasSubstr("job variables[4].lower: must be the index"));
+  EXPECT_THAT(with([](v1::DesignVariable& v) { v.set_start(0.5); }),
+              HasSubstr("job variables[4].start: must be the index of one of the 2 finishes"));
+  EXPECT_THAT(with([](v1::DesignVariable& v) { v.set_start(kNaN); }),
+              HasSubstr("job variables[4].start"));
+  EXPECT_THAT(with([](v1::DesignVariable& v) {
+                v.set_lower(1);
+                v.set_upper(1);
+                v.set_start(0);
+              }),
+              HasSubstr("job variables[4].start: start 0 is outside [1, 1]"));
+  EXPECT_THAT(with([](v1::DesignVariable& v) { v.set_step(0.5); }),
+              HasSubstr("job variables[4].step: must be 1 or unset"));
+  // Finishes on another variable
+  v1::Job job = QuickJob();
+  Variable(job, "alpha").add_finishes()->set_material("blind");
+  EXPECT_THAT(ErrorOf(job),
+              HasSubstr("job variables[0].finishes: only the finish variable lists finishes"));
+  // Twice
+  job = FinishJob({{"white", ""}});
+  *job.add_variables() = job.variables(4);
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job variables[5].name: variable 'finish' given twice"));
 }
 
 // Slats narrow enough for more than kMaxBlindSlats at some design of the job's ranges: the

@@ -397,6 +397,71 @@ TEST(VnsTest, RejectsBadVariablesAndOptions) {
   }
 }
 
+// A choice among `count` values 0, 1, ..., count - 1 (a categorical variable, as a finish).
+DesignVariable ChoiceVariable(std::string name, int count, int start) {
+  DesignVariable v = BoxVariable(std::move(name), 0, count - 1, start);
+  v.step = 1;
+  v.categorical = true;
+  return v;
+}
+
+// A categorical variable moves to another of its values at every move, at most the
+// neighborhood's radius of its range away (one value at least), and stays on its values; a
+// grid variable of the same values mostly rounds back to where it was.
+TEST(VnsTest, ChoiceMovesToAnotherValueWithinTheRadius) {
+  const std::vector<DesignVariable> vars = {BoxVariable("x", 0, 1, 0.5), ChoiceVariable("c", 6, 0)};
+  VnsOptions options;
+  options.max_evaluations = 200;
+  options.failed_cycles_to_stop = 0;
+  options.max_consecutive_cache_hits = 100'000;
+  const ObjectiveFunction objective = [](const std::vector<double>& x) {
+    return Value(-std::abs(x[1] - 3) + 0.1 * x[0]);  // best: value 3, x at 1
+  };
+  absl::StatusOr<VnsResult> r = RunVns(vars, objective, options);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(r->best_x[1], 3);
+  std::vector<double> incumbent = r->history.front().x;
+  int moves = 0;
+  for (const VnsRecord& step : r->history) {
+    const double c = step.x[1];
+    EXPECT_EQ(c, std::round(c));
+    EXPECT_GE(c, 0);
+    EXPECT_LE(c, 5);
+    if (step.neighborhood >= 0 && c != incumbent[1]) {
+      ++moves;
+      const double radius = options.neighborhoods[step.neighborhood].radius_fraction;
+      EXPECT_LE(std::abs(c - incumbent[1]), std::max(1.0, std::round(radius * 5)));
+    }
+    if (step.improved) incumbent = step.x;
+  }
+  EXPECT_GT(moves, 20);
+
+  // Two values: each move is to the other one, so the search evaluates both at once
+  const std::vector<DesignVariable> two = {ChoiceVariable("c", 2, 0)};
+  options.failed_cycles_to_stop = 1;
+  absl::StatusOr<VnsResult> both = RunVns(
+      two, [](const std::vector<double>& x) { return Value(x[0]); }, options);
+  ASSERT_TRUE(both.ok()) << both.status();
+  EXPECT_EQ(both->evaluations, 2);
+  EXPECT_EQ(both->best_x, (std::vector<double>{1}));
+  EXPECT_EQ(both->history[1].x, (std::vector<double>{1}));
+  for (size_t i = 2; i < both->history.size(); ++i) {
+    EXPECT_EQ(both->history[i].x, (std::vector<double>{0}));
+    EXPECT_TRUE(both->history[i].cached);
+  }
+  // The same two values as a plain grid: the fine neighborhoods round back to the start
+  std::vector<DesignVariable> grid = two;
+  grid[0].categorical = false;
+  absl::StatusOr<VnsResult> rounded = RunVns(
+      grid, [](const std::vector<double>& x) { return Value(x[0]); }, options);
+  ASSERT_TRUE(rounded.ok()) << rounded.status();
+  EXPECT_TRUE(rounded->history[1].cached);
+  // A choice needs a grid
+  std::vector<DesignVariable> no_step = two;
+  no_step[0].step = 0;
+  EXPECT_EQ(RunVns(no_step, Bowl, options).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
 // Resuming: a noisy bowl over a continuous variable starting on its bound, a gridded one
 // (cache hits) and a fixed one; the payload is the design's first coordinate.
 absl::StatusOr<Evaluation> NoisyBowl(const std::vector<double>& x) {
@@ -443,6 +508,9 @@ std::vector<ResumeCase> ResumeCases() {
   std::vector<DesignVariable> gridded = ResumeVariables();
   gridded[0].step = 0.1;
   cases.push_back({"space exhausted", exhausted, StopReason::kSpaceExhausted, gridded});
+  std::vector<DesignVariable> chosen = ResumeVariables();
+  chosen[2] = ChoiceVariable("c", 5, 0);
+  cases.push_back({"a choice", budget, StopReason::kEvaluationBudget, chosen});
   return cases;
 }
 
