@@ -8,6 +8,7 @@
 #include <map>
 #include <string_view>
 
+#include "core/optimize/design_variables.h"
 #include "core/optimize/final_check.h"
 
 namespace fenestra {
@@ -138,6 +139,10 @@ void EndProgress() {
 std::string FormatResult(const v1::JobResult& r) {
   const v1::Metrics& m = r.best_metrics();
   std::string out = fmt::format("best design: {}\n", FormatDesign(r.best_design()));
+  if (const auto finish = r.best_design().find(std::string(kFinishVariable));
+      finish != r.best_design().end()) {
+    out += fmt::format("finish: {}\n", FinishNameAt(r.job(), finish->second));
+  }
   out += fmt::format("objective: {} %\n", Value(r.best_value()));
   out += fmt::format(
       "UDI {} % (fell short {} %, exceeded {} %), UDI all sensors {} %, DA {} %, cDA {} %, "

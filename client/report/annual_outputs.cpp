@@ -12,6 +12,7 @@
 #include "core/geometry/obj_io.h"
 #include "core/geometry/scene.h"
 #include "core/metrics/illuminance.h"
+#include "core/optimize/design_variables.h"
 
 namespace fenestra {
 namespace {
@@ -99,7 +100,7 @@ absl::Status WriteBestObj(const v1::JobResult& result, const std::string& path) 
   FENESTRA_ASSIGN_OR_RETURN(scene, BuildScene(result.job().scene(), "the result's job.scene"));
   const std::map<std::string, double> best(result.best_design().begin(),
                                            result.best_design().end());
-  FENESTRA_ASSIGN_OR_RETURN(design, DesignWithOverrides(scene, best));
+  FENESTRA_ASSIGN_OR_RETURN(design, JobDesignWithOverrides(scene, result.job(), best));
   return WriteSceneObj(path, scene, design).status();
 }
 

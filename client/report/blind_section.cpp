@@ -247,6 +247,7 @@ std::string DetailFigure(const BlindCut& s, const BlindDesign& design) {
 
 std::string BlindTable(const Scene& scene, const BlindCut& s, const BlindDesign& d) {
   const BlindSpec& spec = *scene.blind;
+  const SlatFinish finish = FinishOf(spec, d);
   const auto material = [&](uint32_t index) {
     const Material& m = scene.materials[index];
     return fmt::format("{} ({})", m.name, DescribeMaterial(m));
@@ -267,8 +268,8 @@ std::string BlindTable(const Scene& scene, const BlindCut& s, const BlindDesign&
        {"clearance to the wall", fmt::format("{:.1f} mm", 1000 * spec.wall_gap_m)},
        {"slat length beyond the opening, each end",
         fmt::format("{:.1f} mm", 1000 * spec.side_margin_m)},
-       {"slat material", material(spec.material)},
-       {"slat material, outer faces (to the window at α = 0)", material(spec.OuterMaterial())},
+       {"slat material", material(finish.material)},
+       {"slat material, outer faces (to the window at α = 0)", material(finish.outer_material)},
        {"window opening",
         fmt::format("{:.2f} × {:.2f} m, wall {:.2f} m thick", scene.window.width_m,
                     scene.window.height_m, scene.window.depth_m)}});

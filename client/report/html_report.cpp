@@ -89,7 +89,7 @@ std::string Header(const ReportData& data) {
   for (const v1::DesignVariable& v : r.job().variables()) {
     const auto best = r.best_design().find(v.name());
     if (best != r.best_design().end())
-      design.push_back(v.name() + " " + DesignValue(v.name(), best->second));
+      design.push_back(v.name() + " " + DesignValue(v, best->second));
   }
   std::string html =
       fmt::format("<header>\n<h1>Fenestra report: {}</h1>\n",

@@ -10,6 +10,7 @@
 #include "absl/strings/str_join.h"
 #include "core/common/status_macros.h"
 #include "core/metrics/occupancy.h"
+#include "core/optimize/design_variables.h"
 
 namespace fenestra {
 namespace {
@@ -24,6 +25,7 @@ std::string VariableLabel(const std::string& name) {
   if (name == "width") return "slat width w [m]";
   if (name == "spacing") return "slat spacing s [m]";
   if (name == "thickness") return "slat thickness t [m]";
+  if (name == kFinishVariable) return "slat finish [index]";
   return name;
 }
 
@@ -63,7 +65,7 @@ absl::Status GatherScene(const std::string& source, ReportData& data) {
   FENESTRA_ASSIGN_OR_RETURN(scene, BuildScene(data.result.job().scene(), source + ": job.scene"));
   std::map<std::string, double> best(data.result.best_design().begin(),
                                      data.result.best_design().end());
-  absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, best);
+  absl::StatusOr<BlindDesign> design = JobDesignWithOverrides(scene, data.result.job(), best);
   if (!design.ok())
     return Inconsistent(source, "best_design", std::string(design.status().message()));
   data.best_design = *design;
@@ -204,9 +206,14 @@ const v1::Estimate* MetricEstimate(const v1::Metrics& m, v1::Metric metric) {
   }
 }
 
-std::string DesignValue(const std::string& name, double value) {
-  if (name == "alpha") {
+std::string DesignValue(const v1::DesignVariable& variable, double value) {
+  if (variable.name() == "alpha") {
     return fmt::format("{:.4f} rad ({:.1f}°)", value, value * 180 / std::numbers::pi);
+  }
+  if (variable.name() == kFinishVariable) {
+    const std::optional<size_t> index = FinishIndex(value, variable.finishes_size());
+    if (!index) return fmt::format("{:g}", value);
+    return fmt::format("{}: {}", *index, FinishName(variable.finishes(static_cast<int>(*index))));
   }
   return fmt::format("{:.4f} m", value);
 }

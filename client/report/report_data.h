@@ -93,8 +93,9 @@ std::string MetricName(v1::Metric metric, const v1::MetricSettings& settings);
 // The estimate of `metric` in `metrics`; nullptr when `metrics` does not hold it.
 const v1::Estimate* MetricEstimate(const v1::Metrics& metrics, v1::Metric metric);
 
-// A design variable's value with its unit: "0.3487 rad (20.0°)", "0.1500 m".
-std::string DesignValue(const std::string& name, double value);
+// A design variable's value with its unit: "0.3487 rad (20.0°)", "0.1500 m"; a finish's index
+// with its materials' names: "1: white / aluminium outer".
+std::string DesignValue(const v1::DesignVariable& variable, double value);
 
 // Index of the sensor with the lowest UDI in `metrics` (0 when there are none).
 int WorstSensorByUdi(const v1::Metrics& metrics);

@@ -30,11 +30,10 @@ std::string BestDesignTable(const ReportData& data) {
   for (const v1::DesignVariable& v : data.result.job().variables()) {
     const auto best = data.result.best_design().find(v.name());
     const bool free = !v.fixed() && v.upper() > v.lower();
-    rows.push_back(
-        {v.name(),
-         best == data.result.best_design().end() ? "-" : DesignValue(v.name(), best->second),
-         free ? fmt::format("[{:g}, {:g}]", v.lower(), v.upper()) : "fixed",
-         DesignValue(v.name(), v.start())});
+    rows.push_back({v.name(),
+                    best == data.result.best_design().end() ? "-" : DesignValue(v, best->second),
+                    free ? fmt::format("[{:g}, {:g}]", v.lower(), v.upper()) : "fixed",
+                    DesignValue(v, v.start())});
   }
   return HtmlTable("best-design-table", {"variable", "best", "range searched", "start"}, rows);
 }

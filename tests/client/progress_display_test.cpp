@@ -51,5 +51,23 @@ TEST(ProgressDisplayTest, ResultShowsAseAndTheBlindsHours) {
               HasSubstr("points), blind in place 39.23 ± 0.00 % of the hours\n"));
 }
 
+// The best finish by its materials' names, after the design's values.
+TEST(ProgressDisplayTest, ResultNamesTheBestFinish) {
+  v1::JobResult result;
+  (*result.mutable_best_design())["alpha"] = 0.5;
+  EXPECT_THAT(FormatResult(result), Not(HasSubstr("finish")));
+  v1::DesignVariable& finish = *result.mutable_job()->add_variables();
+  finish.set_name("finish");
+  finish.add_finishes()->set_material("aluminium");
+  v1::BlindFinish& two = *finish.add_finishes();
+  two.set_material("white");
+  two.set_outer_material("aluminium");
+  (*result.mutable_best_design())["finish"] = 1;
+  EXPECT_THAT(FormatResult(result),
+              HasSubstr("best design: alpha=0.5 finish=1\nfinish: white / aluminium outer\n"));
+  (*result.mutable_best_design())["finish"] = 0;
+  EXPECT_THAT(FormatResult(result), HasSubstr("\nfinish: aluminium\n"));
+}
+
 }  // namespace
 }  // namespace fenestra

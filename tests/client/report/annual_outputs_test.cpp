@@ -112,6 +112,21 @@ TEST_F(AnnualOutputsTest, ObjHoldsTheSceneWithTheBestBlind) {
   }
 }
 
+// The best design of a search over the finish: its slats in the OBJ are of its finish's
+// material (white), none of the scene's own (black).
+TEST_F(AnnualOutputsTest, ObjHoldsTheBestFinish) {
+  const v1::JobResult& result = QuickFinishJobResult();
+  ASSERT_EQ(result.best_design().at("finish"), 1);
+  ASSERT_TRUE(WriteAnnualOutputs(result, {"", "", Path("best.obj")}).ok());
+  absl::StatusOr<ObjTriangles> obj = ReadObj(Path("best.obj"));
+  ASSERT_TRUE(obj.ok()) << obj.status();
+  absl::StatusOr<Scene> scene = BuildScene(result.job().scene(), "result");
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  const int slats = LayoutBlind(scene->window, *scene->blind, DefaultDesign(*scene)).slat_count;
+  EXPECT_EQ(std::count(obj->group.begin(), obj->group.end(), "white"), 12 * slats);
+  EXPECT_EQ(std::count(obj->group.begin(), obj->group.end(), "black"), 0);
+}
+
 TEST_F(AnnualOutputsTest, WhatTheResultLacksIsAnErrorNamingTheFlag) {
   v1::JobResult result = QuickJobResult();
   result.clear_best_hourly();

@@ -242,6 +242,31 @@ TEST(ReportDataTest, WhatAResultLacksIsNotRecorded) {
   EXPECT_THAT(*page, Not(HasSubstr("id=\"plot-floor-udi\"")));
 }
 
+// The best finish by its materials' names in the page's lead and design table, and its slats'
+// materials in the blind's table; the finish among the free variables the value is plotted
+// against.
+TEST(ReportDataTest, TheBestFinishIsNamed) {
+  const v1::JobResult& result = QuickFinishJobResult();
+  ASSERT_EQ(result.best_design().at("finish"), 1);
+  absl::StatusOr<ReportData> data = GatherReportData(result, "r.json", "");
+  ASSERT_TRUE(data.ok()) << data.status();
+  ASSERT_TRUE(data->best_design.finish);
+  EXPECT_EQ(data->scene->materials[data->best_design.finish->material].name, "white");
+  ASSERT_EQ(data->free_variables.size(), 1u);
+  EXPECT_EQ(data->free_variables[0].label, "slat finish [index]");
+  EXPECT_EQ(DesignValue(result.job().variables(4), 1), "1: white");
+  EXPECT_EQ(DesignValue(result.job().variables(4), 0.5), "0.5");
+  const std::string page = Page(result);
+  EXPECT_THAT(page, HasSubstr("Best design: alpha 0.8000 rad (45.8°), width 0.1500 m, spacing "
+                              "0.0000 m, thickness 0.0100 m, finish 1: white"));
+  EXPECT_THAT(page, HasSubstr("<td>white (reflectance 0.8)</td>"));
+  EXPECT_THAT(page, Not(HasSubstr("black (reflectance 0)")));
+  // A best finish the job does not list is refused
+  v1::JobResult bad = result;
+  (*bad.mutable_best_design())["finish"] = 2;
+  EXPECT_THAT(Gather(bad).message(), HasSubstr("best_design: finish 2 is not an index"));
+}
+
 // Names from the job and the scene are text on the page, never markup
 TEST(ReportDataTest, NamesAreEscaped) {
   v1::JobResult r = QuickJobResult();
