@@ -3,12 +3,14 @@
 
 Usage: glossy.py OUTDIR BACKEND
 
-Radiance: per sensor the mean of 16 groups' sums over bins 1..145 (rcontrib's rows are the
-daylight coefficients of the Reinhart MF 1 bins, bin 0 the ground; 8 groups of paths per
-sensor in each of two processes), its standard error from their scatter. Fenestra: the sky sums and standard errors
+Radiance: per sensor the mean of the groups' sums over bins 1..145 (rcontrib's rows are the
+daylight coefficients of the Reinhart MF 1 bins, bin 0 the ground; every dc_*.txt in OUTDIR is
+one rcontrib process of its own seed with 8 groups of paths per sensor), its standard error
+from their scatter. Fenestra: the sky sums and standard errors
 `fenestra dc` prints. Each line: both, the difference in % and in combined standard errors, and
 whether it lies within 3 combined standard errors and 2%.
 """
+import glob
 import os
 import re
 import sys
@@ -17,10 +19,11 @@ import numpy as np
 
 
 def radiance_sums(out):
-    """Per sensor the mean of the 16 groups' sky sums (8 per half) and its standard error."""
+    """Per sensor the mean of the groups' sky sums over every rcontrib output in OUTDIR
+    (dc_*.txt, 8 rows per sensor each) and its standard error from their scatter."""
     groups = []
-    for name in ("dc_a.txt", "dc_b.txt"):
-        a = np.loadtxt(os.path.join(out, name), ndmin=2)
+    for name in sorted(glob.glob(os.path.join(out, "dc_*.txt"))):
+        a = np.loadtxt(name, ndmin=2)
         if a.shape[1] != 3 * 146 or a.shape[0] % 8:
             sys.exit(f"{name} is {a.shape}, expected 8 rows per sensor of {3 * 146} (RGB)")
         sums = a[:, 0::3][:, 1:146].sum(axis=1)  # grey: the red channel
