@@ -139,6 +139,22 @@ TEST(DirectSunTest, ClosedSlatsGrazingSunsAndBadInput) {
   EXPECT_FALSE(DirectSun::Trace(scene, {{0, {0, 0, 1}, -1}}, 1).ok());
 }
 
+// Suns due north at altitudes 5, 10, ..., 75 degrees, 10^5 lx each, one column each.
+std::vector<SunColumn> NorthernSunFan() {
+  std::vector<SunColumn> suns;
+  for (double a = 5; a < 80; a += 5) {
+    const double phi = a * kDegree;
+    suns.push_back({static_cast<int>(suns.size()), {0, std::cos(phi), std::sin(phi)}, 1e5});
+  }
+  return suns;
+}
+
+// Adds a Lambertian (or glazing) material to `scene`; its index.
+uint32_t AddMaterial(Scene& scene, const char* name, double reflectance, double transmittance) {
+  scene.materials.push_back({name, reflectance, transmittance});
+  return static_cast<uint32_t>(scene.materials.size() - 1);
+}
+
 // Slats of glazing let the sun through by their transmittance; slats whose outer faces'
 // material transmits otherwise than the rest count as opaque (which face a line meets first
 // is not kept), and ones whose two materials transmit alike pass it as one.
@@ -146,19 +162,14 @@ TEST(DirectSunTest, SlatsWhoseFacesTransmitOtherwiseAreOpaque) {
   Scene scene = LoadExample("city_office");
   scene.sensors = SensorsBehindBlind(scene);
   const auto add = [&](const char* name, double reflectance, double transmittance) {
-    scene.materials.push_back({name, reflectance, transmittance});
-    return static_cast<uint32_t>(scene.materials.size() - 1);
+    return AddMaterial(scene, name, reflectance, transmittance);
   };
   const uint32_t half = add("half", 0.1, 0.5), alike = add("alike", 0.3, 0.5),
                  less = add("less", 0.1, 0.3);
   absl::StatusOr<BlindDesign> closed = DesignWithOverrides(
       scene, {{"alpha", 0}, {"width", 0.15}, {"spacing", 0}, {"thickness", 0.01}});
   ASSERT_TRUE(closed.ok()) << closed.status();
-  std::vector<SunColumn> suns;
-  for (double a = 5; a < 80; a += 5) {
-    const double phi = a * kDegree;
-    suns.push_back({static_cast<int>(suns.size()), {0, std::cos(phi), std::sin(phi)}, 1e5});
-  }
+  const std::vector<SunColumn> suns = NorthernSunFan();
   const auto through = [&](uint32_t material, std::optional<uint32_t> outer) {
     scene.blind->material = material;
     scene.blind->outer_material = outer;
@@ -181,19 +192,14 @@ TEST(DirectSunTest, DesignFinishGivesTheSlatsTransmittance) {
   Scene scene = LoadExample("city_office");
   scene.sensors = SensorsBehindBlind(scene);
   const auto add = [&](const char* name, double reflectance, double transmittance) {
-    scene.materials.push_back({name, reflectance, transmittance});
-    return static_cast<uint32_t>(scene.materials.size() - 1);
+    return AddMaterial(scene, name, reflectance, transmittance);
   };
   const uint32_t opaque = scene.blind->material, half = add("half", 0.1, 0.5),
                  less = add("less", 0.1, 0.3);
   absl::StatusOr<BlindDesign> closed = DesignWithOverrides(
       scene, {{"alpha", 0}, {"width", 0.15}, {"spacing", 0}, {"thickness", 0.01}});
   ASSERT_TRUE(closed.ok()) << closed.status();
-  std::vector<SunColumn> suns;
-  for (double a = 5; a < 80; a += 5) {
-    const double phi = a * kDegree;
-    suns.push_back({static_cast<int>(suns.size()), {0, std::cos(phi), std::sin(phi)}, 1e5});
-  }
+  const std::vector<SunColumn> suns = NorthernSunFan();
   const auto traced = [&](const Scene& s) {
     absl::StatusOr<std::unique_ptr<DirectSun>> sun =
         DirectSun::Trace(s, suns, static_cast<int>(suns.size()));
