@@ -124,8 +124,15 @@ def error_text(error, args, token):
     return f"{code.name}: {details}"
 
 
-def design_text(design):
-    return " ".join(f"{name}={design[name]:.4g}" for name in sorted(design))
+def design_text(design, finishes=()):
+    """name=value per variable; the finish (an index into the job's list) by its materials."""
+    def value(name):
+        if name == "finish" and finishes:
+            f = finishes[int(design[name])]
+            outer = f" / {f.outer_material} outer" if f.HasField("outer_material") else ""
+            return f.material + outer
+        return f"{design[name]:.4g}"
+    return " ".join(f"{name}={value(name)}" for name in sorted(design))
 
 
 def main():
@@ -182,6 +189,7 @@ def main():
             job.sampling.indoor_paths_per_sensor = args.indoor_paths
         if args.evaluations:
             job.budget.max_evaluations = args.evaluations
+        finishes = next((v.finishes for v in job.variables if v.name == "finish"), ())
 
         channel = open_channel(args)
         sites = service_grpc.SiteServiceStub(channel)
@@ -215,12 +223,12 @@ def main():
                     p = event.progress
                     print(f"[{p.evaluations}/{p.max_evaluations}] best "
                           f"{p.best.value.value:.2f} ± {p.best.value.standard_error:.2f} % "
-                          f"({design_text(p.best.design)}) | current "
-                          f"{p.current.value.value:.2f} % ({design_text(p.current.design)})",
+                          f"({design_text(p.best.design, finishes)}) | current "
+                          f"{p.current.value.value:.2f} % ({design_text(p.current.design, finishes)})",
                           flush=True)
                 elif kind == "finished":
                     r = event.finished
-                    print(f"best design: {design_text(r.best_design)}\n"
+                    print(f"best design: {design_text(r.best_design, finishes)}\n"
                           f"objective: {r.best_value.value:.2f} ± "
                           f"{r.best_value.standard_error:.2f} % after {r.evaluations} "
                           f"evaluations ({r.stop_reason})")
