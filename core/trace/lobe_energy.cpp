@@ -41,6 +41,23 @@ LobeEnergy Tabulate(float alpha) {
     average += 2 * table.At(static_cast<float>(mu)) * mu / kSteps;
   }
   table.average = static_cast<float>(average);
+  // The draws' masses per interval: the integral of Lost(mu) mu over it, normalized
+  double masses[kLobeEnergyNodes] = {}, total = 0;
+  constexpr int kSub = 256;
+  for (int k = 0; k + 1 < kLobeEnergyNodes; ++k) {
+    for (int j = 0; j < kSub; ++j) {
+      const double t = (k + (j + 0.5) / kSub) / (kLobeEnergyNodes - 1);
+      const double mu = t * t;
+      masses[k] += table.Lost(static_cast<float>(mu)) * mu * 2 * t;  // d mu = 2 t dt
+    }
+    total += masses[k];
+  }
+  double cumulative = 0;
+  for (int k = 0; k + 1 < kLobeEnergyNodes; ++k) {
+    table.cdf[k] = static_cast<float>(total > 0 ? cumulative / total : 0);
+    cumulative += masses[k];
+  }
+  table.cdf[kLobeEnergyNodes - 1] = 1.0f;
   return table;
 }
 

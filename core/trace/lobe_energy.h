@@ -41,6 +41,31 @@ struct LobeEnergy {
   // for the far direction: f_c = rho_s Lost(mu_v) Lost(mu_l) / (pi (1 - E_avg)).
   FENESTRA_CPU_GPU float Lost(float mu) const { return 1.0f - At(mu); }
   FENESTRA_CPU_GPU bool Compensates() const { return average < 1.0f - 1e-6f; }
+
+  // f_c is drawn in proportion to Lost(mu_l) mu_l (its weight is then rho_s Lost(mu_v) / its
+  // share of the draws, whatever mu_l): sqrt(mu_l) from a density constant on each interval
+  // between the nodes, whose masses are f_c's there (`cdf`, at the nodes), the azimuth uniform.
+  float cdf[kLobeEnergyNodes] = {};
+
+  // The cosine mu of a draw for a uniform u.
+  FENESTRA_CPU_GPU float SampleLostCosine(float u) const {
+    int k = 0;
+    while (k < kLobeEnergyNodes - 2 && !(u < cdf[k + 1])) ++k;
+    const float width = cdf[k + 1] - cdf[k];
+    const float f = width > 0.0f ? (u - cdf[k]) / width : 0.0f;
+    const float t = (static_cast<float>(k) + (f < 1.0f ? f : 1.0f)) / (kLobeEnergyNodes - 1);
+    return t * t;
+  }
+
+  // The solid-angle density of SampleLostCosine's directions at cosine mu (> 0).
+  FENESTRA_CPU_GPU float LostDensity(float mu) const {
+    const float t = sqrtf(mu < 1.0f ? mu : 1.0f);
+    int k = static_cast<int>(t * (kLobeEnergyNodes - 1));
+    if (k > kLobeEnergyNodes - 2) k = kLobeEnergyNodes - 2;
+    constexpr float kStep = 1.0f / (kLobeEnergyNodes - 1), kFourPi = 12.5663706f;
+    // per unit t: mass / step; per unit mu: / (2 t); per steradian: / (2 pi)
+    return t > 1e-6f ? (cdf[k + 1] - cdf[k]) / (kStep * kFourPi * t) : 0.0f;
+  }
 };
 
 // The table of a lobe of roughness `alpha` (> 0), by quadrature of Ward's sampling (a

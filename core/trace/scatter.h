@@ -77,14 +77,14 @@ struct SurfaceScatter {
       float value = diffuse * cos_l;
       *pdf = diffuse * inverse_total * cos_l * kInvPi;
       if (lobe > 0.0f) {
-        // Ward's lobe, drawn with probability E(mu_v), and the light it loses, drawn by the
-        // cosine
+        // Ward's lobe, drawn with probability E(mu_v), and the light it loses, drawn in
+        // proportion to Lost(mu_l) mu_l (lobe_energy.h)
         const WardLobe ward{0.0f, lobe, alpha};
         float lobe_value = kPiF * ward.Lobe(normal, view, l);
         float lobe_pdf = kept * ward.LobePdf(normal, view, l);
         if (energy->Compensates()) {
           lobe_value += lobe * (1.0f - kept) * energy->Lost(cos_l) / (1.0f - energy->average);
-          lobe_pdf += (1.0f - kept) * cos_l * kInvPi;
+          lobe_pdf += (1.0f - kept) * energy->LostDensity(cos_l);
         }
         value += lobe_value * cos_l;
         *pdf += lobe * inverse_total * lobe_pdf;
@@ -170,7 +170,12 @@ FENESTRA_CPU_GPU inline ScatterSample Sample(const SurfaceScatter& s, const Unif
       if (!(weight > 0.0f)) return out;  // below the surface: nothing
       out.direction = Normalize(out.direction);
     } else {
-      out.direction = SampleCosineHemisphere(s.normal, u.u[0], u.u[1]);
+      // The lost light, by Lost(mu_l) mu_l
+      const float mu = s.energy->SampleLostCosine(u.u[0]);
+      const float sine = sqrtf(fmaxf(0.0f, 1.0f - mu * mu)), phi = 2.0f * kPiF * u.u[1];
+      Vec3f t, b;
+      OrthonormalBasis(s.normal, &t, &b);
+      out.direction = Normalize(t * (sine * cosf(phi)) + b * (sine * sinf(phi)) + s.normal * mu);
     }
   } else {
     out.direction = SampleCosineHemisphere(s.normal, u.u[0], u.u[1]);

@@ -51,19 +51,20 @@ Integrals Integrate(const SurfaceScatter& s, float alpha) {
 }
 
 struct Mean {
-  double mean = 0, standard_error = 0;
+  double mean = 0, standard_error = 0, largest = 0;
 };
 
 // The mean of Sample's factor over `count` draws (fixed seed), the directional albedo.
 Mean SampledAlbedo(const SurfaceScatter& s, int count, uint64_t seed) {
   const PathRandom random(seed, 0, 0);
-  double sum = 0, squares = 0;
+  double sum = 0, squares = 0, largest = 0;
   for (int k = 0; k < count; ++k) {
     const ScatterSample sample = Sample(s, random.Draw(k, 0));
     sum += sample.factor, squares += double{sample.factor} * sample.factor;
+    largest = std::max<double>(largest, sample.factor);
   }
   const double mean = sum / count;
-  return {mean, std::sqrt((squares / count - mean * mean) / (count - 1))};
+  return {mean, std::sqrt((squares / count - mean * mean) / (count - 1)), largest};
 }
 
 // A Lambertian surface is what it was: every draw weighs its reflectance, with the cosine
@@ -127,6 +128,11 @@ TEST(ScatterTest, SampledAlbedoIsValuesIntegral) {
       const Mean sampled = SampledAlbedo(s, 200000, 7);
       EXPECT_NEAR(sampled.mean, integrals.albedo, 4 * sampled.standard_error + 2e-4)
           << "roughness " << roughness << " theta " << theta;
+      // No draw weighs much more than the albedo: the lost light is drawn as it is spread
+      EXPECT_LT(sampled.largest, 2.5) << "roughness " << roughness << " theta " << theta;
+      // Nor at grazing incidence
+      const SurfaceScatter grazing = ScatterAt(m, kUp, Direction(1.55, 0.0));
+      EXPECT_LT(SampledAlbedo(grazing, 200000, 8).largest, 2.5) << "roughness " << roughness;
       // The lobe and what it loses reflect the specular part exactly
       EXPECT_NEAR(integrals.albedo, 0.95, 2e-3) << "roughness " << roughness << " theta " << theta;
     }
