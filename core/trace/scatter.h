@@ -112,7 +112,8 @@ struct ScatterSample {
 };
 
 // The parts of `m` where a ray arriving along -view meets a surface of unit normal `normal`
-// (turned to the ray's side).
+// (turned to the ray's side). The result points into `m` (its lobe's energy table), so `m` must
+// outlive it: a temporary is refused (the overload below).
 FENESTRA_CPU_GPU inline SurfaceScatter ScatterAt(const TraceMaterial& m, Vec3f normal, Vec3f view) {
   SurfaceScatter s;
   s.normal = normal;
@@ -137,6 +138,9 @@ FENESTRA_CPU_GPU inline SurfaceScatter ScatterAt(const TraceMaterial& m, Vec3f n
   s.total = s.diffuse + s.lobe + s.mirror + s.straight + s.through;
   return s;
 }
+
+FENESTRA_CPU_GPU SurfaceScatter ScatterAt(const TraceMaterial&& m, Vec3f normal,
+                                          Vec3f view) = delete;
 
 // One part of `s` drawn with u.u[3] and a direction from it with u.u[0], u.u[1].
 FENESTRA_CPU_GPU inline ScatterSample Sample(const SurfaceScatter& s, const Uniform4& u) {

@@ -70,7 +70,8 @@ Mean SampledAlbedo(const SurfaceScatter& s, int count, uint64_t seed) {
 // A Lambertian surface is what it was: every draw weighs its reflectance, with the cosine
 // density, and connects with rho cos.
 TEST(ScatterTest, LambertianAsBefore) {
-  const SurfaceScatter s = ScatterAt(TraceMaterial{0.6f, -1.0f}, kUp, Direction(0.4, 1.0));
+  const TraceMaterial m{0.6f, -1.0f};
+  const SurfaceScatter s = ScatterAt(m, kUp, Direction(0.4, 1.0));
   const PathRandom random(1, 0, 0);
   for (int k = 0; k < 1000; ++k) {
     const ScatterSample sample = Sample(s, random.Draw(k, 0));
@@ -162,7 +163,8 @@ TEST(ScatterTest, ValueIsReciprocal) {
 TEST(ScatterTest, SmoothLobesAreMirrors) {
   for (float roughness : {0.0f, 1e-4f, kMirrorRoughness}) {
     const Vec3f v = Direction(1.2, 0.5);
-    const SurfaceScatter s = ScatterAt(Glossy(0.0f, 0.9f, roughness), kUp, v);
+    const TraceMaterial m = Glossy(0.0f, 0.9f, roughness);
+    const SurfaceScatter s = ScatterAt(m, kUp, v);
     EXPECT_EQ(s.lobe, 0.0f);
     EXPECT_FLOAT_EQ(s.mirror, 0.9f);
     EXPECT_FALSE(s.Smooth());
@@ -175,7 +177,8 @@ TEST(ScatterTest, SmoothLobesAreMirrors) {
   }
   // Just above: a lobe, still finite, its draws near the mirror direction
   const Vec3f v = Direction(0.6, 0.0);
-  const SurfaceScatter s = ScatterAt(Glossy(0.0f, 0.9f, 2e-3f), kUp, v);
+  const TraceMaterial m = Glossy(0.0f, 0.9f, 2e-3f);
+  const SurfaceScatter s = ScatterAt(m, kUp, v);
   const Mean sampled = SampledAlbedo(s, 20000, 11);
   EXPECT_TRUE(std::isfinite(sampled.mean));
   EXPECT_NEAR(sampled.mean, 0.9, 0.01);
