@@ -6,14 +6,19 @@
 // the times; then the sensor sums of one design over independent seeds of both stages,
 // for the calibration of the errors (z-scores). Meant for the GPU:
 //   two_stage_grid_bench [cuda|cpu] [--quick] [--seeds N] [--slats lambertian|metal|plastic]
+//                        [--calibrate-only] [--indoor-only]
 // --slats gives the blind's slats Radiance's metal (0.8 grey, specularity 0.9, roughness 0.05)
-// or plastic (0.8, 0.05, 0.1) instead of the scene's Lambertian 0.8.
+// or plastic (0.8, 0.05, 0.1) instead of the scene's Lambertian 0.8. --calibrate-only skips
+// the grid; --indoor-only calibrates the indoor stage alone: every seed's indoor stage against
+// the one outdoor stage of the grid (2e8 paths), so that the seeds' scatter is the indoor
+// stage's.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
+#include <random>
 #include <span>
 #include <string>
 #include <vector>
@@ -95,6 +100,8 @@ struct Args {
   bool quick = false;
   int seeds = 40;
   std::string slats = "lambertian";
+  bool calibrate_only = false;
+  bool indoor_only = false;
 };
 
 // The command line: the backend's name, --quick, --seeds N.
@@ -108,6 +115,10 @@ Args Parse(int argc, char** argv) {
       a.seeds = std::atoi(argv[++i]);
     } else if (arg == "--slats" && i + 1 < argc) {
       a.slats = argv[++i];
+    } else if (arg == "--calibrate-only") {
+      a.calibrate_only = true;
+    } else if (arg == "--indoor-only") {
+      a.indoor_only = true;
     } else {
       a.backend_name = arg;
     }
@@ -240,10 +251,12 @@ void PrintGridSummary(const GridSummary& g, size_t design_count) {
 }
 
 // The two-stage sky sums of one blind design and their standard errors, per seed of both
-// stages (each seed a fresh outdoor and indoor stage at a job's sampling).
+// stages (each seed a fresh outdoor and indoor stage at a job's sampling), or of the indoor
+// stage alone against `fixed_outdoor` where it is given.
 void SeedSums(const Scene& scene, const BlindDesign& design, DcBackend& backend,
               const OutdoorOptions& outdoor, const WindowParts& parts, bool quick, int seeds,
-              std::vector<Eigen::VectorXd>* sums, std::vector<Eigen::VectorXd>* errors) {
+              const OutdoorResult* fixed_outdoor, std::vector<Eigen::VectorXd>* sums,
+              std::vector<Eigen::VectorXd>* errors) {
   for (int k = 0; k < seeds; ++k) {
     OutdoorOptions out = outdoor;
     out.paths = quick ? 1'000'000 : 20'000'000;
@@ -253,53 +266,92 @@ void SeedSums(const Scene& scene, const BlindDesign& design, DcBackend& backend,
     in.max_bounces = -1;
     in.parts = parts;
     in.seed = 2000 + k;
-    const OutdoorResult ok = ValueOrExit(ComputeOutdoorStage(scene, out, &backend));
     const IndoorResult ik = ValueOrExit(ComputeIndoorStage(scene, design, in, &backend));
-    const TwoStageResult tk = ValueOrExit(CombineStages(ik, ok));
+    const TwoStageResult tk = ValueOrExit(
+        fixed_outdoor != nullptr
+            ? CombineStages(ik, *fixed_outdoor)
+            : CombineStages(ik, ValueOrExit(ComputeOutdoorStage(scene, out, &backend))));
     sums->push_back(tk.sky_sum);
     errors->push_back(tk.sky_sum_standard_error);
   }
 }
 
+// The seeds' z-scores of the sensors' sums (sums[k](s)) against the mean over `picked` seeds
+// (indices into sums, repeats allowed): per sensor the sum of z^2 with the pooled SE
+// (rms over the picked seeds) into pooled[s], with each seed's own SE into own[s].
+void SquaredZ(const std::vector<Eigen::VectorXd>& sums, const std::vector<Eigen::VectorXd>& errors,
+              const std::vector<int>& picked, std::vector<double>* pooled,
+              std::vector<double>* own) {
+  const double n = static_cast<double>(picked.size());
+  const double scale = n / (n - 1.0);
+  for (Eigen::Index s = 0; s < sums[0].size(); ++s) {
+    double mean = 0, variance = 0;
+    for (const int k : picked) {
+      mean += sums[k](s) / n;
+      variance += errors[k](s) * errors[k](s) / n;
+    }
+    double p = 0, o = 0;
+    for (const int k : picked) {
+      const double d = sums[k](s) - mean;
+      p += d * d / variance * scale;
+      o += d * d / (errors[k](s) * errors[k](s)) * scale;
+    }
+    (*pooled)[s] = p, (*own)[s] = o;
+  }
+}
+
 // Prints design d's calibration line: per sensor the SD of the seeds' z-scores against the
-// pooled SE, then over all sensors with the pooled and with each seed's own SE.
+// pooled SE, then over all sensors with the pooled and with each seed's own SE, and the
+// pooled SD's 95% interval from 2000 bootstrap resamples of the seeds (which keeps the
+// sensors' correlation through the shared stages).
 void PrintSeedZScores(const Design& d, const std::vector<Eigen::VectorXd>& sums,
                       const std::vector<Eigen::VectorXd>& errors, int seeds) {
-  double pooled = 0, own = 0;
-  int count = 0;
+  const size_t sensors = static_cast<size_t>(sums[0].size());
+  std::vector<double> pooled(sensors), own(sensors);
+  std::vector<int> all(seeds);
+  for (int k = 0; k < seeds; ++k) all[k] = k;
+  SquaredZ(sums, errors, all, &pooled, &own);
+  double pooled_all = 0, own_all = 0;
   std::printf("%-17s per sensor z SD:", d.name.c_str());
-  for (Eigen::Index s = 0; s < sums[0].size(); ++s) {
-    double mean = 0, variance = 0, sensor = 0;
-    for (int k = 0; k < seeds; ++k) {
-      mean += sums[k](s) / seeds;
-      variance += errors[k](s) * errors[k](s) / seeds;
-    }
-    for (int k = 0; k < seeds; ++k) {
-      const double scale = std::sqrt(seeds / (seeds - 1.0));
-      const double z = (sums[k](s) - mean) / std::sqrt(variance) * scale;
-      const double z_own = (sums[k](s) - mean) / errors[k](s) * scale;
-      pooled += z * z, own += z_own * z_own, sensor += z * z;
-      ++count;
-    }
-    std::printf(" %.2f", std::sqrt(sensor / seeds));
+  for (size_t s = 0; s < sensors; ++s) {
+    std::printf(" %.2f", std::sqrt(pooled[s] / seeds));
+    pooled_all += pooled[s], own_all += own[s];
   }
-  std::printf("; all: %.3f (own SE: %.3f), %d z-scores\n", std::sqrt(pooled / count),
-              std::sqrt(own / count), count);
+  const double count = static_cast<double>(seeds * sensors);
+  std::mt19937_64 random(7);
+  std::uniform_int_distribution<int> pick(0, seeds - 1);
+  std::vector<double> resampled;
+  std::vector<int> picked(seeds);
+  std::vector<double> p(sensors), o(sensors);
+  for (int r = 0; r < 2000; ++r) {
+    for (int& k : picked) k = pick(random);
+    SquaredZ(sums, errors, picked, &p, &o);
+    double total = 0;
+    for (const double v : p) total += v;
+    resampled.push_back(std::sqrt(total / count));
+  }
+  std::sort(resampled.begin(), resampled.end());
+  std::printf("; all: %.3f [%.3f, %.3f] (own SE: %.3f), %.0f z-scores\n",
+              std::sqrt(pooled_all / count), resampled[50], resampled[1949],
+              std::sqrt(own_all / count), count);
 }
 
 // Calibration: sky sums over independent seeds of both stages, at a job's sampling, for
 // three of the named designs.
 void Calibrate(const Scene& scene, const std::vector<Design>& designs, DcBackend& backend,
-               const OutdoorOptions& outdoor, const WindowParts& parts, bool quick, int seeds) {
+               const OutdoorOptions& outdoor, const WindowParts& parts, bool quick, int seeds,
+               const OutdoorResult* fixed_outdoor) {
   std::printf(
-      "\nsky sums over %d seeds of both stages (outdoor 2e7 paths, indoor 2e5 paths per sensor, "
+      "\nsky sums over %d seeds of %s (outdoor 2e7 paths, indoor 2e5 paths per sensor, "
       "unlimited bounces, 8 batches): z = (x_k - mean) / rms(SE_k) x sqrt(K / (K - 1)); and "
-      "with each seed's own SE\n",
-      seeds);
+      "with each seed's own SE; [95%% bootstrap interval over the seeds]\n",
+      seeds,
+      fixed_outdoor != nullptr ? "the indoor stage, against one outdoor stage of 2e8 paths"
+                               : "both stages");
   for (const Design& d : {designs[0], designs[1], designs[4]}) {
     const BlindDesign design = BlindAt(scene, d);
     std::vector<Eigen::VectorXd> sums, errors;
-    SeedSums(scene, design, backend, outdoor, parts, quick, seeds, &sums, &errors);
+    SeedSums(scene, design, backend, outdoor, parts, quick, seeds, fixed_outdoor, &sums, &errors);
     PrintSeedZScores(d, sums, errors, seeds);
   }
 }
@@ -342,13 +394,15 @@ int main(int argc, char** argv) {
       "%-17s %5s %5s %5s %6s | per sensor: (two-stage / one-stage - 1) in %% and in combined SE "
       "| UDI one-stage, two-stage [%%] | s one, two\n",
       "design", "alpha", "w", "s", "t");
-  GridSummary summary;
   const std::vector<Design> designs = Designs();
-  for (const Design& d : designs) {
-    CompareDesign(d, scene, sky, *backend, parts, one_stage_paths, indoor_paths, o, &summary);
+  if (!args.calibrate_only) {
+    GridSummary summary;
+    for (const Design& d : designs) {
+      CompareDesign(d, scene, sky, *backend, parts, one_stage_paths, indoor_paths, o, &summary);
+    }
+    PrintGridSummary(summary, designs.size());
   }
-  PrintGridSummary(summary, designs.size());
-
-  Calibrate(scene, designs, *backend, outdoor, parts, quick, args.seeds);
+  Calibrate(scene, designs, *backend, outdoor, parts, quick, args.seeds,
+            args.indoor_only ? &o : nullptr);
   return 0;
 }

@@ -10,7 +10,8 @@
 #   BACKEND  Fenestra's: cpu (default), cuda, or none (Radiance alone). RADBIN "-" skips
 #            Radiance: its halves are read from OUTDIR, as an earlier run left them
 # Fenestra's paths: ONE_STAGE_PATHS per sensor (environment, default 4e6), two-stage
-# OUTDOOR_PATHS (1e8) and INDOOR_PATHS per sensor (2e6), bounces unlimited.
+# OUTDOOR_PATHS (1e8) and INDOOR_PATHS per sensor (2e6), bounces unlimited; seeds
+# ONE_STAGE_SEED (21) and TWO_STAGE_SEED (22).
 # Writes OUTDIR/scene.json (SCENE with the slats' material), scene.rad and sensors.pts (by
 # `fenestra scene export --rad`), Radiance's halves dc_a.txt and dc_b.txt, Fenestra's logs
 # one_stage_BACKEND.log and two_stage_BACKEND.log, and prints the comparison (glossy.py).
@@ -19,6 +20,7 @@ if [ $# -lt 5 ]; then sed -n 2,17p "$0"; exit 2; fi
 RADBIN=$1; SCENE=$(realpath "$2"); DESIGN=$3; SLATS=$4; OUT=$5
 PATHS=${6:-500000}; BACKEND=${7:-cpu}
 ONE=${ONE_STAGE_PATHS:-4000000} OUTDOOR=${OUTDOOR_PATHS:-100000000} INDOOR=${INDOOR_PATHS:-2000000}
+ONE_SEED=${ONE_STAGE_SEED:-21} TWO_SEED=${TWO_STAGE_SEED:-22}
 HERE=$(cd "$(dirname "$0")" && pwd)
 FENESTRA=${FENESTRA:-$HERE/../../build/client/fenestra}
 mkdir -p "$OUT"; OUT=$(cd "$OUT" && pwd)
@@ -75,8 +77,8 @@ fi
 
 [ "$BACKEND" = none ] && exit 0
 "$FENESTRA" dc "$OUT/scene.json" --set "$DESIGN" --backend "$BACKEND" --method one-stage \
-  --paths "$ONE" --seed 21 -o "$OUT/one_stage_$BACKEND.txt" > "$OUT/one_stage_$BACKEND.log"
+  --paths "$ONE" --seed "$ONE_SEED" -o "$OUT/one_stage_$BACKEND.txt" > "$OUT/one_stage_$BACKEND.log"
 "$FENESTRA" dc "$OUT/scene.json" --set "$DESIGN" --backend "$BACKEND" --method two-stage \
-  --outdoor-paths "$OUTDOOR" --indoor-paths "$INDOOR" --seed 22 -o "$OUT/two_stage_$BACKEND.txt" \
+  --outdoor-paths "$OUTDOOR" --indoor-paths "$INDOOR" --seed "$TWO_SEED" -o "$OUT/two_stage_$BACKEND.txt" \
   > "$OUT/two_stage_$BACKEND.log"
 /usr/bin/python3 "$HERE/glossy.py" "$OUT" "$BACKEND"
