@@ -22,18 +22,26 @@ absl::Status OverLimit(const std::string& what, double value, const std::string&
       absl::StrCat(what, " is ", shown, ", above this server's limit ", limit, " = ", maximum));
 }
 
-// Upper bound on the slats the blind generator can place (12 triangles each): pitch >= w.
-double MaxBlindSlats(const v1::Scene& scene, double min_slat_width_m) {
-  if (!scene.has_blind()) return 0;
-  const v1::VenetianBlind& blind = scene.blind();
+// Upper bound on the slats the blind generator can place on `window` (12 triangles each):
+// pitch >= w.
+double MaxSlats(const v1::Window& window, const v1::VenetianBlind& blind, double min_slat_width_m) {
   double w = min_slat_width_m;
   if (!(w > 0))
     w = blind.slat_width_m().min() > 0 ? blind.slat_width_m().min() : blind.slat_width_m().value();
   if (!(w > 0) || !std::isfinite(w)) return 0;  // invalid; the scene check reports it
   const bool vertical = blind.orientation() == v1::VenetianBlind::VERTICAL;
-  const double extent = vertical ? scene.window().width_m() : scene.window().height_m();
+  const double extent = vertical ? window.width_m() : window.height_m();
   if (!(extent > 0) || !std::isfinite(extent)) return 0;
   return std::ceil(extent / w) + 1;
+}
+
+// The same over every blind of the scene, in either window form.
+double MaxBlindSlats(const v1::Scene& scene, double min_slat_width_m) {
+  double slats = scene.has_blind() ? MaxSlats(scene.window(), scene.blind(), min_slat_width_m) : 0;
+  for (const v1::Window& w : scene.windows()) {
+    if (w.has_blind()) slats += MaxSlats(w, w.blind(), min_slat_width_m);
+  }
+  return slats;
 }
 
 }  // namespace

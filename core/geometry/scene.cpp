@@ -1,6 +1,7 @@
 #include "core/geometry/scene.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -314,25 +315,37 @@ absl::Status AddObj(const v1::ObjMesh& obj, const std::string& field, uint32_t d
   return absl::OkStatus();
 }
 
-absl::StatusOr<Window> BuildWindow(const v1::Scene& proto, const Checker& check) {
-  if (!proto.has_window()) return check.Error("window", "is required");
-  const v1::Window& w = proto.window();
+// A window's name or a blind's group: empty, or at most 64 letters, digits, '_', '-', '.'.
+absl::Status CheckWindowName(const std::string& name, const std::string& field,
+                             const Checker& check) {
+  constexpr size_t kLongest = 64;
+  const bool taken =
+      name.size() <= kLongest && std::all_of(name.begin(), name.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+      });
+  if (taken) return absl::OkStatus();
+  return check.Error(field, "must be at most 64 letters, digits, '_', '-' or '.'");
+}
+
+// The window `w`, `field` its place in the scene ("window", "windows[2]").
+absl::StatusOr<Window> BuildWindow(const v1::Window& w, const std::string& field,
+                                   const Checker& check) {
   Window window;
-  FENESTRA_ASSIGN_OR_RETURN(center, check.Point(w.center(), "window.center"));
-  FENESTRA_ASSIGN_OR_RETURN(normal, check.Direction(w.outward_normal(), "window.outward_normal"));
-  FENESTRA_ASSIGN_OR_RETURN(up, check.Direction(w.up(), "window.up"));
+  FENESTRA_ASSIGN_OR_RETURN(center, check.Point(w.center(), field + ".center"));
+  FENESTRA_ASSIGN_OR_RETURN(normal, check.Direction(w.outward_normal(), field + ".outward_normal"));
+  FENESTRA_ASSIGN_OR_RETURN(up, check.Direction(w.up(), field + ".up"));
   if (std::abs(Dot(normal, up)) > kShapeTolerance) {
-    return check.Error("window.up", "must be perpendicular to window.outward_normal");
+    return check.Error(field + ".up", "must be perpendicular to " + field + ".outward_normal");
   }
-  for (const auto& [side, field] :
-       {std::pair{w.width_m(), "window.width_m"}, std::pair{w.height_m(), "window.height_m"}}) {
+  for (const auto& [side, side_field] :
+       {std::pair{w.width_m(), field + ".width_m"}, std::pair{w.height_m(), field + ".height_m"}}) {
     if (!(side >= kMinWindowSideM)) {
-      return check.Error(field,
+      return check.Error(side_field,
                          absl::StrCat("must be at least ", kMinWindowSideM, " m, got ", side));
     }
   }
   if (!(w.depth_m() >= 0 && w.depth_m() <= kMaxWindowDepthM)) {
-    return check.Error("window.depth_m",
+    return check.Error(field + ".depth_m",
                        absl::StrCat("must be in [0, ", kMaxWindowDepthM,
                                     "] m (the wall's thickness), got ", w.depth_m()));
   }
@@ -349,7 +362,7 @@ absl::StatusOr<Window> BuildWindow(const v1::Scene& proto, const Checker& check)
       for (const double d : {0.0, w.depth_m()}) {
         const Vec3d corner =
             center + (a * w.width_m()) * window.across + (b * w.height_m()) * up - d * normal;
-        FENESTRA_RETURN_IF_ERROR(check.Within(corner, "window: a corner").status());
+        FENESTRA_RETURN_IF_ERROR(check.Within(corner, field + ": a corner").status());
       }
     }
   }
@@ -433,7 +446,8 @@ absl::StatusOr<ParameterRange> BuildParameter(const v1::Parameter& p, const std:
   return range;
 }
 
-absl::StatusOr<bool> IsVertical(const v1::VenetianBlind& b, const Checker& check) {
+absl::StatusOr<bool> IsVertical(const v1::VenetianBlind& b, const std::string& field,
+                                const Checker& check) {
   switch (b.orientation()) {
     case v1::VenetianBlind::ORIENTATION_UNSPECIFIED:
     case v1::VenetianBlind::HORIZONTAL:
@@ -441,8 +455,9 @@ absl::StatusOr<bool> IsVertical(const v1::VenetianBlind& b, const Checker& check
     case v1::VenetianBlind::VERTICAL:
       return true;
     default:
-      return check.Error("blind.orientation", absl::StrCat("must be HORIZONTAL or VERTICAL, got ",
-                                                           static_cast<int>(b.orientation())));
+      return check.Error(
+          field + ".orientation",
+          absl::StrCat("must be HORIZONTAL or VERTICAL, got ", static_cast<int>(b.orientation())));
   }
 }
 
@@ -456,46 +471,48 @@ absl::Status CheckLength(double value, double highest, const std::string& field,
 
 absl::StatusOr<BlindSpec> BuildBlind(const v1::VenetianBlind& b,
                                      const std::vector<Material>& materials, const Window& window,
-                                     const Checker& check) {
+                                     const std::string& field, const Checker& check) {
   BlindSpec spec;
   FENESTRA_ASSIGN_OR_RETURN(material,
-                            FindSlatMaterial(materials, b.material(), "blind.material", check));
+                            FindSlatMaterial(materials, b.material(), field + ".material", check));
   spec.material = material;
   if (b.has_outer_material()) {
     FENESTRA_ASSIGN_OR_RETURN(
-        outer, FindSlatMaterial(materials, b.outer_material(), "blind.outer_material", check));
+        outer, FindSlatMaterial(materials, b.outer_material(), field + ".outer_material", check));
     spec.outer_material = outer;
   }
-  FENESTRA_ASSIGN_OR_RETURN(vertical, IsVertical(b, check));
+  FENESTRA_ASSIGN_OR_RETURN(vertical, IsVertical(b, field, check));
   spec.vertical = vertical;
   FENESTRA_ASSIGN_OR_RETURN(
-      tilt, BuildParameter(b.tilt_rad(), "blind.tilt_rad", kTiltBoundsRad, "rad", check));
-  FENESTRA_ASSIGN_OR_RETURN(
-      width, BuildParameter(b.slat_width_m(), "blind.slat_width_m", kSlatWidthBoundsM, "m", check));
-  FENESTRA_ASSIGN_OR_RETURN(spacing, BuildParameter(b.slat_spacing_m(), "blind.slat_spacing_m",
+      tilt, BuildParameter(b.tilt_rad(), field + ".tilt_rad", kTiltBoundsRad, "rad", check));
+  FENESTRA_ASSIGN_OR_RETURN(width, BuildParameter(b.slat_width_m(), field + ".slat_width_m",
+                                                  kSlatWidthBoundsM, "m", check));
+  FENESTRA_ASSIGN_OR_RETURN(spacing, BuildParameter(b.slat_spacing_m(), field + ".slat_spacing_m",
                                                     kSlatSpacingBoundsM, "m", check));
   FENESTRA_ASSIGN_OR_RETURN(thickness,
-                            BuildParameter(b.slat_thickness_m(), "blind.slat_thickness_m",
+                            BuildParameter(b.slat_thickness_m(), field + ".slat_thickness_m",
                                            kSlatThicknessBoundsM, "m", check));
   spec.tilt_rad = tilt;
   spec.slat_width_m = width;
   spec.slat_spacing_m = spacing;
   spec.slat_thickness_m = thickness;
   if (b.has_wall_gap_m()) {
-    FENESTRA_RETURN_IF_ERROR(CheckLength(b.wall_gap_m(), kMaxWallGapM, "blind.wall_gap_m", check));
+    FENESTRA_RETURN_IF_ERROR(
+        CheckLength(b.wall_gap_m(), kMaxWallGapM, field + ".wall_gap_m", check));
     spec.wall_gap_m = b.wall_gap_m();
   }
   FENESTRA_RETURN_IF_ERROR(
-      CheckLength(b.side_margin_m(), kMaxSideMarginM, "blind.side_margin_m", check));
+      CheckLength(b.side_margin_m(), kMaxSideMarginM, field + ".side_margin_m", check));
   spec.side_margin_m = b.side_margin_m();
   if (!v1::VenetianBlind::Operation_IsValid(b.operation())) {
-    return check.Error("blind.operation",
+    return check.Error(field + ".operation",
                        absl::StrCat("unknown operation ", static_cast<int>(b.operation()),
                                     " (STATIC or AUTOMATED_SUN)"));
   }
   spec.automated_sun = b.operation() == v1::VenetianBlind::AUTOMATED_SUN;
+  FENESTRA_RETURN_IF_ERROR(CheckWindowName(b.group(), field + ".group", check));
   if (absl::Status fits = CheckBlindFits(spec, window); !fits.ok()) {
-    return check.Error("blind", std::string(fits.message()));
+    return check.Error(field, std::string(fits.message()));
   }
   return spec;
 }
@@ -574,6 +591,42 @@ absl::Status BuildSurfaces(const v1::Scene& proto, const Checker& check, Scene& 
   return absl::OkStatus();
 }
 
+// The scene's window and its blind, from the one-window form (`window`, `blind`) or from
+// `windows`.
+absl::Status BuildWindows(const v1::Scene& proto, const Checker& check, Scene& scene) {
+  if (proto.has_window() && proto.windows_size() > 0) {
+    return check.Error("windows", "a scene gives either window (with blind) or windows");
+  }
+  if (proto.has_window()) {
+    FENESTRA_ASSIGN_OR_RETURN(window, BuildWindow(proto.window(), "window", check));
+    scene.window = window;
+    if (proto.has_blind()) {
+      FENESTRA_ASSIGN_OR_RETURN(
+          blind, BuildBlind(proto.blind(), scene.materials, scene.window, "blind", check));
+      scene.blind = blind;
+    }
+    return absl::OkStatus();
+  }
+  if (proto.windows_size() == 0) return check.Error("window", "is required (or windows)");
+  if (proto.has_blind()) {
+    return check.Error("blind", "belongs to window; with windows each window has its blind");
+  }
+  if (proto.windows_size() > 1) {
+    return absl::UnimplementedError(absl::StrCat(
+        check.path(), ": windows: one window is traced so far, got ", proto.windows_size()));
+  }
+  const v1::Window& w = proto.windows(0);
+  FENESTRA_RETURN_IF_ERROR(CheckWindowName(w.name(), "windows[0].name", check));
+  FENESTRA_ASSIGN_OR_RETURN(window, BuildWindow(w, "windows[0]", check));
+  scene.window = window;
+  if (w.has_blind()) {
+    FENESTRA_ASSIGN_OR_RETURN(
+        blind, BuildBlind(w.blind(), scene.materials, scene.window, "windows[0].blind", check));
+    scene.blind = blind;
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<v1::Scene> ReadSceneProto(const std::string& path) {
@@ -591,15 +644,9 @@ absl::StatusOr<Scene> BuildScene(const v1::Scene& proto, const std::string& path
   FENESTRA_ASSIGN_OR_RETURN(materials, BuildMaterials(proto, check));
   scene.materials = std::move(materials);
   FENESTRA_RETURN_IF_ERROR(BuildSurfaces(proto, check, scene));
-  FENESTRA_ASSIGN_OR_RETURN(window, BuildWindow(proto, check));
-  scene.window = window;
+  FENESTRA_RETURN_IF_ERROR(BuildWindows(proto, check, scene));
   FENESTRA_ASSIGN_OR_RETURN(sensors, BuildSensors(proto, check));
   scene.sensors = std::move(sensors);
-  if (proto.has_blind()) {
-    FENESTRA_ASSIGN_OR_RETURN(blind,
-                              BuildBlind(proto.blind(), scene.materials, scene.window, check));
-    scene.blind = blind;
-  }
   FENESTRA_ASSIGN_OR_RETURN(site, BuildSite(proto, check));
   scene.site = site;
   return scene;

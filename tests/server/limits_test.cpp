@@ -44,6 +44,25 @@ TEST(LimitsTest, TrianglesCountPolygonsBoxesAndTheBlindAtItsMostSlats) {
               HasSubstr("max_triangles"));
 }
 
+TEST(LimitsTest, BlindsInTheWindowsListCountToo) {
+  // The same window and blind as windows[0], twice: twice the slats
+  v1::Scene one = SceneWithBlind(0.125);
+  v1::Scene listed = one;
+  listed.clear_window();
+  listed.clear_blind();
+  for (int k = 0; k < 2; ++k) {
+    v1::Window& w = *listed.add_windows();
+    w = one.window();
+    *w.mutable_blind() = one.blind();
+  }
+  v1::Limits limits = DefaultLimits();
+  // 2 + 12 + 2 x 12 x (1.5 / 0.125 + 1) = 326 triangles
+  limits.set_max_triangles(326);
+  EXPECT_TRUE(CheckSceneLimits(listed, limits).ok());
+  limits.set_max_triangles(325);
+  EXPECT_THAT(CheckSceneLimits(listed, limits).message(), HasSubstr("326"));
+}
+
 TEST(LimitsTest, SensorGridsAreExpanded) {
   v1::Scene scene;
   scene.add_sensors();

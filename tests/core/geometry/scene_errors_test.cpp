@@ -400,6 +400,58 @@ TEST_F(SceneErrorsTest, OuterMaterialCoversTheSlatsOuterFacesOnly) {
   EXPECT_EQ(per_material[1], 10 * slats);
 }
 
+TEST_F(SceneErrorsTest, WindowsListGivesTheSameSceneAsTheOneWindowForm) {
+  // The window and its blind moved into windows[0]
+  const std::string text = R"({
+      "name": "box",
+      "materials": [{"name": "wall", "reflectance": 0.5}, {"name": "slat", "reflectance": 0.8}],
+      "surfaces": [{"name": "floor", "material": "wall", "side": "SIDE_INDOOR",
+                    "polygon": {"vertices": [{"x": 0, "y": 0, "z": 0}, {"x": 1, "y": 0, "z": 0},
+                                             {"x": 1, "y": 1, "z": 0}]}}],
+      "windows": [{"name": "south", "center": {"x": 0, "y": 1, "z": 1},
+                   "outwardNormal": {"x": 0, "y": 1, "z": 0}, "up": {"x": 0, "y": 0, "z": 1},
+                   "widthM": 1, "heightM": 1, "depthM": 0.2,
+                   "blind": {"material": "slat", "group": "south-facade",
+                             "tiltRad": {"value": 0, "min": 0, "max": 1.5},
+                             "slatWidthM": {"value": 0.1, "min": 0.05, "max": 0.15},
+                             "slatSpacingM": {"value": 0, "min": 0, "max": 0.1},
+                             "slatThicknessM": {"value": 0.01, "min": 0.01, "max": 0.02}}}],
+      "sensors": [{"name": "s", "position": {"x": 0.5, "y": 0.5, "z": 0.5},
+                   "direction": {"x": 0, "y": 0, "z": 1}}]
+    })";
+  absl::StatusOr<fenestra::Scene> listed = LoadScene(Write("listed.json", text));
+  absl::StatusOr<fenestra::Scene> single = LoadScene(Scene());
+  ASSERT_TRUE(listed.ok()) << listed.status();
+  ASSERT_TRUE(single.ok()) << single.status();
+  EXPECT_EQ(listed->window.center.y, single->window.center.y);
+  EXPECT_EQ(listed->window.depth_m, single->window.depth_m);
+  ASSERT_TRUE(listed->blind.has_value());
+  const TriangleMesh a = AssembleMesh(*listed, DefaultDesign(*listed));
+  const TriangleMesh b = AssembleMesh(*single, DefaultDesign(*single));
+  ASSERT_EQ(a.vertices.size(), b.vertices.size());
+  for (size_t v = 0; v < a.vertices.size(); ++v) {
+    EXPECT_EQ(Length(a.vertices[v] - b.vertices[v]), 0.0) << "vertex " << v;
+  }
+
+  // Errors name the field
+  auto edited = [&](const std::string& find, const std::string& replace) {
+    std::string t = text;
+    t.replace(t.find(find), find.size(), replace);
+    return Write("edited.json", t);
+  };
+  ExpectError(edited(R"("widthM": 1,)", R"("widthM": 0.001,)"), {"windows[0].width_m"});
+  ExpectError(edited(R"("group": "south-facade")", R"("group": "south facade")"),
+              {"windows[0].blind.group"});
+  ExpectError(edited(R"("name": "south")", R"("name": "s/../x")"), {"windows[0].name"});
+  ExpectError(edited(R"("material": "slat",)", R"("material": "none",)"),
+              {"windows[0].blind.material"});
+  ExpectError(edited(R"("windows": [)", R"("blind": {"material": "slat"}, "windows": [)"),
+              {"blind", "each window has its blind"});
+  ExpectError(Scene(R"("sensors": [)", R"("windows": [{"widthM": 1}], "sensors": [)"),
+              {"windows", "either window"});
+  ExpectError(Scene(R"("window": {)", R"("windowz": {)"), {"malformed scene"});
+}
+
 TEST_F(SceneErrorsTest, MissingSceneFile) {
   absl::StatusOr<fenestra::Scene> scene = LoadScene((dir_ / "none.json").string());
   ASSERT_FALSE(scene.ok());
