@@ -354,7 +354,7 @@ int main(int argc, char** argv) {
 
   // The window in its default parts (4 x 3), as jobs trace it
   OutdoorOptions outdoor;
-  outdoor.parts = AutomaticWindowParts(office.window);
+  outdoor.parts = AutomaticWindowParts(office.window());
   const OutdoorResult o = TimeOutdoorStage(*gpu, office, outdoor);
 
   // The candidates, then their parts (the recorded paths and the replayed stages are held

@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
       ValueOrExit(LoadScene(std::string(FENESTRA_SOURCE_DIR) + "/examples/city_office/scene.json"));
   std::printf("backend: %s\n", backend->Name().c_str());
 
-  const WindowParts parts = AutomaticWindowParts(scene.window);
+  const WindowParts parts = AutomaticWindowParts(scene.window());
   OutdoorOptions outdoor;
   outdoor.parts = parts;
   const OutdoorResult o = ValueOrExit(ComputeOutdoorStage(scene, outdoor, backend.get()));

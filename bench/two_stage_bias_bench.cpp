@@ -286,7 +286,7 @@ std::vector<Tally> TraceIndoor(const Scene& scene, const BlindDesign& design,
   const TraceGeometry indoor = ValueOrExit(PrepareTraceGeometry(room, scene.materials));
   const auto indoor_scene = ValueOrExit(EmbreeScene::Build(indoor));
   const std::vector<TraceSensor> sensors = LocalSensors(indoor, scene.sensors);
-  const TraceWindow window = LocalWindow(indoor, scene.window, parts);
+  const TraceWindow window = LocalWindow(indoor, scene.window(), parts);
   const WatchingOutdoor prototype{{outdoor_scene, OutdoorOffset(indoor, outdoor), nullptr}};
   const int sensor_count = static_cast<int>(sensors.size());
   const PathSettings settings{-1, true, 1.0f, 1u << 20};
@@ -549,7 +549,7 @@ int main(int argc, char** argv) {
                                               {"spacing", args.spacing},
                                               {"thickness", args.thickness}}));
   const WindowParts parts =
-      args.parts.columns > 0 ? args.parts : AutomaticWindowParts(scene.window);
+      args.parts.columns > 0 ? args.parts : AutomaticWindowParts(scene.window());
   const HemisphereBasis basis = ValueOrExit(BasisFor(args.cells));
   std::printf(
       "city office, design alpha=%.3f w=%.3f s=%.3f t=%.3f, city reflectance %s, %d direction "
@@ -560,7 +560,7 @@ int main(int argc, char** argv) {
   // The outdoor stage, both direction densities
   const TraceGeometry outdoor = ValueOrExit(OutdoorGeometry(scene));
   const auto outdoor_scene = ValueOrExit(EmbreeScene::Build(outdoor));
-  const TraceWindow outdoor_window = LocalWindow(outdoor, scene.window, parts);
+  const TraceWindow outdoor_window = LocalWindow(outdoor, scene.window(), parts);
   const int cells = WindowCellCount(outdoor_window, basis);
   const uint64_t per_cell = static_cast<uint64_t>(args.outdoor_paths / cells);
   const OutdoorSums projected =
@@ -580,7 +580,7 @@ int main(int argc, char** argv) {
   // The cells that make sensor 1's bias
   for (int s : {0, 1}) {
     const SensorCells r = SumSensorCells(tallies, s, projected, paths);
-    PrintLargestCellBiases(s, r, projected, solid, basis, scene.window, parts, args.top);
+    PrintLargestCellBiases(s, r, projected, solid, basis, scene.window(), parts, args.top);
   }
   return 0;
 }

@@ -142,8 +142,8 @@ Scene WithSlats(Scene scene, const std::string& slats) {
   }
   m.name = "slats_" + slats;
   scene.materials.push_back(m);
-  scene.blind->material = static_cast<uint32_t>(scene.materials.size() - 1);
-  scene.blind->outer_material.reset();
+  scene.blind()->material = static_cast<uint32_t>(scene.materials.size() - 1);
+  scene.blind()->outer_material.reset();
   return scene;
 }
 
@@ -367,7 +367,7 @@ int main(int argc, char** argv) {
   const Scene scene =
       WithSlats(ValueOrExit(LoadScene(kRoot + "/examples/city_office/scene.json")), args.slats);
   const AnnualSky sky = CityOfficeSky();
-  const WindowParts parts = AutomaticWindowParts(scene.window);
+  const WindowParts parts = AutomaticWindowParts(scene.window());
   const int64_t one_stage_paths = quick ? 200'000 : 10'000'000;
   const int64_t outdoor_paths = quick ? 2'000'000 : 200'000'000;
   const int64_t indoor_paths = quick ? 200'000 : 2'000'000;

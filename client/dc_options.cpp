@@ -175,7 +175,7 @@ absl::StatusOr<DcInput> LoadDcInput(const DcFlags& flags) {
   FENESTRA_ASSIGN_OR_RETURN(design, DesignWithOverrides(input.scene, values));
   input.design = std::move(design);
   if (flags.window_parts == "auto") {
-    input.parts = AutomaticWindowParts(input.scene.window);
+    input.parts = AutomaticWindowParts(input.scene.window());
   } else {
     FENESTRA_ASSIGN_OR_RETURN(parts, ParseWindowParts(flags.window_parts));
     input.parts = parts;

@@ -41,25 +41,29 @@ void PrintSummary(const Scene& scene, const BlindDesign& design) {
   }
   fmt::print("bounding box: ({:.3f}, {:.3f}, {:.3f}) .. ({:.3f}, {:.3f}, {:.3f}) m\n", lo.x, lo.y,
              lo.z, hi.x, hi.y, hi.z);
-  const Window& w = scene.window;
-  fmt::print(
-      "window: {:.3f} x {:.3f} m at ({:.3f}, {:.3f}, {:.3f}), outward ({:.3f}, {:.3f}, "
-      "{:.3f}), depth {:.3f} m\n",
-      w.width_m, w.height_m, w.center.x, w.center.y, w.center.z, w.normal.x, w.normal.y, w.normal.z,
-      w.depth_m);
+  for (const SceneWindow& sw : scene.windows) {
+    const Window& w = sw.window;
+    fmt::print(
+        "{}: {:.3f} x {:.3f} m at ({:.3f}, {:.3f}, {:.3f}), outward ({:.3f}, {:.3f}, "
+        "{:.3f}), depth {:.3f} m{}\n",
+        sw.name, w.width_m, w.height_m, w.center.x, w.center.y, w.center.z, w.normal.x, w.normal.y,
+        w.normal.z, w.depth_m, sw.blind ? ", with a blind" : "");
+  }
   fmt::print("sensors: {}\n", scene.sensors.size());
   for (const Sensor& s : scene.sensors) {
     fmt::print("  {:<10} ({:.3f}, {:.3f}, {:.3f}) facing ({:.3f}, {:.3f}, {:.3f})\n", s.name,
                s.position.x, s.position.y, s.position.z, s.direction.x, s.direction.y,
                s.direction.z);
   }
-  if (design.has_blind) {
-    const BlindLayout layout = LayoutBlind(scene.window, *scene.blind, design);
+  for (const SceneWindow& sw : scene.windows) {
+    if (!design.has_blind || !sw.blind) continue;
+    const BlindLayout layout = LayoutBlind(sw.window, *sw.blind, design);
     fmt::print(
-        "blind: alpha {:.4f} rad, width {:.4f} m, spacing {:.4f} m, thickness {:.4f} m: "
+        "blind{}: alpha {:.4f} rad, width {:.4f} m, spacing {:.4f} m, thickness {:.4f} m: "
         "{} slats at pitch {:.4f} m, axes {:.4f} m behind the wall\n",
-        design.tilt_rad, design.slat_width_m, design.slat_spacing_m, design.slat_thickness_m,
-        layout.slat_count, layout.pitch_m, layout.axis_depth_m);
+        scene.windows.size() == 1 ? "" : " " + sw.name, design.tilt_rad, design.slat_width_m,
+        design.slat_spacing_m, design.slat_thickness_m, layout.slat_count, layout.pitch_m,
+        layout.axis_depth_m);
   }
   if (!scene.site.weather_file.empty()) {
     fmt::print("site: {}, UTC{:+g}, weather {}\n",

@@ -34,8 +34,8 @@ struct BlindCut {
 
 // Generates the slats as the tracer does and projects each onto the section plane.
 BlindCut SectionOf(const Scene& scene, const BlindDesign& design) {
-  const Window& w = scene.window;
-  const BlindSpec& spec = *scene.blind;
+  const Window& w = scene.window();
+  const BlindSpec& spec = *scene.blind();
   const Vec3d stack = spec.vertical ? w.across : w.up;
   TriangleMesh mesh;
   BlindCut section;
@@ -246,7 +246,7 @@ std::string DetailFigure(const BlindCut& s, const BlindDesign& design) {
 }
 
 std::string BlindTable(const Scene& scene, const BlindCut& s, const BlindDesign& d) {
-  const BlindSpec& spec = *scene.blind;
+  const BlindSpec& spec = *scene.blind();
   const SlatFinish finish = FinishOf(spec, d);
   const auto material = [&](uint32_t index) {
     const Material& m = scene.materials[index];
@@ -271,8 +271,8 @@ std::string BlindTable(const Scene& scene, const BlindCut& s, const BlindDesign&
        {"slat material", material(finish.material)},
        {"slat material, outer faces (to the window at α = 0)", material(finish.outer_material)},
        {"window opening",
-        fmt::format("{:.2f} × {:.2f} m, wall {:.2f} m thick", scene.window.width_m,
-                    scene.window.height_m, scene.window.depth_m)}});
+        fmt::format("{:.2f} × {:.2f} m, wall {:.2f} m thick", scene.window().width_m,
+                    scene.window().height_m, scene.window().depth_m)}});
 }
 
 }  // namespace
@@ -282,7 +282,7 @@ std::string BlindSection(const ReportData& data) {
   if (!data.scene) {
     return Section("blind", heading, NotRecorded("The scene", "this result does not hold its job"));
   }
-  if (!data.scene->blind || !data.best_design.has_blind) {
+  if (!data.scene->blind() || !data.best_design.has_blind) {
     return Section("blind", heading, NotRecorded("A blind", "the scene has none"));
   }
   const BlindCut s = SectionOf(*data.scene, data.best_design);

@@ -53,7 +53,9 @@ Extent PlanExtent(const Scene& scene) {
     if (mesh.side[t] != Side::kIndoor) continue;
     for (int k = 0; k < 3; ++k) e.Add(mesh.vertices[3 * t + k].x, mesh.vertices[3 * t + k].y);
   }
-  for (const auto& [x, y] : WindowCorners(scene.window)) e.Add(x, y);
+  for (const SceneWindow& w : scene.windows) {
+    for (const auto& [x, y] : WindowCorners(w.window)) e.Add(x, y);
+  }
   for (const Sensor& s : scene.sensors) e.Add(s.position.x, s.position.y);
   e.min_x -= kPadding, e.min_y -= kPadding, e.max_x += kPadding, e.max_y += kPadding;
   return e;
@@ -90,17 +92,20 @@ void DrawRoom(Svg& svg, const Chart& chart, const Scene& scene) {
   }
   for (const Points& w : walls)
     svg.Line(w[0].first, w[0].second, w[1].first, w[1].second, "plan-wall");
-  Points window;
-  for (const auto& [x, y] : ConvexHull(WindowCorners(scene.window))) {
-    window.emplace_back(chart.X(x), chart.Y(y));
+  for (const SceneWindow& w : scene.windows) {
+    Points window;
+    for (const auto& [x, y] : ConvexHull(WindowCorners(w.window))) {
+      window.emplace_back(chart.X(x), chart.Y(y));
+    }
+    svg.Polygon(window, "plan-window");
   }
-  svg.Polygon(window, "plan-window");
   svg.EndGroup();
 }
 
-// "window 2.00 x 1.50 m" just outside the window's outer face, along it.
-void LabelWindow(Svg& svg, const Chart& chart, const Window& w) {
-  const std::string text = fmt::format("window {:.2f} × {:.2f} m", w.width_m, w.height_m);
+// "window 2.00 x 1.50 m" (a named window: "north 2.00 x 1.50 m") just outside the window's
+// outer face, along it.
+void LabelWindow(Svg& svg, const Chart& chart, const std::string& name, const Window& w) {
+  const std::string text = fmt::format("{} {:.2f} × {:.2f} m", name, w.width_m, w.height_m);
   const double n = std::hypot(w.normal.x, w.normal.y);
   const double x = chart.X(w.center.x), y = chart.Y(w.center.y);
   if (n < 0.5) {  // a roof light: the label over its middle
@@ -199,7 +204,7 @@ std::string PlanFigure(const ReportData& data, const PlanValues& plan) {
   chart.DrawAxes(std::max(2, static_cast<int>(width / 60)),
                  std::max(2, static_cast<int>(height / 60)));
   DrawRoom(svg, chart, scene);
-  LabelWindow(svg, chart, scene.window);
+  for (const SceneWindow& w : scene.windows) LabelWindow(svg, chart, w.name, w.window);
   DrawNorthArrow(svg, kPlanLeft + width - 14, kPlanTop + 20);
 
   std::vector<Xy> at;

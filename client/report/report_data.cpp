@@ -85,7 +85,7 @@ absl::Status GatherScene(const std::string& source, ReportData& data) {
   for (const int hours : m.sensor_sunlit_hours()) {
     if (hours < 0) return Inconsistent(source, "best_metrics.sensor_sunlit_hours", "must be >= 0");
   }
-  data.operated_blind = scene.blind && scene.blind->automated_sun;
+  data.operated_blind = scene.blind() && scene.blind()->automated_sun;
   data.scene = std::move(scene);
   return absl::OkStatus();
 }

@@ -130,7 +130,7 @@ Rows SamplingRows(const ReportData& data) {
   const v1::Sampling& s = data.result.job().sampling();
   std::string parts = "-";
   if (data.scene) {
-    const WindowParts p = SamplingWindowParts(s, data.scene->window);
+    const WindowParts p = SamplingWindowParts(s, data.scene->window());
     parts = fmt::format("{} × {}{}", p.columns, p.rows,
                         s.window_columns() == 0 || s.window_rows() == 0 ? " (automatic)" : "");
   }

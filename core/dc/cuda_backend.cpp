@@ -281,7 +281,7 @@ class OutdoorHolder {
     FENESTRA_ASSIGN_OR_RETURN(geometry, OutdoorViewGeometry(scene));
     FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(geometry, BvhQuality::kHigh));
     std::vector<uint8_t> met =
-        WindowCellsMeetingSurfaces(geometry, LocalWindow(geometry, scene.window, parts), basis);
+        WindowCellsMeetingSurfaces(geometry, LocalWindow(geometry, scene.window(), parts), basis);
     return OutdoorHolder(tracer, slot, std::move(geometry), std::move(bvh), std::move(met));
   }
   // Makes the tracer hold this outdoor scene.
@@ -323,7 +323,7 @@ class CudaReplay {
                                                           const IndoorOptions& options,
                                                           const HemisphereBasis& basis,
                                                           OutdoorHolder* outdoor) {
-    if (!scene.blind) return absl::InvalidArgumentError("the scene has no blind to vary");
+    if (!scene.blind()) return absl::InvalidArgumentError("the scene has no blind to vary");
     FENESTRA_ASSIGN_OR_RETURN(
         room, PrepareTraceGeometry(SelectSide(scene.fixed, Side::kIndoor), scene.materials));
     auto replay = std::unique_ptr<CudaReplay>(
@@ -342,7 +342,7 @@ class CudaReplay {
     *bvh = BvhWithSlats(room_bvh_, corners, static_cast<uint32_t>(room_.TriangleCount()));
     *triangle_material = room_.triangle_material;
     triangle_material->reserve(room_.TriangleCount() + kTrianglesPerSlat * corners.size() / 8);
-    const SlatFinish finish = FinishOf(*scene_.blind, design);
+    const SlatFinish finish = FinishOf(*scene_.blind(), design);
     for (size_t slat = 0; slat < corners.size() / 8; ++slat) {
       for (int t = 0; t < kTrianglesPerSlat; ++t) {
         triangle_material->push_back(SlatTriangleMaterial(finish, t));
@@ -392,7 +392,7 @@ class CudaReplay {
   size_t triangles() const { return triangles_; }
   int sensors() const { return static_cast<int>(scene_.sensors.size()); }
   int columns() const {
-    return IndoorColumnCount(LocalWindow(room_, scene_.window, options_.parts), basis_);
+    return IndoorColumnCount(LocalWindow(room_, scene_.window(), options_.parts), basis_);
   }
   const CudaReplayStats& stats() const { return stats_; }
 
@@ -429,7 +429,7 @@ class CudaReplay {
     path.importance = nullptr;
     FENESTRA_RETURN_IF_ERROR(tracer_->RecordIndoor(
         LocalEnvelopeOfBlind(room_, scene_), sensors.data(), static_cast<int>(sensors.size()),
-        LocalWindow(room_, scene_.window, options_.parts),
+        LocalWindow(room_, scene_.window(), options_.parts),
         OutdoorOffset(room_, outdoor_->geometry()), basis_,
         static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, kDesignParts,
         options_.seed, path, kMaxReplayBytes, &stats_));
@@ -603,7 +603,7 @@ class CudaDesignTallies : public DesignTallies {
     FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, geometry, BvhQuality::kMedium));
     FENESTRA_RETURN_IF_ERROR(outdoor_->Hold());
     const std::vector<TraceSensor> sensors = LocalSensors(geometry, scene_.sensors);
-    const TraceWindow window = LocalWindow(geometry, scene_.window, options_.parts);
+    const TraceWindow window = LocalWindow(geometry, scene_.window(), options_.parts);
     const uint64_t paths = static_cast<uint64_t>(options_.paths_per_sensor);
     if (tally != nullptr) {
       *tally = ZeroIndoorTally(static_cast<int>(sensors.size()), IndoorColumnCount(window, basis_),
@@ -681,6 +681,7 @@ class CudaBackend : public DcBackend {
 
   absl::StatusOr<std::unique_ptr<DesignTallies>> StartDesignTallies(
       const Scene& scene, const IndoorOptions& options) override {
+    FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the two-stage method"));
     FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
     FENESTRA_ASSIGN_OR_RETURN(outdoor, MakeOutdoor(scene, options.parts, basis));
     FENESTRA_ASSIGN_OR_RETURN(replay, MaybeReplay(scene, options, basis, outdoor.get()));
@@ -829,7 +830,7 @@ class CudaBackend : public DcBackend {
                                                           const IndoorOptions& options,
                                                           const HemisphereBasis& basis,
                                                           OutdoorHolder* outdoor) {
-    if (!scene.blind) return nullptr;
+    if (!scene.blind()) return nullptr;
     absl::StatusOr<std::unique_ptr<CudaReplay>> replay =
         CudaReplay::Make(tracer_.get(), &replay_slot_, scene, options, basis, outdoor);
     if (absl::IsResourceExhausted(replay.status())) return nullptr;

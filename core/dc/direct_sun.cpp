@@ -86,6 +86,7 @@ DirectSun::~DirectSun() = default;
 absl::StatusOr<std::unique_ptr<DirectSun>> DirectSun::Trace(const Scene& scene,
                                                             const std::vector<SunColumn>& suns,
                                                             int columns) {
+  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the direct sun"));
   for (const SunColumn& sun : suns) {
     if (sun.column < 0 || sun.column >= columns) {
       return absl::InvalidArgumentError(
@@ -97,7 +98,7 @@ absl::StatusOr<std::unique_ptr<DirectSun>> DirectSun::Trace(const Scene& scene,
   }
   auto data = std::make_unique<Data>();
   // In a frame about the window, where the lines meet the slats: floats are finest there
-  const Vec3d frame = scene.window.center;
+  const Vec3d frame = scene.window().center;
   FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(scene.fixed, scene.materials, &frame));
   data->geometry = std::move(geometry);
   data->scene = scene;
@@ -106,7 +107,7 @@ absl::StatusOr<std::unique_ptr<DirectSun>> DirectSun::Trace(const Scene& scene,
   FENESTRA_ASSIGN_OR_RETURN(embree, EmbreeScene::Build(data->geometry));
   const EmbreeIntersector intersector = embree->Intersector();
   std::optional<LocalEnvelope> envelope;
-  if (scene.blind) envelope = LocalEnvelopeOfBlind(data->geometry, scene);
+  if (scene.blind()) envelope = LocalEnvelopeOfBlind(data->geometry, scene);
   // Each sensor's lines on a thread of its own, kept in sensor order
   std::vector<std::vector<SunEntry>> always(data->sensors);
   std::vector<std::vector<Data::Line>> lines(data->sensors);
@@ -139,10 +140,10 @@ std::vector<SunEntry> DirectSun::Entries(const BlindDesign& design, bool blind) 
   const Data& d = *data_;
   std::vector<SunEntry> out;
   out.reserve(d.always.size() + d.lines.size());
-  const bool slats = blind && d.scene.blind.has_value();
+  const bool slats = blind && d.scene.blind().has_value();
   const LocalSlats local = slats ? LocalSlatsOfBlind(d.geometry, d.scene, design) : LocalSlats{};
   const float slat_transmittance =
-      slats ? SlatTransmittance(d.scene.materials, FinishOf(*d.scene.blind, design)) : 0.0f;
+      slats ? SlatTransmittance(d.scene.materials, FinishOf(*d.scene.blind(), design)) : 0.0f;
   // Both lists are in sensor order, each sensor's in column order: merged by sensor, then
   // column
   size_t a = 0, l = 0;

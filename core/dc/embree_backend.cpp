@@ -79,7 +79,7 @@ class EmbreeBackend : public DcBackend {
   // Record the paths once, replay them per design; without a blind there is nothing to vary
   absl::StatusOr<std::unique_ptr<IndoorStages>> MakeIndoorStages(
       const Scene& scene, const IndoorOptions& options) override {
-    if (!scene.blind) return DcBackend::MakeIndoorStages(scene, options);
+    if (!scene.blind()) return DcBackend::MakeIndoorStages(scene, options);
     FENESTRA_ASSIGN_OR_RETURN(replay, IndoorReplay::Record(scene, options));
     return std::unique_ptr<IndoorStages>(std::move(replay));
   }

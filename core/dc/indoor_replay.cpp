@@ -175,7 +175,7 @@ bool WithinRange(double value, const ParameterRange& range) {
 }  // namespace
 
 LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& scene) {
-  const BlindEnvelope envelope = EnvelopeOfBlind(scene.window, *scene.blind, kEnvelopeMargin);
+  const BlindEnvelope envelope = EnvelopeOfBlind(scene.window(), *scene.blind(), kEnvelopeMargin);
   LocalEnvelope local;
   local.center = geometry.ToLocal(envelope.center);
   for (int k = 0; k < 3; ++k) {
@@ -188,7 +188,7 @@ LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& s
 
 LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
                              const BlindDesign& design) {
-  const SlatStack stack = StackOfBlind(scene.window, *scene.blind, design);
+  const SlatStack stack = StackOfBlind(scene.window(), *scene.blind(), design);
   const auto axis = [](Vec3d v) {
     return Vec3f{static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};
   };
@@ -212,7 +212,7 @@ LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
 
 std::vector<Vec3f> LocalSlatCorners(const TraceGeometry& geometry, const Scene& scene,
                                     const BlindDesign& design) {
-  const SlatBoxes boxes = BoxesOfStack(StackOfBlind(scene.window, *scene.blind, design));
+  const SlatBoxes boxes = BoxesOfStack(StackOfBlind(scene.window(), *scene.blind(), design));
   std::vector<Vec3f> corners(8 * static_cast<size_t>(boxes.count));
   for (int k = 0; k < boxes.count; ++k) {
     for (int i = 0; i < 8; ++i) corners[8 * k + i] = geometry.ToLocal(boxes.Corner(k, i));
@@ -221,8 +221,9 @@ std::vector<Vec3f> LocalSlatCorners(const TraceGeometry& geometry, const Scene& 
 }
 
 absl::Status CheckReplayDesign(const Scene& scene, const BlindDesign& design) {
-  if (!scene.blind) return absl::InvalidArgumentError("the scene has no blind to vary");
-  const BlindSpec& spec = *scene.blind;
+  if (!scene.blind()) return absl::InvalidArgumentError("the scene has no blind to vary");
+  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the indoor replay"));
+  const BlindSpec& spec = *scene.blind();
   if (!design.has_blind || !WithinRange(design.tilt_rad, spec.tilt_rad) ||
       !WithinRange(design.slat_width_m, spec.slat_width_m) ||
       !WithinRange(design.slat_spacing_m, spec.slat_spacing_m) ||
@@ -260,7 +261,7 @@ IndoorReplay::~IndoorReplay() = default;
 absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& scene,
                                                                    const IndoorOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  if (!scene.blind) return absl::InvalidArgumentError("the scene has no blind to vary");
+  if (!scene.blind()) return absl::InvalidArgumentError("the scene has no blind to vary");
   auto data = std::make_unique<Data>();
   data->scene = scene;
   data->options = options;
@@ -274,7 +275,7 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
   data->origin = geometry.origin;
   FENESTRA_ASSIGN_OR_RETURN(embree, EmbreeScene::Build(geometry));
   data->sensors = LocalSensors(geometry, scene.sensors);
-  data->window = LocalWindow(geometry, scene.window, options.parts);
+  data->window = LocalWindow(geometry, scene.window(), options.parts);
   data->columns = IndoorColumnCount(data->window, basis);
   FENESTRA_ASSIGN_OR_RETURN(outdoor, OutdoorViewGeometry(scene));
   FENESTRA_ASSIGN_OR_RETURN(outdoor_scene, EmbreeScene::Build(outdoor));

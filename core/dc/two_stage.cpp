@@ -138,6 +138,7 @@ TriangleMesh SelectSide(const TriangleMesh& mesh, Side side) {
 
 absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const OutdoorOptions& options,
                                                   DcBackend* backend) {
+  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the two-stage method"));
   const auto start = std::chrono::steady_clock::now();
   FENESTRA_ASSIGN_OR_RETURN(basis, BasisFor(options.basis_cells));
   FENESTRA_RETURN_IF_ERROR(CheckParts(options.parts));
@@ -158,8 +159,8 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const Outd
   // Trace and form O_b (FormOutdoorBatches; a GPU backend forms them where its sums lie)
   const uint64_t per_cell = static_cast<uint64_t>(options.paths / window_cells);
   FENESTRA_ASSIGN_OR_RETURN(
-      formed, backend->Outdoor(geometry, LocalWindow(geometry, scene.window, options.parts), basis,
-                               per_cell, options.batches, options.seed,
+      formed, backend->Outdoor(geometry, LocalWindow(geometry, scene.window(), options.parts),
+                               basis, per_cell, options.batches, options.seed,
                                Settings(options.max_bounces, options.russian_roulette,
                                         options.roulette_threshold),
                                options.threads));
@@ -187,7 +188,7 @@ absl::StatusOr<TraceGeometry> OutdoorViewGeometry(const Scene& scene) {
   const TriangleMesh outdoor = SelectSide(scene.fixed, Side::kOutdoor);
   TriangleMesh in_front;
   in_front.part_names = outdoor.part_names;
-  const Window& w = scene.window;
+  const Window& w = scene.window();
   for (size_t t = 0; t < outdoor.TriangleCount(); ++t) {
     const Vec3d* v = &outdoor.vertices[3 * t];
     const double front = std::max({Dot(v[0] - w.center, w.normal), Dot(v[1] - w.center, w.normal),
@@ -265,6 +266,7 @@ IndoorResult IndoorResultFromTally(const IndoorTally& tally, const IndoorOptions
 
 absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindDesign& design,
                                                 const IndoorOptions& options, DcBackend* backend) {
+  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the two-stage method"));
   const auto start = std::chrono::steady_clock::now();
   FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
   const TriangleMesh indoor = SelectSide(AssembleMesh(scene, design), Side::kIndoor);
@@ -276,7 +278,7 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
   // Trace, then I_b = batch sums / batch paths
   FENESTRA_ASSIGN_OR_RETURN(
       tally, backend->Indoor(geometry, outdoor, LocalSensors(geometry, scene.sensors),
-                             LocalWindow(geometry, scene.window, options.parts), basis,
+                             LocalWindow(geometry, scene.window(), options.parts), basis,
                              static_cast<uint64_t>(options.paths_per_sensor), options.batches,
                              options.seed, IndoorPathSettings(options), options.threads));
   IndoorResult result = IndoorResultFromTally(tally, options);
@@ -469,6 +471,7 @@ absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::MakeDesignTallies(
 
 absl::StatusOr<std::unique_ptr<IndoorStages>> DcBackend::MakeIndoorStages(
     const Scene& scene, const IndoorOptions& options) {
+  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the two-stage method"));
   FENESTRA_RETURN_IF_ERROR(CheckIndoorOptions(options).status());
   return std::make_unique<TracedIndoorStages>(scene, options, this);
 }

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <numbers>
 #include <optional>
+#include <string>
 
 #include "absl/status/status.h"
 #include "core/common/vec3.h"
@@ -47,6 +48,8 @@ struct BlindSpec {
   // In place only in the hours IES LM-83's rule closes it (scene.proto, AUTOMATED_SUN),
   // retracted otherwise; false: in place in every hour.
   bool automated_sun = false;
+  // Blinds of the same non-empty group share their design (scene.proto, VenetianBlind.group).
+  std::string group;
 
   uint32_t OuterMaterial() const { return outer_material.value_or(material); }
 };

@@ -511,6 +511,7 @@ absl::StatusOr<BlindSpec> BuildBlind(const v1::VenetianBlind& b,
   }
   spec.automated_sun = b.operation() == v1::VenetianBlind::AUTOMATED_SUN;
   FENESTRA_RETURN_IF_ERROR(CheckWindowName(b.group(), field + ".group", check));
+  spec.group = b.group();
   if (absl::Status fits = CheckBlindFits(spec, window); !fits.ok()) {
     return check.Error(field, std::string(fits.message()));
   }
@@ -591,38 +592,86 @@ absl::Status BuildSurfaces(const v1::Scene& proto, const Checker& check, Scene& 
   return absl::OkStatus();
 }
 
-// The scene's window and its blind, from the one-window form (`window`, `blind`) or from
+// A blind in the list after the first must share the first's group and ranges: the scene
+// has one design so far (DefaultDesign).
+absl::Status CheckSharedBlind(const BlindSpec& first, const BlindSpec& blind,
+                              const std::string& field, const Checker& check) {
+  if (first.group.empty() || blind.group != first.group) {
+    return absl::UnimplementedError(absl::StrCat(
+        check.path(), ": ", field,
+        ".group: blinds share one design so far: give every blind the same non-empty group"));
+  }
+  const auto same = [](const ParameterRange& a, const ParameterRange& b) {
+    return a.value == b.value && a.min == b.min && a.max == b.max;
+  };
+  if (!same(first.tilt_rad, blind.tilt_rad) || !same(first.slat_width_m, blind.slat_width_m) ||
+      !same(first.slat_spacing_m, blind.slat_spacing_m) ||
+      !same(first.slat_thickness_m, blind.slat_thickness_m)) {
+    return check.Error(field, absl::StrCat("blinds of group '", blind.group,
+                                           "' share their design: give them the same tilt_rad, "
+                                           "slat_width_m, slat_spacing_m and slat_thickness_m"));
+  }
+  return absl::OkStatus();
+}
+
+// Appends windows[i] (`field`) of the list form with its blind.
+absl::Status AddListedWindow(const v1::Window& w, int i, const Checker& check, Scene& scene) {
+  const std::string field = absl::StrCat("windows[", i, "]");
+  FENESTRA_RETURN_IF_ERROR(CheckWindowName(w.name(), field + ".name", check));
+  SceneWindow added;
+  added.name = w.name().empty() ? absl::StrCat("window_", i) : w.name();
+  for (const SceneWindow& other : scene.windows) {
+    if (other.name == added.name) {
+      return check.Error(field + ".name", absl::StrCat("duplicate window '", added.name, "'"));
+    }
+  }
+  FENESTRA_ASSIGN_OR_RETURN(window, BuildWindow(w, field, check));
+  added.window = window;
+  if (w.has_blind()) {
+    FENESTRA_ASSIGN_OR_RETURN(
+        blind, BuildBlind(w.blind(), scene.materials, added.window, field + ".blind", check));
+    for (const SceneWindow& other : scene.windows) {
+      if (other.blind) {
+        FENESTRA_RETURN_IF_ERROR(CheckSharedBlind(*other.blind, blind, field + ".blind", check));
+        break;
+      }
+    }
+    added.blind = blind;
+  }
+  scene.windows.push_back(std::move(added));
+  return absl::OkStatus();
+}
+
+// The scene's windows and their blinds, from the one-window form (`window`, `blind`) or from
 // `windows`.
 absl::Status BuildWindows(const v1::Scene& proto, const Checker& check, Scene& scene) {
+  scene.windows.clear();
   if (proto.has_window() && proto.windows_size() > 0) {
     return check.Error("windows", "a scene gives either window (with blind) or windows");
   }
   if (proto.has_window()) {
+    SceneWindow only;
+    only.name = kOneWindowName;
     FENESTRA_ASSIGN_OR_RETURN(window, BuildWindow(proto.window(), "window", check));
-    scene.window = window;
+    only.window = window;
     if (proto.has_blind()) {
       FENESTRA_ASSIGN_OR_RETURN(
-          blind, BuildBlind(proto.blind(), scene.materials, scene.window, "blind", check));
-      scene.blind = blind;
+          blind, BuildBlind(proto.blind(), scene.materials, only.window, "blind", check));
+      only.blind = blind;
     }
+    scene.windows.push_back(std::move(only));
     return absl::OkStatus();
   }
   if (proto.windows_size() == 0) return check.Error("window", "is required (or windows)");
   if (proto.has_blind()) {
     return check.Error("blind", "belongs to window; with windows each window has its blind");
   }
-  if (proto.windows_size() > 1) {
-    return absl::UnimplementedError(absl::StrCat(
-        check.path(), ": windows: one window is traced so far, got ", proto.windows_size()));
+  if (proto.windows_size() > kMaxSceneWindows) {
+    return check.Error("windows", absl::StrCat("at most ", kMaxSceneWindows, " windows, got ",
+                                               proto.windows_size()));
   }
-  const v1::Window& w = proto.windows(0);
-  FENESTRA_RETURN_IF_ERROR(CheckWindowName(w.name(), "windows[0].name", check));
-  FENESTRA_ASSIGN_OR_RETURN(window, BuildWindow(w, "windows[0]", check));
-  scene.window = window;
-  if (w.has_blind()) {
-    FENESTRA_ASSIGN_OR_RETURN(
-        blind, BuildBlind(w.blind(), scene.materials, scene.window, "windows[0].blind", check));
-    scene.blind = blind;
+  for (int i = 0; i < proto.windows_size(); ++i) {
+    FENESTRA_RETURN_IF_ERROR(AddListedWindow(proto.windows(i), i, check, scene));
   }
   return absl::OkStatus();
 }
@@ -657,12 +706,22 @@ absl::StatusOr<Scene> LoadScene(const std::string& path) {
   return BuildScene(proto, path);
 }
 
+absl::Status CheckOneWindow(const Scene& scene, const std::string& what) {
+  if (scene.windows.size() == 1) return absl::OkStatus();
+  return absl::UnimplementedError(absl::StrCat(
+      scene.source_path, ": ", what, " traces a scene of one window so far; this one has ",
+      scene.windows.size(), " (the one-stage method traces any number)"));
+}
+
 TriangleMesh AssembleMesh(const Scene& scene, const BlindDesign& design) {
   TriangleMesh mesh = scene.fixed;
-  if (scene.blind && design.has_blind) {
+  if (!design.has_blind) return mesh;
+  for (const SceneWindow& w : scene.windows) {
+    if (!w.blind) continue;
     const uint32_t part = static_cast<uint32_t>(mesh.part_names.size());
-    mesh.part_names.push_back("blind");
-    GenerateBlind(scene.window, *scene.blind, design, part, mesh);
+    // One window: its blind is "blind", as the one-window form always named it
+    mesh.part_names.push_back(scene.windows.size() == 1 ? "blind" : "blind " + w.name);
+    GenerateBlind(w.window, *w.blind, design, part, mesh);
   }
   return mesh;
 }
@@ -674,12 +733,12 @@ bool IsDegenerateTriangle(Vec3d a, Vec3d b, Vec3d c) {
 
 BlindDesign DefaultDesign(const Scene& scene) {
   BlindDesign design;
-  if (!scene.blind) return design;
+  if (!scene.blind()) return design;
   design.has_blind = true;
-  design.tilt_rad = scene.blind->tilt_rad.value;
-  design.slat_width_m = scene.blind->slat_width_m.value;
-  design.slat_spacing_m = scene.blind->slat_spacing_m.value;
-  design.slat_thickness_m = scene.blind->slat_thickness_m.value;
+  design.tilt_rad = scene.blind()->tilt_rad.value;
+  design.slat_width_m = scene.blind()->slat_width_m.value;
+  design.slat_spacing_m = scene.blind()->slat_spacing_m.value;
+  design.slat_thickness_m = scene.blind()->slat_thickness_m.value;
   return design;
 }
 
@@ -687,7 +746,7 @@ absl::StatusOr<BlindDesign> DesignWithOverrides(const Scene& scene,
                                                 const std::map<std::string, double>& values) {
   BlindDesign design = DefaultDesign(scene);
   if (values.empty()) return design;
-  if (!scene.blind) {
+  if (!scene.blind()) {
     return absl::InvalidArgumentError(
         absl::StrCat(scene.source_path, ": design values given but the scene has no blind"));
   }
@@ -697,10 +756,10 @@ absl::StatusOr<BlindDesign> DesignWithOverrides(const Scene& scene,
     double* value;
   };
   const Variable variables[] = {
-      {"alpha", &scene.blind->tilt_rad, &design.tilt_rad},
-      {"width", &scene.blind->slat_width_m, &design.slat_width_m},
-      {"spacing", &scene.blind->slat_spacing_m, &design.slat_spacing_m},
-      {"thickness", &scene.blind->slat_thickness_m, &design.slat_thickness_m},
+      {"alpha", &scene.blind()->tilt_rad, &design.tilt_rad},
+      {"width", &scene.blind()->slat_width_m, &design.slat_width_m},
+      {"spacing", &scene.blind()->slat_spacing_m, &design.slat_spacing_m},
+      {"thickness", &scene.blind()->slat_thickness_m, &design.slat_thickness_m},
   };
   for (const auto& [name, value] : values) {
     const Variable* match = nullptr;

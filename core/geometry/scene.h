@@ -25,6 +25,8 @@ inline constexpr double kMaxCoordinateM = 1e5;
 inline constexpr double kMinWindowSideM = 0.01;
 // Thickest wall a window may sit in (`Window::depth_m`) [m]; castle walls reach 3 m.
 inline constexpr double kMaxWindowDepthM = 5.0;
+// Most windows and skylights in a scene: each adds its own outdoor matrix and stages.
+inline constexpr int kMaxSceneWindows = 64;
 // Most sensors in a scene, grids expanded: bounds the memory of a scene file's grid (the
 // service has its own, lower limit).
 inline constexpr int64_t kMaxSceneSensors = 1'000'000;
@@ -39,6 +41,16 @@ struct Window {
   double height_m = 0;
   double depth_m = 0;  // wall thickness: inner face = center - depth_m * normal
   double Area() const { return width_m * height_m; }
+};
+
+// The name of the one-window form's window (scene.proto: `window`).
+inline constexpr char kOneWindowName[] = "window";
+
+// A window or skylight with its optional blind.
+struct SceneWindow {
+  std::string name;  // unique in the scene
+  Window window;
+  std::optional<BlindSpec> blind;
 };
 
 struct Sensor {
@@ -71,12 +83,34 @@ struct Scene {
   std::vector<Material> materials;
   TriangleMesh fixed;             // every surface except the blind
   size_t dropped_degenerate = 0;  // zero-area OBJ triangles left out
-  Window window;
+  // At least one; the one-window form (scene.proto: `window`, `blind`) is windows[0],
+  // named "window".
+  std::vector<SceneWindow> windows = std::vector<SceneWindow>(1);
   std::vector<Sensor> sensors;
   std::vector<SolidBox> solid_boxes;  // every Box surface, indoor and outdoor
-  std::optional<BlindSpec> blind;
   Site site;
+
+  // The first window: what the stages that trace one window take (the two-stage method, the
+  // direct sun, the replays), after CheckOneWindow.
+  const Window& window() const { return windows.front().window; }
+  Window& window() { return windows.front().window; }
+  // The first blind of the windows (empty: none): its ranges are the design's (every blind
+  // of a scene is in one group so far, with the same ranges). With one window, its blind.
+  const std::optional<BlindSpec>& blind() const { return BlindWindow().blind; }
+  std::optional<BlindSpec>& blind() { return const_cast<SceneWindow&>(BlindWindow()).blind; }
+
+ private:
+  const SceneWindow& BlindWindow() const {
+    for (const SceneWindow& w : windows) {
+      if (w.blind) return w;
+    }
+    return windows.front();
+  }
 };
+
+// OK for a scene of one window; else Unimplemented naming `what` (e.g. "the two-stage
+// method"), which traces one window so far, and what can trace the scene instead.
+absl::Status CheckOneWindow(const Scene& scene, const std::string& what);
 
 // Reads a scene file (the JSON form of fenestra.v1.Scene); unknown fields are errors.
 absl::StatusOr<v1::Scene> ReadSceneProto(const std::string& path);
@@ -91,7 +125,8 @@ absl::StatusOr<Scene> BuildScene(const v1::Scene& proto, const std::string& path
 // ReadSceneProto + BuildScene.
 absl::StatusOr<Scene> LoadScene(const std::string& path);
 
-// The complete geometry at `design` (blind included when the scene has one).
+// The complete geometry at `design`: every window's blind where the design has one (all
+// blinds take the same design: BuildScene refuses blinds of different groups so far).
 TriangleMesh AssembleMesh(const Scene& scene, const BlindDesign& design);
 
 // True when a triangle has no area by the polygon check (area <= 1e-6 x its longest

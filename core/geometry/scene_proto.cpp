@@ -65,8 +65,7 @@ void SetMaterial(const Material& m, v1::Material* out) {
   }
 }
 
-void SetBlind(const Scene& scene, v1::VenetianBlind& out) {
-  const BlindSpec& spec = *scene.blind;
+void SetBlind(const Scene& scene, const BlindSpec& spec, v1::VenetianBlind& out) {
   out.set_material(scene.materials[spec.material].name);
   if (spec.outer_material) out.set_outer_material(scene.materials[*spec.outer_material].name);
   out.set_orientation(spec.vertical ? v1::VenetianBlind::VERTICAL : v1::VenetianBlind::HORIZONTAL);
@@ -78,6 +77,31 @@ void SetBlind(const Scene& scene, v1::VenetianBlind& out) {
   out.set_side_margin_m(spec.side_margin_m);
   out.set_operation(spec.automated_sun ? v1::VenetianBlind::AUTOMATED_SUN
                                        : v1::VenetianBlind::STATIC);
+  out.set_group(spec.group);
+}
+
+void SetWindow(const Window& w, v1::Window& window) {
+  SetVec3(w.center, window.mutable_center());
+  SetVec3(w.normal, window.mutable_outward_normal());
+  SetVec3(w.up, window.mutable_up());
+  window.set_width_m(w.width_m);
+  window.set_height_m(w.height_m);
+  window.set_depth_m(w.depth_m);
+}
+
+// The one-window form for a scene that came in it (one window named "window"), else the list.
+void SetWindows(const Scene& scene, v1::Scene& out) {
+  if (scene.windows.size() == 1 && scene.windows[0].name == kOneWindowName) {
+    SetWindow(scene.window(), *out.mutable_window());
+    if (scene.blind()) SetBlind(scene, *scene.blind(), *out.mutable_blind());
+    return;
+  }
+  for (const SceneWindow& w : scene.windows) {
+    v1::Window& window = *out.add_windows();
+    window.set_name(w.name);
+    SetWindow(w.window, window);
+    if (w.blind) SetBlind(scene, *w.blind, *window.mutable_blind());
+  }
 }
 
 }  // namespace
@@ -88,14 +112,7 @@ v1::Scene SelfContainedSceneProto(const Scene& scene) {
   for (const Material& m : scene.materials) SetMaterial(m, out.add_materials());
   AddSurfaces(scene, out);
 
-  const Window& w = scene.window;
-  v1::Window& window = *out.mutable_window();
-  SetVec3(w.center, window.mutable_center());
-  SetVec3(w.normal, window.mutable_outward_normal());
-  SetVec3(w.up, window.mutable_up());
-  window.set_width_m(w.width_m);
-  window.set_height_m(w.height_m);
-  window.set_depth_m(w.depth_m);
+  SetWindows(scene, out);
 
   for (const Sensor& s : scene.sensors) {
     v1::Sensor& sensor = *out.add_sensors();
@@ -103,7 +120,6 @@ v1::Scene SelfContainedSceneProto(const Scene& scene) {
     SetVec3(s.position, sensor.mutable_position());
     SetVec3(s.direction, sensor.mutable_direction());
   }
-  if (scene.blind) SetBlind(scene, *out.mutable_blind());
 
   v1::Site& site = *out.mutable_site();
   site.set_latitude_deg(scene.site.latitude_deg);

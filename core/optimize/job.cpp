@@ -326,7 +326,7 @@ absl::Status SetLaneProducts(Lanes& lanes, const OutdoorMatrix& outdoor, const M
 absl::StatusOr<std::shared_ptr<const BlindOperation>> SetLaneEvaluation(
     const PreparedJob& job, const AnnualSetting& setting, const OutdoorMatrix& matrix,
     const Scene& ranged, const IndoorOptions& indoor, DcBackend& backend, Lanes& lanes) {
-  if (!job.scene.blind || !job.scene.blind->automated_sun) {
+  if (!job.scene.blind() || !job.scene.blind()->automated_sun) {
     FENESTRA_RETURN_IF_ERROR(SetLaneProducts(lanes, matrix, setting.lit_sky));
     for (const auto& tallies : lanes.tallies) tallies->SetDirectSun(setting.sun);
     return std::shared_ptr<const BlindOperation>();
@@ -442,7 +442,7 @@ absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1:
   options.max_bounces = sampling.outdoor_bounces();
   options.seed = sampling.seed();
   options.basis_cells = sampling.basis_cells();
-  options.parts = SamplingWindowParts(sampling, scene.window);
+  options.parts = SamplingWindowParts(sampling, scene.window());
   options.batches = sampling.batches();
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(sampling.backend()));
   FENESTRA_ASSIGN_OR_RETURN(result, ComputeOutdoorStage(scene, options, backend.get()));

@@ -128,7 +128,7 @@ absl::Status FillVariables(v1::Job& job, const Scene& scene, std::vector<SlatFin
                            "width, spacing, thickness or finish; with every one fixed it "
                            "evaluates the start design alone)");
   }
-  if (!scene.blind) {
+  if (!scene.blind()) {
     return InvalidJobField("variables", "the scene has no blind to design");
   }
   std::set<std::string> seen;
@@ -331,8 +331,8 @@ absl::Status CheckWindowCells(const v1::Sampling& sampling, const Window& window
 // in the room's air.
 absl::Status CheckRoomAtEveryDesign(const PreparedJob& prepared) {
   const Scene ranged = WithJobRanges(prepared.scene, prepared.job);
-  if (ranged.blind) {
-    if (absl::Status fits = CheckBlindFits(*ranged.blind, ranged.window); !fits.ok()) {
+  if (ranged.blind()) {
+    if (absl::Status fits = CheckBlindFits(*ranged.blind(), ranged.window()); !fits.ok()) {
       return InvalidJobField("variables", absl::StrCat("with the scene's blind: ", fits.message()));
     }
   }
@@ -438,11 +438,11 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
 
 Scene WithJobRanges(const Scene& scene, const v1::Job& job) {
   Scene ranged = scene;
-  if (!ranged.blind) return ranged;
+  if (!ranged.blind()) return ranged;
   for (const v1::DesignVariable& v : job.variables()) {
     const DesignVariableInfo* info = FindDesignVariable(v.name());
     if (!info) continue;
-    ParameterRange& range = (*ranged.blind).*(info->range);
+    ParameterRange& range = (*ranged.blind()).*(info->range);
     range.min = std::min(range.min, v.lower());
     range.max = std::max(range.max, v.upper());
   }
@@ -455,6 +455,8 @@ absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& b
   prepared.job = job;
   FENESTRA_ASSIGN_OR_RETURN(scene, SceneOf(job, base_dir));
   prepared.scene = std::move(scene);
+  FENESTRA_RETURN_IF_ERROR(
+      CheckOneWindow(prepared.scene, "an optimization (the two-stage method)"));
   v1::Job& filled = prepared.job;
   FENESTRA_RETURN_IF_ERROR(FillVariables(filled, prepared.scene, prepared.finishes));
   FENESTRA_RETURN_IF_ERROR(FillBudget(*filled.mutable_budget()));
@@ -464,7 +466,7 @@ absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& b
   FENESTRA_RETURN_IF_ERROR(CheckNeighborhoods(filled));
   FENESTRA_RETURN_IF_ERROR(CheckObjective(filled.objective()));
   FENESTRA_RETURN_IF_ERROR(FillConstraints(*filled.mutable_objective()));
-  FENESTRA_RETURN_IF_ERROR(CheckWindowCells(filled.sampling(), prepared.scene.window));
+  FENESTRA_RETURN_IF_ERROR(CheckWindowCells(filled.sampling(), prepared.scene.window()));
   FENESTRA_RETURN_IF_ERROR(CheckRoomAtEveryDesign(prepared));
   return prepared;
 }

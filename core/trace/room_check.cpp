@@ -5,6 +5,7 @@
 #include <cmath>
 #include <memory>
 #include <optional>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -19,13 +20,13 @@ namespace {
 // Probe rays start this far off the window's plane [m].
 constexpr double kProbeOffsetM = 0.001;
 
-// The first surface a probe ray meets: an indoor triangle or the window rectangle.
+// The first surface a probe ray meets: an indoor triangle or a window rectangle.
 struct ProbeHit {
   double distance_m = 0;
-  std::optional<uint32_t> triangle;  // in scene.fixed; empty = the window
+  std::optional<uint32_t> triangle;  // in scene.fixed; empty = a window
 };
 
-// The scene's fixed indoor surfaces (the blind left out) and its window, for probe rays.
+// The scene's fixed indoor surfaces (the blinds left out) and its windows, for probe rays.
 class IndoorProbe {
  public:
   static absl::StatusOr<std::unique_ptr<IndoorProbe>> Build(const Scene& scene) {
@@ -48,7 +49,7 @@ class IndoorProbe {
 
   bool Empty() const { return triangle_.empty(); }
 
-  // The first indoor surface along the ray from `origin`; `with_window` counts the window.
+  // The first indoor surface along the ray from `origin`; `with_window` counts the windows.
   std::optional<ProbeHit> First(Vec3d origin, Vec3d direction, bool with_window) const {
     std::optional<ProbeHit> first;
     SurfaceHit hit;
@@ -59,17 +60,18 @@ class IndoorProbe {
       first = ProbeHit{Length(hit.position - local), triangle_[hit.triangle]};
     }
     if (with_window) {
-      const std::optional<double> window = WindowDistance(origin, direction);
-      if (window && (!first || *window < first->distance_m)) first = ProbeHit{*window, {}};
+      for (const SceneWindow& w : windows_) {
+        const std::optional<double> window = WindowDistance(w.window, origin, direction);
+        if (window && (!first || *window < first->distance_m)) first = ProbeHit{*window, {}};
+      }
     }
     return first;
   }
 
  private:
-  explicit IndoorProbe(const Scene& scene) : window_(scene.window) {}
+  explicit IndoorProbe(const Scene& scene) : windows_(scene.windows) {}
 
-  std::optional<double> WindowDistance(Vec3d origin, Vec3d direction) const {
-    const Window& w = window_;
+  static std::optional<double> WindowDistance(const Window& w, Vec3d origin, Vec3d direction) {
     const double facing = Dot(direction, w.normal);
     if (facing == 0) return std::nullopt;
     const double t = Dot(w.center - origin, w.normal) / facing;
@@ -81,7 +83,7 @@ class IndoorProbe {
     return t;
   }
 
-  Window window_;
+  std::vector<SceneWindow> windows_;
   std::vector<uint32_t> triangle_;  // probe triangle -> scene.fixed triangle
   TraceGeometry geometry_;
   std::unique_ptr<EmbreeScene> embree_;
@@ -100,7 +102,7 @@ std::string DirectionName(Vec3d d) {
 }
 
 std::string SurfaceName(const Scene& scene, const ProbeHit& hit) {
-  if (!hit.triangle) return "the window";
+  if (!hit.triangle) return scene.windows.size() == 1 ? "the window" : "a window";
   return absl::StrCat("surface '", scene.fixed.part_names[scene.fixed.part[*hit.triangle]], "'");
 }
 
@@ -123,22 +125,30 @@ std::vector<Vec3d> WindowSamples(const Window& w, double inset) {
   return points;
 }
 
+// Where a window is in the scene file: "window" in the one-window form, else
+// "windows[i] ('name')".
+std::string WindowField(const Scene& scene, size_t i) {
+  if (scene.windows.size() == 1 && scene.windows[0].name == kOneWindowName) return "window";
+  return absl::StrCat("windows[", i, "] ('", scene.windows[i].name, "')");
+}
+
 // The rectangle is open through the wall, the room lies behind it and nothing of the room
 // in front of it.
-absl::Status CheckWindowOpening(const Scene& scene, const IndoorProbe& probe) {
-  const Window& w = scene.window;
+absl::Status CheckWindowOpening(const Scene& scene, size_t i, const IndoorProbe& probe) {
+  const Window& w = scene.windows[i].window;
+  const std::string field = WindowField(scene, i);
   for (const Vec3d& p :
        WindowSamples(w, std::min(kWindowFitM, 0.25 * std::min(w.width_m, w.height_m)))) {
     const Vec3d start = p + kProbeOffsetM * w.normal;
     const std::optional<ProbeHit> behind = probe.First(start, -w.normal, false);
     if (!behind) {
-      return Invalid(scene, "window",
+      return Invalid(scene, field,
                      absl::StrCat("no indoor surface lies behind its point ", Point(p),
                                   ": the room must lie on the side opposite outward_normal"));
     }
     if (behind->distance_m <= w.depth_m + kProbeOffsetM + kWindowFitM) {
       return Invalid(
-          scene, "window",
+          scene, field,
           absl::StrCat("the opening is closed at ", Point(p), ": ", SurfaceName(scene, *behind),
                        " lies ", behind->distance_m - kProbeOffsetM,
                        " m behind the window, within the wall (depth_m ", w.depth_m,
@@ -147,7 +157,7 @@ absl::Status CheckWindowOpening(const Scene& scene, const IndoorProbe& probe) {
     }
     if (const std::optional<ProbeHit> front = probe.First(start, w.normal, false)) {
       return Invalid(
-          scene, "window",
+          scene, field,
           absl::StrCat(SurfaceName(scene, *front), " lies ", front->distance_m + kProbeOffsetM,
                        " m in front of its point ", Point(p),
                        ": outward_normal must point away from the room, "
@@ -170,8 +180,9 @@ bool EdgeClosed(const Window& w, const IndoorProbe& probe, Vec3d edge_point, Vec
   return across && across->distance_m <= 2 * kWindowFitM;
 }
 
-absl::Status CheckWindowRim(const Scene& scene, const IndoorProbe& probe) {
-  const Window& w = scene.window;
+absl::Status CheckWindowRim(const Scene& scene, size_t i, const IndoorProbe& probe) {
+  const Window& w = scene.windows[i].window;
+  const std::string field = WindowField(scene, i);
   struct Edge {
     Vec3d outwards, along;
     double offset, half_length;
@@ -185,13 +196,70 @@ absl::Status CheckWindowRim(const Scene& scene, const IndoorProbe& probe) {
       const Vec3d point = w.center + e.offset * e.outwards + (s * e.half_length) * e.along;
       if (EdgeClosed(w, probe, point, e.outwards)) continue;
       return Invalid(
-          scene, "window",
+          scene, field,
           absl::StrCat("it does not lie at an opening of the indoor surfaces: ", kWindowFitM,
                        " m outside its edge towards ", DirectionName(e.outwards), ", at ",
                        Point(point + kWindowFitM * e.outwards),
                        ", no indoor surface closes the gap between window and room (seen from "
                        "the room, the wall's inner face should lie depth_m = ",
                        w.depth_m, " m behind the window, or a surface run across the edge)"));
+    }
+  }
+  return absl::OkStatus();
+}
+
+// True when boxes a and b (centre, three unit axes, half extents) overlap: no separating axis
+// among their face normals and the cross products of their edges. A flat rectangle is a box
+// of half extent 0 across.
+bool BoxesOverlap(const Vec3d& ca, const Vec3d (&a)[3], const double (&ha)[3], const Vec3d& cb,
+                  const Vec3d (&b)[3], const double (&hb)[3]) {
+  std::vector<Vec3d> axes;
+  for (int i = 0; i < 3; ++i) axes.push_back(a[i]), axes.push_back(b[i]);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const Vec3d c = Cross(a[i], b[j]);
+      if (Length(c) > 1e-9) axes.push_back(Normalize(c));
+    }
+  }
+  const Vec3d d = cb - ca;
+  for (const Vec3d& axis : axes) {
+    double ra = 0, rb = 0;
+    for (int i = 0; i < 3; ++i) {
+      ra += ha[i] * std::abs(Dot(a[i], axis));
+      rb += hb[i] * std::abs(Dot(b[i], axis));
+    }
+    // Touching (a shared edge of windows side by side) is not overlapping; across flat boxes
+    // (coplanar windows) only a gap separates them
+    const double reach = ra + rb;
+    const double gap = reach > kWindowFitM ? reach - kWindowFitM : reach + 1e-6;
+    if (std::abs(Dot(d, axis)) >= gap) return false;
+  }
+  return true;
+}
+
+// Windows do not overlap one another, nor do the spaces their blinds' slats may take.
+absl::Status CheckWindowsApart(const Scene& scene) {
+  for (size_t i = 0; i < scene.windows.size(); ++i) {
+    for (size_t j = 0; j < i; ++j) {
+      const Window& a = scene.windows[i].window;
+      const Window& b = scene.windows[j].window;
+      const Vec3d axes_a[3] = {a.across, a.up, a.normal}, axes_b[3] = {b.across, b.up, b.normal};
+      const double ha[3] = {0.5 * a.width_m, 0.5 * a.height_m, 0};
+      const double hb[3] = {0.5 * b.width_m, 0.5 * b.height_m, 0};
+      if (BoxesOverlap(a.center, axes_a, ha, b.center, axes_b, hb)) {
+        return Invalid(scene, WindowField(scene, i),
+                       absl::StrCat("overlaps ", WindowField(scene, j)));
+      }
+      const auto& blind_a = scene.windows[i].blind;
+      const auto& blind_b = scene.windows[j].blind;
+      if (!blind_a || !blind_b) continue;
+      const BlindEnvelope ea = EnvelopeOfBlind(a, *blind_a, 0);
+      const BlindEnvelope eb = EnvelopeOfBlind(b, *blind_b, 0);
+      if (BoxesOverlap(ea.center, ea.axis, ea.half_extent, eb.center, eb.axis, eb.half_extent)) {
+        return Invalid(scene, WindowField(scene, i) + ".blind",
+                       absl::StrCat("its slats may reach into the space of the blind of ",
+                                    WindowField(scene, j), " at some design within the ranges"));
+      }
     }
   }
   return absl::OkStatus();
@@ -261,15 +329,20 @@ class SensorCheck {
   SensorCheck(const Scene& scene, const IndoorProbe& probe) : scene_(scene), probe_(probe) {
     for (int t = 0; t < 3; ++t) turns_[t] = ProbeDirections(t);
     for (const SolidBox& box : scene.solid_boxes) boxes_[box.part] = &box;
-    if (scene.blind) envelope_ = EnvelopeOfBlind(scene.window, *scene.blind, kSensorClearanceM);
+    for (const SceneWindow& w : scene.windows) {
+      if (!w.blind) continue;
+      envelopes_.push_back(EnvelopeOfBlind(w.window, *w.blind, kSensorClearanceM));
+      names_.push_back(scene.windows.size() == 1 ? "" : " (of window '" + w.name + "')");
+    }
   }
 
   absl::Status Check(const Sensor& s) const {
-    if (envelope_ && InsideEnvelope(*envelope_, s.position)) {
-      return SensorError(
-          scene_, s,
-          "lies in the space the blind's slats take at some design within the ranges "
-          "(just behind the window's inner face); move it into the room");
+    for (size_t k = 0; k < envelopes_.size(); ++k) {
+      if (!InsideEnvelope(envelopes_[k], s.position)) continue;
+      return SensorError(scene_, s,
+                         absl::StrCat("lies in the space the blind's slats take", names_[k],
+                                      " at some design within the ranges (just behind the "
+                                      "window's inner face); move it into the room"));
     }
     const auto& directions = turns_[0];
     for (size_t i = 0; i < directions.size(); ++i) {
@@ -307,7 +380,8 @@ class SensorCheck {
   const IndoorProbe& probe_;
   std::vector<std::pair<Vec3d, std::string>> turns_[3];
   std::unordered_map<uint32_t, const SolidBox*> boxes_;
-  std::optional<BlindEnvelope> envelope_;
+  std::vector<BlindEnvelope> envelopes_;
+  std::vector<std::string> names_;  // per envelope: which window's blind, in messages
 };
 
 }  // namespace
@@ -318,8 +392,11 @@ absl::Status CheckRoom(const Scene& scene) {
     return Invalid(scene, "surfaces",
                    "no surface is SIDE_INDOOR: the sensors need a room around them");
   }
-  FENESTRA_RETURN_IF_ERROR(CheckWindowOpening(scene, *probe));
-  FENESTRA_RETURN_IF_ERROR(CheckWindowRim(scene, *probe));
+  for (size_t i = 0; i < scene.windows.size(); ++i) {
+    FENESTRA_RETURN_IF_ERROR(CheckWindowOpening(scene, i, *probe));
+    FENESTRA_RETURN_IF_ERROR(CheckWindowRim(scene, i, *probe));
+  }
+  FENESTRA_RETURN_IF_ERROR(CheckWindowsApart(scene));
   const SensorCheck sensors(scene, *probe);
   for (const Sensor& s : scene.sensors) FENESTRA_RETURN_IF_ERROR(sensors.Check(s));
   return absl::OkStatus();

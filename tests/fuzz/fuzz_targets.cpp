@@ -169,14 +169,14 @@ absl::Status JobJson(std::string_view bytes) {
   Require(sampling.batches() >= 2 && sampling.batches() <= 64, "batches out of range");
   Require(sampling.basis_cells() == 288 || sampling.basis_cells() == 1152, "basis out of range");
   Require(prepared->job.budget().max_evaluations() >= 1, "no evaluations");
-  if (prepared->scene.blind) {
-    double narrowest = prepared->scene.blind->slat_width_m.min;
+  if (prepared->scene.blind()) {
+    double narrowest = prepared->scene.blind()->slat_width_m.min;
     for (const v1::DesignVariable& v : prepared->job.variables()) {
       if (v.name() == "width") narrowest = std::min(narrowest, v.lower());
     }
-    Require(
-        MaxSlatCount(prepared->scene.window, *prepared->scene.blind, narrowest) <= kMaxBlindSlats,
-        "a prepared job's blind may need more than kMaxBlindSlats slats");
+    Require(MaxSlatCount(prepared->scene.window(), *prepared->scene.blind(), narrowest) <=
+                kMaxBlindSlats,
+            "a prepared job's blind may need more than kMaxBlindSlats slats");
   }
   OutdoorMatrixKey(prepared->scene, sampling);
   return absl::OkStatus();

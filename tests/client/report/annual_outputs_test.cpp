@@ -95,12 +95,12 @@ TEST_F(AnnualOutputsTest, ObjHoldsTheSceneWithTheBestBlind) {
                                            result.best_design().end());
   absl::StatusOr<BlindDesign> design = DesignWithOverrides(*scene, best);
   ASSERT_TRUE(design.ok()) << design.status();
-  const int slats = LayoutBlind(scene->window, *scene->blind, *design).slat_count;
+  const int slats = LayoutBlind(scene->window(), *scene->blind(), *design).slat_count;
   EXPECT_EQ(std::count(obj->group.begin(), obj->group.end(), "blind"), 12 * slats);
   EXPECT_EQ(obj->group.size(), scene->fixed.TriangleCount() + 12 * slats);
   // The slats are where the generator puts them at the best design (OBJ holds floats)
   TriangleMesh blind;
-  GenerateBlind(scene->window, *scene->blind, *design, 0, blind);
+  GenerateBlind(scene->window(), *scene->blind(), *design, 0, blind);
   size_t k = 0;
   for (size_t t = 0; t < obj->group.size(); ++t) {
     if (obj->group[t] != "blind") continue;
@@ -122,7 +122,7 @@ TEST_F(AnnualOutputsTest, ObjHoldsTheBestFinish) {
   ASSERT_TRUE(obj.ok()) << obj.status();
   absl::StatusOr<Scene> scene = BuildScene(result.job().scene(), "result");
   ASSERT_TRUE(scene.ok()) << scene.status();
-  const int slats = LayoutBlind(scene->window, *scene->blind, DefaultDesign(*scene)).slat_count;
+  const int slats = LayoutBlind(scene->window(), *scene->blind(), DefaultDesign(*scene)).slat_count;
   EXPECT_EQ(std::count(obj->group.begin(), obj->group.end(), "white"), 12 * slats);
   EXPECT_EQ(std::count(obj->group.begin(), obj->group.end(), "black"), 0);
 }

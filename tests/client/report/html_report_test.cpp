@@ -152,7 +152,7 @@ TEST_F(HtmlReportTest, LoadsWithoutErrorsOrRequestsAndDrawsEveryFigure) {
   absl::StatusOr<BlindDesign> design = DesignWithOverrides(*scene, best);
   ASSERT_TRUE(design.ok()) << design.status();
   EXPECT_EQ(Get(Get(figures, "plot-blind-section"), "slats").number_value(),
-            LayoutBlind(scene->window, *scene->blind, *design).slat_count);
+            LayoutBlind(scene->window(), *scene->blind(), *design).slat_count);
 
   // The tables, the job's final check and its recorded error against time
   absl::StatusOr<Value> text = browser_->Evaluate(

@@ -32,7 +32,7 @@ std::unique_ptr<DcBackend> Gpu() {
 OutdoorOptions OutdoorInParts(const Scene& scene, int64_t paths, int batches) {
   OutdoorOptions outdoor;
   outdoor.paths = paths;
-  outdoor.parts = AutomaticWindowParts(scene.window);
+  outdoor.parts = AutomaticWindowParts(scene.window());
   outdoor.batches = batches;
   return outdoor;
 }
@@ -134,7 +134,7 @@ TEST(CudaBackendTest, TwoStageMatchesEmbree) {
   // The window in parts, as by default (4 x 3): the GPU's per-part cells and shared rows
   OutdoorOptions outdoor;
   outdoor.paths = 2'000'000;
-  outdoor.parts = AutomaticWindowParts(scene.window);
+  outdoor.parts = AutomaticWindowParts(scene.window());
   IndoorOptions indoor;
   indoor.paths_per_sensor = 200'000;
   indoor.parts = outdoor.parts;
@@ -441,7 +441,7 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
   // Without a blind there is nothing to replay: the design is traced in full, and its I is
   // still the indoor stage's (the outdoor stage never sees the blind, so O stays)
   Scene bare = scene;
-  bare.blind.reset();
+  bare.blind().reset();
   absl::StatusOr<std::unique_ptr<DesignTallies>> in_full =
       gpu->MakeDesignTallies(bare, indoor, o->batches, sky);
   ASSERT_TRUE(in_full.ok()) << in_full.status();
@@ -577,7 +577,7 @@ TEST(CudaBackendTest, ReplayOfSlatsWithDarkOuterFacesIsTheIndoorStage) {
   const Scene light = LoadExample("city_office");
   Scene scene = light;
   scene.materials.push_back({"dark outer faces", 0.05, -1});
-  scene.blind->outer_material = static_cast<uint32_t>(scene.materials.size() - 1);
+  scene.blind()->outer_material = static_cast<uint32_t>(scene.materials.size() - 1);
   IndoorOptions options;
   options.paths_per_sensor = 10'000;
   options.parts = {2, 2};
@@ -614,7 +614,7 @@ TEST(CudaBackendTest, ReplayOfADesignFinishIsTheIndoorStage) {
   scene.materials.push_back({"dark", 0.05, -1});
   const uint32_t dark = static_cast<uint32_t>(scene.materials.size() - 1);
   Scene dark_scene = scene;
-  dark_scene.blind->material = dark;
+  dark_scene.blind()->material = dark;
   IndoorOptions options;
   options.paths_per_sensor = 10'000;
   options.parts = {2, 2};

@@ -44,11 +44,11 @@ bool LineClear(const TriangleMesh& mesh, const std::vector<Material>& materials,
 // sill up: lines from them to a sun in the window's normal plane cross the slats.
 std::vector<Sensor> SensorsBehindBlind(const Scene& scene) {
   std::vector<Sensor> sensors;
-  const double sill = scene.window.center.z - 0.5 * scene.window.height_m;
+  const double sill = scene.window().center.z - 0.5 * scene.window().height_m;
   for (int k = 0; k < 12; ++k) {
     Sensor s;
     s.name = "behind " + std::to_string(k);
-    s.position = {0.1 * k - 0.5, scene.window.center.y - scene.window.depth_m - 0.2,
+    s.position = {0.1 * k - 0.5, scene.window().center.y - scene.window().depth_m - 0.2,
                   sill + 0.013 + 0.017 * k};
     s.direction = {0, 1, 0};
     sensors.push_back(s);
@@ -96,7 +96,7 @@ TEST(DirectSunTest, SlatsCutTheSunOffAboveTheirCutOffAngle) {
         bare_above += bare(i, h) > 0;
       } else {
         EXPECT_EQ(reached, LineClear(mesh, scene.materials, scene.sensors[i], suns[h].direction,
-                                     scene.window.center))
+                                     scene.window().center))
             << "sensor " << i << " at " << angles[h] / kDegree << " degrees";
         lit_below += reached;
       }
@@ -171,8 +171,8 @@ TEST(DirectSunTest, SlatsWhoseFacesTransmitOtherwiseAreOpaque) {
   ASSERT_TRUE(closed.ok()) << closed.status();
   const std::vector<SunColumn> suns = NorthernSunFan();
   const auto through = [&](uint32_t material, std::optional<uint32_t> outer) {
-    scene.blind->material = material;
-    scene.blind->outer_material = outer;
+    scene.blind()->material = material;
+    scene.blind()->outer_material = outer;
     absl::StatusOr<std::unique_ptr<DirectSun>> sun =
         DirectSun::Trace(scene, suns, static_cast<int>(suns.size()));
     EXPECT_TRUE(sun.ok()) << sun.status();
@@ -194,7 +194,7 @@ TEST(DirectSunTest, DesignFinishGivesTheSlatsTransmittance) {
   const auto add = [&](const char* name, double reflectance, double transmittance) {
     return AddMaterial(scene, name, reflectance, transmittance);
   };
-  const uint32_t opaque = scene.blind->material, half = add("half", 0.1, 0.5),
+  const uint32_t opaque = scene.blind()->material, half = add("half", 0.1, 0.5),
                  less = add("less", 0.1, 0.3);
   absl::StatusOr<BlindDesign> closed = DesignWithOverrides(
       scene, {{"alpha", 0}, {"width", 0.15}, {"spacing", 0}, {"thickness", 0.01}});
@@ -216,8 +216,8 @@ TEST(DirectSunTest, DesignFinishGivesTheSlatsTransmittance) {
     BlindDesign design = *closed;
     design.finish = finish;
     Scene alike = scene;
-    alike.blind->material = finish.material;
-    alike.blind->outer_material = finish.outer_material;
+    alike.blind()->material = finish.material;
+    alike.blind()->outer_material = finish.outer_material;
     const std::unique_ptr<DirectSun> of_scene = traced(alike);
     ASSERT_NE(of_scene, nullptr);
     const Matrix e = sun->Illuminance(design);

@@ -141,7 +141,7 @@ TEST(ExtremeScenesTest, GeneratedBlindsWithZeroSpacingStayFinite) {
   for (double tilt : {0.0, 0.3, kPi / 2}) {
     TriangleMesh mesh = AssembleMesh(scene, DefaultDesign(scene));
     const BlindDesign design{true, tilt, 0.15, 0.0, 0.01, {}};
-    const BlindLayout layout = GenerateBlind(scene.window, spec, design,
+    const BlindLayout layout = GenerateBlind(scene.window(), spec, design,
                                              static_cast<uint32_t>(mesh.part_names.size()), mesh);
     const auto result =
         ComputeOneStage(mesh, scene.materials, scene.sensors, Options(50000, 29, 4));

@@ -59,7 +59,7 @@ TEST(IndoorReplayTest, DesignFinishReplaysAsSlatsOfItsMaterials) {
   scene.materials.push_back({"dark", 0.05, -1});
   const uint32_t dark = static_cast<uint32_t>(scene.materials.size() - 1);
   Scene dark_scene = scene;
-  dark_scene.blind->material = dark;
+  dark_scene.blind()->material = dark;
   IndoorOptions options;
   options.paths_per_sensor = 10'000;
   options.parts = {2, 2};

@@ -54,11 +54,11 @@ TEST(LocalSlatsTest, AgreesWithTheTriangles) {
   Scene scene = LoadExample("city_office");
   for (const bool vertical : {false, true})
     for (const std::map<std::string, double>& values : EdgeDesigns()) {
-      scene.blind->vertical = vertical;  // slats stacked across the window instead
+      scene.blind()->vertical = vertical;  // slats stacked across the window instead
       absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, values);
       ASSERT_TRUE(design.ok()) << design.status();
       TriangleMesh blind;
-      GenerateBlind(scene.window, *scene.blind, *design, 0, blind);
+      GenerateBlind(scene.window(), *scene.blind(), *design, 0, blind);
       absl::StatusOr<TraceGeometry> geometry = PrepareTraceGeometry(blind, scene.materials);
       ASSERT_TRUE(geometry.ok()) << geometry.status();
       absl::StatusOr<std::unique_ptr<EmbreeScene>> triangles = EmbreeScene::Build(*geometry);
@@ -68,7 +68,8 @@ TEST(LocalSlatsTest, AgreesWithTheTriangles) {
       const LocalEnvelope e = LocalEnvelopeOfBlind(*geometry, scene);
       const Vec3f shift = slats.ShiftFrom(e.center);
       // Segments between points of a box around the window, inside the room and outside
-      AroundWindow around(geometry->ToLocal(scene.window.center - 0.2 * scene.window.normal), 7);
+      AroundWindow around(geometry->ToLocal(scene.window().center - 0.2 * scene.window().normal),
+                          7);
       int blocked = 0, differ = 0, crossing_count = 0, crossings_differ = 0;
       const int segments = 200'000;
       for (int i = 0; i < segments; ++i) {
@@ -107,7 +108,7 @@ TEST(BvhWithSlatsTest, HitsAreTheMeshes) {
   Scene scene = LoadExample("city_office");
   for (const bool vertical : {false, true})
     for (const std::map<std::string, double>& values : EdgeDesigns()) {
-      scene.blind->vertical = vertical;
+      scene.blind()->vertical = vertical;
       absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, values);
       ASSERT_TRUE(design.ok()) << design.status();
       absl::StatusOr<TraceGeometry> room =
@@ -125,7 +126,7 @@ TEST(BvhWithSlatsTest, HitsAreTheMeshes) {
       ASSERT_EQ(beside.triangles.size(), built->triangles.size());
       const BvhIntersector a{built->nodes.data(), built->triangles.data()};
       const BvhIntersector b{beside.nodes.data(), beside.triangles.data()};
-      AroundWindow around(room->ToLocal(scene.window.center - 0.3 * scene.window.normal), 11);
+      AroundWindow around(room->ToLocal(scene.window().center - 0.3 * scene.window().normal), 11);
       int on_slats = 0, differ = 0;
       const int rays = 100'000;
       for (int i = 0; i < rays; ++i) {

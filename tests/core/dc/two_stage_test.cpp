@@ -92,7 +92,7 @@ TEST(TwoStageTest, LightwellAgreesWithOneStage) {
   const Scene scene = LoadExample("lightwell");
   const Comparison c =
       Compare(scene, DefaultDesign(scene),
-              {1'000'000, 2'000'000, 1'000'000, 29, AutomaticWindowParts(scene.window)});
+              {1'000'000, 2'000'000, 1'000'000, 29, AutomaticWindowParts(scene.window())});
   ExpectSkySumsAgree(c, "lightwell");
   // Nothing reaches the ground bin: the well has no view below the horizon
   EXPECT_EQ(c.two_stage.coefficients.col(0).cwiseAbs().maxCoeff(), 0.0);
@@ -156,7 +156,7 @@ TEST_P(HardDesignTest, AgreesWithOneStage) {
       {{"alpha", h.alpha}, {"width", h.width}, {"spacing", h.spacing}, {"thickness", h.thickness}});
   ASSERT_TRUE(design.ok()) << design.status();
   const Comparison c = Compare(
-      scene, *design, {200'000, 2'000'000, 200'000, -1, AutomaticWindowParts(scene.window)});
+      scene, *design, {200'000, 2'000'000, 200'000, -1, AutomaticWindowParts(scene.window())});
   ExpectSkySumsAgree(c, h.name);
   const auto [one, one_se] = Udi(c.one_stage.batch_coefficients);
   const auto [two, two_se] = Udi(c.two_stage.batches);
@@ -190,7 +190,7 @@ TEST(TwoStageTest, SkySumErrorsMatchTheSpreadOverSeeds) {
     OutdoorOptions outdoor;
     outdoor.paths = 400'000;
     outdoor.max_bounces = -1;
-    outdoor.parts = AutomaticWindowParts(scene.window);
+    outdoor.parts = AutomaticWindowParts(scene.window());
     outdoor.seed = 100 + seed;
     IndoorOptions indoor;
     indoor.paths_per_sensor = 20'000;
@@ -299,7 +299,8 @@ TEST(TwoStageTest, SkippedOutdoorTestsChangeNothing) {
   absl::StatusOr<std::unique_ptr<EmbreeScene>> room = EmbreeScene::Build(*indoor);
   absl::StatusOr<std::unique_ptr<EmbreeScene>> city = EmbreeScene::Build(*outdoor);
   ASSERT_TRUE(room.ok() && city.ok());
-  const TraceWindow window = LocalWindow(*indoor, scene.window, AutomaticWindowParts(scene.window));
+  const TraceWindow window =
+      LocalWindow(*indoor, scene.window(), AutomaticWindowParts(scene.window()));
   const HemisphereBasis basis = Beckers288();
   const std::vector<uint8_t> met = OutdoorMetCells(*indoor, *outdoor, window, basis);
   EXPECT_GT(std::count(met.begin(), met.end(), 1), 1000);  // the street and the buildings

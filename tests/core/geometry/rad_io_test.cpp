@@ -69,8 +69,8 @@ TEST(RadIoTest, RadianceMaterialsAndOuterSlatFaces) {
   Material pane{"pane", 0, 0.88};
   pane.kind = MaterialKind::kGlass;
   scene->materials.push_back(pane);
-  scene->blind->material = metal;
-  scene->blind->outer_material = fabric;
+  scene->blind()->material = metal;
+  scene->blind()->outer_material = fabric;
   const std::string text = Exported(*scene, DefaultDesign(*scene));
 
   EXPECT_NE(text.find("void metal m4_alu\n0\n0\n5 0.8 0.8 0.8 0.9 0.05\n"), std::string::npos)

@@ -234,8 +234,8 @@ TEST_F(SceneErrorsTest, HugeCoordinatesAndWindows) {
        {R"({"x": 0, "y": 5.9e236, "z": 0})", R"({"x": 0, "y": 1e-320, "z": 0})"}) {
     absl::StatusOr<fenestra::Scene> scene = LoadScene(Scene(R"({"x": 0, "y": 1, "z": 0})", normal));
     ASSERT_TRUE(scene.ok()) << scene.status();
-    EXPECT_EQ(scene->window.normal.y, 1.0) << normal;
-    EXPECT_EQ(scene->window.across.x, -1.0) << normal;
+    EXPECT_EQ(scene->window().normal.y, 1.0) << normal;
+    EXPECT_EQ(scene->window().across.x, -1.0) << normal;
   }
   // Directions of any finite size are normalized without overflow
   absl::StatusOr<fenestra::Scene> scene =
@@ -383,8 +383,8 @@ TEST_F(SceneErrorsTest, OuterMaterialCoversTheSlatsOuterFacesOnly) {
       LoadScene(Scene({{R"({"name": "slat", "reflectance": 0.8})", kRadianceMaterials},
                        {blind, blind + R"( "outerMaterial": "white",)"}}));
   ASSERT_TRUE(scene.ok()) << scene.status();
-  ASSERT_EQ(scene->blind->material, 1u);
-  ASSERT_EQ(scene->blind->outer_material, 5u);
+  ASSERT_EQ(scene->blind()->material, 1u);
+  ASSERT_EQ(scene->blind()->outer_material, 5u);
   const TriangleMesh mesh = AssembleMesh(*scene, DefaultDesign(*scene));
   const size_t first = scene->fixed.TriangleCount();
   const size_t slats = (mesh.TriangleCount() - first) / kTrianglesPerSlat;
@@ -423,9 +423,9 @@ TEST_F(SceneErrorsTest, WindowsListGivesTheSameSceneAsTheOneWindowForm) {
   absl::StatusOr<fenestra::Scene> single = LoadScene(Scene());
   ASSERT_TRUE(listed.ok()) << listed.status();
   ASSERT_TRUE(single.ok()) << single.status();
-  EXPECT_EQ(listed->window.center.y, single->window.center.y);
-  EXPECT_EQ(listed->window.depth_m, single->window.depth_m);
-  ASSERT_TRUE(listed->blind.has_value());
+  EXPECT_EQ(listed->window().center.y, single->window().center.y);
+  EXPECT_EQ(listed->window().depth_m, single->window().depth_m);
+  ASSERT_TRUE(listed->blind().has_value());
   const TriangleMesh a = AssembleMesh(*listed, DefaultDesign(*listed));
   const TriangleMesh b = AssembleMesh(*single, DefaultDesign(*single));
   ASSERT_EQ(a.vertices.size(), b.vertices.size());

@@ -51,21 +51,21 @@ void ExpectSameScene(const Scene& original, const Scene& rebuilt) {
   for (size_t m = 0; m < original.materials.size(); ++m) {
     ExpectSameParts(original.materials[m], rebuilt.materials[m]);
   }
-  ExpectSameVector(original.window.center, rebuilt.window.center);
-  ExpectSameVector(original.window.up, rebuilt.window.up);
-  EXPECT_EQ(original.window.depth_m, rebuilt.window.depth_m);
+  ExpectSameVector(original.window().center, rebuilt.window().center);
+  ExpectSameVector(original.window().up, rebuilt.window().up);
+  EXPECT_EQ(original.window().depth_m, rebuilt.window().depth_m);
   ASSERT_EQ(original.sensors.size(), rebuilt.sensors.size());
   for (size_t s = 0; s < original.sensors.size(); ++s) {
     EXPECT_EQ(original.sensors[s].name, rebuilt.sensors[s].name);
     ExpectSameVector(original.sensors[s].position, rebuilt.sensors[s].position);
   }
-  ASSERT_EQ(original.blind.has_value(), rebuilt.blind.has_value());
-  if (original.blind) {
-    EXPECT_EQ(original.blind->slat_width_m.max, rebuilt.blind->slat_width_m.max);
-    EXPECT_EQ(original.blind->wall_gap_m, rebuilt.blind->wall_gap_m);
-    EXPECT_EQ(original.blind->vertical, rebuilt.blind->vertical);
-    EXPECT_EQ(original.blind->material, rebuilt.blind->material);
-    EXPECT_EQ(original.blind->outer_material, rebuilt.blind->outer_material);
+  ASSERT_EQ(original.blind().has_value(), rebuilt.blind().has_value());
+  if (original.blind()) {
+    EXPECT_EQ(original.blind()->slat_width_m.max, rebuilt.blind()->slat_width_m.max);
+    EXPECT_EQ(original.blind()->wall_gap_m, rebuilt.blind()->wall_gap_m);
+    EXPECT_EQ(original.blind()->vertical, rebuilt.blind()->vertical);
+    EXPECT_EQ(original.blind()->material, rebuilt.blind()->material);
+    EXPECT_EQ(original.blind()->outer_material, rebuilt.blind()->outer_material);
   }
   EXPECT_EQ(original.site.latitude_deg, rebuilt.site.latitude_deg);
   EXPECT_EQ(original.site.ground_reflectance, rebuilt.site.ground_reflectance);
@@ -114,7 +114,7 @@ TEST(SceneProtoTest, ObjMeshesAndGridsAreInlined) {
   absl::StatusOr<Scene> rebuilt = BuildScene(proto, "rebuilt.json");
   ASSERT_TRUE(rebuilt.ok()) << rebuilt.status();
   ExpectSameScene(*scene, *rebuilt);
-  EXPECT_EQ(rebuilt->blind->side_margin_m, 0.02);
+  EXPECT_EQ(rebuilt->blind()->side_margin_m, 0.02);
 }
 
 // Radiance's materials go back as their kinds with the parameters the scene gave, through

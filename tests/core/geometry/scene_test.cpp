@@ -65,8 +65,8 @@ TEST(SceneTest, LightwellHas42TrianglesMatchingItsDescription) {
   }
   ASSERT_EQ(scene->sensors.size(), 3u);
   EXPECT_DOUBLE_EQ(scene->sensors[2].position.y, -5);
-  EXPECT_DOUBLE_EQ(scene->window.Area(), 3.0);
-  EXPECT_FALSE(scene->blind.has_value());
+  EXPECT_DOUBLE_EQ(scene->window().Area(), 3.0);
+  EXPECT_FALSE(scene->blind().has_value());
 }
 
 TEST(SceneTest, CityOfficeMatchesItsTable) {
@@ -110,8 +110,8 @@ TEST(SceneTest, CityOfficeMatchesItsTable) {
   EXPECT_DOUBLE_EQ(scene->sensors[8].position.x, 1);
   EXPECT_DOUBLE_EQ(scene->sensors[8].position.y, -5);
   EXPECT_DOUBLE_EQ(scene->sensors[8].position.z, 6.7);
-  ASSERT_TRUE(scene->blind.has_value());
-  EXPECT_DOUBLE_EQ(scene->blind->slat_width_m.value, 0.15);
+  ASSERT_TRUE(scene->blind().has_value());
+  EXPECT_DOUBLE_EQ(scene->blind()->slat_width_m.value, 0.15);
   EXPECT_NEAR(scene->site.latitude_deg, -34.83, 1e-12);
 
   // The default blind: 10 slats of 12 triangles

@@ -86,7 +86,7 @@ TEST(DesignVariablesTest, JobDesignWithOverridesResolvesTheFinish) {
   EXPECT_EQ(design->tilt_rad, 0.6);
   ASSERT_TRUE(design->finish);
   EXPECT_EQ(scene->materials[design->finish->material].name, "white");
-  EXPECT_EQ(scene->materials[FinishOf(*scene->blind, *design).outer_material].name, "white");
+  EXPECT_EQ(scene->materials[FinishOf(*scene->blind(), *design).outer_material].name, "white");
   // Without a finish value: the scene's own slats
   design = JobDesignWithOverrides(*scene, job, {{"alpha", 0.6}});
   ASSERT_TRUE(design.ok()) << design.status();

@@ -85,7 +85,7 @@ TEST(HourlyIlluminanceTest, TheResultSaysHowItWasMade) {
   absl::StatusOr<Scene> scene = BuildScene(result.job().scene(), "result.json");
   ASSERT_TRUE(scene.ok()) << scene.status();
   EXPECT_EQ(scene->sensors.size(), 9u);
-  ASSERT_TRUE(scene->blind.has_value());
+  ASSERT_TRUE(scene->blind().has_value());
   EXPECT_EQ(result.weather_location(), "MONTEVIDEO, URY");
   EXPECT_EQ(result.versions().at("fenestra"), "0.1.0");
   EXPECT_TRUE(result.versions().contains("embree"));

@@ -73,10 +73,10 @@ TEST(JobTest, WindowPartsAreResolvedAndChecked) {
   absl::StatusOr<v1::Sampling> automatic = ResolveSampling(v1::Sampling());
   ASSERT_TRUE(automatic.ok()) << automatic.status();
   const Scene scene = LoadExample("city_office");
-  EXPECT_EQ(SamplingWindowParts(*automatic, scene.window), (WindowParts{4, 3}));
+  EXPECT_EQ(SamplingWindowParts(*automatic, scene.window()), (WindowParts{4, 3}));
   v1::Sampling columns_only = *automatic;
   columns_only.set_window_columns(2);
-  EXPECT_EQ(SamplingWindowParts(columns_only, scene.window), (WindowParts{2, 3}));
+  EXPECT_EQ(SamplingWindowParts(columns_only, scene.window()), (WindowParts{2, 3}));
   for (const int bad : {-1, 17}) {
     v1::Sampling s;
     s.set_window_rows(bad);
