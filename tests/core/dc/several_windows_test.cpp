@@ -1,7 +1,8 @@
-// Scenes of several windows: the corner office (examples/corner_office: windows on two walls,
+// Rooms as they are drawn: the corner office (examples/corner_office: windows on two walls,
 // one blind design for both) is a room, its blinds move together, the one-stage method
-// traces both windows, and a window that no light can reach changes nothing. Tolerances are
-// in standard errors; seeds are fixed.
+// traces both windows, and a window that no light can reach changes nothing; the skylight
+// room (examples/skylight_room: a roof light with a blind under it) gives the two-stage
+// method the one-stage sums. Tolerances are in standard errors; seeds are fixed.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -210,6 +211,44 @@ TEST(SeveralWindowsTest, AWindowNoLightReachesChangesNothing) {
               5 * std::hypot(open.sky_sum_standard_error(s), ra.sky_sum_standard_error(s)))
         << "sensor " << s;
   }
+}
+
+// Over a grid of designs, the skylight's two-stage sky sums lie within 3 combined SE + 1% of
+// the one-stage ones at every sensor.
+TEST(SeveralWindowsTest, SkylightTwoStageMatchesOneStageOverADesignGrid) {
+  absl::StatusOr<Scene> scene =
+      LoadValidScene(std::string(FENESTRA_SOURCE_DIR) + "/examples/skylight_room/scene.json");
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  ASSERT_EQ(scene->window().normal.z, 1.0);
+  OutdoorOptions outdoor;
+  outdoor.paths = 4'000'000;
+  outdoor.parts = AutomaticWindowParts(scene->window());
+  outdoor.seed = 7;
+  absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(*scene, outdoor);
+  ASSERT_TRUE(o.ok()) << o.status();
+  int compared = 0;
+  for (const double alpha : {0.0, 0.8, 1.5}) {
+    for (const double spacing : {0.0, 0.1}) {
+      absl::StatusOr<BlindDesign> design =
+          DesignWithOverrides(*scene, {{"alpha", alpha}, {"spacing", spacing}});
+      ASSERT_TRUE(design.ok()) << design.status();
+      const OneStageResult one = OneStage(*scene, *design);
+      IndoorOptions indoor;
+      indoor.paths_per_sensor = 20000;
+      indoor.parts = outdoor.parts;
+      indoor.seed = 11;
+      absl::StatusOr<IndoorResult> i = ComputeIndoorStage(*scene, *design, indoor);
+      ASSERT_TRUE(i.ok()) << i.status();
+      absl::StatusOr<TwoStageResult> two = CombineStages(*i, *o);
+      ASSERT_TRUE(two.ok()) << two.status();
+      for (Eigen::Index s = 0; s < one.sky_sum.size(); ++s, ++compared) {
+        const double se = std::hypot(one.sky_sum_standard_error(s), two->sky_sum_standard_error(s));
+        EXPECT_NEAR(two->sky_sum(s), one.sky_sum(s), 3 * se + 0.01 * one.sky_sum(s))
+            << "alpha " << alpha << ", spacing " << spacing << ", sensor " << s;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 6 * 9);
 }
 
 }  // namespace
