@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -26,7 +27,13 @@ struct ProbeHit {
   std::optional<uint32_t> triangle;  // in scene.fixed; empty = a window
 };
 
-// The scene's fixed indoor surfaces (the blinds left out) and its windows, for probe rays.
+// Light passes a material that transmits: glazing, glass, trans.
+bool Transmits(const Material& m) {
+  return m.transmittance > 0 || m.through > 0 || m.kind == MaterialKind::kGlass;
+}
+
+// The scene's fixed indoor surfaces (the blinds and transmitting surfaces, such as the
+// glazing in an opening, left out) and its windows, for probe rays.
 class IndoorProbe {
  public:
   static absl::StatusOr<std::unique_ptr<IndoorProbe>> Build(const Scene& scene) {
@@ -35,7 +42,7 @@ class IndoorProbe {
     indoor.part_names = scene.fixed.part_names;
     const TriangleMesh& fixed = scene.fixed;
     for (size_t t = 0; t < fixed.TriangleCount(); ++t) {
-      if (fixed.side[t] != Side::kIndoor) continue;
+      if (fixed.side[t] != Side::kIndoor || Transmits(scene.materials[fixed.material[t]])) continue;
       indoor.Add(fixed.vertices[3 * t], fixed.vertices[3 * t + 1], fixed.vertices[3 * t + 2],
                  fixed.material[t], Side::kIndoor, fixed.part[t]);
       probe->triangle_.push_back(static_cast<uint32_t>(t));
@@ -49,8 +56,10 @@ class IndoorProbe {
 
   bool Empty() const { return triangle_.empty(); }
 
-  // The first indoor surface along the ray from `origin`; `with_window` counts the windows.
-  std::optional<ProbeHit> First(Vec3d origin, Vec3d direction, bool with_window) const {
+  // The first indoor surface along the ray from `origin`; `with_window` counts the windows
+  // (but window `skip`, where the ray starts).
+  std::optional<ProbeHit> First(Vec3d origin, Vec3d direction, bool with_window,
+                                size_t skip = SIZE_MAX) const {
     std::optional<ProbeHit> first;
     SurfaceHit hit;
     const Vec3f local = geometry_.ToLocal(origin);
@@ -60,8 +69,9 @@ class IndoorProbe {
       first = ProbeHit{Length(hit.position - local), triangle_[hit.triangle]};
     }
     if (with_window) {
-      for (const SceneWindow& w : windows_) {
-        const std::optional<double> window = WindowDistance(w.window, origin, direction);
+      for (size_t k = 0; k < windows_.size(); ++k) {
+        if (k == skip) continue;
+        const std::optional<double> window = WindowDistance(windows_[k].window, origin, direction);
         if (window && (!first || *window < first->distance_m)) first = ProbeHit{*window, {}};
       }
     }
@@ -140,7 +150,8 @@ absl::Status CheckWindowOpening(const Scene& scene, size_t i, const IndoorProbe&
   for (const Vec3d& p :
        WindowSamples(w, std::min(kWindowFitM, 0.25 * std::min(w.width_m, w.height_m)))) {
     const Vec3d start = p + kProbeOffsetM * w.normal;
-    const std::optional<ProbeHit> behind = probe.First(start, -w.normal, false);
+    // The room behind: an indoor surface, or another window across the room
+    const std::optional<ProbeHit> behind = probe.First(start, -w.normal, true, i);
     if (!behind) {
       return Invalid(scene, field,
                      absl::StrCat("no indoor surface lies behind its point ", Point(p),
@@ -392,11 +403,11 @@ absl::Status CheckRoom(const Scene& scene) {
     return Invalid(scene, "surfaces",
                    "no surface is SIDE_INDOOR: the sensors need a room around them");
   }
+  FENESTRA_RETURN_IF_ERROR(CheckWindowsApart(scene));
   for (size_t i = 0; i < scene.windows.size(); ++i) {
     FENESTRA_RETURN_IF_ERROR(CheckWindowOpening(scene, i, *probe));
     FENESTRA_RETURN_IF_ERROR(CheckWindowRim(scene, i, *probe));
   }
-  FENESTRA_RETURN_IF_ERROR(CheckWindowsApart(scene));
   const SensorCheck sensors(scene, *probe);
   for (const Sensor& s : scene.sensors) FENESTRA_RETURN_IF_ERROR(sensors.Check(s));
   return absl::OkStatus();

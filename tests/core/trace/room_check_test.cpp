@@ -86,7 +86,7 @@ std::string ErrorOf(const v1::Scene& scene) {
 }
 
 TEST(RoomCheckTest, ExampleScenesPass) {
-  for (const std::string name : {"lightwell", "city_office"}) {
+  for (const std::string name : {"lightwell", "city_office", "corner_office", "skylight_room"}) {
     absl::StatusOr<Scene> scene =
         LoadValidScene(FENESTRA_SOURCE_DIR "/examples/" + name + "/scene.json");
     EXPECT_TRUE(scene.ok()) << name << ": " << scene.status();
@@ -199,6 +199,16 @@ TEST(RoomCheckTest, WindowsOffTheRoomsBoundary) {
   AddPolygon(office, "glass pane", {V(-1, 0, 6.9), V(1, 0, 6.9), V(1, 0, 8.4), V(-1, 0, 8.4)});
   office.mutable_surfaces()->rbegin()->set_material("office");
   EXPECT_THAT(ErrorOf(office), HasSubstr("window: the opening is closed"));
+  // Glazing in the opening does not close it: a pane of glass 1 mm inside the outer face
+  office = Example("city_office");
+  v1::Material& pane = *office.add_materials();
+  pane.set_name("pane");
+  pane.mutable_glass()->set_transmittance(0.8);
+  AddPolygon(office, "glazing",
+             {V(-1, 0.249, 6.9), V(1, 0.249, 6.9), V(1, 0.249, 8.4), V(-1, 0.249, 8.4)});
+  office.mutable_surfaces()->rbegin()->set_material("pane");
+  const absl::StatusOr<Scene> glazed = ValidateScene(office, "scene");
+  EXPECT_TRUE(glazed.ok()) << glazed.status();
   // The lightwell's outdoor walls, moved indoors: in front of the window
   v1::Scene well = Example("lightwell");
   for (v1::Surface& s : *well.mutable_surfaces()) {
