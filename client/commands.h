@@ -10,6 +10,8 @@ namespace fenestra {
 
 // Each adds one subcommand (and its callback) to the CLI.
 void AddSceneCommand(CLI::App& app);
+// fenestra scene import (client/scene_import_command.cpp), under `scene`.
+void AddSceneImportCommand(CLI::App& scene);
 void AddSkyCommand(CLI::App& app);
 void AddDcCommand(CLI::App& app);
 void AddConvergenceCommand(CLI::App& app);

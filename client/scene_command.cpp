@@ -75,7 +75,8 @@ void PrintSummary(const Scene& scene, const BlindDesign& design) {
 }  // namespace
 
 void AddSceneCommand(CLI::App& app) {
-  CLI::App* scene = app.add_subcommand("scene", "Check or export a scene file");
+  CLI::App* scene = app.add_subcommand("scene", "Check, export or import a scene file");
+  AddSceneImportCommand(*scene);
   scene->require_subcommand(1);
 
   auto check_file = std::make_shared<std::string>();

@@ -18,9 +18,10 @@ bool SameParts(const Material& a, const Material& b) {
          a.specular == b.specular && a.roughness == b.roughness && a.through == b.through;
 }
 
-// `x` >= 0 moved by `ulps` representable doubles; false below 0.
+// `x` >= 0 moved by `ulps` representable doubles; false below 0. A -0 counts as 0 (its sign
+// bit would make its bits the least int64_t).
 bool Step(double x, int ulps, double* out) {
-  const int64_t bits = std::bit_cast<int64_t>(x) + ulps;
+  const int64_t bits = std::bit_cast<int64_t>(x + 0.0) + ulps;
   if (bits < 0) return false;
   *out = std::bit_cast<double>(bits);
   return true;

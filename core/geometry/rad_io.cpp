@@ -1,7 +1,6 @@
 #include "core/geometry/rad_io.h"
 
 #include <cctype>
-#include <initializer_list>
 #include <ostream>
 
 #include "core/common/atomic_file.h"
@@ -11,47 +10,40 @@
 namespace fenestra {
 namespace {
 
-// Writes `void <type> <name>`, no string or integer arguments, then `values` (each grey
-// colour three times where the caller repeats it).
-void WriteModifier(std::ostream& out, const char* type, const std::string& name,
-                   std::initializer_list<double> values) {
-  out << "void " << type << ' ' << name << "\n0\n0\n" << values.size();
-  for (const double v : values) out << ' ' << v;
+void WriteMaterial(std::ostream& out, uint32_t index, const Material& m) {
+  const RadianceModifier modifier = RadianceModifierOf(m);
+  out << "void " << modifier.type << ' ' << RadianceName(index, m.name) << "\n0\n0\n"
+      << modifier.reals.size();
+  for (const double v : modifier.reals) out << ' ' << v;
   out << "\n\n";
 }
 
-void WriteMaterial(std::ostream& out, uint32_t index, const Material& m) {
-  const std::string name = RadianceName(index, m.name);
+}  // namespace
+
+RadianceModifier RadianceModifierOf(const Material& m) {
   const RadianceParameters p = ParametersOfKind(m);
   const double c = p.colour, s = p.specularity, a = p.roughness;
   switch (m.kind) {
     case MaterialKind::kLambertian:
       if (m.transmittance > 0) {
         const double g = m.reflectance + m.transmittance;
-        WriteModifier(out, "trans", name, {g, g, g, 0, 0, m.transmittance / g, 1});
-      } else {
-        WriteModifier(out, "plastic", name, {m.reflectance, m.reflectance, m.reflectance, 0, 0});
+        return {"trans", {g, g, g, 0, 0, m.transmittance / g, 1}};
       }
-      break;
+      return {"plastic", {m.reflectance, m.reflectance, m.reflectance, 0, 0}};
     case MaterialKind::kPlastic:
-      WriteModifier(out, "plastic", name, {c, c, c, s, a});
-      break;
+      return {"plastic", {c, c, c, s, a}};
     case MaterialKind::kMetal:
-      WriteModifier(out, "metal", name, {c, c, c, s, a});
-      break;
+      return {"metal", {c, c, c, s, a}};
     case MaterialKind::kTrans:
-      WriteModifier(out, "trans", name, {c, c, c, s, a, p.transmissivity, p.transmitted_specular});
-      break;
+      return {"trans", {c, c, c, s, a, p.transmissivity, p.transmitted_specular}};
     case MaterialKind::kGlass: {
       // The tracer's pane (ToTraceMaterial): the same transmissivity, in float
       const double t = GlassPane::TransmissivityFor(static_cast<float>(m.transmittance));
-      WriteModifier(out, "glass", name, {t, t, t});
-      break;
+      return {"glass", {t, t, t}};
     }
   }
+  return {"plastic", {0, 0, 0, 0, 0}};
 }
-
-}  // namespace
 
 std::string RadianceName(uint32_t index, const std::string& name) {
   std::string out(1, 'm');

@@ -11,12 +11,21 @@
 // metal or trans is itself with the scene's parameters (ParametersOfKind), a glass is `glass`
 // of the transmissivity the tracer gives its pane (GlassPane::TransmissivityFor).
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "core/geometry/blind.h"
 #include "core/geometry/scene.h"
 
 namespace fenestra {
+
+// Material `m` as a Radiance modifier, by the rules above: its type ("plastic", "metal",
+// "trans" or "glass") and its real arguments, each grey colour three times.
+struct RadianceModifier {
+  const char* type = "";
+  std::vector<double> reals;
+};
+RadianceModifier RadianceModifierOf(const Material& m);
 
 // The modifier name of material `index` named `name`: "m<index>_" and the name with every
 // character Radiance does not take in a name replaced by '_'.

@@ -36,6 +36,15 @@ struct GlassPane {
     return 0.5f * (low + high);
   }
 
+  // Transmittance(1) in double: at normal incidence both polarizations reflect
+  // r = ((n - 1) / (n + 1))^2 at each face and T = (1 - r)^2 t / (1 - r^2 t^2). What a
+  // Radiance glass of transmissivity `transmissivity` lets through straight on.
+  static double NormalTransmittance(double transmissivity, double index = 1.52) {
+    const double r = (index - 1.0) * (index - 1.0) / ((index + 1.0) * (index + 1.0));
+    const double t = transmissivity;
+    return (1.0 - r) * (1.0 - r) * t / (1.0 - r * r * t * t);
+  }
+
  private:
   FENESTRA_CPU_GPU float Sum(float c, bool transmitted) const {
     if (!(c > 0.0f)) return 0.0f;

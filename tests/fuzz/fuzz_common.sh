@@ -1,7 +1,8 @@
 # The fuzz targets and how libFuzzer runs them, for tests/run_all.sh and
 # bench/fuzz_campaign.sh (sourced). FUZZ_DIR is this folder.
 FUZZ_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
-FUZZ_TARGETS=(scene_json job_json epw obj radiance_matrix outdoor_cache daemon_request)
+FUZZ_TARGETS=(scene_json job_json epw obj radiance_matrix outdoor_cache daemon_request rad_import
+  hbjson_import)
 
 # fuzz_options TARGET: libFuzzer flags for TARGET. Inputs are capped a little above the
 # largest seed; one input may take at most 10 s and 2 GB (a single allocation above 1 GB
@@ -15,6 +16,8 @@ fuzz_options() {
     radiance_matrix) echo "$common -max_len=4096 -dict=$FUZZ_DIR/dict/radiance_matrix.dict" ;;
     outdoor_cache) echo "$common -max_len=16384" ;;
     daemon_request) echo "$common -max_len=32768" ;;
+    rad_import) echo "$common -max_len=16384 -dict=$FUZZ_DIR/dict/rad_import.dict" ;;
+    hbjson_import) echo "$common -max_len=16384 -dict=$FUZZ_DIR/dict/hbjson.dict" ;;
     *) echo "unknown fuzz target $1" >&2; return 1 ;;
   esac
 }

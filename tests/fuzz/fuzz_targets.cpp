@@ -1,6 +1,7 @@
 #include "tests/fuzz/fuzz_targets.h"
 
 #include <google/protobuf/stubs/logging.h>
+#include <google/protobuf/util/message_differencer.h>
 #include <stdlib.h>
 
 #include <algorithm>
@@ -13,7 +14,9 @@
 #include <string>
 
 #include "core/common/radiance_matrix.h"
+#include "core/geometry/hbjson_import.h"
 #include "core/geometry/obj_io.h"
+#include "core/geometry/rad_import.h"
 #include "core/geometry/scene.h"
 #include "core/optimize/job.h"
 #include "core/sky/epw.h"
@@ -261,6 +264,71 @@ absl::Status DaemonRequest(std::string_view bytes) {
   return CheckSubmitJobRequest(request, DefaultConfig());
 }
 
+absl::Status RadImport(std::string_view bytes) {
+  const size_t nul = bytes.find('\0');
+  const std::string rad(bytes.substr(0, nul));
+  const std::string pts(nul == std::string_view::npos ? "" : bytes.substr(nul + 1));
+  const absl::StatusOr<v1::Scene> scene = ImportRadiance({{"fuzz.rad", rad}}, {"fuzz.pts", pts});
+  if (!scene.ok()) return scene.status();
+  // A blind of very many slats costs the export time, and the fuzzer no new code
+  for (const v1::Window& w : scene->windows()) {
+    const v1::VenetianBlind& b = w.blind();
+    const double extent =
+        b.orientation() == v1::VenetianBlind::VERTICAL ? w.width_m() : w.height_m();
+    const double pitch = b.slat_width_m().value() + b.slat_spacing_m().value();
+    if (w.has_blind() && !(extent <= 1000 * pitch)) return absl::OkStatus();
+  }
+  std::string points;
+  const absl::StatusOr<std::string> written = ExportRadiance(*scene, &points);
+  Require(written.ok(), "an imported Radiance model cannot be exported");
+  const absl::StatusOr<v1::Scene> again =
+      ImportRadiance({{"fuzz.rad", *written}}, {"fuzz.pts", points});
+  Require(again.ok(), "an exported Radiance model does not import");
+  // The same scene; a field at its default counts as unset (protobuf's JSON leaves out -0)
+  google::protobuf::util::MessageDifferencer same;
+  same.set_message_field_comparison(google::protobuf::util::MessageDifferencer::EQUIVALENT);
+  Require(same.Compare(*scene, *again), "an exported Radiance model reads back changed");
+  return absl::OkStatus();
+}
+
+absl::Status HbjsonImport(std::string_view bytes) {
+  const absl::StatusOr<v1::Scene> scene = ImportHoneybee(bytes, "fuzz.hbjson", {});
+  if (!scene.ok()) {
+    Require(scene.status().code() == absl::StatusCode::kInvalidArgument,
+            "a Honeybee model is refused otherwise than as bad input");
+    return scene.status();
+  }
+  const auto finite = [](const v1::Vec3& v) {
+    return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
+  };
+  for (const v1::Surface& s : scene->surfaces()) {
+    for (const v1::Vec3& v : s.polygon().vertices()) {
+      Require(finite(v), "an imported surface has a non-finite vertex");
+    }
+  }
+  for (const v1::Window& w : scene->windows()) {
+    Require(finite(w.center()) && finite(w.outward_normal()) && finite(w.up()) &&
+                std::isfinite(w.width_m()) && std::isfinite(w.height_m()),
+            "an imported window is not finite");
+  }
+  for (const v1::Sensor& s : scene->sensors()) {
+    Require(finite(s.position()) && finite(s.direction()), "an imported sensor is not finite");
+  }
+  Require(scene->surfaces_size() <= static_cast<int>(kMaxHoneybeeSurfaces),
+          "an import makes more surfaces than kMaxHoneybeeSurfaces");
+  Require(scene->sensors_size() <= kMaxSceneSensors,
+          "an import makes more sensors than a scene takes");
+  const absl::StatusOr<Scene> built = BuildScene(*scene, "fuzz.hbjson");
+  if (!built.ok()) {
+    Require(built.status().code() == absl::StatusCode::kInvalidArgument,
+            "an imported scene is refused otherwise than as bad input");
+    return built.status();
+  }
+  Require(AllFinite(AssembleMesh(*built, DefaultDesign(*built)).vertices),
+          "an imported scene has non-finite vertices");
+  return absl::OkStatus();
+}
+
 std::span<const Target> Targets() {
   static constexpr Target kTargets[] = {
       {"scene_json", &SceneJson},
@@ -270,6 +338,8 @@ std::span<const Target> Targets() {
       {"radiance_matrix", &RadianceMatrix},
       {"outdoor_cache", &OutdoorCache},
       {"daemon_request", &DaemonRequest},
+      {"rad_import", &RadImport},
+      {"hbjson_import", &HbjsonImport},
   };
   return kTargets;
 }

@@ -42,6 +42,16 @@ absl::Status OutdoorCache(std::string_view bytes);
 // CheckSiteRequest) under the default configuration.
 absl::Status DaemonRequest(std::string_view bytes);
 
+// Radiance scene descriptions (ImportRadiance): the bytes before the first NUL are a .rad
+// text, those after it a points file (none without a NUL). An accepted scene is written back
+// (ExportRadiance) and must read back as the same scene.
+absl::Status RadImport(std::string_view bytes);
+
+// A Honeybee model (HBJSON, ImportHoneybee with the default options), refused only as bad
+// input (InvalidArgument). An accepted model's scene has finite coordinates and is built
+// (BuildScene), which may refuse it only as bad input too.
+absl::Status HbjsonImport(std::string_view bytes);
+
 struct Target {
   const char* name;  // folder under tests/fuzz/corpus and tests/fuzz/regressions
   absl::Status (*run)(std::string_view bytes);

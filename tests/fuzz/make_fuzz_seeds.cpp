@@ -10,6 +10,7 @@
 
 #include "client/cli_util.h"
 #include "client/job_request.h"
+#include "core/geometry/rad_import.h"
 #include "server/outdoor_cache.h"
 
 namespace fenestra {
@@ -39,6 +40,47 @@ OutdoorMatrix ExampleMatrix(int rows, int cols, bool with_errors) {
   m.backend = "cpu";
   m.key = "c0ffee";
   return m;
+}
+
+// A small room read from Radiance, given a blind, as ExportRadiance writes it, then a NUL and
+// its points file (fuzz_targets.h).
+bool WriteRadSeed(const fs::path& path) {
+  const std::string room =
+      "void plastic wall 0 0 5 0.6 0.6 0.6 0 0\n"
+      "void glass pane 0 0 3 0.9 0.9 0.9\n"
+      "wall polygon floor 0 0 12 0 0 0 3 0 0 3 3 0 0 3 0\n"
+      "wall polygon ceiling 0 0 12 0 0 2.5 0 3 2.5 3 3 2.5 3 0 2.5\n"
+      "wall polygon north 0 0 12 0 3 0 3 3 0 3 3 2.5 0 3 2.5\n"
+      "wall polygon west 0 0 12 0 0 0 0 3 0 0 3 2.5 0 0 2.5\n"
+      "wall polygon east 0 0 12 3 0 0 3 0 2.5 3 3 2.5 3 3 0\n"
+      "wall polygon south 0 0 30 0 0 0 3 0 0 3 0 2.5 0 0 2.5 0 0 0\n"
+      "  1 0 1 1 0 1.6 2 0 1.6 2 0 1 1 0 1\n"
+      "pane polygon window 0 0 12 1 0 1 2 0 1 2 0 1.6 1 0 1.6\n";
+  absl::StatusOr<v1::Scene> scene =
+      ImportRadiance({{"room.rad", room}}, {"room.pts", "1.5 1.5 0.8 0 0 1\n"});
+  if (!scene.ok() || scene->windows_size() != 1) {
+    std::fprintf(stderr, "the seed room does not import: %s\n", scene.status().ToString().c_str());
+    return false;
+  }
+  v1::VenetianBlind* blind = scene->mutable_windows(0)->mutable_blind();
+  blind->set_material("wall");
+  const auto set = [](v1::Parameter* p, double value, double min, double max) {
+    p->set_value(value);
+    p->set_min(min);
+    p->set_max(max);
+  };
+  set(blind->mutable_tilt_rad(), 0.4, 0, 1.5);
+  set(blind->mutable_slat_width_m(), 0.1, 0.05, 0.1);
+  set(blind->mutable_slat_spacing_m(), 0.1, 0, 0.1);
+  set(blind->mutable_slat_thickness_m(), 0.005, 0.002, 0.01);
+  std::string points;
+  absl::StatusOr<std::string> rad = ExportRadiance(*scene, &points);
+  if (!rad.ok()) {
+    std::fprintf(stderr, "the seed room does not export: %s\n", rad.status().ToString().c_str());
+    return false;
+  }
+  WriteSeed(path, *rad + '\0' + points);
+  return true;
 }
 
 int Main(int argc, char** argv) {
@@ -83,6 +125,7 @@ int Main(int argc, char** argv) {
                 '\0' + with_path.SerializeAsString());
     }
   }
+  if (!WriteRadSeed(corpus / "rad_import/export_room_with_blind")) return 1;
   return 0;
 }
 
