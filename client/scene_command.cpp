@@ -10,7 +10,9 @@
 
 #include "client/cli_util.h"
 #include "client/commands.h"
+#include "core/common/atomic_file.h"
 #include "core/geometry/obj_io.h"
+#include "core/geometry/rad_import.h"
 #include "core/geometry/rad_io.h"
 #include "core/geometry/scene.h"
 #include "core/trace/room_check.h"
@@ -72,6 +74,40 @@ void PrintSummary(const Scene& scene, const BlindDesign& design) {
   }
 }
 
+// `fenestra scene export --model`: the scene file as a Radiance model (ExportRadiance), the
+// blind's parameters at the design `set` gives, and its sensors as a points file.
+void ExportModel(const std::string& file, const std::string& set, const std::string& model,
+                 const std::string& pts) {
+  v1::Scene proto = ValueOrFail(ReadSceneProto(file));
+  const Scene built = ValueOrFail(LoadScene(file));
+  const BlindDesign design =
+      ValueOrFail(DesignWithOverrides(built, ValueOrFail(ParseDesignValues(set))));
+  const auto at_design = [&](v1::VenetianBlind& b) {
+    b.mutable_tilt_rad()->set_value(design.tilt_rad);
+    b.mutable_slat_width_m()->set_value(design.slat_width_m);
+    b.mutable_slat_spacing_m()->set_value(design.slat_spacing_m);
+    b.mutable_slat_thickness_m()->set_value(design.slat_thickness_m);
+  };
+  if (design.has_blind) {
+    if (proto.has_blind()) at_design(*proto.mutable_blind());
+    for (v1::Window& w : *proto.mutable_windows()) {
+      if (w.has_blind()) at_design(*w.mutable_blind());
+    }
+  }
+  std::string points;
+  const std::string text = ValueOrFail(ExportRadiance(proto, &points));
+  const std::pair<std::string, const std::string*> outputs[] = {{model, &text}, {pts, &points}};
+  for (const auto& [path, content] : outputs) {
+    if (path.empty()) continue;
+    const absl::Status written = WriteFileAtomically(path, [&](std::ostream& out) {
+      out << *content;
+      return absl::OkStatus();
+    });
+    if (!written.ok()) Fail(written);
+    fmt::print("wrote {}\n", path);
+  }
+}
+
 }  // namespace
 
 void AddSceneCommand(CLI::App& app) {
@@ -88,7 +124,7 @@ void AddSceneCommand(CLI::App& app) {
   });
 
   struct ExportArgs {
-    std::string file, obj, rad, pts, set;
+    std::string file, obj, rad, model, pts, set;
   };
   auto args = std::make_shared<ExportArgs>();
   CLI::App* exp = scene->add_subcommand(
@@ -97,13 +133,26 @@ void AddSceneCommand(CLI::App& app) {
   CLI::Option* obj = exp->add_option("--obj", args->obj, "Output OBJ file");
   CLI::Option* rad = exp->add_option(
       "--rad", args->rad, "Output Radiance scene: the materials as Radiance reads them, polygons");
-  exp->add_option("--pts", args->pts, "Output sensors as a Radiance points file (with --rad)")
-      ->needs(rad);
+  CLI::Option* model = exp->add_option(
+      "--model", args->model,
+      "Output the scene as a Radiance model that `fenestra scene import` reads back into the "
+      "same scene (surfaces, windows and blinds as they are given, the slats at the design)");
+  exp->add_option("--pts", args->pts,
+                  "Output sensors as a Radiance points file (with --rad or --model)");
   obj->excludes(rad);
+  model->excludes(obj);
+  model->excludes(rad);
   exp->add_option("--set", args->set, "Design values, e.g. alpha=0.5,width=0.12");
   exp->callback([args] {
-    if (args->obj.empty() && args->rad.empty()) {
-      Fail(absl::InvalidArgumentError("scene export needs --obj or --rad"));
+    if (args->obj.empty() && args->rad.empty() && args->model.empty()) {
+      Fail(absl::InvalidArgumentError("scene export needs --obj, --rad or --model"));
+    }
+    if (!args->pts.empty() && args->rad.empty() && args->model.empty()) {
+      Fail(absl::InvalidArgumentError("--pts goes with --rad or --model"));
+    }
+    if (!args->model.empty()) {
+      ExportModel(args->file, args->set, args->model, args->pts);
+      return;
     }
     const Scene s = ValueOrFail(LoadScene(args->file));
     const BlindDesign design =

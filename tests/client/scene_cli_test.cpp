@@ -63,10 +63,11 @@ TEST_F(SceneCliTest, ExportsRadianceMaterialsPolygonsAndSensors) {
   const std::string points = ReadText(pts);
   EXPECT_EQ(std::count(points.begin(), points.end(), '\n'), 9);
   EXPECT_EQ(points.substr(0, points.find('\n')), "-1 -1 6.7 0 0 1");
-  // One of --obj and --rad, and --pts only with --rad
+  // One of --obj, --rad and --model, and --pts only with --rad or --model
   EXPECT_NE(Fenestra("scene export " + scene).exit_code, 0);
   EXPECT_NE(Fenestra("scene export " + scene + " --obj x.obj --rad y.rad").exit_code, 0);
   EXPECT_NE(Fenestra("scene export " + scene + " --pts " + pts).exit_code, 0);
+  EXPECT_NE(Fenestra("scene export " + scene + " --model m.rad --rad y.rad").exit_code, 0);
 }
 
 TEST_F(SceneCliTest, CheckPrintsASummary) {

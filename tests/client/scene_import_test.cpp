@@ -40,6 +40,17 @@ TEST_F(SceneImportTest, RadianceModelRunsADcAndAJob) {
   EXPECT_NE(imported.output.find("1 windows, 100 sensors"), std::string::npos) << imported.output;
   EXPECT_NE(imported.output.find("the scene is a room"), std::string::npos) << imported.output;
 
+  // Export as a model, import again: the same scene file
+  const std::string model = (dir_ / "back.rad").string(), pts = (dir_ / "back.pts").string();
+  const std::string again = (dir_ / "again.json").string();
+  const CliRun exported = Fenestra("scene export " + scene + " --model " + model + " --pts " + pts);
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  const CliRun reimported = Fenestra("scene import " + model + " --pts " + pts + " -o " + again);
+  ASSERT_EQ(reimported.exit_code, 0) << reimported.output;
+  absl::StatusOr<v1::Scene> first = ReadSceneProto(scene), second = ReadSceneProto(again);
+  ASSERT_TRUE(first.ok() && second.ok());
+  EXPECT_EQ(first->DebugString(), second->DebugString());
+
   const CliRun dc =
       Fenestra("dc " + scene + " --method one-stage --paths 2000 -o " + (dir_ / "D.txt").string());
   ASSERT_EQ(dc.exit_code, 0) << dc.output;
