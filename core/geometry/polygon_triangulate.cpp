@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <tuple>
 #include <utility>
@@ -497,6 +498,41 @@ absl::StatusOr<std::vector<std::vector<Vec3d>>> ConvexPiecesOfPlanarPolygon(
     out.push_back(std::move(vertices));
   }
   return out;
+}
+
+PolygonShape ShapeOfPolygon(const std::vector<Vec3d>& v) {
+  PolygonShape shape;
+  Vec3d normal{0, 0, 0};
+  double size = 0;
+  for (size_t k = 0; k < v.size(); ++k) {
+    const Vec3d a = v[k], b = v[(k + 1) % v.size()];
+    normal += Cross(a, b);
+    size = std::max(size, Length(b - a));
+  }
+  shape.area = 0.5 * Length(normal) > kPolygonShapeTolerance * size * size;
+  if (!shape.area) return shape;
+  shape.normal = Normalize(normal);
+  shape.planar = true;
+  for (size_t k = 1; k < v.size(); ++k) {
+    if (std::abs(Dot(v[k] - v[0], shape.normal)) > kPolygonShapeTolerance * size && shape.planar) {
+      shape.planar = false;
+      shape.off_plane = static_cast<int>(k);
+    }
+  }
+  shape.convex = true;
+  double turning = 0;  // the corners' turns summed [rad]
+  for (size_t k = 0; k < v.size(); ++k) {
+    const Vec3d a = v[k], b = v[(k + 1) % v.size()], c = v[(k + 2) % v.size()];
+    if (Dot(Cross(b - a, c - b), shape.normal) < -kPolygonShapeTolerance * size * size &&
+        shape.convex) {
+      shape.convex = false;
+      shape.concave = static_cast<int>((k + 1) % v.size());
+    }
+    turning += std::atan2(Dot(Cross(b - a, c - b), shape.normal), Dot(b - a, c - b));
+  }
+  // A star turns one way at every corner, but twice round
+  if (std::abs(turning) > 3 * std::numbers::pi) shape.convex = false;
+  return shape;
 }
 
 }  // namespace fenestra

@@ -20,6 +20,24 @@
 
 namespace fenestra {
 
+// Relative tolerance of the polygon checks: of the longest edge (planarity) and its square
+// (area, corners).
+inline constexpr double kPolygonShapeTolerance = 1e-6;
+
+// The checks a polygon surface must pass (BuildScene) and an importer asks of a polygon:
+// Newell's normal; area above kPolygonShapeTolerance x the longest edge squared; every vertex
+// within kPolygonShapeTolerance x the longest edge of the plane; convex: every corner turns
+// the same way, 2 pi in all (a star turns one way at every corner, but twice round).
+struct PolygonShape {
+  Vec3d normal{0, 0, 0};  // unit; zero without area
+  bool area = false;
+  bool planar = false;
+  bool convex = false;
+  int off_plane = -1;  // the first vertex off the plane, or -1
+  int concave = -1;    // the first corner that turns the other way, or -1
+};
+PolygonShape ShapeOfPolygon(const std::vector<Vec3d>& vertices);
+
 // Most vertices of one polygon, outline and holes together: bounds the ear clipping's work
 // (quadratic in the vertices); a building's face with its openings has tens.
 inline constexpr size_t kMaxTriangulatedVertices = 2048;

@@ -31,36 +31,6 @@ size_t SeamWalkStart(const std::vector<Vec3d>& v, const std::map<RadPointKey, in
 
 }  // namespace
 
-RadPolygonShape ShapeOfRadPolygon(const std::vector<Vec3d>& v) {
-  RadPolygonShape shape;
-  Vec3d normal{0, 0, 0};
-  double size = 0;
-  for (size_t k = 0; k < v.size(); ++k) {
-    const Vec3d a = v[k], b = v[(k + 1) % v.size()];
-    normal += Cross(a, b);
-    size = std::max(size, Length(b - a));
-  }
-  shape.area = 0.5 * Length(normal) > kRadShapeTolerance * size * size;
-  if (!shape.area) return shape;
-  shape.normal = Normalize(normal);
-  shape.planar = true;
-  for (size_t k = 1; k < v.size(); ++k) {
-    if (std::abs(Dot(v[k] - v[0], shape.normal)) > kRadShapeTolerance * size) shape.planar = false;
-  }
-  shape.convex = true;
-  double turning = 0;  // the corners' turns summed [rad]
-  for (size_t k = 0; k < v.size(); ++k) {
-    const Vec3d a = v[k], b = v[(k + 1) % v.size()], c = v[(k + 2) % v.size()];
-    if (Dot(Cross(b - a, c - b), shape.normal) < -kRadShapeTolerance * size * size) {
-      shape.convex = false;
-    }
-    turning += std::atan2(Dot(Cross(b - a, c - b), shape.normal), Dot(b - a, c - b));
-  }
-  // Stricter than BuildScene: a star turns one way at every corner, but twice round
-  if (std::abs(turning) > 3 * std::numbers::pi) shape.convex = false;
-  return shape;
-}
-
 RadRings SplitRadSeams(const std::vector<Vec3d>& v) {
   RadRings rings;
   if (v.empty()) return rings;

@@ -1,23 +1,13 @@
 #pragma once
 
-// The geometry ImportRadiance (rad_import.h) reads from a Radiance polygon: BuildScene's shape
-// checks, the holes behind a polygon's seams, and a glass rectangle as a window.
+// The geometry ImportRadiance (rad_import.h) reads from a Radiance polygon: the holes behind a
+// polygon's seams, and a glass rectangle as a window (its shape: ShapeOfPolygon,
+// polygon_triangulate.h).
 #include <vector>
 
 #include "core/common/vec3.h"
 
 namespace fenestra {
-
-// BuildScene's polygon checks (scene.cpp's AddPolygon), computed the same way, so that a
-// polygon taken here is taken there; convexity also asks the corners to turn once round,
-// which a star polygon (BuildScene takes it) does not.
-struct RadPolygonShape {
-  Vec3d normal{0, 0, 0};  // unit, Newell's; zero without area
-  bool area = false;      // area above 1e-6 x the longest edge squared
-  bool planar = false;    // every vertex within 1e-6 x the longest edge of the plane
-  bool convex = false;    // every corner turns the same way, 2 pi in all
-};
-RadPolygonShape ShapeOfRadPolygon(const std::vector<Vec3d>& vertices);
 
 // A polygon as its outline and the holes its seams reach. Radiance writes a wall with a hole
 // as one outline that runs from a vertex A to the hole's first vertex H, round the hole, back

@@ -128,7 +128,7 @@ class RadReader {
                         int64_t line);
   absl::Status Polygon(absl::string_view modifier, absl::string_view id, int64_t line);
   absl::Status Window(absl::string_view id, int material, const std::vector<Vec3d>& v,
-                      const RadPolygonShape& shape, int64_t line);
+                      const PolygonShape& shape, int64_t line);
   absl::Status Triangles(const std::string& name, int material, const std::vector<Vec3d>& v,
                          int64_t line);
   absl::Status AddSurface(const std::string& name, int material, const std::vector<Vec3d>& v,
@@ -506,7 +506,7 @@ absl::Status RadReader::Polygon(absl::string_view modifier, absl::string_view id
       }
     }
   }
-  const RadPolygonShape shape = ShapeOfRadPolygon(v);
+  const PolygonShape shape = ShapeOfPolygon(v);
   if (!shape.area) return Error(line, absl::StrCat("zero-area polygon ", QuoteText(id)));
   if (!shape.planar) return Error(line, absl::StrCat("polygon ", QuoteText(id), " is not planar"));
   const Modifier& m = it->second;
@@ -518,7 +518,7 @@ absl::Status RadReader::Polygon(absl::string_view modifier, absl::string_view id
 
 // A glass rectangle on the indoor side: the window (the opening) and its glazing, 1 mm in.
 absl::Status RadReader::Window(absl::string_view id, int material, const std::vector<Vec3d>& v,
-                               const RadPolygonShape& shape, int64_t line) {
+                               const PolygonShape& shape, int64_t line) {
   const std::string what =
       absl::StrCat("windows must be rectangles: glass polygon ", QuoteText(id));
   if (v.size() != 4) return Error(line, absl::StrCat(what, " has ", v.size(), " vertices"));
@@ -542,7 +542,7 @@ absl::Status RadReader::Window(absl::string_view id, int material, const std::ve
   ++summary_.windows;
   std::vector<Vec3d> glazing = v;
   for (Vec3d& p : glazing) p = p - kRadGlazingInsetM * r.normal;
-  const RadPolygonShape moved = ShapeOfRadPolygon(glazing);
+  const PolygonShape moved = ShapeOfPolygon(glazing);
   if (!moved.area || !moved.planar || !moved.convex) {
     return Error(line, absl::StrCat("the glazing of window ", QuoteText(id),
                                     " is not a polygon BuildScene takes"));
@@ -565,7 +565,7 @@ absl::Status RadReader::Triangles(const std::string& name, int material,
   int k = 0;
   for (const std::array<Vec3d, 3>& t : *triangles) {
     const std::vector<Vec3d> corners(t.begin(), t.end());
-    const RadPolygonShape shape = ShapeOfRadPolygon(corners);
+    const PolygonShape shape = ShapeOfPolygon(corners);
     if (!shape.area || !shape.planar || !shape.convex) {
       ++summary_.dropped_triangles;
       continue;

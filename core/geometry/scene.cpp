@@ -13,12 +13,13 @@
 #include "core/common/text.h"
 #include "core/geometry/material.h"
 #include "core/geometry/obj_io.h"
+#include "core/geometry/polygon_triangulate.h"
 
 namespace fenestra {
 namespace {
 
 // Relative tolerance for planarity and perpendicularity checks.
-constexpr double kShapeTolerance = 1e-6;
+constexpr double kShapeTolerance = kPolygonShapeTolerance;
 
 // Collects errors as "<file>: <field>: <reason>".
 class Checker {
@@ -232,31 +233,14 @@ absl::Status AddPolygon(const v1::Polygon& polygon, const std::string& surface, 
     if (!Checker::Takes(q)) return check.Point(q, vertex(k)).status();
     v.push_back(Vec3d{q.x(), q.y(), q.z()});
   }
-  // Newell's normal: robust for any planar polygon
-  Vec3d normal{0, 0, 0};
-  double size = 0;
-  for (size_t k = 0; k < v.size(); ++k) {
-    const Vec3d a = v[k], b = v[(k + 1) % v.size()];
-    normal += Cross(a, b);
-    size = std::max(size, Length(b - a));
-  }
-  const double area = 0.5 * Length(normal);
-  if (!(area > kShapeTolerance * size * size)) {
-    return check.Error(field(), "degenerate polygon (zero area)");
-  }
-  normal = Normalize(normal);
-  for (size_t k = 1; k < v.size(); ++k) {
-    if (std::abs(Dot(v[k] - v[0], normal)) > kShapeTolerance * size) {
-      return check.Error(vertex(k), "polygon is not planar");
-    }
-  }
-  // Convex: every corner turns the same way (the fan of triangles covers the polygon)
-  for (size_t k = 0; k < v.size(); ++k) {
-    const Vec3d a = v[k], b = v[(k + 1) % v.size()], c = v[(k + 2) % v.size()];
-    if (Dot(Cross(b - a, c - b), normal) < -kShapeTolerance * size * size) {
-      return check.Error(vertex((k + 1) % v.size()),
-                         "polygon is not convex (split it into convex polygons)");
-    }
+  // Newell's normal, planarity and convexity as every importer checks them
+  const PolygonShape shape = ShapeOfPolygon(v);
+  if (!shape.area) return check.Error(field(), "degenerate polygon (zero area)");
+  if (!shape.planar) return check.Error(vertex(shape.off_plane), "polygon is not planar");
+  // Convex: every corner turns the same way, once round (the fan of triangles covers it)
+  if (!shape.convex) {
+    return check.Error(vertex(shape.concave >= 0 ? shape.concave : 0),
+                       "polygon is not convex (split it into convex polygons)");
   }
   for (size_t k = 1; k + 1 < v.size(); ++k) mesh.Add(v[0], v[k], v[k + 1], material, side, part);
   return absl::OkStatus();

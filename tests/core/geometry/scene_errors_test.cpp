@@ -260,6 +260,13 @@ TEST_F(SceneErrorsTest, NonConvexPolygon) {
           R"({"x": 1, "y": 1, "z": 0}]})",
           R"({"x": 1, "y": 1, "z": 0}, {"x": 0.5, "y": 0.2, "z": 0}, {"x": 0, "y": 1, "z": 0}]})"),
       {"surfaces[0].polygon.vertices[3]", "not convex"});
+  // A five-pointed star drawn in one stroke turns the same way at every corner, but twice round
+  ExpectError(
+      Scene(
+          R"({"x": 0, "y": 0, "z": 0}, {"x": 1, "y": 0, "z": 0},
+                                             {"x": 1, "y": 1, "z": 0}]})",
+          R"({"x": 0.500000, "y": 0.900000, "z": 0}, {"x": 0.264886, "y": 0.176393, "z": 0}, {"x": 0.880423, "y": 0.623607, "z": 0}, {"x": 0.119577, "y": 0.623607, "z": 0}, {"x": 0.735114, "y": 0.176393, "z": 0}]})"),
+      {"surfaces[0].polygon", "not convex"});
 }
 
 TEST_F(SceneErrorsTest, BlindsOutsidePhysicalSense) {
