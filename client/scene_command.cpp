@@ -97,9 +97,11 @@ void ExportModel(const std::string& file, const std::string& set, const std::str
   std::string points;
   const std::string text = ValueOrFail(ExportRadiance(proto, &points));
   const std::pair<std::string, const std::string*> outputs[] = {{model, &text}, {pts, &points}};
-  for (const auto& [path, content] : outputs) {
+  for (const auto& output : outputs) {
+    const std::string& path = output.first;
+    const std::string* content = output.second;
     if (path.empty()) continue;
-    const absl::Status written = WriteFileAtomically(path, [&](std::ostream& out) {
+    const absl::Status written = WriteFileAtomically(path, [content](std::ostream& out) {
       out << *content;
       return absl::OkStatus();
     });
