@@ -138,7 +138,9 @@ OutdoorSums TraceOutdoor(const EmbreeIntersector& scene, const TraceGeometry& ge
   TraceChunksCpu<Slot>(
       sums.cells, 0,
       [&](uint64_t c, Slot& slot) {
-        ObservedOutdoorMode<Slot> mode{{window, &basis, static_cast<int>(c), &slot}, projected};
+        ObservedOutdoorMode<Slot> mode{{window, TraceWindows{&window, 1, sums.cells, window.Area()},
+                                        &basis, static_cast<int>(c), &slot},
+                                       projected};
         for (uint64_t p = 0; p < paths_per_cell; ++p) {
           TracePath(scene, geometry.Surfaces(), settings,
                     PathRandom(1, kOutdoorStreamBase + static_cast<uint32_t>(c), p), mode);
@@ -163,8 +165,8 @@ struct WatchingOutdoor {
   mutable Vec3f point{}, omega{};
   mutable bool escapes = false;
   template <class Sink>
-  void Score(const TraceWindow& window, const HemisphereBasis&, Vec3f p, Vec3f o, int cell,
-             double value, bool, Sink* sink) const {
+  void Score(const TraceWindow& window, int, Vec3f p, Vec3f o, int cell, double value, bool,
+             Sink* sink) const {
     point = p, omega = o, escapes = view.Escapes(p, window.normal, o);
     sink->Add(cell, value);
   }
@@ -310,7 +312,13 @@ std::vector<Tally> TraceIndoor(const Scene& scene, const BlindDesign& design,
         IndoorSink sink{&t, &context, static_cast<uint32_t>(s), &slot.continuations};
         slot.continuations = BatchStart(paths, kBatches, b) * 64;
         IndoorMode<IndoorSink, WatchingOutdoor> mode{
-            sensors[s].position, sensors[s].normal, window, &basis, -1, &watcher, &sink};
+            sensors[s].position,
+            sensors[s].normal,
+            TraceWindows{&window, 1, WindowCellCount(window, basis), window.Area()},
+            &basis,
+            -1,
+            &watcher,
+            &sink};
         for (uint64_t p = BatchStart(paths, kBatches, b); p < BatchStart(paths, kBatches, b + 1);
              ++p) {
           TracePath<EmbreeIntersector, decltype(mode), 0>(

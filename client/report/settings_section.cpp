@@ -1,6 +1,7 @@
 // The summary (best design, its metrics with ASE and the LEED points, the objective's
 // constraints) and the settings, timings and versions.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 
@@ -130,8 +131,14 @@ Rows SamplingRows(const ReportData& data) {
   const v1::Sampling& s = data.result.job().sampling();
   std::string parts = "-";
   if (data.scene) {
-    const WindowParts p = SamplingWindowParts(s, data.scene->window());
-    parts = fmt::format("{} × {}{}", p.columns, p.rows,
+    std::vector<std::string> each;
+    for (const SceneWindow& w : data.scene->windows) {
+      const WindowParts p = SamplingWindowParts(s, w.window);
+      each.push_back(data.scene->windows.size() == 1
+                         ? fmt::format("{} × {}", p.columns, p.rows)
+                         : fmt::format("{} {} × {}", w.name, p.columns, p.rows));
+    }
+    parts = fmt::format("{}{}", fmt::join(each, ", "),
                         s.window_columns() == 0 || s.window_rows() == 0 ? " (automatic)" : "");
   }
   auto bounces = [](int b) {

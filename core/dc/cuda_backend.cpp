@@ -281,7 +281,7 @@ class OutdoorHolder {
     FENESTRA_ASSIGN_OR_RETURN(geometry, OutdoorViewGeometry(scene));
     FENESTRA_ASSIGN_OR_RETURN(bvh, BuildBvh(geometry, BvhQuality::kHigh));
     std::vector<uint8_t> met =
-        WindowCellsMeetingSurfaces(geometry, LocalWindow(geometry, scene.window(), parts), basis);
+        OutdoorMetCells(geometry, geometry, LocalWindows(geometry, scene, parts, basis), basis);
     return OutdoorHolder(tracer, slot, std::move(geometry), std::move(bvh), std::move(met));
   }
   // Makes the tracer hold this outdoor scene.
@@ -392,7 +392,7 @@ class CudaReplay {
   size_t triangles() const { return triangles_; }
   int sensors() const { return static_cast<int>(scene_.sensors.size()); }
   int columns() const {
-    return IndoorColumnCount(LocalWindow(room_, scene_.window(), options_.parts), basis_);
+    return WindowCellsOf(scene_, options_.parts, basis_.cell_count) + kIndoorDirectColumns;
   }
   const CudaReplayStats& stats() const { return stats_; }
 
@@ -429,7 +429,7 @@ class CudaReplay {
     path.importance = nullptr;
     FENESTRA_RETURN_IF_ERROR(tracer_->RecordIndoor(
         LocalEnvelopeOfBlind(room_, scene_), sensors.data(), static_cast<int>(sensors.size()),
-        LocalWindow(room_, scene_.window(), options_.parts),
+        LocalWindows(room_, scene_, options_.parts, basis_),
         OutdoorOffset(room_, outdoor_->geometry()), basis_,
         static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, kDesignParts,
         options_.seed, path, kMaxReplayBytes, &stats_));
@@ -495,7 +495,7 @@ class CudaDesignTallies : public DesignTallies {
 
   absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches, const Matrix& sky,
                           const DeviceMatrices& on_device) override {
-    FENESTRA_RETURN_IF_ERROR(CheckOutdoorFitsIndoor(outdoor_batches, options_));
+    FENESTRA_RETURN_IF_ERROR(CheckOutdoorFitsIndoor(outdoor_batches, scene_, options_));
     FENESTRA_ASSIGN_OR_RETURN(product,
                               CudaAnnualProduct::Make(device_, outdoor_batches, sky, on_device));
     product_ = std::move(product);
@@ -603,15 +603,16 @@ class CudaDesignTallies : public DesignTallies {
     FENESTRA_RETURN_IF_ERROR(UploadScene(*tracer_, geometry, BvhQuality::kMedium));
     FENESTRA_RETURN_IF_ERROR(outdoor_->Hold());
     const std::vector<TraceSensor> sensors = LocalSensors(geometry, scene_.sensors);
-    const TraceWindow window = LocalWindow(geometry, scene_.window(), options_.parts);
+    const std::vector<TraceWindow> windows = LocalWindows(geometry, scene_, options_.parts, basis_);
     const uint64_t paths = static_cast<uint64_t>(options_.paths_per_sensor);
     if (tally != nullptr) {
-      *tally = ZeroIndoorTally(static_cast<int>(sensors.size()), IndoorColumnCount(window, basis_),
-                               options_.batches, paths);
+      *tally = ZeroIndoorTally(static_cast<int>(sensors.size()),
+                               IndoorColumnCount(ViewOfWindows(windows, basis_)), options_.batches,
+                               paths);
     }
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(tracer_->Indoor(
-        sensors.data(), static_cast<int>(sensors.size()), window,
+        sensors.data(), static_cast<int>(sensors.size()), windows,
         OutdoorOffset(geometry, outdoor_->geometry()), basis_, paths, options_.batches,
         options_.seed, WithoutImportance(IndoorPathSettings(options_)),
         tally != nullptr ? tally->sum.data() : nullptr, &counters));
@@ -681,7 +682,6 @@ class CudaBackend : public DcBackend {
 
   absl::StatusOr<std::unique_ptr<DesignTallies>> StartDesignTallies(
       const Scene& scene, const IndoorOptions& options) override {
-    FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the two-stage method"));
     FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
     FENESTRA_ASSIGN_OR_RETURN(outdoor, MakeOutdoor(scene, options.parts, basis));
     FENESTRA_ASSIGN_OR_RETURN(replay, MaybeReplay(scene, options, basis, outdoor.get()));
@@ -751,12 +751,13 @@ class CudaBackend : public DcBackend {
     return result;
   }
 
-  absl::StatusOr<OutdoorBatches> Outdoor(const TraceGeometry& geometry, const TraceWindow& window,
+  absl::StatusOr<OutdoorBatches> Outdoor(const TraceGeometry& geometry,
+                                         const std::vector<TraceWindow>& windows, int window,
                                          const HemisphereBasis& basis, uint64_t paths_per_cell,
                                          int batches, uint64_t seed, const PathSettings& path,
                                          int) override {
     FENESTRA_RETURN_IF_ERROR(Upload(geometry));
-    const int cells = WindowCellCount(window, basis);
+    const int cells = WindowCellCount(windows[window], basis);
     OutdoorBatches o;
     o.paths_per_cell = paths_per_cell;
     CudaTracer::OutdoorOutput out;
@@ -784,7 +785,7 @@ class CudaBackend : public DcBackend {
     }
     ReadyFreshBuffers(fresh);
     CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(tracer_->Outdoor(window, basis, paths_per_cell, batches, seed,
+    FENESTRA_RETURN_IF_ERROR(tracer_->Outdoor(windows, window, basis, paths_per_cell, batches, seed,
                                               WithoutImportance(path), out, &counters));
     CopyCounters(counters, &o.counters);
     o.batches_on_device.device = device_;
@@ -793,22 +794,23 @@ class CudaBackend : public DcBackend {
 
   absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry, const TraceGeometry& outdoor,
                                      const std::vector<TraceSensor>& sensors,
-                                     const TraceWindow& window, const HemisphereBasis& basis,
-                                     uint64_t paths_per_sensor, int batches, uint64_t seed,
-                                     const PathSettings& path, int) override {
+                                     const std::vector<TraceWindow>& windows,
+                                     const HemisphereBasis& basis, uint64_t paths_per_sensor,
+                                     int batches, uint64_t seed, const PathSettings& path,
+                                     int) override {
     const auto start = std::chrono::steady_clock::now();
     // A room and its blind, built anew for every design of a search; the outdoor surfaces
     FENESTRA_RETURN_IF_ERROR(Upload(geometry, BvhQuality::kMedium));
     FENESTRA_ASSIGN_OR_RETURN(outdoor_bvh, BuildBvh(outdoor, BvhQuality::kHigh));
     FENESTRA_RETURN_IF_ERROR(
-        tracer_->SetOutdoorScene(outdoor_bvh, OutdoorMetCells(geometry, outdoor, window, basis)));
+        tracer_->SetOutdoorScene(outdoor_bvh, OutdoorMetCells(geometry, outdoor, windows, basis)));
     outdoor_slot_.current = 0;
-    IndoorTally tally =
-        ZeroIndoorTally(static_cast<int>(sensors.size()), IndoorColumnCount(window, basis), batches,
-                        paths_per_sensor);
+    IndoorTally tally = ZeroIndoorTally(static_cast<int>(sensors.size()),
+                                        IndoorColumnCount(ViewOfWindows(windows, basis)), batches,
+                                        paths_per_sensor);
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(tracer_->Indoor(
-        sensors.data(), tally.sensors, window, OutdoorOffset(geometry, outdoor), basis,
+        sensors.data(), tally.sensors, windows, OutdoorOffset(geometry, outdoor), basis,
         paths_per_sensor, batches, seed, WithoutImportance(path), tally.sum.data(), &counters));
     CopyCounters(counters, &tally.counters);
     tally.wall_seconds = SecondsSince(start);
@@ -830,7 +832,8 @@ class CudaBackend : public DcBackend {
                                                           const IndoorOptions& options,
                                                           const HemisphereBasis& basis,
                                                           OutdoorHolder* outdoor) {
-    if (!scene.blind()) return nullptr;
+    // The replay follows one window's blind so far: several windows are traced per design
+    if (!scene.blind() || scene.windows.size() > 1) return nullptr;
     absl::StatusOr<std::unique_ptr<CudaReplay>> replay =
         CudaReplay::Make(tracer_.get(), &replay_slot_, scene, options, basis, outdoor);
     if (absl::IsResourceExhausted(replay.status())) return nullptr;

@@ -248,16 +248,18 @@ class DcBackend {
   // stage tests its window connections against `outdoor` (the outdoor stage's geometry).
   // The outdoor stage comes back as O's batches, formed where its sums lie. `threads`
   // applies to CPU backends.
+  // The outdoor stage traces window `window` of `windows` (LinkWindows), the indoor stage all
+  // of them.
   virtual absl::StatusOr<OutdoorBatches> Outdoor(const TraceGeometry& geometry,
-                                                 const TraceWindow& window,
-                                                 const HemisphereBasis& basis,
+                                                 const std::vector<TraceWindow>& windows,
+                                                 int window, const HemisphereBasis& basis,
                                                  uint64_t paths_per_cell, int batches,
                                                  uint64_t seed, const PathSettings& path,
                                                  int threads) = 0;
   virtual absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry,
                                              const TraceGeometry& outdoor,
                                              const std::vector<TraceSensor>& sensors,
-                                             const TraceWindow& window,
+                                             const std::vector<TraceWindow>& windows,
                                              const HemisphereBasis& basis,
                                              uint64_t paths_per_sensor, int batches, uint64_t seed,
                                              const PathSettings& path, int threads) = 0;

@@ -77,7 +77,7 @@ struct DirectSun::Data {
   Scene scene;  // the blind and its ranges, the window
   int sensors = 0, columns = 0;
   std::vector<SunEntry> always;  // lines no blind of the ranges can reach
-  std::vector<Line> lines;       // lines through the blind's envelope
+  std::vector<Line> lines;       // lines through a blind's envelope
 };
 
 DirectSun::DirectSun(std::unique_ptr<Data> data) : data_(std::move(data)) {}
@@ -86,7 +86,6 @@ DirectSun::~DirectSun() = default;
 absl::StatusOr<std::unique_ptr<DirectSun>> DirectSun::Trace(const Scene& scene,
                                                             const std::vector<SunColumn>& suns,
                                                             int columns) {
-  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the direct sun"));
   for (const SunColumn& sun : suns) {
     if (sun.column < 0 || sun.column >= columns) {
       return absl::InvalidArgumentError(
@@ -97,8 +96,9 @@ absl::StatusOr<std::unique_ptr<DirectSun>> DirectSun::Trace(const Scene& scene,
     }
   }
   auto data = std::make_unique<Data>();
-  // In a frame about the window, where the lines meet the slats: floats are finest there
-  const Vec3d frame = scene.window().center;
+  // In a frame about the (first blind's) window, where the lines meet the slats: floats are
+  // finest there
+  const Vec3d frame = scene.BlindWindow().window.center;
   FENESTRA_ASSIGN_OR_RETURN(geometry, PrepareTraceGeometry(scene.fixed, scene.materials, &frame));
   data->geometry = std::move(geometry);
   data->scene = scene;
@@ -106,8 +106,10 @@ absl::StatusOr<std::unique_ptr<DirectSun>> DirectSun::Trace(const Scene& scene,
   data->columns = columns;
   FENESTRA_ASSIGN_OR_RETURN(embree, EmbreeScene::Build(data->geometry));
   const EmbreeIntersector intersector = embree->Intersector();
-  std::optional<LocalEnvelope> envelope;
-  if (scene.blind()) envelope = LocalEnvelopeOfBlind(data->geometry, scene);
+  std::vector<LocalEnvelope> envelopes;
+  for (const SceneWindow& w : scene.windows) {
+    if (w.blind) envelopes.push_back(LocalEnvelopeOfBlind(data->geometry, w));
+  }
   // Each sensor's lines on a thread of its own, kept in sensor order
   std::vector<std::vector<SunEntry>> always(data->sensors);
   std::vector<std::vector<Data::Line>> lines(data->sensors);
@@ -122,7 +124,9 @@ absl::StatusOr<std::unique_ptr<DirectSun>> DirectSun::Trace(const Scene& scene,
       if (!(transmission > 0)) continue;
       const SunEntry entry{static_cast<int32_t>(s), sun.column,
                            sun.normal_lux * cosine * transmission};
-      if (envelope && envelope->Touches(origin, direction, kLineLength)) {
+      if (std::any_of(envelopes.begin(), envelopes.end(), [&](const LocalEnvelope& e) {
+            return e.Touches(origin, direction, kLineLength);
+          })) {
         lines[s].push_back({entry, origin, direction});
       } else {
         always[s].push_back(entry);
@@ -141,7 +145,11 @@ std::vector<SunEntry> DirectSun::Entries(const BlindDesign& design, bool blind) 
   std::vector<SunEntry> out;
   out.reserve(d.always.size() + d.lines.size());
   const bool slats = blind && d.scene.blind().has_value();
-  const LocalSlats local = slats ? LocalSlatsOfBlind(d.geometry, d.scene, design) : LocalSlats{};
+  // Every blind at the design (the blinds of a scene share it)
+  std::vector<LocalSlats> local;
+  for (const SceneWindow& w : d.scene.windows) {
+    if (slats && w.blind) local.push_back(LocalSlatsOfBlind(d.geometry, w, design));
+  }
   const float slat_transmittance =
       slats ? SlatTransmittance(d.scene.materials, FinishOf(*d.scene.blind(), design)) : 0.0f;
   // Both lists are in sensor order, each sensor's in column order: merged by sensor, then
@@ -157,8 +165,10 @@ std::vector<SunEntry> DirectSun::Entries(const BlindDesign& design, bool blind) 
     }
     const Data::Line& line = d.lines[l++];
     SunEntry entry = line.entry;
-    if (slats && local.Occluded(line.origin, line.direction, kLineLength)) {
-      entry.lux *= slat_transmittance;
+    for (const LocalSlats& blind_slats : local) {
+      if (blind_slats.Occluded(line.origin, line.direction, kLineLength)) {
+        entry.lux *= slat_transmittance;
+      }
     }
     if (entry.lux > 0) out.push_back(entry);
   }

@@ -67,34 +67,40 @@ class EmbreeBackend : public DcBackend {
     return result;
   }
 
-  absl::StatusOr<OutdoorBatches> Outdoor(const TraceGeometry& geometry, const TraceWindow& window,
+  absl::StatusOr<OutdoorBatches> Outdoor(const TraceGeometry& geometry,
+                                         const std::vector<TraceWindow>& windows, int window,
                                          const HemisphereBasis& basis, uint64_t paths_per_cell,
                                          int batches, uint64_t seed, const PathSettings& path,
                                          int threads) override {
     FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
-    return FormOutdoorBatches(TraceOutdoorCpu(scene->Intersector(), geometry.Surfaces(), window,
-                                              basis, paths_per_cell, batches, seed, path, threads));
+    return FormOutdoorBatches(TraceOutdoorCpu(scene->Intersector(), geometry.Surfaces(), windows,
+                                              window, basis, paths_per_cell, batches, seed, path,
+                                              threads));
   }
 
-  // Record the paths once, replay them per design; without a blind there is nothing to vary
+  // Record the paths once, replay them per design; without a blind there is nothing to vary,
+  // and the replay follows one window so far
   absl::StatusOr<std::unique_ptr<IndoorStages>> MakeIndoorStages(
       const Scene& scene, const IndoorOptions& options) override {
-    if (!scene.blind()) return DcBackend::MakeIndoorStages(scene, options);
+    if (!scene.blind() || scene.windows.size() > 1) {
+      return DcBackend::MakeIndoorStages(scene, options);
+    }
     FENESTRA_ASSIGN_OR_RETURN(replay, IndoorReplay::Record(scene, options));
     return std::unique_ptr<IndoorStages>(std::move(replay));
   }
 
   absl::StatusOr<IndoorTally> Indoor(const TraceGeometry& geometry, const TraceGeometry& outdoor,
                                      const std::vector<TraceSensor>& sensors,
-                                     const TraceWindow& window, const HemisphereBasis& basis,
-                                     uint64_t paths_per_sensor, int batches, uint64_t seed,
-                                     const PathSettings& path, int threads) override {
+                                     const std::vector<TraceWindow>& windows,
+                                     const HemisphereBasis& basis, uint64_t paths_per_sensor,
+                                     int batches, uint64_t seed, const PathSettings& path,
+                                     int threads) override {
     FENESTRA_ASSIGN_OR_RETURN(scene, EmbreeScene::Build(geometry));
     FENESTRA_ASSIGN_OR_RETURN(outdoor_scene, EmbreeScene::Build(outdoor));
-    const std::vector<uint8_t> met = OutdoorMetCells(geometry, outdoor, window, basis);
+    const std::vector<uint8_t> met = OutdoorMetCells(geometry, outdoor, windows, basis);
     const OutdoorView<EmbreeIntersector> view{outdoor_scene->Intersector(),
                                               OutdoorOffset(geometry, outdoor), met.data()};
-    return TraceIndoorCpu(scene->Intersector(), geometry.Surfaces(), view, sensors, window, basis,
+    return TraceIndoorCpu(scene->Intersector(), geometry.Surfaces(), view, sensors, windows, basis,
                           paths_per_sensor, batches, seed, path, threads);
   }
 };

@@ -175,7 +175,11 @@ bool WithinRange(double value, const ParameterRange& range) {
 }  // namespace
 
 LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& scene) {
-  const BlindEnvelope envelope = EnvelopeOfBlind(scene.window(), *scene.blind(), kEnvelopeMargin);
+  return LocalEnvelopeOfBlind(geometry, scene.BlindWindow());
+}
+
+LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const SceneWindow& window) {
+  const BlindEnvelope envelope = EnvelopeOfBlind(window.window, *window.blind, kEnvelopeMargin);
   LocalEnvelope local;
   local.center = geometry.ToLocal(envelope.center);
   for (int k = 0; k < 3; ++k) {
@@ -188,7 +192,12 @@ LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& s
 
 LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
                              const BlindDesign& design) {
-  const SlatStack stack = StackOfBlind(scene.window(), *scene.blind(), design);
+  return LocalSlatsOfBlind(geometry, scene.BlindWindow(), design);
+}
+
+LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const SceneWindow& window,
+                             const BlindDesign& design) {
+  const SlatStack stack = StackOfBlind(window.window, *window.blind, design);
   const auto axis = [](Vec3d v) {
     return Vec3f{static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};
   };
@@ -212,7 +221,8 @@ LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
 
 std::vector<Vec3f> LocalSlatCorners(const TraceGeometry& geometry, const Scene& scene,
                                     const BlindDesign& design) {
-  const SlatBoxes boxes = BoxesOfStack(StackOfBlind(scene.window(), *scene.blind(), design));
+  const SceneWindow& w = scene.BlindWindow();
+  const SlatBoxes boxes = BoxesOfStack(StackOfBlind(w.window, *w.blind, design));
   std::vector<Vec3f> corners(8 * static_cast<size_t>(boxes.count));
   for (int k = 0; k < boxes.count; ++k) {
     for (int i = 0; i < 8; ++i) corners[8 * k + i] = geometry.ToLocal(boxes.Corner(k, i));
@@ -244,7 +254,8 @@ struct IndoorReplay::Data {
   HemisphereBasis basis;
   Vec3d origin;  // the trace frame of every geometry here
   std::vector<TraceSensor> sensors;
-  TraceWindow window;
+  std::vector<TraceWindow> windows;  // the scene's one window (LocalWindows)
+  TraceWindows Windows() const { return ViewOfWindows(windows, basis); }
   std::unique_ptr<EmbreeScene> outdoor;  // the outdoor surfaces, for the direct test
   std::vector<uint8_t> met;              // the window cells whose views all meet them
   OutdoorEmbreeView outdoor_view;
@@ -262,6 +273,7 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
                                                                    const IndoorOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   if (!scene.blind()) return absl::InvalidArgumentError("the scene has no blind to vary");
+  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the indoor replay"));
   auto data = std::make_unique<Data>();
   data->scene = scene;
   data->options = options;
@@ -275,12 +287,12 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
   data->origin = geometry.origin;
   FENESTRA_ASSIGN_OR_RETURN(embree, EmbreeScene::Build(geometry));
   data->sensors = LocalSensors(geometry, scene.sensors);
-  data->window = LocalWindow(geometry, scene.window(), options.parts);
-  data->columns = IndoorColumnCount(data->window, basis);
+  data->windows = LocalWindows(geometry, scene, options.parts, basis);
+  data->columns = IndoorColumnCount(ViewOfWindows(data->windows, basis));
   FENESTRA_ASSIGN_OR_RETURN(outdoor, OutdoorViewGeometry(scene));
   FENESTRA_ASSIGN_OR_RETURN(outdoor_scene, EmbreeScene::Build(outdoor));
   data->outdoor = std::move(outdoor_scene);
-  data->met = OutdoorMetCells(geometry, outdoor, data->window, basis);
+  data->met = OutdoorMetCells(geometry, outdoor, data->windows, basis);
   data->outdoor_view = {data->outdoor->Intersector(), OutdoorOffset(geometry, outdoor),
                         data->met.data()};
   data->envelope = LocalEnvelopeOfBlind(geometry, scene);
@@ -307,8 +319,8 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
     RecordingSink<EmbreeIntersector, Chunk> sink{&scene_view, &chunk};
     using Mode = RecordingMode<EmbreeIntersector, Chunk, OutdoorEmbreeView>;
     for (uint64_t p = first; p < last; ++p) {
-      Mode mode{{sensor.position, sensor.normal, data->window, &data->basis, settings.max_bounces,
-                 &data->outdoor_view, &sink},
+      Mode mode{{sensor.position, sensor.normal, data->Windows(), &data->basis,
+                 settings.max_bounces, &data->outdoor_view, &sink},
                 &scene_view,
                 &chunk};
       // Without splitting, so that a path's records are one sequence
@@ -381,7 +393,7 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
         slot.counters.rays += chunk.crossings.size() + chunk.others.size();
         const TraceSensor& sensor = d.sensors[chunk.sensor];
         IndoorMode<Slot, OutdoorEmbreeView> mode{
-            sensor.position,      sensor.normal,   d.window, &d.basis,
+            sensor.position,      sensor.normal,   d.Windows(), &d.basis,
             settings.max_bounces, &d.outdoor_view, &slot};
         slot.counters.rays +=
             FollowTouches(slats, shift, chunk, slot.sum, [&](const ReplayTouch& r) {

@@ -25,14 +25,18 @@
 
 namespace fenestra {
 
-// The envelope of the blinds of `scene`'s ranges (with room to spare) in `geometry`'s frame.
+// The envelope of the blinds of `scene`'s ranges (with room to spare) in `geometry`'s frame:
+// of the scene's blind (Scene::BlindWindow), or of the blind of `window`, which has one.
 LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& scene);
+LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const SceneWindow& window);
 
 // The slats of `scene`'s blind at `design` in `geometry`'s frame, for the replays' shadow
 // rays: one test of the ray's line or a few box tests instead of a traversal of the blind's
 // triangles (bench/README.md, "Racing"). A ray that grazes a slat's edge within float
 // rounding, about one in a million, may be answered otherwise than by the triangles.
 LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
+                             const BlindDesign& design);
+LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const SceneWindow& window,
                              const BlindDesign& design);
 
 // The corners of those slats, 8 per slat in SlatBoxes::Corner's order, as the blind's mesh

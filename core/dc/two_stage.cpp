@@ -41,8 +41,9 @@ absl::Status CheckPaths(int max_bounces, bool russian_roulette, double roulette_
   return absl::OkStatus();
 }
 
+// A side of 0 is automatic (PartsOfWindow)
 absl::Status CheckParts(WindowParts parts) {
-  if (parts.columns < 1 || parts.rows < 1 || parts.columns > kMaxWindowPartsPerSide ||
+  if (parts.columns < 0 || parts.rows < 0 || parts.columns > kMaxWindowPartsPerSide ||
       parts.rows > kMaxWindowPartsPerSide) {
     return absl::InvalidArgumentError(
         absl::StrCat("window parts must be 1 to ", kMaxWindowPartsPerSide,
@@ -93,6 +94,31 @@ WindowParts AutomaticWindowParts(const Window& window) {
   return {count(window.width_m), count(window.height_m)};
 }
 
+WindowParts PartsOfWindow(const Window& window, WindowParts parts) {
+  const WindowParts automatic = AutomaticWindowParts(window);
+  return {parts.columns > 0 ? parts.columns : automatic.columns,
+          parts.rows > 0 ? parts.rows : automatic.rows};
+}
+
+int WindowCellsOf(const Scene& scene, WindowParts parts, int basis_cells) {
+  int cells = 0;
+  for (const SceneWindow& w : scene.windows) {
+    const WindowParts p = PartsOfWindow(w.window, parts);
+    cells += p.columns * p.rows * basis_cells;
+  }
+  return cells;
+}
+
+std::vector<TraceWindow> LocalWindows(const TraceGeometry& geometry, const Scene& scene,
+                                      WindowParts parts, const HemisphereBasis& basis) {
+  std::vector<TraceWindow> windows;
+  for (const SceneWindow& w : scene.windows) {
+    windows.push_back(LocalWindow(geometry, w.window, PartsOfWindow(w.window, parts)));
+  }
+  LinkWindows(basis, &windows);
+  return windows;
+}
+
 TraceWindow LocalWindow(const TraceGeometry& geometry, const Window& window, WindowParts parts) {
   auto f = [](Vec3d v) { return Vec3f{float(v.x), float(v.y), float(v.z)}; };
   return {geometry.ToLocal(window.center),
@@ -112,6 +138,10 @@ absl::StatusOr<WindowParts> ParseWindowParts(const std::string& text) {
       !absl::SimpleAtoi(fields[1], &parts.rows)) {
     return absl::InvalidArgumentError(
         absl::StrCat("window parts must read COLUMNSxROWS, e.g. 4x2, got '", text, "'"));
+  }
+  if (parts.columns < 1 || parts.rows < 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("window parts must be at least 1 in each direction, got '", text, "'"));
   }
   FENESTRA_RETURN_IF_ERROR(CheckParts(parts));
   return parts;
@@ -136,17 +166,48 @@ TriangleMesh SelectSide(const TriangleMesh& mesh, Side side) {
   return out;
 }
 
+namespace {
+
+// O of several windows from each window's own: their cell rows one after the other, then the
+// identity rows of the direct columns.
+OutdoorBatches StackWindows(std::vector<OutdoorBatches> windows, int cells) {
+  if (windows.size() == 1) return std::move(windows.front());
+  OutdoorBatches o;
+  o.paths_per_cell = windows.front().paths_per_cell;
+  o.first_escapes.resize(cells);
+  for (size_t b = 0; b < windows.front().batches.size(); ++b) {
+    Matrix batch(OutdoorRowCount(cells), kDaylightBins);
+    int row = 0;
+    for (const OutdoorBatches& w : windows) {
+      const Eigen::Index rows = w.first_escapes.size();
+      batch.middleRows(row, rows) = w.batches[b].topRows(rows);
+      row += static_cast<int>(rows);
+    }
+    batch.middleRows(cells, kDaylightBins).setIdentity();
+    batch.bottomRows(kDaylightBins).setIdentity();
+    o.batches.push_back(std::move(batch));
+  }
+  int row = 0;
+  for (const OutdoorBatches& w : windows) {
+    o.first_escapes.segment(row, w.first_escapes.size()) = w.first_escapes;
+    row += static_cast<int>(w.first_escapes.size());
+    o.counters.Add(w.counters);
+  }
+  MeanAndError(o.batches, &o.mean, &o.standard_error);
+  return o;
+}
+
+}  // namespace
+
 absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const OutdoorOptions& options,
                                                   DcBackend* backend) {
-  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the two-stage method"));
   const auto start = std::chrono::steady_clock::now();
   FENESTRA_ASSIGN_OR_RETURN(basis, BasisFor(options.basis_cells));
   FENESTRA_RETURN_IF_ERROR(CheckParts(options.parts));
   FENESTRA_RETURN_IF_ERROR(CheckPaths(options.max_bounces, options.russian_roulette,
                                       options.roulette_threshold, options.threads));
   FENESTRA_RETURN_IF_ERROR(CheckBatches(options.batches));
-  const int64_t window_cells =
-      int64_t{basis.cell_count} * options.parts.columns * options.parts.rows;
+  const int64_t window_cells = WindowCellsOf(scene, options.parts, basis.cell_count);
   if (options.paths < window_cells * options.batches) {
     return absl::InvalidArgumentError(
         absl::StrCat("outdoor paths must be at least one per window cell and batch (",
@@ -156,14 +217,21 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const Outd
   std::unique_ptr<DcBackend> fallback;
   if (backend == nullptr) backend = (fallback = MakeEmbreeBackend()).get();
 
-  // Trace and form O_b (FormOutdoorBatches; a GPU backend forms them where its sums lie)
+  // Trace and form O_b (FormOutdoorBatches; a GPU backend forms them where its sums lie),
+  // window by window
   const uint64_t per_cell = static_cast<uint64_t>(options.paths / window_cells);
-  FENESTRA_ASSIGN_OR_RETURN(
-      formed, backend->Outdoor(geometry, LocalWindow(geometry, scene.window(), options.parts),
-                               basis, per_cell, options.batches, options.seed,
-                               Settings(options.max_bounces, options.russian_roulette,
-                                        options.roulette_threshold),
-                               options.threads));
+  const std::vector<TraceWindow> windows = LocalWindows(geometry, scene, options.parts, basis);
+  std::vector<OutdoorBatches> each;
+  for (int w = 0; w < static_cast<int>(windows.size()); ++w) {
+    FENESTRA_ASSIGN_OR_RETURN(
+        formed,
+        backend->Outdoor(
+            geometry, windows, w, basis, per_cell, options.batches, options.seed,
+            Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold),
+            options.threads));
+    each.push_back(std::move(formed));
+  }
+  OutdoorBatches formed = StackWindows(std::move(each), static_cast<int>(window_cells));
   OutdoorResult result;
   result.coefficients = std::move(formed.mean);
   result.standard_error = std::move(formed.standard_error);
@@ -188,12 +256,14 @@ absl::StatusOr<TraceGeometry> OutdoorViewGeometry(const Scene& scene) {
   const TriangleMesh outdoor = SelectSide(scene.fixed, Side::kOutdoor);
   TriangleMesh in_front;
   in_front.part_names = outdoor.part_names;
-  const Window& w = scene.window();
+  const auto is_in_front = [](const Vec3d* v, const Window& w) {
+    return std::max({Dot(v[0] - w.center, w.normal), Dot(v[1] - w.center, w.normal),
+                     Dot(v[2] - w.center, w.normal)}) > 0;
+  };
   for (size_t t = 0; t < outdoor.TriangleCount(); ++t) {
     const Vec3d* v = &outdoor.vertices[3 * t];
-    const double front = std::max({Dot(v[0] - w.center, w.normal), Dot(v[1] - w.center, w.normal),
-                                   Dot(v[2] - w.center, w.normal)});
-    if (front > 0) {
+    if (std::any_of(scene.windows.begin(), scene.windows.end(),
+                    [&](const SceneWindow& w) { return is_in_front(v, w.window); })) {
       in_front.Add(v[0], v[1], v[2], outdoor.material[t], Side::kOutdoor, outdoor.part[t]);
     }
   }
@@ -206,9 +276,15 @@ Vec3f OutdoorOffset(const TraceGeometry& indoor, const TraceGeometry& outdoor) {
 }
 
 std::vector<uint8_t> OutdoorMetCells(const TraceGeometry& indoor, const TraceGeometry& outdoor,
-                                     TraceWindow window, const HemisphereBasis& basis) {
-  window.center = window.center + OutdoorOffset(indoor, outdoor);
-  return WindowCellsMeetingSurfaces(outdoor, window, basis);
+                                     const std::vector<TraceWindow>& windows,
+                                     const HemisphereBasis& basis) {
+  std::vector<uint8_t> met;
+  for (TraceWindow window : windows) {
+    window.center = window.center + OutdoorOffset(indoor, outdoor);
+    const std::vector<uint8_t> cells = WindowCellsMeetingSurfaces(outdoor, window, basis);
+    met.insert(met.end(), cells.begin(), cells.end());
+  }
+  return met;
 }
 
 absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options) {
@@ -225,11 +301,11 @@ absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options)
   return basis;
 }
 
-absl::Status CheckOutdoorFitsIndoor(const std::vector<Matrix>& outdoor_batches,
+absl::Status CheckOutdoorFitsIndoor(const std::vector<Matrix>& outdoor_batches, const Scene& scene,
                                     const IndoorOptions& options) {
   FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
   const Eigen::Index columns =
-      OutdoorRowCount(options.parts.columns * options.parts.rows * basis.cell_count);
+      OutdoorRowCount(WindowCellsOf(scene, options.parts, basis.cell_count));
   const Eigen::Index rows = outdoor_batches.empty() ? 0 : outdoor_batches[0].rows();
   if (rows != columns || static_cast<int>(outdoor_batches.size()) != options.batches) {
     return absl::InvalidArgumentError(
@@ -266,7 +342,6 @@ IndoorResult IndoorResultFromTally(const IndoorTally& tally, const IndoorOptions
 
 absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindDesign& design,
                                                 const IndoorOptions& options, DcBackend* backend) {
-  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the two-stage method"));
   const auto start = std::chrono::steady_clock::now();
   FENESTRA_ASSIGN_OR_RETURN(basis, CheckIndoorOptions(options));
   const TriangleMesh indoor = SelectSide(AssembleMesh(scene, design), Side::kIndoor);
@@ -278,7 +353,7 @@ absl::StatusOr<IndoorResult> ComputeIndoorStage(const Scene& scene, const BlindD
   // Trace, then I_b = batch sums / batch paths
   FENESTRA_ASSIGN_OR_RETURN(
       tally, backend->Indoor(geometry, outdoor, LocalSensors(geometry, scene.sensors),
-                             LocalWindow(geometry, scene.window(), options.parts), basis,
+                             LocalWindows(geometry, scene, options.parts, basis), basis,
                              static_cast<uint64_t>(options.paths_per_sensor), options.batches,
                              options.seed, IndoorPathSettings(options), options.threads));
   IndoorResult result = IndoorResultFromTally(tally, options);
@@ -364,13 +439,13 @@ class TracedIndoorStages : public IndoorStages {
 // The indoor stage, then the annual product's tallies; in parts where the stages trace so.
 class StagedDesignTallies : public DesignTallies {
  public:
-  StagedDesignTallies(std::unique_ptr<IndoorStages> stages, DcBackend* backend,
+  StagedDesignTallies(std::unique_ptr<IndoorStages> stages, DcBackend* backend, const Scene& scene,
                       const IndoorOptions& options)
-      : stages_(std::move(stages)), backend_(backend), options_(options) {}
+      : stages_(std::move(stages)), backend_(backend), scene_(scene), options_(options) {}
 
   absl::Status SetProduct(const std::vector<Matrix>& outdoor_batches, const Matrix& sky,
                           const DeviceMatrices&) override {
-    FENESTRA_RETURN_IF_ERROR(CheckOutdoorFitsIndoor(outdoor_batches, options_));
+    FENESTRA_RETURN_IF_ERROR(CheckOutdoorFitsIndoor(outdoor_batches, scene_, options_));
     FENESTRA_ASSIGN_OR_RETURN(product, backend_->MakeAnnualProduct(outdoor_batches, sky));
     product_ = std::move(product);
     return absl::OkStatus();
@@ -416,6 +491,7 @@ class StagedDesignTallies : public DesignTallies {
   std::unique_ptr<IndoorStages> stages_;
   DcBackend* backend_;
   std::unique_ptr<AnnualProduct> product_;
+  Scene scene_;
   IndoorOptions options_;
   // The sums of the design of the last call, over its first held_parts_ parts
   IndoorTally held_;
@@ -458,7 +534,7 @@ absl::StatusOr<std::vector<Matrix>> DesignTallies::DesignIlluminance(const Blind
 absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::StartDesignTallies(
     const Scene& scene, const IndoorOptions& options) {
   FENESTRA_ASSIGN_OR_RETURN(stages, MakeIndoorStages(scene, options));
-  return std::make_unique<StagedDesignTallies>(std::move(stages), this, options);
+  return std::make_unique<StagedDesignTallies>(std::move(stages), this, scene, options);
 }
 
 absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::MakeDesignTallies(
@@ -471,7 +547,6 @@ absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::MakeDesignTallies(
 
 absl::StatusOr<std::unique_ptr<IndoorStages>> DcBackend::MakeIndoorStages(
     const Scene& scene, const IndoorOptions& options) {
-  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the two-stage method"));
   FENESTRA_RETURN_IF_ERROR(CheckIndoorOptions(options).status());
   return std::make_unique<TracedIndoorStages>(scene, options, this);
 }

@@ -24,6 +24,13 @@
 // the buildings moved a sensor by 3.6% (6.4% with a black city) where slats in the window plane let
 // it see each cell only in strips (bench/results/two_stage_bias_cpu2.txt).
 //
+// Several windows: O's cell rows and I's cell columns hold every window's cells, one window
+// after the other, above and before the direct rows and columns, which the windows share. The
+// outdoor stage traces each window's cells on their own (its paths end where they go back in
+// through any window); the indoor stage's next-event estimates draw a point of all windows'
+// area, and a bounce ray scores at the window it leaves by (core/trace/two_stage_modes.h).
+// So D = I O sums the light of every window, as the one-stage method does.
+//
 // Errors: both stages are traced in the same number B of independent batches, and batch b
 // of D is I_b O_b, so D (their mean) and every metric's jackknife see the noise of both
 // stages and the covariance that sensors and hours share through O.
@@ -43,6 +50,8 @@ namespace fenestra {
 // The window split into columns x rows equal parts, each with its own direction cells
 // (core/trace/two_stage_modes.h). One part assumes the outdoor radiance from a direction is
 // the same all over the window; more parts relax that at no extra tracing cost.
+// In options for a scene of several windows, a side of 0 splits each window on that side
+// as AutomaticWindowParts does (PartsOfWindow).
 struct WindowParts {
   int columns = 1;
   int rows = 1;
@@ -53,6 +62,13 @@ struct WindowParts {
 // the error of the averaging well below the Monte Carlo error for views of streets and
 // courtyards from ordinary windows (examples/city_office).
 WindowParts AutomaticWindowParts(const Window& window);
+
+// `parts` for `window`: each side of 0 as AutomaticWindowParts.
+WindowParts PartsOfWindow(const Window& window, WindowParts parts);
+
+// The cells of every window of `scene` split into `parts` (PartsOfWindow), in a basis of
+// `basis_cells`: the rows of O above its direct rows, I's columns before its direct columns.
+int WindowCellsOf(const Scene& scene, WindowParts parts, int basis_cells);
 
 // WindowParts from "COLUMNSxROWS" (e.g. "4x2"), or InvalidArgument.
 absl::StatusOr<WindowParts> ParseWindowParts(const std::string& text);
@@ -195,17 +211,17 @@ absl::Status CheckDesignParts(int first, int last);
 // For the indoor stage's tracers: the basis `options` ask for, or InvalidArgument for bad
 // options; their per-path settings; I from the sums of a trace.
 absl::StatusOr<HemisphereBasis> CheckIndoorOptions(const IndoorOptions& options);
-// InvalidArgument unless O's batches pair with the indoor stage `options` ask for: as many
-// batches, each with a row per column of I.
-absl::Status CheckOutdoorFitsIndoor(const std::vector<Matrix>& outdoor_batches,
+// InvalidArgument unless O's batches pair with the indoor stage `options` ask for in `scene`:
+// as many batches, each with a row per column of I.
+absl::Status CheckOutdoorFitsIndoor(const std::vector<Matrix>& outdoor_batches, const Scene& scene,
                                     const IndoorOptions& options);
 PathSettings IndoorPathSettings(const IndoorOptions& options);
 IndoorResult IndoorResultFromTally(const IndoorTally& tally, const IndoorOptions& options);
 
 // The outdoor surfaces of `scene`, prepared for tracing (empty when there are none): all of
-// them for the outdoor stage; for the indoor stage's test whether a view from the window
-// reaches the sky, only those with a point in front of the window's plane (no ray that
-// leaves the window outwards can meet the others: the facade around the window, the
+// them for the outdoor stage; for the indoor stage's test whether a view from a window
+// reaches the sky, only those with a point in front of some window's plane (no ray that
+// leaves a window outwards can meet the others: the facade around the window, the
 // building behind it), which makes the test about twice as fast.
 absl::StatusOr<TraceGeometry> OutdoorGeometry(const Scene& scene);
 absl::StatusOr<TraceGeometry> OutdoorViewGeometry(const Scene& scene);
@@ -214,12 +230,18 @@ absl::StatusOr<TraceGeometry> OutdoorViewGeometry(const Scene& scene);
 Vec3f OutdoorOffset(const TraceGeometry& indoor, const TraceGeometry& outdoor);
 
 // The window cells of an OutdoorView whose every view meets one of `outdoor`'s surfaces
-// (core/trace/window_cells.h), for `window` given in `indoor`'s frame.
+// (core/trace/window_cells.h), for `windows` given in `indoor`'s frame, one window's cells
+// after the other.
 std::vector<uint8_t> OutdoorMetCells(const TraceGeometry& indoor, const TraceGeometry& outdoor,
-                                     TraceWindow window, const HemisphereBasis& basis);
+                                     const std::vector<TraceWindow>& windows,
+                                     const HemisphereBasis& basis);
 
 // The window in `geometry`'s local frame, split into `parts`.
 TraceWindow LocalWindow(const TraceGeometry& geometry, const Window& window, WindowParts parts);
+// Every window of `scene` so, each split by PartsOfWindow, linked for TraceWindows
+// (LinkWindows).
+std::vector<TraceWindow> LocalWindows(const TraceGeometry& geometry, const Scene& scene,
+                                      WindowParts parts, const HemisphereBasis& basis);
 
 // D = I O, batch by batch. InvalidArgument when the bases, the window parts or the batch
 // counts differ.

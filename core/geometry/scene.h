@@ -90,16 +90,14 @@ struct Scene {
   std::vector<SolidBox> solid_boxes;  // every Box surface, indoor and outdoor
   Site site;
 
-  // The first window: what the stages that trace one window take (the two-stage method, the
-  // direct sun, the replays), after CheckOneWindow.
+  // The first window: what the replays take, after CheckOneWindow.
   const Window& window() const { return windows.front().window; }
   Window& window() { return windows.front().window; }
   // The first blind of the windows (empty: none): its ranges are the design's (every blind
   // of a scene is in one group so far, with the same ranges). With one window, its blind.
   const std::optional<BlindSpec>& blind() const { return BlindWindow().blind; }
   std::optional<BlindSpec>& blind() { return const_cast<SceneWindow&>(BlindWindow()).blind; }
-
- private:
+  // The window of blind(): the first window with a blind, else the first window.
   const SceneWindow& BlindWindow() const {
     for (const SceneWindow& w : windows) {
       if (w.blind) return w;
@@ -108,8 +106,8 @@ struct Scene {
   }
 };
 
-// OK for a scene of one window; else Unimplemented naming `what` (e.g. "the two-stage
-// method"), which traces one window so far, and what can trace the scene instead.
+// OK for a scene of one window; else Unimplemented naming `what` (the indoor replays), which
+// follow one window so far, and what traces the scene instead.
 absl::Status CheckOneWindow(const Scene& scene, const std::string& what);
 
 // Reads a scene file (the JSON form of fenestra.v1.Scene); unknown fields are errors.

@@ -433,6 +433,11 @@ WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Window& wind
           sampling.window_rows() > 0 ? sampling.window_rows() : automatic.rows};
 }
 
+WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Scene& scene) {
+  if (scene.windows.size() == 1) return SamplingWindowParts(sampling, scene.window());
+  return {sampling.window_columns(), sampling.window_rows()};
+}
+
 absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1::Sampling& sampling,
                                                    const std::function<bool()>& cancelled,
                                                    bool keep_on_device) {
@@ -442,7 +447,7 @@ absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1:
   options.max_bounces = sampling.outdoor_bounces();
   options.seed = sampling.seed();
   options.basis_cells = sampling.basis_cells();
-  options.parts = SamplingWindowParts(sampling, scene.window());
+  options.parts = SamplingWindowParts(sampling, scene);
   options.batches = sampling.batches();
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(sampling.backend()));
   FENESTRA_ASSIGN_OR_RETURN(result, ComputeOutdoorStage(scene, options, backend.get()));

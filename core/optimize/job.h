@@ -100,6 +100,9 @@ std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling);
 // The window parts `sampling` asks for (resolved), automatic ones for `window` if it
 // leaves them open.
 WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Window& window);
+// For the stages of `scene`: as above for a scene of one window; for several, a side left
+// open stays 0, each window's own automatic split (PartsOfWindow).
+WindowParts SamplingWindowParts(const v1::Sampling& sampling, const Scene& scene);
 
 // Mean relative standard error of the window cells' entries of O (not the identity rows),
 // over the entries above 1% of the matrix's largest.

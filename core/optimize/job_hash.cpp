@@ -26,14 +26,16 @@ std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
     hash.Value(m.reflectance), hash.Value(m.transmittance), hash.Value(m.specular);
     hash.Value(m.roughness), hash.Value(m.through), hash.Value(static_cast<int>(m.kind));
   }
-  const Window& w = scene.window();
-  for (const Vec3d& v : {w.center, w.normal, w.up})
-    hash.Value(v.x), hash.Value(v.y), hash.Value(v.z);
-  hash.Value(w.width_m), hash.Value(w.height_m);
+  for (const SceneWindow& scene_window : scene.windows) {
+    const Window& w = scene_window.window;
+    for (const Vec3d& v : {w.center, w.normal, w.up})
+      hash.Value(v.x), hash.Value(v.y), hash.Value(v.z);
+    hash.Value(w.width_m), hash.Value(w.height_m);
+  }
   hash.Value(sampling.outdoor_paths()), hash.Value(sampling.outdoor_bounces());
   hash.Value(sampling.seed()), hash.Value(sampling.basis_cells());
   hash.Value(sampling.batches());
-  const WindowParts parts = SamplingWindowParts(sampling, scene.window());
+  const WindowParts parts = SamplingWindowParts(sampling, scene);
   hash.Value(parts.columns), hash.Value(parts.rows);
   return hash.Hex();
 }

@@ -131,7 +131,7 @@ IndoorOptions JobIndoorOptions(const PreparedJob& job) {
   options.max_bounces = sampling.indoor_bounces();
   options.seed = sampling.seed();
   options.basis_cells = sampling.basis_cells();
-  options.parts = SamplingWindowParts(sampling, job.scene.window());
+  options.parts = SamplingWindowParts(sampling, job.scene);
   options.batches = sampling.batches();
   return options;
 }

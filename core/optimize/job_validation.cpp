@@ -313,16 +313,20 @@ absl::Status CheckNeighborhoods(const v1::Job& job) {
 }
 
 // Enough outdoor paths for every window cell, the automatic parts resolved
-absl::Status CheckWindowCells(const v1::Sampling& sampling, const Window& window) {
-  const WindowParts parts = SamplingWindowParts(sampling, window);
-  const int64_t window_cells = int64_t{sampling.basis_cells()} * parts.columns * parts.rows;
+absl::Status CheckWindowCells(const v1::Sampling& sampling, const Scene& scene) {
+  const WindowParts parts = SamplingWindowParts(sampling, scene);
+  const int64_t window_cells = WindowCellsOf(scene, parts, sampling.basis_cells());
   const int batches = sampling.batches();
   if (sampling.outdoor_paths() < window_cells * batches) {
+    const std::string cells =
+        scene.windows.size() == 1
+            ? absl::StrCat(parts.columns, "x", parts.rows, " window parts x ",
+                           sampling.basis_cells(), " direction cells")
+            : absl::StrCat(window_cells, " cells of ", scene.windows.size(), " windows");
     return InvalidJobField(
         "sampling.outdoor_paths",
         absl::StrCat("must be at least one per window cell and batch (", window_cells * batches,
-                     ": ", parts.columns, "x", parts.rows, " window parts x ",
-                     sampling.basis_cells(), " direction cells x ", batches, " batches)"));
+                     ": ", cells, " x ", batches, " batches)"));
   }
   return absl::OkStatus();
 }
@@ -331,9 +335,13 @@ absl::Status CheckWindowCells(const v1::Sampling& sampling, const Window& window
 // in the room's air.
 absl::Status CheckRoomAtEveryDesign(const PreparedJob& prepared) {
   const Scene ranged = WithJobRanges(prepared.scene, prepared.job);
-  if (ranged.blind()) {
-    if (absl::Status fits = CheckBlindFits(*ranged.blind(), ranged.window()); !fits.ok()) {
-      return InvalidJobField("variables", absl::StrCat("with the scene's blind: ", fits.message()));
+  for (const SceneWindow& w : ranged.windows) {
+    if (!w.blind) continue;
+    if (absl::Status fits = CheckBlindFits(*w.blind, w.window); !fits.ok()) {
+      const std::string blind = ranged.windows.size() == 1
+                                    ? "the scene's blind"
+                                    : absl::StrCat("the blind of window '", w.name, "'");
+      return InvalidJobField("variables", absl::StrCat("with ", blind, ": ", fits.message()));
     }
   }
   return CheckRoom(ranged);
@@ -438,13 +446,15 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
 
 Scene WithJobRanges(const Scene& scene, const v1::Job& job) {
   Scene ranged = scene;
-  if (!ranged.blind()) return ranged;
-  for (const v1::DesignVariable& v : job.variables()) {
-    const DesignVariableInfo* info = FindDesignVariable(v.name());
-    if (!info) continue;
-    ParameterRange& range = (*ranged.blind()).*(info->range);
-    range.min = std::min(range.min, v.lower());
-    range.max = std::max(range.max, v.upper());
+  for (SceneWindow& w : ranged.windows) {
+    if (!w.blind) continue;
+    for (const v1::DesignVariable& v : job.variables()) {
+      const DesignVariableInfo* info = FindDesignVariable(v.name());
+      if (!info) continue;
+      ParameterRange& range = (*w.blind).*(info->range);
+      range.min = std::min(range.min, v.lower());
+      range.max = std::max(range.max, v.upper());
+    }
   }
   return ranged;
 }
@@ -455,8 +465,6 @@ absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& b
   prepared.job = job;
   FENESTRA_ASSIGN_OR_RETURN(scene, SceneOf(job, base_dir));
   prepared.scene = std::move(scene);
-  FENESTRA_RETURN_IF_ERROR(
-      CheckOneWindow(prepared.scene, "an optimization (the two-stage method)"));
   v1::Job& filled = prepared.job;
   FENESTRA_RETURN_IF_ERROR(FillVariables(filled, prepared.scene, prepared.finishes));
   FENESTRA_RETURN_IF_ERROR(FillBudget(*filled.mutable_budget()));
@@ -466,7 +474,7 @@ absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& b
   FENESTRA_RETURN_IF_ERROR(CheckNeighborhoods(filled));
   FENESTRA_RETURN_IF_ERROR(CheckObjective(filled.objective()));
   FENESTRA_RETURN_IF_ERROR(FillConstraints(*filled.mutable_objective()));
-  FENESTRA_RETURN_IF_ERROR(CheckWindowCells(filled.sampling(), prepared.scene.window()));
+  FENESTRA_RETURN_IF_ERROR(CheckWindowCells(filled.sampling(), prepared.scene));
   FENESTRA_RETURN_IF_ERROR(CheckRoomAtEveryDesign(prepared));
   return prepared;
 }

@@ -86,11 +86,15 @@ inline std::vector<uint64_t> PartPaths(uint64_t paths, int batches, int parts, i
   return sizes;
 }
 
+// The outdoor paths of window `w` of `windows` (LinkWindows).
 template <class Intersector>
 OutdoorTally TraceOutdoorCpu(const Intersector& scene, const SurfaceTable& surfaces,
-                             const TraceWindow& window, const HemisphereBasis& basis,
-                             uint64_t paths_per_cell, int batches, uint64_t seed,
-                             const PathSettings& path, int threads) {
+                             const std::vector<TraceWindow>& windows, int w,
+                             const HemisphereBasis& basis, uint64_t paths_per_cell, int batches,
+                             uint64_t seed, const PathSettings& path, int threads) {
+  const TraceWindow& window = windows[w];
+  const TraceWindows all = ViewOfWindows(windows, basis);
+  const uint32_t streams = kOutdoorStreamBase + static_cast<uint32_t>(w) * kOutdoorWindowStreams;
   struct Slot {
     double sum[kOutdoorRowSize] = {};
     TraceCounters counters;
@@ -116,11 +120,11 @@ OutdoorTally TraceOutdoorCpu(const Intersector& scene, const SurfaceTable& surfa
         const uint64_t part = c % parts;
         const uint64_t batch_first = BatchStart(paths_per_cell, batches, b);
         const uint64_t size = tally.batch_paths[b];
-        OutdoorMode<Slot> mode{window, &basis, cell, &slot};
+        OutdoorMode<Slot> mode{window, all, &basis, cell, &slot};
         for (uint64_t p = batch_first + part * size / parts;
              p < batch_first + (part + 1) * size / parts; ++p) {
-          slot.counters.Add(TracePath(scene, surfaces, path,
-                                      PathRandom(seed, kOutdoorStreamBase + cell, p), mode));
+          slot.counters.Add(
+              TracePath(scene, surfaces, path, PathRandom(seed, streams + cell, p), mode));
         }
       },
       [&](uint64_t c, const Slot& slot) {
@@ -153,7 +157,7 @@ struct IndoorTally {
 template <class Intersector, class Outdoor>
 IndoorTally TraceIndoorCpu(const Intersector& scene, const SurfaceTable& surfaces,
                            const Outdoor& outdoor, const std::vector<TraceSensor>& sensors,
-                           const TraceWindow& window, const HemisphereBasis& basis,
+                           const std::vector<TraceWindow>& windows, const HemisphereBasis& basis,
                            uint64_t paths_per_sensor, int batches, uint64_t seed,
                            const PathSettings& path, int threads) {
   struct Slot {
@@ -162,7 +166,8 @@ IndoorTally TraceIndoorCpu(const Intersector& scene, const SurfaceTable& surface
     void Add(int cell, double value) { sum[cell] += value; }
   };
   const auto start = std::chrono::steady_clock::now();
-  const int columns = IndoorColumnCount(window, basis);
+  const TraceWindows all = ViewOfWindows(windows, basis);
+  const int columns = IndoorColumnCount(all);
   IndoorTally tally;
   tally.sensors = static_cast<int>(sensors.size());
   tally.columns = columns;
@@ -186,7 +191,7 @@ IndoorTally TraceIndoorCpu(const Intersector& scene, const SurfaceTable& surface
         const uint64_t first = batch_first + part * batch_size / parts;
         const uint64_t last = batch_first + (part + 1) * batch_size / parts;
         slot.sum.assign(columns, 0.0);
-        IndoorMode<Slot, Outdoor> mode{sensors[s].position, sensors[s].normal, window, &basis,
+        IndoorMode<Slot, Outdoor> mode{sensors[s].position, sensors[s].normal, all,  &basis,
                                        path.max_bounces,    &outdoor,          &slot};
         for (uint64_t p = first; p < last; ++p) {
           slot.counters.Add(TracePath(scene, surfaces, path, PathRandom(seed, s, p), mode));

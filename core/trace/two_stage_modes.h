@@ -49,6 +49,8 @@
 #include <math.h>
 #include <stdint.h>
 
+#include <vector>
+
 #include "core/common/cpu_gpu.h"
 #include "core/common/vec3.h"
 #include "core/geometry/hemisphere_basis.h"
@@ -69,6 +71,10 @@ struct TraceWindow {
   float height;
   int32_t columns = 1;  // parts across
   int32_t rows = 1;     // parts up
+  // Among all windows of the scene (TraceWindows): the first of this window's cells, and the
+  // area of the windows before it
+  int32_t first_cell = 0;
+  float area_before = 0.0f;
 
   FENESTRA_CPU_GPU float Area() const { return width * height; }
   FENESTRA_CPU_GPU int Parts() const { return columns * rows; }
@@ -116,9 +122,52 @@ struct TraceWindow {
   }
 };
 
-// Random stream of outdoor paths starting in cell c: kOutdoorStreamBase + c, apart from
-// the sensors' streams.
+// Every window of a scene in the trace frame, in the scene's order: the indoor stage's light
+// comes in through any of them, and an outdoor path that goes back in through any of them ends.
+// Window w's cells are list[w].first_cell + part * basis cells + direction cell: the indoor
+// matrix's columns hold every window's cells, one window after the other, then the direct
+// columns, which all windows share (a sky bin seen through either window is the same sky).
+struct TraceWindows {
+  const TraceWindow* list;  // `count` windows (on a GPU, in device memory)
+  int32_t count;
+  int32_t cells;  // of all windows
+  float area;     // of all windows [m2]
+
+  // The window drawn for a uniform u with probability its area over all windows' area, so that
+  // a window point drawn uniformly on it is a uniform point of all windows' area.
+  FENESTRA_CPU_GPU int Pick(float u) const {
+    const float target = u * area;
+    for (int w = 0; w + 1 < count; ++w) {
+      if (target < list[w].area_before + list[w].Area()) return w;
+    }
+    return count - 1;
+  }
+  // The window whose rectangle the ray passes through first, and the distance there in
+  // *distance; -1 if none.
+  FENESTRA_CPU_GPU int Crossed(Vec3f origin, Vec3f direction, float* distance) const {
+    int crossed = -1;
+    for (int w = 0; w < count; ++w) {
+      const float t = list[w].Crossing(origin, direction);
+      if (t > 0.0f && (crossed < 0 || t < *distance)) {
+        crossed = w;
+        *distance = t;
+      }
+    }
+    return crossed;
+  }
+  // Whether the ray enters the room through one of the windows.
+  FENESTRA_CPU_GPU bool Enters(Vec3f origin, Vec3f direction) const {
+    for (int w = 0; w < count; ++w) {
+      if (list[w].Crosses(origin, direction)) return true;
+    }
+    return false;
+  }
+};
+
+// Random stream of outdoor paths starting in cell c of window w: kOutdoorStreamBase +
+// w * kOutdoorWindowStreams + c, apart from the sensors' streams.
 inline constexpr uint32_t kOutdoorStreamBase = 0x80000000u;
+inline constexpr uint32_t kOutdoorWindowStreams = 1u << 19;  // > the most cells of a window
 
 // Multiple importance sampling weight of the technique with density a against one with
 // density b (the power heuristic, exponent 2).
@@ -156,10 +205,32 @@ FENESTRA_CPU_GPU inline double OutdoorCoefficient(const double* row, double path
 // sky through the window (no reflection: the direct component, which the direct sun replaces;
 // core/README.md, "Direct sun"). O's rows below the cells are the identity for each block.
 inline constexpr int kIndoorDirectColumns = 2 * kTregenzaBinCount;
-FENESTRA_CPU_GPU inline int IndoorColumnCount(const TraceWindow& window,
-                                              const HemisphereBasis& basis) {
-  return WindowCellCount(window, basis) + kIndoorDirectColumns;
+FENESTRA_CPU_GPU inline int IndoorColumnCount(const TraceWindows& windows) {
+  return windows.cells + kIndoorDirectColumns;
 }
+// A view of `windows` (their first cells and areas before them filled in by LinkWindows).
+inline TraceWindows ViewOfWindows(const std::vector<TraceWindow>& windows,
+                                  const HemisphereBasis& basis) {
+  TraceWindows view{windows.data(), static_cast<int32_t>(windows.size()), 0, 0.0f};
+  for (const TraceWindow& w : windows) view.area += w.Area();
+  if (!windows.empty()) {
+    view.cells = windows.back().first_cell + WindowCellCount(windows.back(), basis);
+  }
+  return view;
+}
+
+// Fills in each window's first cell (of `basis`'s cells per part) and the area before it.
+inline void LinkWindows(const HemisphereBasis& basis, std::vector<TraceWindow>* windows) {
+  int32_t cells = 0;
+  float area = 0.0f;
+  for (TraceWindow& w : *windows) {
+    w.first_cell = cells;
+    w.area_before = area;
+    cells += WindowCellCount(w, basis);
+    area += w.Area();
+  }
+}
+
 // Rows of O for `cells` window cells: the cells, then an identity row per direct column.
 FENESTRA_CPU_GPU inline int OutdoorRowCount(int cells) { return cells + kIndoorDirectColumns; }
 // The direct column of sky bin `bin` for light reflected in the room (`unreflected` false) or
@@ -183,26 +254,24 @@ struct OutdoorView {
     return !scene.Occluded(OffsetRayOrigin(point + offset, outward), omega, INFINITY);
   }
 
-  // Light arriving through the window at `point` from `omega` (window cell `cell`), worth
-  // `value` per unit radiance, `unreflected` when it reaches the sensor without a reflection
-  // in the room: into the direct column of omega's sky bin when the view reaches the sky,
-  // else into the window cell. Sink: void Add(int column, double value).
+  // Light arriving through `window` at `point` from `omega` (cell `cell` of all `cells`
+  // windows' cells), worth `value` per unit radiance, `unreflected` when it reaches the sensor
+  // without a reflection in the room: into the direct column of omega's sky bin when the view
+  // reaches the sky, else into the window cell. Sink: void Add(int column, double value).
   template <class Sink>
-  FENESTRA_CPU_GPU void Score(const TraceWindow& window, const HemisphereBasis& basis, Vec3f point,
-                              Vec3f omega, int cell, double value, bool unreflected,
-                              Sink* sink) const {
+  FENESTRA_CPU_GPU void Score(const TraceWindow& window, int cells, Vec3f point, Vec3f omega,
+                              int cell, double value, bool unreflected, Sink* sink) const {
     const bool direct = !SurelyMet(cell) && Escapes(point, window.normal, omega);
-    sink->Add(direct ? DirectColumn(WindowCellCount(window, basis), TregenzaBin(omega), unreflected)
-                     : cell,
-              value);
+    sink->Add(direct ? DirectColumn(cells, TregenzaBin(omega), unreflected) : cell, value);
   }
 };
 
 template <class Sink>  // Sink: void Add(int bin, double value); void AddFirstEscape()
 struct OutdoorMode {
-  TraceWindow window;
+  TraceWindow window;    // where the paths start
+  TraceWindows windows;  // every window, `window` among them
   const HemisphereBasis* basis;
-  int cell;  // window cell: part * basis cells + direction cell
+  int cell;  // cell of `window`: part * basis cells + direction cell
   Sink* sink;
 
   template <class Intersector>
@@ -220,14 +289,14 @@ struct OutdoorMode {
                                      const PathRandom&) const {}
 
   // A first segment that reaches the sky is the indoor stage's direct light: counted only.
-  // A ray that leaves back through the window goes into the room, which the outdoor stage
+  // A ray that leaves back through a window goes into the room, which the outdoor stage
   // does not see: it ends without reaching the sky.
   FENESTRA_CPU_GPU void Escape(const PathState& path) {
     if (path.vertex == 0) {
       sink->AddFirstEscape();
       return;
     }
-    if (window.Crosses(path.origin, path.direction)) return;
+    if (windows.Enters(path.origin, path.direction)) return;
     sink->Add(TregenzaBin(path.direction), static_cast<double>(path.weight));
   }
 
@@ -235,12 +304,15 @@ struct OutdoorMode {
 };
 
 // Sink: void Add(int column, double value) (IndoorColumnCount columns);
-// Outdoor: void Score(window, basis, point, omega, cell, value, Sink*), as OutdoorView.
+// Outdoor: void Score(window, cells, point, omega, cell, value, unreflected, Sink*), as
+// OutdoorView. With several windows, next-event estimation draws a uniform point of all
+// windows' area (a window by its area, then a point on it), and a bounce ray scores at the
+// window it leaves by.
 template <class Sink, class Outdoor>
 struct IndoorMode {
   Vec3f sensor_position;  // local frame
   Vec3f sensor_normal;    // unit
-  TraceWindow window;
+  TraceWindows windows;
   const HemisphereBasis* basis;
   int32_t max_bounces;  // as PathSettings: reflections whose light may reach the sensor
   const Outdoor* outdoor;
@@ -269,11 +341,14 @@ struct IndoorMode {
             random.Draw(path.vertex, kWindowSamplePurpose), false);
   }
 
-  // A bounce ray that leaves through the window scores pi w in the cell it leaves by.
+  // A bounce ray that leaves through a window scores pi w in the cell it leaves by.
   FENESTRA_CPU_GPU void Escape(const PathState& path) {
-    const float distance = window.Crossing(path.origin, path.direction);
+    float distance = 0.0f;
+    const int w = windows.Crossed(path.origin, path.direction, &distance);
+    if (w < 0) return;
+    const TraceWindow& window = windows.list[w];
     const float cos_window = Dot(window.normal, path.direction);
-    if (!(distance > 0.0f) || !(cos_window > 0.0f)) return;
+    if (!(cos_window > 0.0f)) return;
     const int cell = BasisCell(*basis, Vec3f{Dot(path.direction, window.across),
                                              Dot(path.direction, window.up), cos_window});
     if (cell < 0) return;
@@ -281,23 +356,25 @@ struct IndoorMode {
     const float mis = path.pdf > 0.0f
                           ? PowerHeuristic(path.pdf, WindowDensity(distance * distance, cos_window))
                           : 1.0f;
-    Score(point, path.direction, window.PartAt(point) * basis->cell_count + cell,
+    Score(window, point, path.direction,
+          window.first_cell + window.PartAt(point) * basis->cell_count + cell,
           kPi * static_cast<double>(path.weight * mis), path.reflections == 0);
   }
 
-  // Light reaching the window at `point` from `omega` (window cell `cell`), worth `value`
-  // per unit radiance, `unreflected` when no reflection in the room lies between: the outdoor
-  // surfaces tell its column (OutdoorView::Score).
-  FENESTRA_CPU_GPU void Score(Vec3f point, Vec3f omega, int cell, double value, bool unreflected) {
-    outdoor->Score(window, *basis, point, omega, cell, value, unreflected, sink);
+  // Light reaching `window` at `point` from `omega` (cell `cell` of all windows), worth
+  // `value` per unit radiance, `unreflected` when no reflection in the room lies between: the
+  // outdoor surfaces tell its column (OutdoorView::Score).
+  FENESTRA_CPU_GPU void Score(const TraceWindow& window, Vec3f point, Vec3f omega, int cell,
+                              double value, bool unreflected) {
+    outdoor->Score(window, windows.cells, point, omega, cell, value, unreflected, sink);
   }
 
   FENESTRA_CPU_GPU void Finish(const PathStats&) const {}
 
-  // Solid-angle density of a uniform window point seen at squared distance r2 and cosine
-  // cos_window.
+  // Solid-angle density of a uniform point of all windows seen at squared distance r2 and
+  // cosine cos_window.
   FENESTRA_CPU_GPU float WindowDensity(float r2, float cos_window) const {
-    return r2 / (window.Area() * cos_window);
+    return r2 / (windows.area * cos_window);
   }
 
   // Next-event estimation from `position` towards a uniform window point, through the smooth
@@ -307,6 +384,7 @@ struct IndoorMode {
   FENESTRA_CPU_GPU void Connect(const Intersector& scene, Vec3f position,
                                 const SurfaceScatter& scatter, float weight, const Uniform4& u,
                                 bool unreflected) {
+    const TraceWindow& window = windows.list[windows.Pick(u.u[2])];
     const Vec3f point = window.Point(u.u[0], u.u[1]);
     const Vec3f to_window = point - position;
     const float distance_squared = Dot(to_window, to_window);
@@ -327,8 +405,9 @@ struct IndoorMode {
         BasisCell(*basis, Vec3f{Dot(omega, window.across), Dot(omega, window.up), cos_window});
     if (cell < 0) return;
     const float mis = PowerHeuristic(WindowDensity(distance_squared, cos_window), pdf);
-    Score(point, omega, window.PartOf(u.u[0], u.u[1]) * basis->cell_count + cell,
-          static_cast<double>(weight * value * cos_window * window.Area() / distance_squared * mis),
+    Score(window, point, omega,
+          window.first_cell + window.PartOf(u.u[0], u.u[1]) * basis->cell_count + cell,
+          static_cast<double>(weight * value * cos_window * windows.area / distance_squared * mis),
           unreflected);
   }
 };

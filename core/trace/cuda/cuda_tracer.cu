@@ -216,8 +216,9 @@ __device__ int BatchOf(uint64_t paths, int batches, uint64_t i) {
 // b * cells + cell of the sums holds the cell's paths [b N / batches, (b + 1) N / batches).
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     OutdoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
-                  TraceWindow window, HemisphereBasis basis, uint64_t paths_per_cell, int batches,
-                  uint64_t seed, unsigned int first_cell, double* sum, unsigned long long* counters,
+                  TraceWindow window, TraceWindows windows, unsigned int window_index,
+                  HemisphereBasis basis, uint64_t paths_per_cell, int batches, uint64_t seed,
+                  unsigned int first_cell, double* sum, unsigned long long* counters,
                   unsigned long long* next_path) {
   extern __shared__ double rows[];  // per batch, kOutdoorRowSize
   __shared__ unsigned long long block_counters[kCounters];
@@ -227,12 +228,13 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   BeginRow(rows, size, block_counters);
   const unsigned int cell = first_cell + blockIdx.y;
   OutdoorSink sink{rows};
-  OutdoorMode<OutdoorSink> mode{window, &shared_basis, static_cast<int>(cell), &sink};
+  OutdoorMode<OutdoorSink> mode{window, windows, &shared_basis, static_cast<int>(cell), &sink};
+  const uint32_t streams = kOutdoorStreamBase + window_index * kOutdoorWindowStreams;
   ThreadCounts counts;
   TraceItems(scene, surfaces, settings, mode, paths_per_cell, next_path + cell, counts,
              [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
                sink.SetRow(rows + BatchOf(paths_per_cell, batches, i) * kOutdoorRowSize);
-               *random = PathRandom(seed, kOutdoorStreamBase + cell, i);
+               *random = PathRandom(seed, streams + cell, i);
                *path = path_internal::StartPath(scene, *random, mode, stats);
              });
   sink.Flush();
@@ -284,14 +286,14 @@ __global__ void FormOutdoorKernel(const double* sum, int cells, uint64_t paths_p
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     IndoorKernel(BvhIntersector scene, SurfaceTable surfaces, PathSettings settings,
                  OutdoorView<BvhIntersector> outdoor, const TraceSensor* sensors, int sensor_count,
-                 TraceWindow window, HemisphereBasis basis, uint64_t paths_per_sensor, int batches,
-                 uint64_t seed, double* sum, unsigned long long* counters,
+                 TraceWindows windows, HemisphereBasis basis, uint64_t paths_per_sensor,
+                 int batches, uint64_t seed, double* sum, unsigned long long* counters,
                  unsigned long long* next_path) {
   extern __shared__ double row[];  // columns of I
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
   if (threadIdx.x == 0) shared_basis = basis;
-  const int columns = IndoorColumnCount(window, basis);
+  const int columns = IndoorColumnCount(windows);
   BeginRow(row, columns, block_counters);
   const int s = static_cast<int>(blockIdx.y) / batches;
   const int b = static_cast<int>(blockIdx.y) % batches;
@@ -299,7 +301,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   const uint64_t last = BatchFirst(paths_per_sensor, batches, b + 1);
   SharedSink sink{row, nullptr};
   IndoorMode<SharedSink, OutdoorView<BvhIntersector>> mode{
-      sensors[s].position,  sensors[s].normal, window, &shared_basis,
+      sensors[s].position,  sensors[s].normal, windows, &shared_basis,
       settings.max_bounces, &outdoor,          &sink};
   ThreadCounts counts;
   TracePaths(scene, surfaces, settings, mode, seed, s, first, last, next_path + blockIdx.y, counts);
@@ -390,7 +392,7 @@ struct DeviceRecorder {
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     RecordKernel(BvhIntersector room, LocalEnvelope envelope, SurfaceTable surfaces,
                  PathSettings settings, OutdoorView<BvhIntersector> outdoor,
-                 const TraceSensor* sensors, int sensor_count, TraceWindow window,
+                 const TraceSensor* sensors, int sensor_count, TraceWindows windows,
                  HemisphereBasis basis, uint64_t paths_per_sensor, int batches, uint64_t seed,
                  DeviceRecords records, double* sum, unsigned long long* counters,
                  unsigned long long* next_path) {
@@ -398,7 +400,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
   if (threadIdx.x == 0) shared_basis = basis;
-  const int columns = IndoorColumnCount(window, basis);
+  const int columns = IndoorColumnCount(windows);
   BeginRow(row, columns, block_counters);
   const int s = static_cast<int>(blockIdx.y) / batches;
   const int b = static_cast<int>(blockIdx.y) % batches;
@@ -406,7 +408,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   DeviceRecorder recorder{row, records, blockIdx.y, envelope};
   RecordingSink<BvhIntersector, DeviceRecorder> sink{&scene, &recorder};
   RecordingMode<BvhIntersector, DeviceRecorder, OutdoorView<BvhIntersector>> mode{
-      {sensors[s].position, sensors[s].normal, window, &shared_basis, settings.max_bounces,
+      {sensors[s].position, sensors[s].normal, windows, &shared_basis, settings.max_bounces,
        &outdoor, &sink},
       &scene,
       &recorder};
@@ -485,7 +487,7 @@ struct ReplayDesigns {
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     ReplayKernel(ReplayDesigns designs, const TraceMaterial* materials, PathSettings settings,
                  OutdoorView<BvhIntersector> outdoor, const TraceSensor* sensors, int sensor_count,
-                 TraceWindow window, HemisphereBasis basis, ReplayParts parts, uint64_t seed,
+                 TraceWindows windows, HemisphereBasis basis, ReplayParts parts, uint64_t seed,
                  LocalEnvelope envelope, DeviceRecords records, const unsigned int* row_blocks,
                  const double* fixed, double* sum, size_t design_sums, unsigned long long* counters,
                  unsigned long long* next_item) {
@@ -493,7 +495,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
   if (threadIdx.x == 0) shared_basis = basis;
-  const int columns = IndoorColumnCount(window, basis);
+  const int columns = IndoorColumnCount(windows);
   // This block's row: blocks [row_blocks[y], row_blocks[y + 1]) work on row y
   const unsigned int design_rows = static_cast<unsigned int>(sensor_count * parts.batches);
   const unsigned int rows = design_rows * static_cast<unsigned int>(designs.count);
@@ -534,7 +536,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   uint8_t* lengths = all_parts && y < design_rows ? records.lengths : nullptr;
   SharedSink sink{row, nullptr};
   IndoorMode<SharedSink, OutdoorView<BvhIntersector>> mode{
-      sensors[s].position,  sensors[s].normal, window, &shared_basis,
+      sensors[s].position,  sensors[s].normal, windows, &shared_basis,
       settings.max_bounces, &outdoor,          &sink};
   size_t slot = 0;  // the lane's resumed path
   TraceItems(
@@ -644,6 +646,17 @@ constexpr double kResumeWork = 32;
 // memory leave the designs traced in full.
 constexpr double kCrossingsPerPath = 4.5;
 
+// `windows` (LinkWindows) in `buffer`, and their view with the list on the device.
+absl::StatusOr<TraceWindows> UploadWindows(DeviceBuffer<TraceWindow>& buffer,
+                                           const std::vector<TraceWindow>& windows,
+                                           const HemisphereBasis& basis) {
+  if (windows.empty()) return absl::InvalidArgumentError("CUDA tracer: no window");
+  FENESTRA_CUDA_RETURN_IF_ERROR(buffer.Upload(windows.data(), windows.size()));
+  TraceWindows view = ViewOfWindows(windows, basis);
+  view.list = buffer.get();
+  return view;
+}
+
 }  // namespace
 
 struct CudaTracer::Impl {
@@ -653,6 +666,8 @@ struct CudaTracer::Impl {
   DeviceBuffer<BvhNode> nodes, outdoor_nodes;
   DeviceBuffer<BvhTriangle> triangles, outdoor_triangles;
   DeviceBuffer<uint8_t> outdoor_met;  // per window cell (OutdoorView::met)
+  // The windows of the last stage traced, and of the recorded replay (TraceWindows::list)
+  DeviceBuffer<TraceWindow> windows, recorded_windows;
   DeviceBuffer<uint32_t> triangle_material;
   DeviceBuffer<TraceMaterial> materials;
   DeviceBuffer<TraceSensor> sensors;
@@ -696,7 +711,7 @@ struct CudaTracer::Impl {
     // Per row: the other connections, then the resumes, then the crossings
     std::vector<unsigned long long> counts;
     LocalEnvelope envelope;
-    TraceWindow window;
+    TraceWindows windows;  // in recorded_windows
     HemisphereBasis basis;
     Vec3f outdoor_offset;
     PathSettings path;
@@ -705,7 +720,7 @@ struct CudaTracer::Impl {
   // The indoor stage's paths (CudaTracer::Indoor); the sums stay on the device without
   // host_sum.
   absl::Status TraceIndoor(const TraceSensor* host_sensors, int sensor_count,
-                           const TraceWindow& window, Vec3f outdoor_offset,
+                           const std::vector<TraceWindow>& host_windows, Vec3f outdoor_offset,
                            const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
                            uint64_t seed, const PathSettings& path, double* host_sum,
                            CudaCounters* out);
@@ -720,7 +735,7 @@ struct CudaTracer::Impl {
                       int last, double* host_sum, CudaCounters* out);
   size_t DesignSums() const {
     return static_cast<size_t>(recorded.batches) * recorded.sensor_count *
-           IndoorColumnCount(recorded.window, recorded.basis);
+           IndoorColumnCount(recorded.windows);
   }
   // Parts [0, replayed_parts) of the last replay are in `sum`; 0 once `sum` holds other sums.
   int replayed_parts = 0;
@@ -941,11 +956,13 @@ absl::Status CudaTracer::OneStage(const TraceSensor* sensors, int sensor_count,
       sum, sum_squares, counters);
 }
 
-absl::Status CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
-                                 uint64_t paths_per_cell, int batches, uint64_t seed,
-                                 const PathSettings& path, const OutdoorOutput& out,
+absl::Status CudaTracer::Outdoor(const std::vector<TraceWindow>& windows, int w,
+                                 const HemisphereBasis& basis, uint64_t paths_per_cell, int batches,
+                                 uint64_t seed, const PathSettings& path, const OutdoorOutput& out,
                                  CudaCounters* counters) {
   Impl& d = *impl_;
+  FENESTRA_ASSIGN_OR_RETURN(all, UploadWindows(d.windows, windows, basis));
+  const TraceWindow& window = windows[w];
   const int cells = WindowCellCount(window, basis);
   const int row_size = batches * kOutdoorRowSize;
   FENESTRA_RETURN_IF_ERROR(AllowSharedRow(
@@ -962,8 +979,9 @@ absl::Status CudaTracer::Outdoor(const TraceWindow& window, const HemisphereBasi
           const dim3 grid(per_cell,
                           std::min(kMaxGridRows, static_cast<unsigned int>(cells) - first));
           OutdoorKernel<<<grid, kThreads, shared>>>(
-              d.Scene(), d.Surfaces(), path, window, basis, paths_per_cell, batches, seed, first,
-              d.sum.get(), d.counters.get(), d.next_path.get());
+              d.Scene(), d.Surfaces(), path, window, all, static_cast<unsigned int>(w), basis,
+              paths_per_cell, batches, seed, first, d.sum.get(), d.counters.get(),
+              d.next_path.get());
         }
       },
       nullptr, nullptr, counters));
@@ -1001,16 +1019,18 @@ absl::Status CudaTracer::SetOutdoorScene(const BvhLayout& bvh, const std::vector
 }
 
 absl::Status CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int sensor_count,
-                                           const TraceWindow& window, Vec3f outdoor_offset,
-                                           const HemisphereBasis& basis, uint64_t paths_per_sensor,
-                                           int batches, uint64_t seed, const PathSettings& path,
-                                           double* host_sum, CudaCounters* out) {
+                                           const std::vector<TraceWindow>& host_windows,
+                                           Vec3f outdoor_offset, const HemisphereBasis& basis,
+                                           uint64_t paths_per_sensor, int batches, uint64_t seed,
+                                           const PathSettings& path, double* host_sum,
+                                           CudaCounters* out) {
   Impl& d = *this;
   if (!d.has_outdoor)
     return absl::FailedPreconditionError("CUDA tracer: no outdoor scene uploaded");
   FENESTRA_CUDA_RETURN_IF_ERROR(d.sensors.Upload(host_sensors, sensor_count));
+  FENESTRA_ASSIGN_OR_RETURN(windows, UploadWindows(d.windows, host_windows, basis));
   const unsigned int rows = static_cast<unsigned int>(sensor_count * batches);
-  const int cells = IndoorColumnCount(window, basis);
+  const int cells = IndoorColumnCount(windows);
   const size_t shared = static_cast<size_t>(cells) * sizeof(double);
   FENESTRA_RETURN_IF_ERROR(AllowSharedRow(IndoorKernel, cells));
   const dim3 grid(d.BlocksPerRow(IndoorKernel, shared, paths_per_sensor / batches + 1, rows), rows);
@@ -1019,23 +1039,23 @@ absl::Status CudaTracer::Impl::TraceIndoor(const TraceSensor* host_sensors, int 
       [&] {
         IndoorKernel<<<grid, kThreads, shared>>>(
             d.Scene(), d.Surfaces(), path, d.Outdoor(outdoor_offset), d.sensors.get(), sensor_count,
-            window, basis, paths_per_sensor, batches, seed, d.sum.get(), d.counters.get(),
+            windows, basis, paths_per_sensor, batches, seed, d.sum.get(), d.counters.get(),
             d.next_path.get());
       },
       host_sum, nullptr, out);
 }
 
 absl::Status CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
-                                const TraceWindow& window, Vec3f outdoor_offset,
+                                const std::vector<TraceWindow>& windows, Vec3f outdoor_offset,
                                 const HemisphereBasis& basis, uint64_t paths_per_sensor,
                                 int batches, uint64_t seed, const PathSettings& path, double* sum,
                                 CudaCounters* counters) {
-  return impl_->TraceIndoor(sensors, sensor_count, window, outdoor_offset, basis, paths_per_sensor,
+  return impl_->TraceIndoor(sensors, sensor_count, windows, outdoor_offset, basis, paths_per_sensor,
                             batches, seed, path, sum, counters);
 }
 
 absl::Status CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
-                                      int sensor_count, const TraceWindow& window,
+                                      int sensor_count, const std::vector<TraceWindow>& windows,
                                       Vec3f outdoor_offset, const HemisphereBasis& basis,
                                       uint64_t paths_per_sensor, int batches, int parts,
                                       uint64_t seed, const PathSettings& path, size_t max_bytes,
@@ -1047,7 +1067,8 @@ absl::Status CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const Trace
   d.resume_order_made = false;
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   FENESTRA_CUDA_RETURN_IF_ERROR(d.replay_sensors.Upload(sensors, sensor_count));
-  const int columns = IndoorColumnCount(window, basis);
+  FENESTRA_ASSIGN_OR_RETURN(recorded_windows, UploadWindows(d.recorded_windows, windows, basis));
+  const int columns = IndoorColumnCount(recorded_windows);
   FENESTRA_RETURN_IF_ERROR(AllowSharedRow(RecordKernel, columns));
   FENESTRA_RETURN_IF_ERROR(AllowSharedRow(ReplayKernel, columns));
   if (parts < 1)
@@ -1070,7 +1091,7 @@ absl::Status CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const Trace
        row_paths,
        {},
        envelope,
-       window,
+       recorded_windows,
        basis,
        outdoor_offset,
        path};
@@ -1127,7 +1148,7 @@ absl::Status CudaTracer::Impl::TraceRecords(int columns, size_t max_bytes,
         [&] {
           RecordKernel<<<grid, kThreads, shared>>>(
               d.Scene(), r.envelope, d.Surfaces(), r.path, d.Outdoor(r.outdoor_offset),
-              d.replay_sensors.get(), r.sensor_count, r.window, r.basis, r.paths_per_sensor,
+              d.replay_sensors.get(), r.sensor_count, r.windows, r.basis, r.paths_per_sensor,
               row_batches, r.seed, records, d.sum.get(), d.counters.get(), d.next_path.get());
         },
         nullptr, nullptr, counters));
@@ -1164,7 +1185,7 @@ absl::Status CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceM
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
   const ReplayParts parts{r.batches, r.parts, first, last};
   const unsigned int rows = static_cast<unsigned int>(r.sensor_count * r.batches * designs.count);
-  const int columns = IndoorColumnCount(r.window, r.basis);
+  const int columns = IndoorColumnCount(r.windows);
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);
   if (d.row_blocks_key != std::array<int, 3>{first, last, designs.count}) {
     int resident = 0;
@@ -1194,7 +1215,7 @@ absl::Status CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceM
       [&] {
         ReplayKernel<<<d.row_blocks_total, kThreads, shared>>>(
             designs, materials, r.path, d.Outdoor(r.outdoor_offset), d.replay_sensors.get(),
-            r.sensor_count, r.window, r.basis, parts, r.seed, r.envelope, records,
+            r.sensor_count, r.windows, r.basis, parts, r.seed, r.envelope, records,
             d.row_blocks.get(), d.fixed.get(), d.sum.get(), d.DesignSums(), d.counters.get(),
             d.next_path.get());
       },

@@ -86,9 +86,11 @@ class CudaTracer {
   };
   // Outdoor paths, paths_per_cell from each window cell in `batches` batches, the same
   // streams as TraceOutdoorCpu; O formed from their sums on the device, then downloaded.
-  absl::Status Outdoor(const TraceWindow& window, const HemisphereBasis& basis,
-                       uint64_t paths_per_cell, int batches, uint64_t seed,
-                       const PathSettings& path, const OutdoorOutput& out, CudaCounters* counters);
+  // Of window `window` of `windows` (LinkWindows).
+  absl::Status Outdoor(const std::vector<TraceWindow>& windows, int window,
+                       const HemisphereBasis& basis, uint64_t paths_per_cell, int batches,
+                       uint64_t seed, const PathSettings& path, const OutdoorOutput& out,
+                       CudaCounters* counters);
 
   // Uploads the outdoor surfaces' BVH, which the indoor stage tests its window connections
   // against (OutdoorView), and per window cell whether all its views meet them
@@ -98,10 +100,10 @@ class CudaTracer {
   // Indoor paths in `batches` contiguous batches per sensor, as TraceIndoorCpu, against the
   // uploaded scene and outdoor scene (`outdoor_offset`: OutdoorView::offset); sum gets
   // [(batch * sensors + sensor) * columns + column], or, null, leaves them on the device.
-  absl::Status Indoor(const TraceSensor* sensors, int sensor_count, const TraceWindow& window,
-                      Vec3f outdoor_offset, const HemisphereBasis& basis, uint64_t paths_per_sensor,
-                      int batches, uint64_t seed, const PathSettings& path, double* sum,
-                      CudaCounters* counters);
+  absl::Status Indoor(const TraceSensor* sensors, int sensor_count,
+                      const std::vector<TraceWindow>& windows, Vec3f outdoor_offset,
+                      const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
+                      uint64_t seed, const PathSettings& path, double* sum, CudaCounters* counters);
 
   // The indoor replay (core/dc/indoor_replay.h) on the device. RecordIndoor traces the
   // indoor paths, as Indoor, through the uploaded scene (the room without the blind) up to
@@ -116,10 +118,10 @@ class CudaTracer {
   // [0, first) that the replay before it left on the device (an error where they are no
   // longer there: FAILED_PRECONDITION).
   absl::Status RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
-                            int sensor_count, const TraceWindow& window, Vec3f outdoor_offset,
-                            const HemisphereBasis& basis, uint64_t paths_per_sensor, int batches,
-                            int parts, uint64_t seed, const PathSettings& path, size_t max_bytes,
-                            CudaReplayStats* stats);
+                            int sensor_count, const std::vector<TraceWindow>& windows,
+                            Vec3f outdoor_offset, const HemisphereBasis& basis,
+                            uint64_t paths_per_sensor, int batches, int parts, uint64_t seed,
+                            const PathSettings& path, size_t max_bytes, CudaReplayStats* stats);
   absl::Status ReplayIndoor(const LocalSlats& blind, int first, int last, double* sum,
                             CudaCounters* counters);
 

@@ -299,9 +299,9 @@ TEST(TwoStageTest, SkippedOutdoorTestsChangeNothing) {
   absl::StatusOr<std::unique_ptr<EmbreeScene>> room = EmbreeScene::Build(*indoor);
   absl::StatusOr<std::unique_ptr<EmbreeScene>> city = EmbreeScene::Build(*outdoor);
   ASSERT_TRUE(room.ok() && city.ok());
-  const TraceWindow window =
-      LocalWindow(*indoor, scene.window(), AutomaticWindowParts(scene.window()));
   const HemisphereBasis basis = Beckers288();
+  const std::vector<TraceWindow> window =
+      LocalWindows(*indoor, scene, AutomaticWindowParts(scene.window()), basis);
   const std::vector<uint8_t> met = OutdoorMetCells(*indoor, *outdoor, window, basis);
   EXPECT_GT(std::count(met.begin(), met.end(), 1), 1000);  // the street and the buildings
   IndoorOptions options;
