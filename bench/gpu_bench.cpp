@@ -298,7 +298,8 @@ void PrintOptimization(const v1::JobResult& result, const std::string& stage_sta
       result.best_value().value(), result.best_value().standard_error(), check.one_stage().value(),
       check.one_stage().standard_error());
   for (const char* name : {"alpha", "width", "spacing", "thickness"}) {
-    std::printf(" %s=%.4f", name, result.best_design().at(name));
+    const auto value = result.best_design().find(name);
+    if (value != result.best_design().end()) std::printf(" %s=%.4f", name, value->second);
   }
   std::printf("\nstages began at (s):%s; ended %.3f\n", stage_starts.c_str(), SecondsSince(start));
   std::printf("final check: difference %+.2f ± %.2f %%%s\n", check.difference().value(),

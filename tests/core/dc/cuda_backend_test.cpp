@@ -126,20 +126,18 @@ TEST(CudaBackendTest, CityOfficeOneStageMatchesEmbree) {
   OneStageParity("city_office", &design, 10);
 }
 
-TEST(CudaBackendTest, TwoStageMatchesEmbree) {
-  std::unique_ptr<DcBackend> gpu = Gpu();
-  if (!gpu) GTEST_SKIP() << "no CUDA device";
-  const Scene scene = LoadExample("city_office");
-  const BlindDesign design = *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}});
-  // The window in parts, as by default (4 x 3): the GPU's per-part cells and shared rows
+// Both stages and their product on the GPU and on the CPU, each window in parts as by default
+// (4 x 3 for the city office's and the corner office's): the GPU's per-part cells and shared
+// rows.
+void ExpectTwoStageParity(DcBackend* gpu, const Scene& scene, const BlindDesign& design) {
   OutdoorOptions outdoor;
   outdoor.paths = 2'000'000;
-  outdoor.parts = AutomaticWindowParts(scene.window());
+  outdoor.parts = WindowParts{0, 0};
   IndoorOptions indoor;
   indoor.paths_per_sensor = 200'000;
   indoor.parts = outdoor.parts;
   absl::StatusOr<OutdoorResult> o_cpu = ComputeOutdoorStage(scene, outdoor);
-  absl::StatusOr<OutdoorResult> o_gpu = ComputeOutdoorStage(scene, outdoor, gpu.get());
+  absl::StatusOr<OutdoorResult> o_gpu = ComputeOutdoorStage(scene, outdoor, gpu);
   ASSERT_TRUE(o_cpu.ok() && o_gpu.ok());
   ExpectParity(o_cpu->coefficients, o_cpu->standard_error, o_gpu->coefficients,
                o_gpu->standard_error, "outdoor matrix");
@@ -152,7 +150,7 @@ TEST(CudaBackendTest, TwoStageMatchesEmbree) {
   EXPECT_LT(sky_view_difference, 0.005);
   EXPECT_GT(o_gpu->sky_view.maxCoeff(), 0.5);
   absl::StatusOr<IndoorResult> i_cpu = ComputeIndoorStage(scene, design, indoor);
-  absl::StatusOr<IndoorResult> i_gpu = ComputeIndoorStage(scene, design, indoor, gpu.get());
+  absl::StatusOr<IndoorResult> i_gpu = ComputeIndoorStage(scene, design, indoor, gpu);
   ASSERT_TRUE(i_cpu.ok() && i_gpu.ok());
   ExpectParity(i_cpu->coefficients, i_cpu->standard_error, i_gpu->coefficients,
                i_gpu->standard_error, "indoor matrix");
@@ -168,6 +166,25 @@ TEST(CudaBackendTest, TwoStageMatchesEmbree) {
                d_gpu->standard_error, "daylight coefficients");
   std::printf("outdoor: CPU %.3f s, GPU %.3f s; indoor: CPU %.3f s, GPU %.3f s\n",
               o_cpu->wall_seconds, o_gpu->wall_seconds, i_cpu->wall_seconds, i_gpu->wall_seconds);
+}
+
+TEST(CudaBackendTest, TwoStageMatchesEmbree) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const Scene scene = LoadExample("city_office");
+  ExpectTwoStageParity(gpu.get(), scene,
+                       *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}}));
+}
+
+// Two windows on two walls (examples/corner_office): both backends stack the windows' cells
+// alike and draw the same window points.
+TEST(CudaBackendTest, TwoStageOfTwoWindowsMatchesEmbree) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const Scene scene = LoadExample("corner_office");
+  ASSERT_EQ(scene.windows.size(), 2u);
+  ExpectTwoStageParity(gpu.get(), scene,
+                       *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}}));
 }
 
 // A city-office-sized annual product with random entries: 8 batches of O (window cells and
