@@ -90,7 +90,7 @@ TEST_F(SceneImportTest, RadianceModelRunsADcAndAJob) {
 TEST_F(SceneImportTest, HoneybeeModelRunsADc) {
   const std::string scene = (dir_ / "hb.json").string();
   const CliRun imported = Fenestra("scene import " + kModels +
-                                   "/dup_grid_id/dup_grid_id.hbjson --grid core -o " + scene);
+                                   "/end_windows_hall/end_windows_hall.hbjson --grid core -o " + scene);
   ASSERT_EQ(imported.exit_code, 0) << imported.output;
   EXPECT_NE(imported.output.find("the scene is a room"), std::string::npos) << imported.output;
   const CliRun dc =
@@ -102,7 +102,7 @@ TEST_F(SceneImportTest, BadArgumentsAndModelsAreRefusedWithNothingWritten) {
   const std::string scene = (dir_ / "x.json").string();
   for (const std::string& args :
        {kModels + "/matrix_tutorial_room/materials.rad -o " + scene,  // no --pts
-        kModels + "/dup_grid_id/dup_grid_id.hbjson --pts p.txt -o " + scene,
+        kModels + "/end_windows_hall/end_windows_hall.hbjson --pts p.txt -o " + scene,
         kModels + "/matrix_tutorial_room/room.rad --pts " + kModels +
             "/matrix_tutorial_room/points.txt -o " + scene}) {  // !xform
     const CliRun run = Fenestra("scene import " + args);
