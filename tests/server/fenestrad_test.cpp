@@ -621,6 +621,59 @@ TEST_F(FenestradTest, BadInputIsRefusedBeforeAnythingIsStored) {
        "materials[0].name: holds the control character U+000A"},
       {"long scene name", [](v1::Scene& s) { s.set_name(std::string(300, 'n')); },
        "scene.name: is 300 bytes long"},
+      // The list form of windows (Scene.windows)
+      {"window and windows", [](v1::Scene& s) { *s.add_windows() = s.window(); },
+       "windows: a scene gives either window (with blind) or windows"},
+      {"65 windows",
+       [](v1::Scene& s) {
+         for (int i = 0; i < 65; ++i) {
+           v1::Window& w = *s.add_windows();
+           w = s.window();
+           w.set_name("w" + std::to_string(i));
+         }
+         s.clear_window();
+         s.clear_blind();
+       },
+       "at most 64 windows, got 65"},
+      {"window name with a newline",
+       [](v1::Scene& s) {
+         v1::Window& w = *s.add_windows();
+         w = s.window();
+         w.set_name("north\n[info] job-1 succeeded");
+         s.clear_window();
+         s.clear_blind();
+       },
+       "windows[0].name: holds the control character U+000A"},
+      {"two windows of one name",
+       [](v1::Scene& s) {
+         for (int i = 0; i < 2; ++i) {
+           v1::Window& w = *s.add_windows();
+           w = s.window();
+           w.set_name("same");
+         }
+         s.clear_window();
+         s.clear_blind();
+       },
+       "windows[1].name: duplicate window 'same'"},
+      {"blind group with a slash",
+       [](v1::Scene& s) {
+         v1::Window& w = *s.add_windows();
+         w = s.window();
+         w.set_name("north");
+         *w.mutable_blind() = s.blind();
+         w.mutable_blind()->set_group("../etc");
+         s.clear_window();
+         s.clear_blind();
+       },
+       "windows[0].blind.group: must be at most 64 letters"},
+      {"a blind beside windows",
+       [](v1::Scene& s) {
+         v1::Window& w = *s.add_windows();
+         w = s.window();
+         w.set_name("north");
+         s.clear_window();
+       },
+       "blind: belongs to window; with windows each window has its blind"},
   };
   using JobEdit = std::function<void(v1::SubmitJobRequest&)>;
   std::vector<std::tuple<std::string, JobEdit, std::string>> job_cases = {
