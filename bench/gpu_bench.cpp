@@ -283,7 +283,7 @@ void PrintOptimization(const v1::JobResult& result, const std::string& stage_sta
   const v1::Timings& t = result.timings();
   const v1::FinalCheck& check = result.final_check();
   std::printf(
-      "four-variable optimization: %d evaluations (%s; %d designs at once, %d evaluated ahead "
+      "optimization: %d evaluations (%s; %d designs at once, %d evaluated ahead "
       "and dropped) in %.2f s (sky %.2f s, outdoor %.2f s, "
       "evaluations %.2f s, best design's hourly illuminance %.2f s, final check %.2f s with "
       "%lld + %lld paths per sensor, the rest %.2f s); best UDI %.2f ± %.2f %% (check %.2f ± "
