@@ -111,7 +111,13 @@ absl::StatusOr<OutdoorMatrix> DecodeOutdoorMatrix(std::string_view bytes) {
     matrix.batches.push_back(std::move(batch));
   }
   matrix.basis_cells = entry.basis_cells();
-  matrix.parts = {std::max(1, entry.window_columns()), std::max(1, entry.window_rows())};
+  // Sides of 0: each window's automatic split (a scene of several windows), or, in an entry of
+  // one window's rows, from before the window had parts (one part)
+  matrix.parts = {entry.window_columns(), entry.window_rows()};
+  if (entry.window_columns() == 0 && entry.window_rows() == 0 &&
+      entry.rows() == OutdoorRowCount(entry.basis_cells())) {
+    matrix.parts = {1, 1};
+  }
   matrix.paths = entry.paths();
   matrix.bounces = entry.bounces();
   matrix.seed = entry.seed();

@@ -317,6 +317,17 @@ absl::Status CheckWindowCells(const v1::Sampling& sampling, const Scene& scene) 
   const WindowParts parts = SamplingWindowParts(sampling, scene);
   const int64_t window_cells = WindowCellsOf(scene, parts, sampling.basis_cells());
   const int batches = sampling.batches();
+  // The outdoor matrix of every window (ResolveSampling bounds one window's at its most)
+  const int64_t matrix_bytes =
+      (window_cells + kIndoorDirectColumns) * kTregenzaBinCount * 8 * (int64_t{batches} + 2);
+  if (matrix_bytes > kMaxOutdoorMatrixBytes) {
+    return InvalidJobField(
+        "sampling", absl::StrCat("the outdoor matrix of the scene's ", scene.windows.size(),
+                                 " windows with its batches would take ", matrix_bytes >> 20,
+                                 " MiB (", window_cells, " window cells x ", batches,
+                                 " batches), more than the ", kMaxOutdoorMatrixBytes >> 20,
+                                 " MiB allowed: fewer batches, direction cells or window parts"));
+  }
   if (sampling.outdoor_paths() < window_cells * batches) {
     const std::string cells =
         scene.windows.size() == 1

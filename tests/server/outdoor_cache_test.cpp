@@ -68,6 +68,16 @@ TEST(OutdoorCacheTest, EncodeDecodeRoundTrip) {
   ASSERT_TRUE(split_back.ok()) << split_back.status();
   EXPECT_EQ(split_back->parts, (WindowParts{3, 2}));
   EXPECT_TRUE(split_back->coefficients == split.coefficients);
+  // Several windows, each split automatically (parts 0 x 0), keep that: the job's indoor
+  // stage asks for the same
+  OutdoorMatrix several = TestMatrix("ghi");
+  several.coefficients = Matrix::Random(2 * 288 * 12 + 292, 146).cwiseAbs();
+  several.standard_error = 0.01 * several.coefficients;
+  for (Matrix& b : several.batches) b = Matrix::Random(2 * 288 * 12 + 292, 146).cwiseAbs();
+  several.parts = {0, 0};
+  absl::StatusOr<OutdoorMatrix> several_back = DecodeOutdoorMatrix(EncodeOutdoorMatrix(several));
+  ASSERT_TRUE(several_back.ok()) << several_back.status();
+  EXPECT_EQ(several_back->parts, (WindowParts{0, 0}));
 }
 
 TEST(OutdoorCacheTest, FlippedByteOrTruncationIsDataLoss) {
