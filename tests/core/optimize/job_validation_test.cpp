@@ -64,6 +64,28 @@ TEST(JobValidationTest, ExampleJobsPrepare) {
   EXPECT_TRUE(ValidateJob(QuickJob(), kOffice).ok());
 }
 
+// The corner office's job (examples/corner_office: two windows) prepares; the outdoor matrix of
+// both windows is bounded at the door, where one window's would fit.
+TEST(JobValidationTest, AJobOfTwoWindowsPreparesAndItsOutdoorMatrixIsBounded) {
+  const std::string corner = FENESTRA_SOURCE_DIR "/examples/corner_office";
+  absl::StatusOr<v1::Job> job = ReadJobFile(corner + "/tilt_and_spacing.json");
+  ASSERT_TRUE(job.ok()) << job.status();
+  absl::StatusOr<PreparedJob> prepared = ValidateJob(*job, corner);
+  ASSERT_TRUE(prepared.ok()) << prepared.status();
+  EXPECT_EQ(prepared->scene.windows.size(), 2u);
+  // 16 x 16 parts of 1152 cells and 8 batches: 3.4 GB for one window, 6.9 GB for two
+  v1::Sampling& s = *job->mutable_sampling();
+  s.set_basis_cells(1152);
+  s.set_window_columns(16);
+  s.set_window_rows(16);
+  s.set_outdoor_paths(int64_t{1} << 40);
+  prepared = ValidateJob(*job, corner);
+  ASSERT_FALSE(prepared.ok());
+  EXPECT_EQ(prepared.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(prepared.status().message(),
+              HasSubstr("job sampling: the outdoor matrix of the scene's 2 windows"));
+}
+
 TEST(JobValidationTest, UnknownEnumValues) {
   v1::Job job = QuickJob();
   job.mutable_objective()->set_goal(static_cast<v1::Goal>(42));
