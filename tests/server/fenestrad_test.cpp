@@ -574,6 +574,18 @@ TEST_F(FenestradTest, FinalCheckIsInTheLastProgressEventTheResultAndTheLog) {
   EXPECT_EQ(stored.progress().final_check().SerializeAsString(), check.SerializeAsString());
 }
 
+// The scene's one window as entries of the list form (Scene.windows), one per name; the
+// scene's blind dropped unless `keep_blind`.
+void AsWindowList(v1::Scene& s, const std::vector<std::string>& names, bool keep_blind = false) {
+  for (const std::string& name : names) {
+    v1::Window& w = *s.add_windows();
+    w = s.window();
+    w.set_name(name);
+  }
+  s.clear_window();
+  if (!keep_blind) s.clear_blind();
+}
+
 // What a hostile tester sent, each refused at the door: INVALID_ARGUMENT naming the field,
 // no server path in the message, nothing stored (no job, no site, no weather file), and
 // the daemon serves on.
@@ -626,53 +638,28 @@ TEST_F(FenestradTest, BadInputIsRefusedBeforeAnythingIsStored) {
        "windows: a scene gives either window (with blind) or windows"},
       {"65 windows",
        [](v1::Scene& s) {
-         for (int i = 0; i < 65; ++i) {
-           v1::Window& w = *s.add_windows();
-           w = s.window();
-           w.set_name("w" + std::to_string(i));
-         }
-         s.clear_window();
-         s.clear_blind();
+         std::vector<std::string> names;
+         for (int i = 0; i < 65; ++i) names.push_back("w" + std::to_string(i));
+         AsWindowList(s, names);
        },
        "at most 64 windows, got 65"},
       {"window name with a newline",
-       [](v1::Scene& s) {
-         v1::Window& w = *s.add_windows();
-         w = s.window();
-         w.set_name("north\n[info] job-1 succeeded");
-         s.clear_window();
-         s.clear_blind();
-       },
+       [](v1::Scene& s) { AsWindowList(s, {"north\n[info] job-1 succeeded"}); },
        "windows[0].name: holds the control character U+000A"},
       {"two windows of one name",
        [](v1::Scene& s) {
-         for (int i = 0; i < 2; ++i) {
-           v1::Window& w = *s.add_windows();
-           w = s.window();
-           w.set_name("same");
-         }
-         s.clear_window();
-         s.clear_blind();
+         AsWindowList(s, {"same", "same"});
        },
        "windows[1].name: duplicate window 'same'"},
       {"blind group with a slash",
        [](v1::Scene& s) {
-         v1::Window& w = *s.add_windows();
-         w = s.window();
-         w.set_name("north");
-         *w.mutable_blind() = s.blind();
-         w.mutable_blind()->set_group("../etc");
-         s.clear_window();
-         s.clear_blind();
+         const v1::VenetianBlind blind = s.blind();
+         AsWindowList(s, {"north"});
+         *s.mutable_windows(0)->mutable_blind() = blind;
+         s.mutable_windows(0)->mutable_blind()->set_group("../etc");
        },
        "windows[0].blind.group: must be at most 64 letters"},
-      {"a blind beside windows",
-       [](v1::Scene& s) {
-         v1::Window& w = *s.add_windows();
-         w = s.window();
-         w.set_name("north");
-         s.clear_window();
-       },
+      {"a blind beside windows", [](v1::Scene& s) { AsWindowList(s, {"north"}, true); },
        "blind: belongs to window; with windows each window has its blind"},
   };
   using JobEdit = std::function<void(v1::SubmitJobRequest&)>;
