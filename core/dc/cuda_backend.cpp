@@ -310,24 +310,25 @@ class OutdoorHolder {
   std::vector<uint8_t> met_;
 };
 
-// The indoor replay on the GPU (core/dc/indoor_replay.h): the room without the blind is
-// traced once up to the blind's envelope; per design, the tracer replays the records
+// The indoor replay on the GPU (core/dc/indoor_replay.h): the room without the blinds is
+// traced once up to the blinds' envelopes; per design, the tracer replays the records
 // against the room with the design's slats (their BVH put beside the room's) and the
 // slats' layout alone, all in the room's frame.
 class CudaReplay {
  public:
   // Records `scene`'s indoor paths; Unavailable where the records would take more than
-  // kMaxReplayBytes, InvalidArgument for a scene without a blind.
+  // kMaxReplayBytes, InvalidArgument for a scene without a blind, Unimplemented for one of
+  // more blinds than a replay follows.
   static absl::StatusOr<std::unique_ptr<CudaReplay>> Make(CudaTracer* tracer, TracerSlot* slot,
                                                           const Scene& scene,
                                                           const IndoorOptions& options,
                                                           const HemisphereBasis& basis,
                                                           OutdoorHolder* outdoor) {
-    if (!scene.blind()) return absl::InvalidArgumentError("the scene has no blind to vary");
     FENESTRA_ASSIGN_OR_RETURN(
         room, PrepareTraceGeometry(SelectSide(scene.fixed, Side::kIndoor), scene.materials));
+    FENESTRA_ASSIGN_OR_RETURN(envelopes, LocalEnvelopesOfBlinds(room, scene));
     auto replay = std::unique_ptr<CudaReplay>(
-        new CudaReplay(tracer, slot, scene, options, basis, outdoor, std::move(room)));
+        new CudaReplay(tracer, slot, scene, options, basis, outdoor, std::move(room), envelopes));
     FENESTRA_RETURN_IF_ERROR(replay->Record());
     return replay;
   }
@@ -338,29 +339,36 @@ class CudaReplay {
   absl::StatusOr<CudaTracer::DesignScene> MakeScene(const BlindDesign& design, BvhLayout* bvh,
                                                     std::vector<uint32_t>* triangle_material) {
     FENESTRA_RETURN_IF_ERROR(CheckReplayDesign(scene_, design));
-    const std::vector<Vec3f> corners = LocalSlatCorners(room_, scene_, design);
-    *bvh = BvhWithSlats(room_bvh_, corners, static_cast<uint32_t>(room_.TriangleCount()));
+    std::vector<int> slats_per_blind;
+    const std::vector<Vec3f> corners = LocalSlatCorners(room_, scene_, design, &slats_per_blind);
+    *bvh = BvhWithSlats(room_bvh_, corners, static_cast<uint32_t>(room_.TriangleCount()),
+                        slats_per_blind);
     *triangle_material = room_.triangle_material;
     triangle_material->reserve(room_.TriangleCount() + kTrianglesPerSlat * corners.size() / 8);
-    const SlatFinish finish = FinishOf(*scene_.blind(), design);
-    for (size_t slat = 0; slat < corners.size() / 8; ++slat) {
-      for (int t = 0; t < kTrianglesPerSlat; ++t) {
-        triangle_material->push_back(SlatTriangleMaterial(finish, t));
+    size_t blind = 0;
+    for (const SceneWindow& w : scene_.windows) {
+      if (!w.blind) continue;
+      const SlatFinish finish = FinishOf(*w.blind, design);
+      for (int slat = 0; slat < slats_per_blind[blind]; ++slat) {
+        for (int t = 0; t < kTrianglesPerSlat; ++t) {
+          triangle_material->push_back(SlatTriangleMaterial(finish, t));
+        }
       }
+      ++blind;
     }
     triangles_ = triangle_material->size();
     return CudaTracer::DesignScene{bvh, triangle_material,
-                                   LocalSlatsOfBlind(room_, scene_, design)};
+                                   ReplayBlindsOf(room_, scene_, design, envelopes_)};
   }
 
-  // Makes the tracer hold the records and the recorded room with `design`'s slats; `blind`
+  // Makes the tracer hold the records and the recorded room with `design`'s slats; `blinds`
   // gets the slats' layout. InvalidArgument for a design outside the recorded ranges.
-  absl::Status Prepare(const BlindDesign& design, LocalSlats* blind) {
+  absl::Status Prepare(const BlindDesign& design, ReplayBlinds* blinds) {
     BvhLayout bvh;
     std::vector<uint32_t> triangle_material;
     FENESTRA_ASSIGN_OR_RETURN(scene, MakeScene(design, &bvh, &triangle_material));
     FENESTRA_RETURN_IF_ERROR(Hold());
-    *blind = scene.blind;
+    *blinds = scene.blinds;
     return tracer_->SetScene(bvh, triangle_material.data(), triangle_material.size(),
                              room_.materials.data(), room_.materials.size());
   }
@@ -368,13 +376,13 @@ class CudaReplay {
   // Every part of `design`, its sums downloaded (IndoorResultFromTally gives its I).
   absl::StatusOr<IndoorTally> Sums(const BlindDesign& design) {
     const auto start = std::chrono::steady_clock::now();
-    LocalSlats blind;
-    FENESTRA_RETURN_IF_ERROR(Prepare(design, &blind));
+    ReplayBlinds blinds;
+    FENESTRA_RETURN_IF_ERROR(Prepare(design, &blinds));
     IndoorTally tally = ZeroIndoorTally(sensors(), columns(), options_.batches,
                                         static_cast<uint64_t>(options_.paths_per_sensor));
     CudaCounters counters;
     FENESTRA_RETURN_IF_ERROR(
-        tracer_->ReplayIndoor(blind, 0, kDesignParts, tally.sum.data(), &counters));
+        tracer_->ReplayIndoor(blinds, 0, kDesignParts, tally.sum.data(), &counters));
     CopyCounters(counters, &tally.counters);
     tally.trace_seconds = counters.kernel_seconds;
     tally.wall_seconds = SecondsSince(start);
@@ -398,7 +406,8 @@ class CudaReplay {
 
  private:
   CudaReplay(CudaTracer* tracer, TracerSlot* slot, const Scene& scene, const IndoorOptions& options,
-             const HemisphereBasis& basis, OutdoorHolder* outdoor, TraceGeometry room)
+             const HemisphereBasis& basis, OutdoorHolder* outdoor, TraceGeometry room,
+             const LocalEnvelopes& envelopes)
       : tracer_(tracer),
         slot_(slot),
         generation_(++slot->made),
@@ -406,7 +415,8 @@ class CudaReplay {
         options_(options),
         basis_(basis),
         outdoor_(outdoor),
-        room_(std::move(room)) {}
+        room_(std::move(room)),
+        envelopes_(envelopes) {}
 
   // Makes the tracer hold the records (recording again after another replay of the tracer)
   // and the outdoor scene.
@@ -427,12 +437,12 @@ class CudaReplay {
     const std::vector<TraceSensor> sensors = LocalSensors(room_, scene_.sensors);
     PathSettings path = IndoorPathSettings(options_);
     path.importance = nullptr;
-    FENESTRA_RETURN_IF_ERROR(tracer_->RecordIndoor(
-        LocalEnvelopeOfBlind(room_, scene_), sensors.data(), static_cast<int>(sensors.size()),
-        LocalWindows(room_, scene_, options_.parts, basis_),
-        OutdoorOffset(room_, outdoor_->geometry()), basis_,
-        static_cast<uint64_t>(options_.paths_per_sensor), options_.batches, kDesignParts,
-        options_.seed, path, kMaxReplayBytes, &stats_));
+    FENESTRA_RETURN_IF_ERROR(
+        tracer_->RecordIndoor(envelopes_, sensors.data(), static_cast<int>(sensors.size()),
+                              LocalWindows(room_, scene_, options_.parts, basis_),
+                              OutdoorOffset(room_, outdoor_->geometry()), basis_,
+                              static_cast<uint64_t>(options_.paths_per_sensor), options_.batches,
+                              kDesignParts, options_.seed, path, kMaxReplayBytes, &stats_));
     slot_->current = generation_;
     return absl::OkStatus();
   }
@@ -444,7 +454,8 @@ class CudaReplay {
   IndoorOptions options_;
   HemisphereBasis basis_;
   OutdoorHolder* outdoor_;
-  TraceGeometry room_;  // the room without the blind; its frame is every design's
+  TraceGeometry room_;  // the room without the blinds; its frame is every design's
+  LocalEnvelopes envelopes_;
   BvhLayout room_bvh_;
   CudaReplayStats stats_;
   size_t triangles_ = 0;
@@ -628,10 +639,11 @@ class CudaDesignTallies : public DesignTallies {
                          tracer_->ReplayedParts() == held_parts_;
     if (!goes_on) {
       held_parts_ = 0;
-      FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blind_));
+      FENESTRA_RETURN_IF_ERROR(replay_->Prepare(design, &blinds_));
     }
     CudaCounters counters;
-    FENESTRA_RETURN_IF_ERROR(tracer_->ReplayIndoor(blind_, held_parts_, parts, nullptr, &counters));
+    FENESTRA_RETURN_IF_ERROR(
+        tracer_->ReplayIndoor(blinds_, held_parts_, parts, nullptr, &counters));
     rays_ += counters.rays;
     held_design_ = design;
     held_parts_ = parts;
@@ -652,9 +664,9 @@ class CudaDesignTallies : public DesignTallies {
   std::unique_ptr<OutdoorHolder> outdoor_;
   std::unique_ptr<CudaReplay> replay_;
   std::unique_ptr<CudaAnnualProduct> product_;
-  // The replay's last design, its blind, and how many parts of it the tracer holds
+  // The replay's last design, its blinds, and how many parts of it the tracer holds
   BlindDesign held_design_;
-  LocalSlats blind_;
+  ReplayBlinds blinds_;
   int held_parts_ = 0;
   uint64_t rays_ = 0;
 };
@@ -826,14 +838,14 @@ class CudaBackend : public DcBackend {
     return std::make_unique<OutdoorHolder>(std::move(outdoor));
   }
 
-  // The replay of `scene`'s indoor paths; null for a scene without a blind or records that
-  // would not fit the device (RESOURCE_EXHAUSTED).
+  // The replay of `scene`'s indoor paths; null for a scene without a blind, with more blinds
+  // than a replay follows (ReplayFollows) or with records that would not fit the device
+  // (RESOURCE_EXHAUSTED).
   absl::StatusOr<std::unique_ptr<CudaReplay>> MaybeReplay(const Scene& scene,
                                                           const IndoorOptions& options,
                                                           const HemisphereBasis& basis,
                                                           OutdoorHolder* outdoor) {
-    // The replay follows one window's blind so far: several windows are traced per design
-    if (!scene.blind() || scene.windows.size() > 1) return nullptr;
+    if (!ReplayFollows(scene)) return nullptr;
     absl::StatusOr<std::unique_ptr<CudaReplay>> replay =
         CudaReplay::Make(tracer_.get(), &replay_slot_, scene, options, basis, outdoor);
     if (absl::IsResourceExhausted(replay.status())) return nullptr;

@@ -78,11 +78,10 @@ class EmbreeBackend : public DcBackend {
                                               threads));
   }
 
-  // Record the paths once, replay them per design; without a blind there is nothing to vary,
-  // and the replay follows one window so far
+  // Record the paths once, replay them per design; without a blind there is nothing to vary
   absl::StatusOr<std::unique_ptr<IndoorStages>> MakeIndoorStages(
       const Scene& scene, const IndoorOptions& options) override {
-    if (!scene.blind() || scene.windows.size() > 1) {
+    if (!ReplayFollows(scene)) {
       return DcBackend::MakeIndoorStages(scene, options);
     }
     FENESTRA_ASSIGN_OR_RETURN(replay, IndoorReplay::Record(scene, options));

@@ -28,14 +28,15 @@ struct FixedLight {
   double value;
 };
 
-// Where a recorded path reached the envelope, and what it did after in the room without the
-// blind (RecordingMode::GoesOn): its records in the chunk's `after_*` from these indices on, up to
-// the next touch's, count for a design that leaves this touch's line, and the path's earlier ones,
-// clear.
+// Where a recorded path reached an envelope, and what it did after in the room without the
+// blinds (RecordingMode::GoesOn): its records in the chunk's `after_*` from these indices on, up
+// to the next touch's, count for a design that leaves this touch's line, and the path's earlier
+// ones, clear.
 struct Touch {
   ReplayTouch touch;
-  bool first;  // the path's first touch
-  uint32_t crossings, others, fixed;
+  bool first;                            // the path's first touch
+  uint32_t crossings[kMaxReplayBlinds];  // per blind
+  uint32_t others, fixed;
 };
 
 // Connections that cross the envelope, kept as columns so that a design's tests of their
@@ -62,17 +63,17 @@ struct Chunk {
   uint32_t sensor = 0;
   int batch = 0;
   std::vector<double> fixed;  // per column of I: what no blind can change
-  const LocalEnvelope* envelope = nullptr;
-  // Connections before a path reaches the envelope
-  Crossings crossings;
-  std::vector<ReplayConnection> others;  // connections that do not cross the envelope
+  const LocalEnvelopes* envelopes = nullptr;
+  // Connections before a path reaches an envelope: those that cross one, per blind
+  Crossings crossings[kMaxReplayBlinds];
+  std::vector<ReplayConnection> others;  // tested against every blind
   std::vector<Touch> touches;
-  // What paths did beyond the envelope, in the order of their touches
-  Crossings after_crossings;
+  // What paths did beyond the envelopes, in the order of their touches
+  Crossings after_crossings[kMaxReplayBlinds];
   std::vector<ReplayConnection> after_others;
   std::vector<FixedLight> after_fixed;
   uint64_t paths = 0;
-  bool beyond = false;  // the path being recorded has reached the envelope
+  bool beyond = false;  // the path being recorded has reached an envelope
 
   void BeginPath() { beyond = false; }
   void AddFixed(int column, double value) {
@@ -84,16 +85,28 @@ struct Chunk {
   }
   void AddConnection(const ReplayConnection& c) {
     ReplayCrossing crossing;
-    if (CrossingOf(*envelope, c, &crossing)) {
-      (beyond ? after_crossings : crossings).Add(crossing);
-    } else {
-      (beyond ? after_others : others).push_back(c);
+    switch (KindOf(*envelopes, c, &crossing)) {
+      case ConnectionKind::kFixed:
+        AddFixed(c.column, c.value);
+        return;
+      case ConnectionKind::kCrossing:
+        (beyond ? after_crossings : crossings)[crossing.blind].Add(crossing);
+        return;
+      case ConnectionKind::kOther:
+        (beyond ? after_others : others).push_back(c);
+        return;
     }
   }
   void AddTouch(const ReplayTouch& touch) {
-    touches.push_back({touch, !beyond, static_cast<uint32_t>(after_crossings.size()),
-                       static_cast<uint32_t>(after_others.size()),
-                       static_cast<uint32_t>(after_fixed.size())});
+    Touch t{touch,
+            !beyond,
+            {},
+            static_cast<uint32_t>(after_others.size()),
+            static_cast<uint32_t>(after_fixed.size())};
+    for (int b = 0; b < kMaxReplayBlinds; ++b) {
+      t.crossings[b] = static_cast<uint32_t>(after_crossings[b].size());
+    }
+    touches.push_back(t);
     beyond = true;
   }
 };
@@ -102,13 +115,13 @@ using OutdoorEmbreeView = OutdoorView<EmbreeIntersector>;
 using Recording = RecordingIntersector<EmbreeIntersector>;
 
 // Adds the value of every connection that `slats` leave clear to its column of `sum`: the
-// crossings [first, last) of `crossings`, then `others`; `shift` is where the slats' centre
+// crossings [first, last) of `crossings` of `envelope`; `shift` is where the slats' centre
 // lies in the envelope's frame (ShiftFrom). A crossing's test is a few flops without a branch
 // (LocalSlats::LineOccluded), run over a block of lines at a time, then added times 0 or 1
 // rather than by a branch the CPU would mispredict for a third of the rays.
-void TestConnections(const LocalSlats& slats, Vec3f shift, const LocalEnvelope& envelope,
-                     const Crossings& crossings, size_t first, size_t last,
-                     std::span<const ReplayConnection> others, std::vector<double>& sum) {
+void TestCrossings(const LocalSlats& slats, Vec3f shift, const LocalEnvelope& envelope,
+                   const Crossings& crossings, size_t first, size_t last,
+                   std::vector<double>& sum) {
   constexpr size_t kBlock = 256;
   float clear[kBlock];  // 1 or 0, or -1 where the line does not answer for the crossing
   const float half_depth = envelope.half[2];
@@ -129,17 +142,31 @@ void TestConnections(const LocalSlats& slats, Vec3f shift, const LocalEnvelope& 
       sum[crossings.column[begin + i]] += crossings.value[begin + i] * c;
     }
   }
-  for (const ReplayConnection& k : others) {
-    if (!slats.Occluded(k.origin, k.direction, k.distance)) sum[k.column] += k.value;
-  }
 }
 
-// Follows each path of `chunk` beyond the envelope while `slats` leave its lines clear,
+// TestCrossings for each blind's crossings [first[b], last[b]), then the connections `others`
+// tested against every blind. The tests made.
+uint64_t TestConnections(const ReplayBlinds& blinds, const LocalEnvelopes& envelopes,
+                         const Crossings* crossings, const uint32_t* first, const uint32_t* last,
+                         std::span<const ReplayConnection> others, std::vector<double>& sum) {
+  uint64_t tests = others.size();
+  for (int b = 0; b < blinds.count; ++b) {
+    TestCrossings(blinds.slats[b], blinds.shift[b], envelopes.blind[b], crossings[b], first[b],
+                  last[b], sum);
+    tests += last[b] - first[b];
+  }
+  for (const ReplayConnection& k : others) {
+    if (!blinds.Occluded(k.origin, k.direction, k.distance)) sum[k.column] += k.value;
+  }
+  return tests;
+}
+
+// Follows each path of `chunk` beyond the envelopes while `blinds` leave its lines clear,
 // adding what it did there to `sum`; a path whose line they block, or whose ray does not
-// cross the envelope, goes to `resume` from that touch. The tests made.
+// cross one envelope alone, goes to `resume` from that touch. The tests made.
 template <class Resume>
-uint64_t FollowTouches(const LocalSlats& slats, Vec3f shift, const Chunk& chunk,
-                       std::vector<double>& sum, Resume resume) {
+uint64_t FollowTouches(const ReplayBlinds& blinds, const Chunk& chunk, std::vector<double>& sum,
+                       Resume resume) {
   uint64_t tests = 0;
   bool following = false;
   const size_t count = chunk.touches.size();
@@ -148,19 +175,22 @@ uint64_t FollowTouches(const LocalSlats& slats, Vec3f shift, const Chunk& chunk,
     following = following || touch.first;
     if (!following) continue;
     ++tests;
-    if (!Clear(slats, shift, *chunk.envelope, touch.touch)) {
+    if (!Clear(blinds, *chunk.envelopes, touch.touch)) {
       resume(touch.touch);
       following = false;
       continue;
     }
     const bool last = t + 1 == count;
-    const size_t crossings = last ? chunk.after_crossings.size() : chunk.touches[t + 1].crossings;
+    uint32_t crossings[kMaxReplayBlinds];
+    for (int b = 0; b < kMaxReplayBlinds; ++b) {
+      crossings[b] = last ? static_cast<uint32_t>(chunk.after_crossings[b].size())
+                          : chunk.touches[t + 1].crossings[b];
+    }
     const size_t others = last ? chunk.after_others.size() : chunk.touches[t + 1].others;
     const size_t fixed = last ? chunk.after_fixed.size() : chunk.touches[t + 1].fixed;
-    TestConnections(
-        slats, shift, *chunk.envelope, chunk.after_crossings, touch.crossings, crossings,
+    tests += TestConnections(
+        blinds, *chunk.envelopes, chunk.after_crossings, touch.crossings, crossings,
         std::span(chunk.after_others).subspan(touch.others, others - touch.others), sum);
-    tests += crossings - touch.crossings + others - touch.others;
     for (size_t k = touch.fixed; k < fixed; ++k) {
       sum[chunk.after_fixed[k].column] += chunk.after_fixed[k].value;
     }
@@ -188,6 +218,34 @@ LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const SceneWin
     local.half[k] = static_cast<float>(envelope.half_extent[k]);
   }
   return local;
+}
+
+absl::StatusOr<LocalEnvelopes> LocalEnvelopesOfBlinds(const TraceGeometry& geometry,
+                                                      const Scene& scene) {
+  if (!scene.blind()) return absl::InvalidArgumentError("the scene has no blind to vary");
+  LocalEnvelopes envelopes;
+  for (const SceneWindow& w : scene.windows) {
+    if (!w.blind) continue;
+    if (envelopes.count == kMaxReplayBlinds) {
+      return absl::UnimplementedError(
+          absl::StrCat("the indoor replay follows at most ", kMaxReplayBlinds,
+                       " blinds (the stages trace this scene per design instead)"));
+    }
+    envelopes.blind[envelopes.count++] = LocalEnvelopeOfBlind(geometry, w);
+  }
+  return envelopes;
+}
+
+ReplayBlinds ReplayBlindsOf(const TraceGeometry& geometry, const Scene& scene,
+                            const BlindDesign& design, const LocalEnvelopes& envelopes) {
+  ReplayBlinds blinds;
+  for (const SceneWindow& w : scene.windows) {
+    if (!w.blind || blinds.count == envelopes.count) continue;
+    const int b = blinds.count++;
+    blinds.slats[b] = LocalSlatsOfBlind(geometry, w, design);
+    blinds.shift[b] = blinds.slats[b].ShiftFrom(envelopes.blind[b].center);
+  }
+  return blinds;
 }
 
 LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
@@ -220,30 +278,46 @@ LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const SceneWindow& w
 }
 
 std::vector<Vec3f> LocalSlatCorners(const TraceGeometry& geometry, const Scene& scene,
-                                    const BlindDesign& design) {
-  const SceneWindow& w = scene.BlindWindow();
-  const SlatBoxes boxes = BoxesOfStack(StackOfBlind(w.window, *w.blind, design));
-  std::vector<Vec3f> corners(8 * static_cast<size_t>(boxes.count));
-  for (int k = 0; k < boxes.count; ++k) {
-    for (int i = 0; i < 8; ++i) corners[8 * k + i] = geometry.ToLocal(boxes.Corner(k, i));
+                                    const BlindDesign& design, std::vector<int>* slats_per_blind) {
+  std::vector<Vec3f> corners;
+  if (slats_per_blind != nullptr) slats_per_blind->clear();
+  for (const SceneWindow& w : scene.windows) {
+    if (!w.blind) continue;
+    const SlatBoxes boxes = BoxesOfStack(StackOfBlind(w.window, *w.blind, design));
+    for (int k = 0; k < boxes.count; ++k) {
+      for (int i = 0; i < 8; ++i) corners.push_back(geometry.ToLocal(boxes.Corner(k, i)));
+    }
+    if (slats_per_blind != nullptr) slats_per_blind->push_back(boxes.count);
   }
   return corners;
 }
 
+bool ReplayFollows(const Scene& scene) {
+  const auto blinds = std::count_if(scene.windows.begin(), scene.windows.end(),
+                                    [](const SceneWindow& w) { return w.blind.has_value(); });
+  return blinds > 0 && blinds <= kMaxReplayBlinds;
+}
+
 absl::Status CheckReplayDesign(const Scene& scene, const BlindDesign& design) {
   if (!scene.blind()) return absl::InvalidArgumentError("the scene has no blind to vary");
-  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the indoor replay"));
-  const BlindSpec& spec = *scene.blind();
-  if (!design.has_blind || !WithinRange(design.tilt_rad, spec.tilt_rad) ||
-      !WithinRange(design.slat_width_m, spec.slat_width_m) ||
-      !WithinRange(design.slat_spacing_m, spec.slat_spacing_m) ||
-      !WithinRange(design.slat_thickness_m, spec.slat_thickness_m)) {
+  if (!design.has_blind) {
     return absl::InvalidArgumentError(
         "the design lies outside the ranges the indoor paths were recorded for");
   }
-  const SlatFinish finish = FinishOf(spec, design);
-  if (std::max(finish.material, finish.outer_material) >= scene.materials.size()) {
-    return absl::InvalidArgumentError("the design's slat finish names no material of the scene");
+  for (const SceneWindow& w : scene.windows) {
+    if (!w.blind) continue;
+    const BlindSpec& spec = *w.blind;
+    if (!WithinRange(design.tilt_rad, spec.tilt_rad) ||
+        !WithinRange(design.slat_width_m, spec.slat_width_m) ||
+        !WithinRange(design.slat_spacing_m, spec.slat_spacing_m) ||
+        !WithinRange(design.slat_thickness_m, spec.slat_thickness_m)) {
+      return absl::InvalidArgumentError(
+          "the design lies outside the ranges the indoor paths were recorded for");
+    }
+    const SlatFinish finish = FinishOf(spec, design);
+    if (std::max(finish.material, finish.outer_material) >= scene.materials.size()) {
+      return absl::InvalidArgumentError("the design's slat finish names no material of the scene");
+    }
   }
   return absl::OkStatus();
 }
@@ -254,12 +328,12 @@ struct IndoorReplay::Data {
   HemisphereBasis basis;
   Vec3d origin;  // the trace frame of every geometry here
   std::vector<TraceSensor> sensors;
-  std::vector<TraceWindow> windows;  // the scene's one window (LocalWindows)
+  std::vector<TraceWindow> windows;  // the scene's windows (LocalWindows)
   TraceWindows Windows() const { return ViewOfWindows(windows, basis); }
   std::unique_ptr<EmbreeScene> outdoor;  // the outdoor surfaces, for the direct test
   std::vector<uint8_t> met;              // the window cells whose views all meet them
   OutdoorEmbreeView outdoor_view;
-  LocalEnvelope envelope;  // the frame of the chunks' connections
+  LocalEnvelopes envelopes;  // the frames of the chunks' connections
   std::vector<Chunk> chunks;
   int columns = 0;  // of I
   uint64_t resumed = 0;
@@ -273,7 +347,6 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
                                                                    const IndoorOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   if (!scene.blind()) return absl::InvalidArgumentError("the scene has no blind to vary");
-  FENESTRA_RETURN_IF_ERROR(CheckOneWindow(scene, "the indoor replay"));
   auto data = std::make_unique<Data>();
   data->scene = scene;
   data->options = options;
@@ -295,8 +368,8 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
   data->met = OutdoorMetCells(geometry, outdoor, data->windows, basis);
   data->outdoor_view = {data->outdoor->Intersector(), OutdoorOffset(geometry, outdoor),
                         data->met.data()};
-  data->envelope = LocalEnvelopeOfBlind(geometry, scene);
-  const LocalEnvelope& local = data->envelope;
+  FENESTRA_ASSIGN_OR_RETURN(envelopes, LocalEnvelopesOfBlinds(geometry, scene));
+  data->envelopes = envelopes;
 
   // Chunks: (sensor, batch, part of the batch), as TraceIndoorCpu
   const int batches = options.batches;
@@ -312,9 +385,9 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
     const uint64_t first = PartStart(paths, batches, kDesignParts, chunk.batch, part);
     const uint64_t last = PartStart(paths, batches, kDesignParts, chunk.batch, part + 1);
     chunk.fixed.assign(data->columns, 0.0);
-    chunk.envelope = &data->envelope;
+    chunk.envelopes = &data->envelopes;
     chunk.paths = last - first;
-    Recording scene_view{embree->Intersector(), local};
+    Recording scene_view{embree->Intersector(), data->envelopes};
     const TraceSensor& sensor = data->sensors[chunk.sensor];
     RecordingSink<EmbreeIntersector, Chunk> sink{&scene_view, &chunk};
     using Mode = RecordingMode<EmbreeIntersector, Chunk, OutdoorEmbreeView>;
@@ -359,8 +432,7 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
                             PrepareTraceGeometry(full, d.scene.materials, &d.origin));
   FENESTRA_ASSIGN_OR_RETURN(full_scene, EmbreeScene::Build(full_geometry));
   const EmbreeIntersector full_view = full_scene->Intersector();
-  const LocalSlats slats = LocalSlatsOfBlind(full_geometry, d.scene, design);
-  const Vec3f shift = slats.ShiftFrom(d.envelope.center);
+  const ReplayBlinds blinds = ReplayBlindsOf(full_geometry, d.scene, design, d.envelopes);
   const SurfaceTable surfaces = full_geometry.Surfaces();
   const PathSettings settings = IndoorPathSettings(d.options);
 
@@ -388,24 +460,27 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
       [&](uint64_t i, Slot& slot) {
         const Chunk& chunk = chunk_of(i);
         slot.sum = chunk.fixed;
-        TestConnections(slats, shift, *chunk.envelope, chunk.crossings, 0, chunk.crossings.size(),
-                        chunk.others, slot.sum);
-        slot.counters.rays += chunk.crossings.size() + chunk.others.size();
+        uint32_t counts[kMaxReplayBlinds];
+        for (int b = 0; b < kMaxReplayBlinds; ++b) {
+          counts[b] = static_cast<uint32_t>(chunk.crossings[b].size());
+        }
+        const uint32_t none[kMaxReplayBlinds] = {};
+        slot.counters.rays += TestConnections(blinds, *chunk.envelopes, chunk.crossings, none,
+                                              counts, chunk.others, slot.sum);
         const TraceSensor& sensor = d.sensors[chunk.sensor];
         IndoorMode<Slot, OutdoorEmbreeView> mode{
             sensor.position,      sensor.normal,   d.Windows(), &d.basis,
             settings.max_bounces, &d.outdoor_view, &slot};
-        slot.counters.rays +=
-            FollowTouches(slats, shift, chunk, slot.sum, [&](const ReplayTouch& r) {
-              PathStats stats = ResumedStats(r.state);
-              PathState pending[1];
-              int pending_count = 0;
-              uint32_t interactions = r.state.vertex;
-              stats.end = path_internal::FollowBranch(
-                  full_view, surfaces, settings, PathRandom(d.options.seed, chunk.sensor, r.path),
-                  mode, r.state, &interactions, pending, 0, &pending_count, &stats);
-              slot.counters.Add(stats);
-            });
+        slot.counters.rays += FollowTouches(blinds, chunk, slot.sum, [&](const ReplayTouch& r) {
+          PathStats stats = ResumedStats(r.state);
+          PathState pending[1];
+          int pending_count = 0;
+          uint32_t interactions = r.state.vertex;
+          stats.end = path_internal::FollowBranch(
+              full_view, surfaces, settings, PathRandom(d.options.seed, chunk.sensor, r.path), mode,
+              r.state, &interactions, pending, 0, &pending_count, &stats);
+          slot.counters.Add(stats);
+        });
       },
       [&](uint64_t i, const Slot& slot) {
         const Chunk& chunk = chunk_of(i);

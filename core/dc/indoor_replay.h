@@ -14,6 +14,8 @@
 // room and the blind (on the GPU, the room's BVH recorded once with the slats' put beside it
 // per design, BvhWithSlats). Here the records follow each path on as if there were no blind
 // (RecordingMode::GoesOn), and a design traces it on only from the first ray its slats block.
+// With several windows, each blind has its envelope (LocalEnvelopes): a record that enters
+// one is tested against that blind's slats alone, one that enters several against all.
 #include <memory>
 #include <vector>
 
@@ -29,6 +31,11 @@ namespace fenestra {
 // of the scene's blind (Scene::BlindWindow), or of the blind of `window`, which has one.
 LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const Scene& scene);
 LocalEnvelope LocalEnvelopeOfBlind(const TraceGeometry& geometry, const SceneWindow& window);
+// Those of every window's blind, in the scene's order: what a replay records against.
+// Unimplemented for a scene of more than kMaxReplayBlinds blinds (traced in full instead),
+// InvalidArgument for one without a blind.
+absl::StatusOr<LocalEnvelopes> LocalEnvelopesOfBlinds(const TraceGeometry& geometry,
+                                                      const Scene& scene);
 
 // The slats of `scene`'s blind at `design` in `geometry`'s frame, for the replays' shadow
 // rays: one test of the ray's line or a few box tests instead of a traversal of the blind's
@@ -38,15 +45,24 @@ LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const Scene& scene,
                              const BlindDesign& design);
 LocalSlats LocalSlatsOfBlind(const TraceGeometry& geometry, const SceneWindow& window,
                              const BlindDesign& design);
+// Every blind's slats at `design`, in the order of `envelopes` (LocalEnvelopesOfBlinds),
+// shifted from their envelopes' centres.
+ReplayBlinds ReplayBlindsOf(const TraceGeometry& geometry, const Scene& scene,
+                            const BlindDesign& design, const LocalEnvelopes& envelopes);
 
-// The corners of those slats, 8 per slat in SlatBoxes::Corner's order, as the blind's mesh
-// has them in `geometry`'s frame (GenerateBlind, then PrepareTraceGeometry): BvhWithSlats
+// The corners of the slats of every blind, 8 per slat in SlatBoxes::Corner's order, as the
+// blinds' mesh has them in `geometry`'s frame (AssembleMesh, then PrepareTraceGeometry), one
+// blind after the other; `slats_per_blind`, where given, gets each blind's count. BvhWithSlats
 // makes the mesh's triangles from them.
 std::vector<Vec3f> LocalSlatCorners(const TraceGeometry& geometry, const Scene& scene,
-                                    const BlindDesign& design);
+                                    const BlindDesign& design,
+                                    std::vector<int>* slats_per_blind = nullptr);
 
-// InvalidArgument unless `design` has a blind within the ranges of `scene`'s blind (a replay
-// is only valid there) and a finish of the scene's materials.
+// Whether a replay follows `scene`'s blinds: it has one, and at most kMaxReplayBlinds.
+bool ReplayFollows(const Scene& scene);
+
+// InvalidArgument unless `design` has a blind within the ranges of `scene`'s blinds (a replay
+// is only valid there) and a finish of the scene's materials for each.
 absl::Status CheckReplayDesign(const Scene& scene, const BlindDesign& design);
 
 class IndoorReplay : public IndoorStages {

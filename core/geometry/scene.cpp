@@ -690,13 +690,6 @@ absl::StatusOr<Scene> LoadScene(const std::string& path) {
   return BuildScene(proto, path);
 }
 
-absl::Status CheckOneWindow(const Scene& scene, const std::string& what) {
-  if (scene.windows.size() == 1) return absl::OkStatus();
-  return absl::UnimplementedError(absl::StrCat(
-      scene.source_path, ": ", what, " follows a scene of one window so far; this one has ",
-      scene.windows.size(), " (the stages trace them per design instead)"));
-}
-
 TriangleMesh AssembleMesh(const Scene& scene, const BlindDesign& design) {
   TriangleMesh mesh = scene.fixed;
   if (!design.has_blind) return mesh;

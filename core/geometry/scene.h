@@ -90,7 +90,7 @@ struct Scene {
   std::vector<SolidBox> solid_boxes;  // every Box surface, indoor and outdoor
   Site site;
 
-  // The first window: what the replays take, after CheckOneWindow.
+  // The first window.
   const Window& window() const { return windows.front().window; }
   Window& window() { return windows.front().window; }
   // The first blind of the windows (empty: none): its ranges are the design's (every blind
@@ -105,10 +105,6 @@ struct Scene {
     return windows.front();
   }
 };
-
-// OK for a scene of one window; else Unimplemented naming `what` (the indoor replays), which
-// follow one window so far, and what traces the scene instead.
-absl::Status CheckOneWindow(const Scene& scene, const std::string& what);
 
 // Reads a scene file (the JSON form of fenestra.v1.Scene); unknown fields are errors.
 absl::StatusOr<v1::Scene> ReadSceneProto(const std::string& path);

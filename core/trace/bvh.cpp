@@ -3,6 +3,7 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <tuple>
@@ -285,10 +286,23 @@ void SetChild(BvhNode& node, int i, int32_t child, const Bounds& box) {
   node.child[i] = child;
 }
 
-// Appends slats [first, last) as a subtree of `layout`; returns its node and box and sets
-// *depth to its depth in nodes.
+// Where slats [first, last) split into two subtrees: at the start of a blind (`blind_starts`,
+// ascending) inside the range closest to its middle, else at the middle.
+int SplitOfSlats(int first, int last, const std::vector<int>& blind_starts) {
+  const int middle = first + (last - first) / 2;
+  int split = middle;
+  for (const int start : blind_starts) {
+    if (start <= first || start >= last) continue;
+    if (split == middle || std::abs(start - middle) < std::abs(split - middle)) split = start;
+  }
+  return split;
+}
+
+// Appends slats [first, last) as a subtree of `layout`, never a node's leaves across two blinds
+// (`blind_starts`); returns its node and box and sets *depth to its depth in nodes.
 int32_t AppendSlats(const std::vector<Vec3f>& corners, uint32_t first_index, int first, int last,
-                    BvhLayout& layout, Bounds* box, int* depth) {
+                    const std::vector<int>& blind_starts, BvhLayout& layout, Bounds* box,
+                    int* depth) {
   const int32_t index = static_cast<int32_t>(layout.nodes.size());
   layout.nodes.emplace_back();
   if (last - first == 1) {
@@ -315,11 +329,13 @@ int32_t AppendSlats(const std::vector<Vec3f>& corners, uint32_t first_index, int
     *depth = 2;
     return index;
   }
-  const int middle = first + (last - first) / 2;
+  const int middle = SplitOfSlats(first, last, blind_starts);
   Bounds left, right;
   int left_depth = 0, right_depth = 0;
-  const int32_t a = AppendSlats(corners, first_index, first, middle, layout, &left, &left_depth);
-  const int32_t b = AppendSlats(corners, first_index, middle, last, layout, &right, &right_depth);
+  const int32_t a =
+      AppendSlats(corners, first_index, first, middle, blind_starts, layout, &left, &left_depth);
+  const int32_t b =
+      AppendSlats(corners, first_index, middle, last, blind_starts, layout, &right, &right_depth);
   SetChild(layout.nodes[index], 0, a, left);
   SetChild(layout.nodes[index], 1, b, right);
   box->Grow(left);
@@ -331,7 +347,7 @@ int32_t AppendSlats(const std::vector<Vec3f>& corners, uint32_t first_index, int
 }  // namespace
 
 BvhLayout BvhWithSlats(const BvhLayout& room, const std::vector<Vec3f>& slat_corners,
-                       uint32_t first_index) {
+                       uint32_t first_index, const std::vector<int>& slats_per_blind) {
   BvhLayout layout;
   layout.triangles = room.triangles;  // their leaves keep their places
   // Node 0 the new root, then the room's nodes one place on, then the slats'
@@ -358,8 +374,11 @@ BvhLayout BvhWithSlats(const BvhLayout& room, const std::vector<Vec3f>& slat_cor
   }
   Bounds slat_box;
   int slat_depth = 0;
-  const int32_t top =
-      AppendSlats(slat_corners, first_index, 0, slats, layout, &slat_box, &slat_depth);
+  std::vector<int> blind_starts;
+  int start = 0;
+  for (const int count : slats_per_blind) blind_starts.push_back(start += count);
+  const int32_t top = AppendSlats(slat_corners, first_index, 0, slats, blind_starts, layout,
+                                  &slat_box, &slat_depth);
   SetChild(layout.nodes[0], 1, top, slat_box);
   layout.depth = 1 + std::max(room.depth, slat_depth);
   return layout;

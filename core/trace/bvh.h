@@ -30,7 +30,9 @@ absl::StatusOr<BvhLayout> BuildBvh(const TraceGeometry& geometry,
 // order (neighbours in the stack are neighbours in space). For a design's indoor replay on
 // the GPU: microseconds, where a build of the room with the blind takes a tenth of a
 // millisecond, and the same triangles.
+// With several blinds, `slats_per_blind` gives each one's count (their corners one blind
+// after the other): the slats of one blind are a subtree of their own.
 BvhLayout BvhWithSlats(const BvhLayout& room, const std::vector<Vec3f>& slat_corners,
-                       uint32_t first_index);
+                       uint32_t first_index, const std::vector<int>& slats_per_blind = {});
 
 }  // namespace fenestra

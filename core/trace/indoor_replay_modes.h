@@ -1,8 +1,10 @@
 #pragma once
 
 // What the indoor replay (core/dc/indoor_replay.h) shares between the CPU and the GPU:
-// the blind's envelope in the trace frame, the records of the design-independent part of a
-// path, and the intersector, sink and mode that make them while IndoorMode traces.
+// the blinds' envelopes in the trace frame, the records of the design-independent part of a
+// path, and the intersector, sink and mode that make them while IndoorMode traces. A scene
+// may have up to kMaxReplayBlinds blinds (one per window); a record that meets one envelope
+// names it, and one that meets several is tested against every blind.
 //
 // A Recorder takes the records:
 //   void BeginPath();                                a path starts
@@ -55,6 +57,43 @@ struct LocalEnvelope {
   }
 };
 
+// The most blinds a replay follows; a scene with more is traced in full per design.
+inline constexpr int kMaxReplayBlinds = 4;
+
+// The envelopes of a scene's blinds (one per window with a blind, in the scene's order).
+struct LocalEnvelopes {
+  LocalEnvelope blind[kMaxReplayBlinds];
+  int count = 0;
+
+  static constexpr int kNone = -1, kSeveral = -2;
+  // The one envelope that origin + t direction, t in [0, extent], enters; kNone or kSeveral.
+  FENESTRA_CPU_GPU int Touched(Vec3f origin, Vec3f direction, float extent) const {
+    int touched = kNone;
+    for (int b = 0; b < count; ++b) {
+      if (!blind[b].Touches(origin, direction, extent)) continue;
+      if (touched != kNone) return kSeveral;
+      touched = b;
+    }
+    return touched;
+  }
+};
+
+// A design's slats of each blind (LocalSlatsOfBlind), with their centres from their
+// envelopes' (LocalSlats::ShiftFrom), for the replays' tests.
+struct ReplayBlinds {
+  LocalSlats slats[kMaxReplayBlinds];
+  Vec3f shift[kMaxReplayBlinds];
+  int count = 0;
+
+  // Whether any blind meets the segment.
+  FENESTRA_CPU_GPU bool Occluded(Vec3f origin, Vec3f direction, float distance) const {
+    for (int b = 0; b < count; ++b) {
+      if (slats[b].Occluded(origin, direction, distance)) return true;
+    }
+    return false;
+  }
+};
+
 // A next-event estimate whose shadow ray cleared the room: it counts unless the blind
 // blocks the ray.
 struct ReplayConnection {
@@ -70,6 +109,7 @@ struct ReplayConnection {
 struct ReplayCrossing {
   SlabCrossing line;
   int32_t column;
+  int32_t blind;  // whose envelope
   double value;
 };
 
@@ -80,14 +120,35 @@ FENESTRA_CPU_GPU inline bool CrossingOf(const LocalEnvelope& envelope, const Rep
   const StackSegment s = SegmentInFrame(envelope.center, envelope.axis[0], envelope.axis[1],
                                         envelope.axis[2], c.origin, c.direction, c.distance);
   crossing->column = c.column;
+  crossing->blind = 0;
   crossing->value = c.value;
   return SlabCrossing::Of(s, envelope.half[2], &crossing->line);
+}
+
+// What a connection is to the blinds: light none can block (its shadow ray enters no
+// envelope), a crossing of one envelope (*crossing), or one tested against every blind.
+enum class ConnectionKind { kFixed, kCrossing, kOther };
+FENESTRA_CPU_GPU inline ConnectionKind KindOf(const LocalEnvelopes& envelopes,
+                                              const ReplayConnection& c, ReplayCrossing* crossing) {
+  const int b = envelopes.Touched(c.origin, c.direction, c.distance);
+  if (b == LocalEnvelopes::kNone) return ConnectionKind::kFixed;
+  if (b >= 0 && CrossingOf(envelopes.blind[b], c, crossing)) {
+    crossing->blind = b;
+    return ConnectionKind::kCrossing;
+  }
+  return ConnectionKind::kOther;
 }
 
 // Whether `slats` leave crossing `k` of `envelope` clear; `shift` is ShiftFrom(envelope.center).
 FENESTRA_CPU_GPU inline bool Clear(const LocalSlats& slats, Vec3f shift,
                                    const LocalEnvelope& envelope, const ReplayCrossing& k) {
   return !slats.Occluded(k.line, shift, envelope.half[2]);
+}
+
+// Whether `blinds` leave crossing `k` of `envelopes` clear.
+FENESTRA_CPU_GPU inline bool Clear(const ReplayBlinds& blinds, const LocalEnvelopes& envelopes,
+                                   const ReplayCrossing& k) {
+  return Clear(blinds.slats[k.blind], blinds.shift[k.blind], envelopes.blind[k.blind], k);
 }
 
 // A path that reached the envelope, as the GPU keeps it: its state there and its index
@@ -97,31 +158,36 @@ struct ReplayResume {
   uint64_t path;
 };
 
-// Where a recorded path reached the envelope: its state there, its index (random stream)
-// and, when its ray crosses the envelope from face to face, that ray's line there.
+// Where a recorded path reached an envelope: its state there, its index (random stream)
+// and, when its ray enters that envelope alone and crosses it from face to face, that ray's
+// line there.
 struct ReplayTouch {
   PathState state;
   uint64_t path;
   SlabCrossing line;
+  int32_t blind;  // whose envelope
   bool crosses;
 };
 
-// Whether `slats` leave the line of `touch` clear, so that the path goes on as recorded.
-FENESTRA_CPU_GPU inline bool Clear(const LocalSlats& slats, Vec3f shift,
-                                   const LocalEnvelope& envelope, const ReplayTouch& touch) {
-  return touch.crosses && !slats.Occluded(touch.line, shift, envelope.half[2]);
+// Whether `blinds` leave the line of `touch` clear, so that the path goes on as recorded.
+FENESTRA_CPU_GPU inline bool Clear(const ReplayBlinds& blinds, const LocalEnvelopes& envelopes,
+                                   const ReplayTouch& touch) {
+  const int b = touch.blind;
+  return touch.crosses &&
+         !blinds.slats[b].Occluded(touch.line, blinds.shift[b], envelopes.blind[b].half[2]);
 }
 
-// The room without the blind, stopping rays that touch the envelope (unless told to let the
+// The room without the blinds, stopping rays that touch an envelope (unless told to let the
 // next one pass) and remembering the shadow ray a next-event estimate is about to score. One
 // per thread: it holds the state of the path being traced.
 template <class Room>
 struct RecordingIntersector {
   Room room;
-  LocalEnvelope envelope;
+  LocalEnvelopes envelopes;
   mutable bool diverged = false;
-  mutable bool crosses = false;  // the stopped ray crosses the envelope from face to face
+  mutable bool crosses = false;  // the stopped ray enters one envelope and crosses it
   mutable SlabCrossing line{};   // then its line there
+  mutable int32_t blind = 0;     // and whose envelope that is
   mutable bool pass = false;     // the next ray goes on through the envelope
   mutable bool connection_pending = false;
   mutable ReplayConnection pending{};
@@ -135,12 +201,15 @@ struct RecordingIntersector {
     }
     const Vec3f to_hit = found ? hit->position - origin : Vec3f{0, 0, 0};
     const float extent = found ? sqrtf(Dot(to_hit, to_hit)) : INFINITY;
-    if (envelope.Touches(origin, direction, extent)) {
+    const int b = envelopes.Touched(origin, direction, extent);
+    if (b != LocalEnvelopes::kNone) {
       diverged = true;
       ReplayCrossing crossing;
       crosses =
-          CrossingOf(envelope, ReplayConnection{origin, direction, extent, 0, 0.0}, &crossing);
+          b >= 0 && CrossingOf(envelopes.blind[b],
+                               ReplayConnection{origin, direction, extent, 0, 0.0}, &crossing);
       line = crossing.line;
+      blind = b >= 0 ? b : 0;
       return false;
     }
     return found;
@@ -202,7 +271,7 @@ struct RecordingMode {
   FENESTRA_CPU_GPU void Escape(const PathState& state) {
     if (scene->diverged) {
       scene->diverged = false;
-      recorder->AddTouch(ReplayTouch{state, path, scene->line, scene->crosses});
+      recorder->AddTouch(ReplayTouch{state, path, scene->line, scene->blind, scene->crosses});
       // A ray that does not cross is traced on at every design: nothing after it counts
       touched = follow && scene->crosses;
     } else {

@@ -352,7 +352,7 @@ struct DeviceRecorder {
   double* fixed;
   DeviceRecords records;
   unsigned int row;
-  LocalEnvelope envelope;
+  const LocalEnvelopes* envelopes;
   FENESTRA_CPU_GPU void AddFixed(int column, double value) {
 #if defined(__CUDA_ARCH__)
     atomicAdd(&fixed[column], value);
@@ -361,7 +361,12 @@ struct DeviceRecorder {
   FENESTRA_CPU_GPU void AddConnection(const ReplayConnection& c) {
 #if defined(__CUDA_ARCH__)
     ReplayCrossing crossing;
-    if (CrossingOf(envelope, c, &crossing)) {
+    const ConnectionKind kind = KindOf(*envelopes, c, &crossing);
+    if (kind == ConnectionKind::kFixed) {
+      atomicAdd(&fixed[c.column], c.value);
+      return;
+    }
+    if (kind == ConnectionKind::kCrossing) {
       const uint64_t i = atomicAdd(&records.crossing_count[row], 1ull);
       if (i < records.crossing_capacity) {
         records.crossings[row * records.crossing_capacity + i] = crossing;
@@ -375,7 +380,7 @@ struct DeviceRecorder {
 #endif
   }
   FENESTRA_CPU_GPU void BeginPath() {}
-  // RecordKernel does not follow a path beyond the envelope: it is traced on from its touch
+  // RecordKernel does not follow a path beyond an envelope: it is traced on from its touch
   // at every design (following paths on did not pay on the GPU: bench/README.md)
   FENESTRA_CPU_GPU void AddTouch(const ReplayTouch& touch) {
 #if defined(__CUDA_ARCH__)
@@ -390,7 +395,7 @@ struct DeviceRecorder {
 // The indoor kernel's paths through the room without the blind, recorded for the replay
 // (CudaTracer::RecordIndoor); the fixed light goes to `sum` in the indoor kernel's layout.
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
-    RecordKernel(BvhIntersector room, LocalEnvelope envelope, SurfaceTable surfaces,
+    RecordKernel(BvhIntersector room, LocalEnvelopes envelopes, SurfaceTable surfaces,
                  PathSettings settings, OutdoorView<BvhIntersector> outdoor,
                  const TraceSensor* sensors, int sensor_count, TraceWindows windows,
                  HemisphereBasis basis, uint64_t paths_per_sensor, int batches, uint64_t seed,
@@ -404,15 +409,15 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   BeginRow(row, columns, block_counters);
   const int s = static_cast<int>(blockIdx.y) / batches;
   const int b = static_cast<int>(blockIdx.y) % batches;
-  RecordingIntersector<BvhIntersector> scene{room, envelope};
-  DeviceRecorder recorder{row, records, blockIdx.y, envelope};
+  RecordingIntersector<BvhIntersector> scene{room, envelopes};
+  DeviceRecorder recorder{row, records, blockIdx.y, &scene.envelopes};
   RecordingSink<BvhIntersector, DeviceRecorder> sink{&scene, &recorder};
   RecordingMode<BvhIntersector, DeviceRecorder, OutdoorView<BvhIntersector>> mode{
       {sensors[s].position, sensors[s].normal, windows, &shared_basis, settings.max_bounces,
        &outdoor, &sink},
       &scene,
       &recorder};
-  mode.follow = false;  // the records end at a path's first touch of the envelope
+  mode.follow = false;  // the records end at a path's first touch of an envelope
   ThreadCounts counts;
   TracePaths(scene, surfaces, settings, mode, seed, s, BatchFirst(paths_per_sensor, batches, b),
              BatchFirst(paths_per_sensor, batches, b + 1), next_path + blockIdx.y, counts);
@@ -427,20 +432,19 @@ struct ReplayParts {
   int batches, parts, first, last;
 };
 
-// A design of a replay on the device: the room with its blind (BVH, and per triangle its
-// material), its slats alone, and their centre from the recorded envelope's (ShiftFrom).
+// A design of a replay on the device: the room with its blinds (BVH, and per triangle its
+// material), and their slats alone, shifted from the recorded envelopes' centres.
 struct DeviceDesign {
   const BvhNode* nodes;
   const BvhTriangle* triangles;
   const uint32_t* triangle_material;
-  LocalSlats blind;
-  Vec3f shift;
+  ReplayBlinds blinds;
 };
 
-// Adds the window connections of record rows [first_row, first_row + count) that `design`'s
-// blind leaves clear to `row`, this block's share of them (block of `blocks`); returns how
-// many paths of those rows resume at the envelope.
-__device__ uint64_t TestConnections(const DeviceDesign& design, const LocalEnvelope& envelope,
+// Adds the window connections of record rows [first_row, first_row + count) that `blinds`
+// leave clear to `row`, this block's share of them (block of `blocks`); returns how many paths
+// of those rows resume at an envelope.
+__device__ uint64_t TestConnections(const ReplayBlinds& blinds, const LocalEnvelopes& envelopes,
                                     const DeviceRecords& records, unsigned int first_row, int count,
                                     unsigned int block, unsigned int blocks, double* row,
                                     ThreadCounts& counts) {
@@ -454,7 +458,7 @@ __device__ uint64_t TestConnections(const DeviceDesign& design, const LocalEnvel
          i += stride) {
       const ReplayCrossing k = crossings[i];
       ++counts.values[0];
-      if (Clear(design.blind, design.shift, envelope, k)) atomicAdd(&row[k.column], k.value);
+      if (Clear(blinds, envelopes, k)) atomicAdd(&row[k.column], k.value);
     }
     const uint64_t connection_count =
         Smaller(records.connection_count[r], records.connection_capacity);
@@ -463,7 +467,7 @@ __device__ uint64_t TestConnections(const DeviceDesign& design, const LocalEnvel
          i += stride) {
       const ReplayConnection c = connections[i];
       ++counts.values[0];
-      if (!design.blind.Occluded(c.origin, c.direction, c.distance)) {
+      if (!blinds.Occluded(c.origin, c.direction, c.distance)) {
         atomicAdd(&row[c.column], c.value);
       }
     }
@@ -480,17 +484,18 @@ struct ReplayDesigns {
 
 // Designs' indoor sums from the records (CudaTracer::ReplayIndoor, ReplayIndoorDesigns), one
 // row per (design, sensor, batch) over the parts traced: their fixed light (first block of
-// the row), their connections the design's blind leaves clear, and their resumed paths traced
-// on through the room with that blind. A row has as many blocks as its share of the work
+// the row), their connections the design's blinds leave clear, and their resumed paths traced
+// on through the room with those blinds. A row has as many blocks as its share of the work
 // (row_blocks: ShareBlocks of Impl::ReplayRowWork), so that the rows end together. Design k's
 // sums start at sum + k * design_sums.
 __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
-    ReplayKernel(ReplayDesigns designs, const TraceMaterial* materials, PathSettings settings,
-                 OutdoorView<BvhIntersector> outdoor, const TraceSensor* sensors, int sensor_count,
-                 TraceWindows windows, HemisphereBasis basis, ReplayParts parts, uint64_t seed,
-                 LocalEnvelope envelope, DeviceRecords records, const unsigned int* row_blocks,
-                 const double* fixed, double* sum, size_t design_sums, unsigned long long* counters,
-                 unsigned long long* next_item) {
+    ReplayKernel(const __grid_constant__ ReplayDesigns designs, const TraceMaterial* materials,
+                 PathSettings settings, OutdoorView<BvhIntersector> outdoor,
+                 const TraceSensor* sensors, int sensor_count, TraceWindows windows,
+                 HemisphereBasis basis, ReplayParts parts, uint64_t seed,
+                 const __grid_constant__ LocalEnvelopes envelopes, DeviceRecords records,
+                 const unsigned int* row_blocks, const double* fixed, double* sum,
+                 size_t design_sums, unsigned long long* counters, unsigned long long* next_item) {
   extern __shared__ double row[];  // columns of I
   __shared__ unsigned long long block_counters[kCounters];
   __shared__ HemisphereBasis shared_basis;
@@ -504,6 +509,13 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
     if (y + step < rows && row_blocks[y + step] <= blockIdx.x) y += step;
   }
   const DeviceDesign& design = designs.design[y / design_rows];
+  // The design's slats and the envelopes, read by every lane at its own blind
+  __shared__ ReplayBlinds blinds;
+  __shared__ LocalEnvelopes shared_envelopes;
+  if (threadIdx.x == 0) {
+    blinds = design.blinds;
+    shared_envelopes = envelopes;
+  }
   BeginRow(row, columns, block_counters);
   const unsigned int block = blockIdx.x - row_blocks[y];
   const unsigned int blocks = row_blocks[y + 1] - row_blocks[y];
@@ -527,8 +539,8 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   }
   __syncthreads();
   ThreadCounts counts;
-  const uint64_t resume_count =
-      TestConnections(design, envelope, records, first_row, count, block, blocks, row, counts);
+  const uint64_t resume_count = TestConnections(blinds, shared_envelopes, records, first_row, count,
+                                                block, blocks, row, counts);
   const BvhIntersector scene{design.nodes, design.triangles};
   const SurfaceTable surfaces{materials, design.triangle_material};
   const bool all_parts = parts.first == 0 && parts.last == parts.parts;
@@ -710,7 +722,7 @@ struct CudaTracer::Impl {
              resume_capacity = 0;
     // Per row: the other connections, then the resumes, then the crossings
     std::vector<unsigned long long> counts;
-    LocalEnvelope envelope;
+    LocalEnvelopes envelopes;
     TraceWindows windows;  // in recorded_windows
     HemisphereBasis basis;
     Vec3f outdoor_offset;
@@ -1054,7 +1066,7 @@ absl::Status CudaTracer::Indoor(const TraceSensor* sensors, int sensor_count,
                             batches, seed, path, sum, counters);
 }
 
-absl::Status CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
+absl::Status CudaTracer::RecordIndoor(const LocalEnvelopes& envelopes, const TraceSensor* sensors,
                                       int sensor_count, const std::vector<TraceWindow>& windows,
                                       Vec3f outdoor_offset, const HemisphereBasis& basis,
                                       uint64_t paths_per_sensor, int batches, int parts,
@@ -1090,7 +1102,7 @@ absl::Status CudaTracer::RecordIndoor(const LocalEnvelope& envelope, const Trace
        row_paths / 16 + 64,
        row_paths,
        {},
-       envelope,
+       envelopes,
        recorded_windows,
        basis,
        outdoor_offset,
@@ -1147,7 +1159,7 @@ absl::Status CudaTracer::Impl::TraceRecords(int columns, size_t max_bytes,
         rows, static_cast<size_t>(rows) * columns, false,
         [&] {
           RecordKernel<<<grid, kThreads, shared>>>(
-              d.Scene(), r.envelope, d.Surfaces(), r.path, d.Outdoor(r.outdoor_offset),
+              d.Scene(), r.envelopes, d.Surfaces(), r.path, d.Outdoor(r.outdoor_offset),
               d.replay_sensors.get(), r.sensor_count, r.windows, r.basis, r.paths_per_sensor,
               row_batches, r.seed, records, d.sum.get(), d.counters.get(), d.next_path.get());
         },
@@ -1215,7 +1227,7 @@ absl::Status CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceM
       [&] {
         ReplayKernel<<<d.row_blocks_total, kThreads, shared>>>(
             designs, materials, r.path, d.Outdoor(r.outdoor_offset), d.replay_sensors.get(),
-            r.sensor_count, r.windows, r.basis, parts, r.seed, r.envelope, records,
+            r.sensor_count, r.windows, r.basis, parts, r.seed, r.envelopes, records,
             d.row_blocks.get(), d.fixed.get(), d.sum.get(), d.DesignSums(), d.counters.get(),
             d.next_path.get());
       },
@@ -1227,12 +1239,11 @@ absl::Status CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceM
 
 int CudaTracer::ReplayedParts() const { return impl_->replayed_parts; }
 
-absl::Status CudaTracer::ReplayIndoor(const LocalSlats& blind, int first, int last, double* sum,
+absl::Status CudaTracer::ReplayIndoor(const ReplayBlinds& blinds, int first, int last, double* sum,
                                       CudaCounters* counters) {
   Impl& d = *impl_;
   ReplayDesigns designs{};
-  designs.design[0] = {d.nodes.get(), d.triangles.get(), d.triangle_material.get(), blind,
-                       blind.ShiftFrom(d.recorded.envelope.center)};
+  designs.design[0] = {d.nodes.get(), d.triangles.get(), d.triangle_material.get(), blinds};
   designs.count = 1;
   return d.Replay(designs, d.materials.get(), first, last, sum, counters);
 }
@@ -1279,8 +1290,7 @@ absl::Status CudaTracer::ReplayIndoorDesigns(const std::vector<DesignScene>& sce
   for (size_t k = 0; k < scenes.size(); ++k) {
     designs.design[k] = {d.design_nodes.get() + starts[k][0],
                          d.design_triangles.get() + starts[k][1],
-                         d.design_triangle_material.get() + starts[k][2], scenes[k].blind,
-                         scenes[k].blind.ShiftFrom(d.recorded.envelope.center)};
+                         d.design_triangle_material.get() + starts[k][2], scenes[k].blinds};
   }
   return d.Replay(designs, d.design_materials.get(), 0, d.recorded.parts, nullptr, counters);
 }

@@ -106,34 +106,34 @@ class CudaTracer {
                       uint64_t seed, const PathSettings& path, double* sum, CudaCounters* counters);
 
   // The indoor replay (core/dc/indoor_replay.h) on the device. RecordIndoor traces the
-  // indoor paths, as Indoor, through the uploaded scene (the room without the blind) up to
-  // where they could first meet a blind inside `envelope`, and keeps on the device what no
-  // blind changes, the next-event connections that cleared the room and the paths that
-  // reached the envelope (RESOURCE_EXHAUSTED, and nothing recorded, where that would take
+  // indoor paths, as Indoor, through the uploaded scene (the room without the blinds) up to
+  // where they could first meet a blind inside one of `envelopes`, and keeps on the device what
+  // no blind changes, the next-event connections that cleared the room and the paths that
+  // reached an envelope (RESOURCE_EXHAUSTED, and nothing recorded, where that would take
   // more than `max_bytes` or more device memory than there is). ReplayIndoor then gives Indoor's
-  // sums for the uploaded scene, a room with a blind inside the envelope in the recorded frame,
-  // from the records: the connections tested against `blind` (its slats alone), the paths that
-  // reached the envelope traced on. Each batch's paths are recorded in `parts` parts of consecutive
-  // paths, and ReplayIndoor replays parts [first, last) of every batch, added to the sums of parts
-  // [0, first) that the replay before it left on the device (an error where they are no
-  // longer there: FAILED_PRECONDITION).
-  absl::Status RecordIndoor(const LocalEnvelope& envelope, const TraceSensor* sensors,
+  // sums for the uploaded scene, a room with blinds inside the envelopes in the recorded frame,
+  // from the records: the connections tested against `blinds` (their slats alone), the paths
+  // that reached an envelope traced on. Each batch's paths are recorded in `parts` parts of
+  // consecutive paths, and ReplayIndoor replays parts [first, last) of every batch, added to the
+  // sums of parts [0, first) that the replay before it left on the device (an error where they are
+  // no longer there: FAILED_PRECONDITION).
+  absl::Status RecordIndoor(const LocalEnvelopes& envelopes, const TraceSensor* sensors,
                             int sensor_count, const std::vector<TraceWindow>& windows,
                             Vec3f outdoor_offset, const HemisphereBasis& basis,
                             uint64_t paths_per_sensor, int batches, int parts, uint64_t seed,
                             const PathSettings& path, size_t max_bytes, CudaReplayStats* stats);
-  absl::Status ReplayIndoor(const LocalSlats& blind, int first, int last, double* sum,
+  absl::Status ReplayIndoor(const ReplayBlinds& blinds, int first, int last, double* sum,
                             CudaCounters* counters);
 
   // ReplayIndoor for several designs in one launch, every part of each (a launch's last
   // paths end one after another, so designs traced together share that tail): design k's
-  // room with its blind (`scenes[k]`, its triangles' materials indexed into `materials`)
-  // and its slats alone (`scenes[k].blind`). The sums stay on the device, design k's at
+  // room with its blinds (`scenes[k]`, its triangles' materials indexed into `materials`)
+  // and their slats alone (`scenes[k].blinds`). The sums stay on the device, design k's at
   // DeviceSums() + k * DesignSums(). At most kMaxReplayDesigns.
   struct DesignScene {
     const BvhLayout* bvh;
     const std::vector<uint32_t>* triangle_material;
-    LocalSlats blind;
+    ReplayBlinds blinds;
   };
   absl::Status ReplayIndoorDesigns(const std::vector<DesignScene>& scenes,
                                    const std::vector<TraceMaterial>& materials,

@@ -532,19 +532,13 @@ TEST(CudaBackendTest, OutdoorBatchesOnTheDeviceMakeTheHostsProduct) {
 // The GPU's replay is the full trace: for designs across the ranges, I equals the indoor
 // stage traced in full on the GPU with the same seed, up to the order of the sums (and the
 // rare path whose float rounding differs between the two scenes' BVHs).
-TEST(CudaBackendTest, ReplayEqualsTheIndoorStage) {
-  std::unique_ptr<DcBackend> gpu = Gpu();
-  if (!gpu) GTEST_SKIP() << "no CUDA device";
-  const Scene scene = LoadExample("city_office");
-  IndoorOptions options;
-  options.paths_per_sensor = 20'000;
-  options.parts = {2, 2};
+void ExpectGpuReplayIsTheTrace(DcBackend* gpu, const Scene& scene, const IndoorOptions& options) {
   absl::StatusOr<std::unique_ptr<IndoorStages>> stages = gpu->MakeIndoorStages(scene, options);
   ASSERT_TRUE(stages.ok()) << stages.status();
   for (const auto& values : ReplayCheckDesigns()) {
     absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, values);
     ASSERT_TRUE(design.ok()) << design.status();
-    absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(scene, *design, options, gpu.get());
+    absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(scene, *design, options, gpu);
     absl::StatusOr<IndoorResult> replayed = (*stages)->Compute(*design);
     ASSERT_TRUE(traced.ok() && replayed.ok()) << traced.status() << replayed.status();
     EXPECT_NE(replayed->backend.find("replay"), std::string::npos) << replayed->backend;
@@ -558,6 +552,25 @@ TEST(CudaBackendTest, ReplayEqualsTheIndoorStage) {
   BlindDesign wide = DefaultDesign(scene);
   wide.slat_width_m = 0.3;
   EXPECT_EQ((*stages)->Compute(wide).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+TEST(CudaBackendTest, ReplayEqualsTheIndoorStage) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  IndoorOptions options;
+  options.paths_per_sensor = 20'000;
+  options.parts = {2, 2};
+  ExpectGpuReplayIsTheTrace(gpu.get(), LoadExample("city_office"), options);
+}
+
+// The same with the corner office's two blinds: each record meets the blind whose envelope
+// it enters, and a resumed path both blinds' slats.
+TEST(CudaBackendTest, ReplayOfTwoBlindsEqualsTheIndoorStage) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  IndoorOptions options;
+  options.paths_per_sensor = 10'000;
+  ExpectGpuReplayIsTheTrace(gpu.get(), LoadExample("corner_office"), options);
 }
 
 // A bright room (every opaque surface of reflectance 0.9) makes many more window
