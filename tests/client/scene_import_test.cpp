@@ -1,6 +1,7 @@
 // fenestra scene import, run as a user would: a public Radiance model and a public Honeybee
-// model (tests/data/models/, sources in their READMEs) become scenes that `fenestra dc` traces,
-// and the Radiance model, given a blind, runs an optimization.
+// model (tests/data/models/, sources in their READMEs) become scenes that export and import
+// back unchanged, that `fenestra dc` traces and that, given a blind, run an optimization; a
+// Honeybee model of two windows exports, imports back and traces too.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include "client/cli_util.h"
 #include "core/geometry/scene.h"
 #include "tests/client/cli_run.h"
+#include "tests/core/geometry/hbjson_test_models.h"
 
 namespace fenestra {
 namespace {
@@ -32,17 +34,10 @@ std::string TutorialRoomArgs() {
   return args + " --pts " + m + "points.txt";
 }
 
-TEST_F(SceneImportTest, RadianceModelRunsADcAndAJob) {
-  const std::string scene = (dir_ / "room.json").string();
-  const CliRun imported =
-      Fenestra("scene import " + TutorialRoomArgs() + " --weather " + kWeather + " -o " + scene);
-  ASSERT_EQ(imported.exit_code, 0) << imported.output;
-  EXPECT_NE(imported.output.find("1 windows, 100 sensors"), std::string::npos) << imported.output;
-  EXPECT_NE(imported.output.find("the scene is a room"), std::string::npos) << imported.output;
-
-  // Export as a model, import again: the same scene file
-  const std::string model = (dir_ / "back.rad").string(), pts = (dir_ / "back.pts").string();
-  const std::string again = (dir_ / "again.json").string();
+// Exports `scene` as a Radiance model and imports it again: expects the same scene file.
+void ExpectExportImportsBack(const std::filesystem::path& dir, const std::string& scene) {
+  const std::string model = (dir / "back.rad").string(), pts = (dir / "back.pts").string();
+  const std::string again = (dir / "again.json").string();
   const CliRun exported = Fenestra("scene export " + scene + " --model " + model + " --pts " + pts);
   ASSERT_EQ(exported.exit_code, 0) << exported.output;
   const CliRun reimported = Fenestra("scene import " + model + " --pts " + pts + " -o " + again);
@@ -50,29 +45,30 @@ TEST_F(SceneImportTest, RadianceModelRunsADcAndAJob) {
   absl::StatusOr<v1::Scene> first = ReadSceneProto(scene), second = ReadSceneProto(again);
   ASSERT_TRUE(first.ok() && second.ok());
   EXPECT_EQ(first->DebugString(), second->DebugString());
+}
 
-  const CliRun dc =
-      Fenestra("dc " + scene + " --method one-stage --paths 2000 -o " + (dir_ / "D.txt").string());
-  ASSERT_EQ(dc.exit_code, 0) << dc.output;
-  EXPECT_NE(dc.output.find("sensor_99"), std::string::npos) << dc.output;
-
-  // The window gets a blind, and a short tilt optimization runs on the imported room
+// Gives every window of `scene` a blind whose tilt is free, all of one group (one design),
+// and runs a short tilt optimization on it.
+void ExpectShortJobRuns(const std::filesystem::path& dir, const std::string& scene) {
   absl::StatusOr<v1::Scene> proto = ReadSceneProto(scene);
   ASSERT_TRUE(proto.ok()) << proto.status();
   v1::Material& slat = *proto->add_materials();
   slat.set_name("slat");
   slat.set_reflectance(0.7);
-  v1::VenetianBlind& blind = *proto->mutable_windows(0)->mutable_blind();
-  blind.set_material("slat");
-  for (const auto& [p, value, lo, hi] :
-       {std::tuple{blind.mutable_tilt_rad(), 0.0, 0.0, 1.5},
-        std::tuple{blind.mutable_slat_width_m(), 0.08, 0.08, 0.08},
-        std::tuple{blind.mutable_slat_spacing_m(), 0.0, 0.0, 0.0},
-        std::tuple{blind.mutable_slat_thickness_m(), 0.005, 0.005, 0.005}}) {
-    p->set_value(value), p->set_min(lo), p->set_max(hi);
+  for (v1::Window& w : *proto->mutable_windows()) {
+    v1::VenetianBlind& blind = *w.mutable_blind();
+    blind.set_material("slat");
+    blind.set_group("blinds");
+    for (const auto& [p, value, lo, hi] :
+         {std::tuple{blind.mutable_tilt_rad(), 0.0, 0.0, 1.5},
+          std::tuple{blind.mutable_slat_width_m(), 0.08, 0.08, 0.08},
+          std::tuple{blind.mutable_slat_spacing_m(), 0.0, 0.0, 0.0},
+          std::tuple{blind.mutable_slat_thickness_m(), 0.005, 0.005, 0.005}}) {
+      p->set_value(value), p->set_min(lo), p->set_max(hi);
+    }
   }
-  ASSERT_TRUE(WriteJsonFile((dir_ / "room_blind.json").string(), *proto).ok());
-  const std::string job = (dir_ / "job.json").string();
+  ASSERT_TRUE(WriteJsonFile((dir / "room_blind.json").string(), *proto).ok());
+  const std::string job = (dir / "job.json").string();
   {
     std::ofstream out(job);
     out << R"({"sceneFile": "room_blind.json",
@@ -87,15 +83,61 @@ TEST_F(SceneImportTest, RadianceModelRunsADcAndAJob) {
   EXPECT_NE(optimized.output.find("best design: alpha="), std::string::npos) << optimized.output;
 }
 
-TEST_F(SceneImportTest, HoneybeeModelRunsADc) {
+TEST_F(SceneImportTest, RadianceModelRunsADcAndAJob) {
+  const std::string scene = (dir_ / "room.json").string();
+  const CliRun imported =
+      Fenestra("scene import " + TutorialRoomArgs() + " --weather " + kWeather + " -o " + scene);
+  ASSERT_EQ(imported.exit_code, 0) << imported.output;
+  EXPECT_NE(imported.output.find("1 windows, 100 sensors"), std::string::npos) << imported.output;
+  EXPECT_NE(imported.output.find("the scene is a room"), std::string::npos) << imported.output;
+  ExpectExportImportsBack(dir_, scene);
+  const CliRun dc =
+      Fenestra("dc " + scene + " --method one-stage --paths 2000 -o " + (dir_ / "D.txt").string());
+  ASSERT_EQ(dc.exit_code, 0) << dc.output;
+  EXPECT_NE(dc.output.find("sensor_99"), std::string::npos) << dc.output;
+  ExpectShortJobRuns(dir_, scene);
+}
+
+// honeybee-schema's sample patient room (tests/data/models/patient_room), with a grid of 9
+// sensors over its floor added to the file: it has none of its own.
+TEST_F(SceneImportTest, HoneybeeSchemaSampleRunsADcAndAJob) {
+  std::ifstream in(kModels + "/patient_room/model_complete_patient_room.hbjson");
+  std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<std::pair<double, double>> desks;
+  for (double x : {1.0, 2.5, 4.0}) {
+    for (double y : {1.0, 5.0, 9.0}) desks.push_back({x, y});
+  }
+  const std::string none = R"("modifiers": [])";
+  const size_t at = json.find(none);
+  ASSERT_NE(at, std::string::npos);
+  json.replace(at, none.size(),
+               none + R"(, "sensor_grids": [)" + hbjson_test::Grid("beds", desks, 0.8) + "]");
+  const std::string model = (dir_ / "patient_room.hbjson").string();
+  std::ofstream(model) << json;
   const std::string scene = (dir_ / "hb.json").string();
-  const CliRun imported = Fenestra("scene import " + kModels +
-                                   "/end_windows_hall/end_windows_hall.hbjson --grid core -o " + scene);
+  const CliRun imported =
+      Fenestra("scene import " + model + " --weather " + kWeather + " -o " + scene);
   ASSERT_EQ(imported.exit_code, 0) << imported.output;
   EXPECT_NE(imported.output.find("the scene is a room"), std::string::npos) << imported.output;
+  ExpectExportImportsBack(dir_, scene);
   const CliRun dc =
       Fenestra("dc " + scene + " --method one-stage --paths 500 -o " + (dir_ / "D.txt").string());
-  EXPECT_EQ(dc.exit_code, 0) << dc.output;
+  ASSERT_EQ(dc.exit_code, 0) << dc.output;
+  ExpectShortJobRuns(dir_, scene);
+}
+
+// A Honeybee model of two windows and 640 sensors (tests/data/models/end_windows_hall).
+TEST_F(SceneImportTest, HoneybeeModelOfTwoWindowsRunsADc) {
+  const std::string scene = (dir_ / "hb.json").string();
+  const CliRun imported =
+      Fenestra("scene import " + kModels + "/end_windows_hall/end_windows_hall.hbjson --grid core" +
+               " --weather " + kWeather + " -o " + scene);
+  ASSERT_EQ(imported.exit_code, 0) << imported.output;
+  EXPECT_NE(imported.output.find("the scene is a room"), std::string::npos) << imported.output;
+  ExpectExportImportsBack(dir_, scene);
+  const CliRun dc =
+      Fenestra("dc " + scene + " --method one-stage --paths 500 -o " + (dir_ / "D.txt").string());
+  ASSERT_EQ(dc.exit_code, 0) << dc.output;
 }
 
 TEST_F(SceneImportTest, BadArgumentsAndModelsAreRefusedWithNothingWritten) {

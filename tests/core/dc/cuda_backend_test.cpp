@@ -187,6 +187,16 @@ TEST(CudaBackendTest, TwoStageOfTwoWindowsMatchesEmbree) {
                        *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}}));
 }
 
+// A skylight with its blind under it (examples/skylight_room): a window facing up.
+TEST(CudaBackendTest, TwoStageOfASkylightMatchesEmbree) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const Scene scene = LoadExample("skylight_room");
+  ASSERT_GT(scene.windows.front().window.normal.z, 0.5);
+  ExpectTwoStageParity(gpu.get(), scene,
+                       *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}}));
+}
+
 // A city-office-sized annual product with random entries: 8 batches of O (window cells and
 // direct columns x bins) and of I (9 sensors), and S (bins x steps).
 struct RandomInputs {
