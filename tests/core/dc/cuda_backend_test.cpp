@@ -18,6 +18,7 @@
 #include "core/dc/two_stage.h"
 #include "core/metrics/metric_errors.h"
 #include "tests/core/dc/replay_checks.h"
+#include "tests/core/dc/two_stage_checks.h"
 #include "tests/example_scene.h"
 
 namespace fenestra {
@@ -195,6 +196,18 @@ TEST(CudaBackendTest, TwoStageOfASkylightMatchesEmbree) {
   ASSERT_GT(scene.windows.front().window.normal.z, 0.5);
   ExpectTwoStageParity(gpu.get(), scene,
                        *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}}));
+}
+
+// The GPU's two-stage sky sums of the corner office and of the skylight room lie within 3
+// combined SE + 1% of its one-stage ones over a grid of designs (as on the CPU:
+// tests/core/dc/several_windows_test.cpp).
+TEST(CudaBackendTest, SeveralWindowsTwoStageMatchesOneStageOverADesignGrid) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  for (const char* name : {"corner_office", "skylight_room"}) {
+    const Scene scene = LoadExample(name);
+    ExpectTwoStageMatchesOneStage(scene, static_cast<int>(scene.sensors.size()), gpu.get());
+  }
 }
 
 // A city-office-sized annual product with random entries: 8 batches of O (window cells and

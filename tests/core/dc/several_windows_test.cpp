@@ -17,6 +17,7 @@
 #include "core/geometry/scene_proto.h"
 #include "core/trace/room_check.h"
 #include "tests/core/dc/replay_checks.h"
+#include "tests/core/dc/two_stage_checks.h"
 
 namespace fenestra {
 namespace {
@@ -228,40 +229,6 @@ TEST(SeveralWindowsTest, AWindowNoLightReachesChangesNothing) {
               5 * std::hypot(open.sky_sum_standard_error(s), ra.sky_sum_standard_error(s)))
         << "sensor " << s;
   }
-}
-
-// Over a grid of designs (alpha x spacing), the two-stage sky sums of `scene` lie within 3
-// combined SE + 1% of the one-stage ones at every sensor.
-void ExpectTwoStageMatchesOneStage(const Scene& scene, int sensors) {
-  OutdoorOptions outdoor;
-  outdoor.paths = 4'000'000;
-  outdoor.parts = WindowParts{0, 0};  // each window's automatic split
-  outdoor.seed = 7;
-  absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor);
-  ASSERT_TRUE(o.ok()) << o.status();
-  int compared = 0;
-  for (const double alpha : {0.0, 0.8, 1.5}) {
-    for (const double spacing : {0.0, 0.1}) {
-      absl::StatusOr<BlindDesign> design =
-          DesignWithOverrides(scene, {{"alpha", alpha}, {"spacing", spacing}});
-      ASSERT_TRUE(design.ok()) << design.status();
-      const OneStageResult one = OneStage(scene, *design);
-      IndoorOptions indoor;
-      indoor.paths_per_sensor = 20000;
-      indoor.parts = outdoor.parts;
-      indoor.seed = 11;
-      absl::StatusOr<IndoorResult> i = ComputeIndoorStage(scene, *design, indoor);
-      ASSERT_TRUE(i.ok()) << i.status();
-      absl::StatusOr<TwoStageResult> two = CombineStages(*i, *o);
-      ASSERT_TRUE(two.ok()) << two.status();
-      for (Eigen::Index s = 0; s < one.sky_sum.size(); ++s, ++compared) {
-        const double se = std::hypot(one.sky_sum_standard_error(s), two->sky_sum_standard_error(s));
-        EXPECT_NEAR(two->sky_sum(s), one.sky_sum(s), 3 * se + 0.01 * one.sky_sum(s))
-            << "alpha " << alpha << ", spacing " << spacing << ", sensor " << s;
-      }
-    }
-  }
-  EXPECT_EQ(compared, 6 * sensors);
 }
 
 TEST(SeveralWindowsTest, SkylightTwoStageMatchesOneStageOverADesignGrid) {
