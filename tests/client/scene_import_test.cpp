@@ -34,17 +34,38 @@ std::string TutorialRoomArgs() {
   return args + " --pts " + m + "points.txt";
 }
 
-// Exports `scene` as a Radiance model and imports it again: expects the same scene file.
-void ExpectExportImportsBack(const std::filesystem::path& dir, const std::string& scene) {
+// Imports the model `import_args` name into DIR/scene.json, which must be a room; exports it as
+// a Radiance model and imports that again (the same scene file expected); traces it by the
+// one-stage method with `paths` paths per sensor. Returns the scene file and the import's and
+// the trace's output.
+struct Imported {
+  std::string scene, import_output, dc_output;
+};
+Imported ImportExportAndTrace(const std::filesystem::path& dir, const std::string& import_args,
+                              int paths) {
+  Imported r{(dir / "scene.json").string(), "", ""};
+  const CliRun imported =
+      Fenestra("scene import " + import_args + " --weather " + kWeather + " -o " + r.scene);
+  r.import_output = imported.output;
+  EXPECT_EQ(imported.exit_code, 0) << imported.output;
+  EXPECT_NE(imported.output.find("the scene is a room"), std::string::npos) << imported.output;
   const std::string model = (dir / "back.rad").string(), pts = (dir / "back.pts").string();
   const std::string again = (dir / "again.json").string();
-  const CliRun exported = Fenestra("scene export " + scene + " --model " + model + " --pts " + pts);
-  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  const CliRun exported =
+      Fenestra("scene export " + r.scene + " --model " + model + " --pts " + pts);
+  EXPECT_EQ(exported.exit_code, 0) << exported.output;
   const CliRun reimported = Fenestra("scene import " + model + " --pts " + pts + " -o " + again);
-  ASSERT_EQ(reimported.exit_code, 0) << reimported.output;
-  absl::StatusOr<v1::Scene> first = ReadSceneProto(scene), second = ReadSceneProto(again);
-  ASSERT_TRUE(first.ok() && second.ok());
-  EXPECT_EQ(first->DebugString(), second->DebugString());
+  EXPECT_EQ(reimported.exit_code, 0) << reimported.output;
+  absl::StatusOr<v1::Scene> first = ReadSceneProto(r.scene), second = ReadSceneProto(again);
+  EXPECT_TRUE(first.ok() && second.ok());
+  if (first.ok() && second.ok()) {
+    EXPECT_EQ(first->DebugString(), second->DebugString());
+  }
+  const CliRun dc = Fenestra("dc " + r.scene + " --method one-stage --paths " +
+                             std::to_string(paths) + " -o " + (dir / "D.txt").string());
+  r.dc_output = dc.output;
+  EXPECT_EQ(dc.exit_code, 0) << dc.output;
+  return r;
 }
 
 // Gives every window of `scene` a blind whose tilt is free, all of one group (one design),
@@ -84,18 +105,10 @@ void ExpectShortJobRuns(const std::filesystem::path& dir, const std::string& sce
 }
 
 TEST_F(SceneImportTest, RadianceModelRunsADcAndAJob) {
-  const std::string scene = (dir_ / "room.json").string();
-  const CliRun imported =
-      Fenestra("scene import " + TutorialRoomArgs() + " --weather " + kWeather + " -o " + scene);
-  ASSERT_EQ(imported.exit_code, 0) << imported.output;
-  EXPECT_NE(imported.output.find("1 windows, 100 sensors"), std::string::npos) << imported.output;
-  EXPECT_NE(imported.output.find("the scene is a room"), std::string::npos) << imported.output;
-  ExpectExportImportsBack(dir_, scene);
-  const CliRun dc =
-      Fenestra("dc " + scene + " --method one-stage --paths 2000 -o " + (dir_ / "D.txt").string());
-  ASSERT_EQ(dc.exit_code, 0) << dc.output;
-  EXPECT_NE(dc.output.find("sensor_99"), std::string::npos) << dc.output;
-  ExpectShortJobRuns(dir_, scene);
+  const Imported r = ImportExportAndTrace(dir_, TutorialRoomArgs(), 2000);
+  EXPECT_NE(r.import_output.find("1 windows, 100 sensors"), std::string::npos) << r.import_output;
+  EXPECT_NE(r.dc_output.find("sensor_99"), std::string::npos) << r.dc_output;
+  ExpectShortJobRuns(dir_, r.scene);
 }
 
 // honeybee-schema's sample patient room (tests/data/models/patient_room), with a grid of 9
@@ -114,30 +127,14 @@ TEST_F(SceneImportTest, HoneybeeSchemaSampleRunsADcAndAJob) {
                none + R"(, "sensor_grids": [)" + hbjson_test::Grid("beds", desks, 0.8) + "]");
   const std::string model = (dir_ / "patient_room.hbjson").string();
   std::ofstream(model) << json;
-  const std::string scene = (dir_ / "hb.json").string();
-  const CliRun imported =
-      Fenestra("scene import " + model + " --weather " + kWeather + " -o " + scene);
-  ASSERT_EQ(imported.exit_code, 0) << imported.output;
-  EXPECT_NE(imported.output.find("the scene is a room"), std::string::npos) << imported.output;
-  ExpectExportImportsBack(dir_, scene);
-  const CliRun dc =
-      Fenestra("dc " + scene + " --method one-stage --paths 500 -o " + (dir_ / "D.txt").string());
-  ASSERT_EQ(dc.exit_code, 0) << dc.output;
-  ExpectShortJobRuns(dir_, scene);
+  ExpectShortJobRuns(dir_, ImportExportAndTrace(dir_, model, 500).scene);
 }
 
 // A Honeybee model of two windows and 640 sensors (tests/data/models/end_windows_hall).
 TEST_F(SceneImportTest, HoneybeeModelOfTwoWindowsRunsADc) {
-  const std::string scene = (dir_ / "hb.json").string();
-  const CliRun imported =
-      Fenestra("scene import " + kModels + "/end_windows_hall/end_windows_hall.hbjson --grid core" +
-               " --weather " + kWeather + " -o " + scene);
-  ASSERT_EQ(imported.exit_code, 0) << imported.output;
-  EXPECT_NE(imported.output.find("the scene is a room"), std::string::npos) << imported.output;
-  ExpectExportImportsBack(dir_, scene);
-  const CliRun dc =
-      Fenestra("dc " + scene + " --method one-stage --paths 500 -o " + (dir_ / "D.txt").string());
-  ASSERT_EQ(dc.exit_code, 0) << dc.output;
+  const Imported r = ImportExportAndTrace(
+      dir_, kModels + "/end_windows_hall/end_windows_hall.hbjson --grid core", 500);
+  EXPECT_NE(r.import_output.find("2 windows, 640 sensors"), std::string::npos) << r.import_output;
 }
 
 TEST_F(SceneImportTest, BadArgumentsAndModelsAreRefusedWithNothingWritten) {

@@ -558,23 +558,7 @@ TEST(CudaBackendTest, OutdoorBatchesOnTheDeviceMakeTheHostsProduct) {
 void ExpectGpuReplayIsTheTrace(DcBackend* gpu, const Scene& scene, const IndoorOptions& options) {
   absl::StatusOr<std::unique_ptr<IndoorStages>> stages = gpu->MakeIndoorStages(scene, options);
   ASSERT_TRUE(stages.ok()) << stages.status();
-  for (const auto& values : ReplayCheckDesigns()) {
-    absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, values);
-    ASSERT_TRUE(design.ok()) << design.status();
-    absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(scene, *design, options, gpu);
-    absl::StatusOr<IndoorResult> replayed = (*stages)->Compute(*design);
-    ASSERT_TRUE(traced.ok() && replayed.ok()) << traced.status() << replayed.status();
-    EXPECT_NE(replayed->backend.find("replay"), std::string::npos) << replayed->backend;
-    ASSERT_EQ(traced->coefficients.cols(), replayed->coefficients.cols());
-    std::printf(
-        "replay against full trace: %.3g relative L1 difference; replay %.2f ms, full %.2f ms\n",
-        ExpectReplayEqualsTrace(*traced, *replayed), 1e3 * replayed->wall_seconds,
-        1e3 * traced->wall_seconds);
-  }
-  // Outside the recorded ranges the replay would be wrong, so it refuses
-  BlindDesign wide = DefaultDesign(scene);
-  wide.slat_width_m = 0.3;
-  EXPECT_EQ((*stages)->Compute(wide).status().code(), absl::StatusCode::kInvalidArgument);
+  ExpectReplayIsTheTrace(scene, options, **stages, gpu);
 }
 
 TEST(CudaBackendTest, ReplayEqualsTheIndoorStage) {

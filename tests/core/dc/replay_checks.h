@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -43,6 +45,32 @@ inline double ExpectReplayEqualsTrace(const IndoorResult& traced, const IndoorRe
   EXPECT_GT(replayed.coefficients.rightCols(kDaylightBins).sum(), 0);
   EXPECT_GT(replayed.coefficients.leftCols(replayed.coefficients.cols() - kDaylightBins).sum(), 0);
   return difference / traced.coefficients.sum();
+}
+
+// For each design of ReplayCheckDesigns, `replay`'s I equals the indoor stage of `scene` traced
+// in full by `backend` (the CPU's where null) with `options`, as ExpectReplayEqualsTrace has
+// it; `also`, where given, then checks more at the design. Outside the recorded ranges the
+// replay refuses, as it would be wrong there.
+inline void ExpectReplayIsTheTrace(const Scene& scene, const IndoorOptions& options,
+                                   const IndoorStages& replay, DcBackend* backend = nullptr,
+                                   const std::function<void(const BlindDesign&)>& also = nullptr) {
+  for (const auto& values : ReplayCheckDesigns()) {
+    absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, values);
+    ASSERT_TRUE(design.ok()) << design.status();
+    absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(scene, *design, options, backend);
+    absl::StatusOr<IndoorResult> replayed = replay.Compute(*design);
+    ASSERT_TRUE(traced.ok() && replayed.ok()) << traced.status() << replayed.status();
+    EXPECT_NE(replayed->backend.find("replay"), std::string::npos) << replayed->backend;
+    ASSERT_EQ(traced->coefficients.cols(), replayed->coefficients.cols());
+    std::printf(
+        "replay against full trace: %.3g relative L1 difference; replay %.2f ms, full %.2f ms\n",
+        ExpectReplayEqualsTrace(*traced, *replayed), 1e3 * replayed->wall_seconds,
+        1e3 * traced->wall_seconds);
+    if (also) also(*design);
+  }
+  BlindDesign wide = DefaultDesign(scene);
+  wide.slat_width_m = 0.3;
+  EXPECT_EQ(replay.Compute(wide).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
 // The tallies' I of `design` (DesignTallies::IndoorBatches, which gives the best design's

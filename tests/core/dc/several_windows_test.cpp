@@ -160,15 +160,7 @@ TEST(SeveralWindowsTest, TheReplayOfBothBlindsIsTheIndoorStage) {
   absl::StatusOr<std::unique_ptr<IndoorReplay>> replay = IndoorReplay::Record(scene, options);
   ASSERT_TRUE(replay.ok()) << replay.status();
   std::printf("paths resumed per design: %.1f%%\n", 100 * (*replay)->ResumedFraction());
-  for (const auto& values : ReplayCheckDesigns()) {
-    absl::StatusOr<BlindDesign> design = DesignWithOverrides(scene, values);
-    ASSERT_TRUE(design.ok()) << design.status();
-    absl::StatusOr<IndoorResult> traced = ComputeIndoorStage(scene, *design, options);
-    absl::StatusOr<IndoorResult> replayed = (*replay)->Compute(*design);
-    ASSERT_TRUE(traced.ok() && replayed.ok()) << replayed.status();
-    std::printf("replay against full trace: %.3g relative L1 difference\n",
-                ExpectReplayEqualsTrace(*traced, *replayed));
-  }
+  ExpectReplayIsTheTrace(scene, options, **replay);
 }
 
 // The east window opens onto a closed black box: no light comes in through it and all that
