@@ -14,6 +14,8 @@ void AddSceneCommand(CLI::App& app);
 void AddSceneImportCommand(CLI::App& scene);
 void AddSkyCommand(CLI::App& app);
 void AddDcCommand(CLI::App& app);
+// fenestra glare (client/glare_command.cpp).
+void AddGlareCommand(CLI::App& app);
 void AddConvergenceCommand(CLI::App& app);
 void AddOptimizeCommand(CLI::App& app);
 // fenestra report (client/report_command.cpp).

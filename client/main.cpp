@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   fenestra::AddSceneCommand(app);
   fenestra::AddSkyCommand(app);
   fenestra::AddDcCommand(app);
+  fenestra::AddGlareCommand(app);
   fenestra::AddConvergenceCommand(app);
   fenestra::AddOptimizeCommand(app);
   fenestra::AddReportCommand(app);

@@ -35,20 +35,19 @@ absl::StatusOr<const v1::HourlyIlluminance*> Hourly(const v1::JobResult& result)
   return &h;
 }
 
-// A CSV field, quoted when it holds a separator, a quote or a line break (RFC 4180).
-std::string CsvField(const std::string& text) {
-  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (const char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
-}
-
 absl::Status WithFlag(const std::string& flag, const absl::Status& status) {
   if (status.ok()) return status;
   return absl::Status(status.code(), absl::StrCat(flag, ": ", status.message()));
 }
 
 }  // namespace
+
+std::string CsvField(const std::string& text) {
+  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (const char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
 
 void AddAnnualOutputOptions(CLI::App* command, AnnualOutputPaths& paths) {
   command->add_option("--hourly-csv", paths.hourly_csv,

@@ -19,6 +19,9 @@ struct AnnualOutputPaths {
   std::string hourly_csv, hourly_matrix, best_obj;
 };
 
+// A CSV field, quoted when it holds a separator, a quote or a line break (RFC 4180).
+std::string CsvField(const std::string& text);
+
 // Adds --hourly-csv, --hourly-matrix and --best-obj to `command`.
 void AddAnnualOutputOptions(CLI::App* command, AnnualOutputPaths& paths);
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <numbers>
+#include <set>
 #include <unordered_map>
 
 #include "absl/strings/str_cat.h"
@@ -387,6 +388,35 @@ absl::Status AddGridSensors(const v1::SensorGrid& g, int i, const Checker& check
   return absl::OkStatus();
 }
 
+absl::StatusOr<std::vector<ViewPoint>> BuildViews(const v1::Scene& proto, const Checker& check) {
+  if (proto.views_size() > kMaxSceneViews) {
+    return check.Error("views", absl::StrCat("a scene holds at most ", kMaxSceneViews,
+                                             " views, got ", proto.views_size()));
+  }
+  std::vector<ViewPoint> views;
+  std::set<std::string> names;
+  for (int i = 0; i < proto.views_size(); ++i) {
+    const v1::ViewPoint& v = proto.views(i);
+    const std::string field = absl::StrCat("views[", i, "]");
+    FENESTRA_ASSIGN_OR_RETURN(position, check.Point(v.position(), field + ".position"));
+    FENESTRA_ASSIGN_OR_RETURN(direction, check.Direction(v.direction(), field + ".direction"));
+    Vec3d up{0, 0, 1};
+    if (v.has_up()) {
+      FENESTRA_ASSIGN_OR_RETURN(given, check.Direction(v.up(), field + ".up"));
+      up = given;
+    }
+    if (Length(Cross(direction, up)) < 1e-3) {
+      return check.Error(field + ".up", "must not lie along the view direction");
+    }
+    const std::string name = v.name().empty() ? absl::StrCat("v", i + 1) : v.name();
+    if (!names.insert(name).second) {
+      return check.Error(field + ".name", absl::StrCat("\"", name, "\" names another view too"));
+    }
+    views.push_back({name, position, direction, up, field});
+  }
+  return views;
+}
+
 absl::StatusOr<std::vector<Sensor>> BuildSensors(const v1::Scene& proto, const Checker& check) {
   std::vector<Sensor> sensors;
   if (proto.sensors_size() > kMaxSceneSensors) {
@@ -680,6 +710,8 @@ absl::StatusOr<Scene> BuildScene(const v1::Scene& proto, const std::string& path
   FENESTRA_RETURN_IF_ERROR(BuildWindows(proto, check, scene));
   FENESTRA_ASSIGN_OR_RETURN(sensors, BuildSensors(proto, check));
   scene.sensors = std::move(sensors);
+  FENESTRA_ASSIGN_OR_RETURN(views, BuildViews(proto, check));
+  scene.views = std::move(views);
   FENESTRA_ASSIGN_OR_RETURN(site, BuildSite(proto, check));
   scene.site = site;
   return scene;

@@ -27,6 +27,8 @@ inline constexpr double kMinWindowSideM = 0.01;
 inline constexpr double kMaxWindowDepthM = 5.0;
 // Most windows and skylights in a scene: each adds its own outdoor matrix and stages.
 inline constexpr int kMaxSceneWindows = 64;
+// Most view points in a scene.
+inline constexpr int kMaxSceneViews = 1000;
 // Most sensors in a scene, grids expanded: bounds the memory of a scene file's grid (the
 // service has its own, lower limit).
 inline constexpr int64_t kMaxSceneSensors = 1'000'000;
@@ -62,6 +64,21 @@ struct Sensor {
   std::string field = {};
 };
 
+// An eye for glare (scene.proto, ViewPoint): its vertical eye illuminance is that of a sensor
+// at the eye facing the view direction (EyeSensor).
+struct ViewPoint {
+  std::string name;
+  Vec3d position;     // [m]
+  Vec3d direction;    // unit
+  Vec3d up;           // unit, not along direction
+  std::string field;  // e.g. "views[0]"
+};
+
+// The sensor whose illuminance is `view`'s vertical eye illuminance.
+inline Sensor EyeSensor(const ViewPoint& view) {
+  return {view.name, view.position, view.direction, view.field};
+}
+
 // A Box surface: a solid no sensor may lie in.
 struct SolidBox {
   Vec3d min, max;  // [m]
@@ -87,6 +104,7 @@ struct Scene {
   // named "window".
   std::vector<SceneWindow> windows = std::vector<SceneWindow>(1);
   std::vector<Sensor> sensors;
+  std::vector<ViewPoint> views;
   std::vector<SolidBox> solid_boxes;  // every Box surface, indoor and outdoor
   Site site;
 

@@ -120,6 +120,13 @@ v1::Scene SelfContainedSceneProto(const Scene& scene) {
     SetVec3(s.position, sensor.mutable_position());
     SetVec3(s.direction, sensor.mutable_direction());
   }
+  for (const ViewPoint& v : scene.views) {
+    v1::ViewPoint& view = *out.add_views();
+    view.set_name(v.name);
+    SetVec3(v.position, view.mutable_position());
+    SetVec3(v.direction, view.mutable_direction());
+    SetVec3(v.up, view.mutable_up());
+  }
 
   v1::Site& site = *out.mutable_site();
   site.set_latitude_deg(scene.site.latitude_deg);

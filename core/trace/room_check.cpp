@@ -410,6 +410,7 @@ absl::Status CheckRoom(const Scene& scene) {
   }
   const SensorCheck sensors(scene, *probe);
   for (const Sensor& s : scene.sensors) FENESTRA_RETURN_IF_ERROR(sensors.Check(s));
+  for (const ViewPoint& v : scene.views) FENESTRA_RETURN_IF_ERROR(sensors.Check(EyeSensor(v)));
   return absl::OkStatus();
 }
 

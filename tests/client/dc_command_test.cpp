@@ -265,3 +265,40 @@ TEST_F(DcCommandTest, StageMatricesNeedTheTwoStageMethod) {
 
 }  // namespace
 }  // namespace fenestra
+
+namespace fenestra {
+namespace {
+
+using GlareCommandTest = CliTest;
+
+const std::string kSunnyOffice = kExamples + "/sunny_office/scene.json";
+
+TEST_F(GlareCommandTest, PrintsEachViewsYearAndWritesItsHours) {
+  const std::string hourly = (dir_ / "hours.csv").string();
+  const CliRun run =
+      Fenestra("glare " + kSunnyOffice + " --set alpha=1.2 --paths 4000 --hourly " + hourly);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (const char* text :
+       {"view desk facing the window at (0.00, 2.00, 4.20)", "view desk facing the side wall",
+        "glare autonomy", "of 3650 occupied hours (DGPs < 0.40; target 95%: not met)",
+        "EN 17037 glare protection", "hours imperceptible"}) {
+    EXPECT_NE(run.output.find(text), std::string::npos) << text << "\n" << run.output;
+  }
+  const std::string csv = ReadText(hourly);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 8761);
+  EXPECT_EQ(csv.substr(0, csv.find(",desk facing the side wall")),
+            "month,day,hour,desk facing the window Ev [lx],desk facing the window Ev SE "
+            "[lx],desk facing the window DGPs");
+}
+
+TEST_F(GlareCommandTest, ASceneWithoutViewsOrATwoStageRunIsRefused) {
+  CliRun run = Fenestra("glare " + kExamples + "/city_office/scene.json --paths 100");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.output.find("the scene has no view points"), std::string::npos) << run.output;
+  run = Fenestra("glare " + kSunnyOffice + " --method two-stage");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.output.find("one-stage"), std::string::npos) << run.output;
+}
+
+}  // namespace
+}  // namespace fenestra

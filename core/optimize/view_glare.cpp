@@ -1,0 +1,115 @@
+#include "core/optimize/view_glare.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "absl/strings/str_cat.h"
+#include "core/common/seconds.h"
+#include "core/common/status_macros.h"
+#include "core/dc/direct_sun.h"
+#include "core/dc/one_stage.h"
+#include "core/metrics/illuminance.h"
+#include "core/optimize/hourly_illuminance.h"
+
+namespace fenestra {
+namespace {
+
+// The standard error of the mean of `values` (one per batch) from their spread.
+double BatchStandardError(const std::vector<double>& values) {
+  const double n = static_cast<double>(values.size());
+  double mean = 0;
+  for (const double v : values) mean += v / n;
+  double squares = 0;
+  for (const double v : values) squares += (v - mean) * (v - mean);
+  return std::sqrt(squares / (n - 1) / n);
+}
+
+// Row `view` of `lux` over the steps `lit` of `steps` steps, the other steps 0.
+std::vector<double> EveryStep(const Matrix& lux, int view, const std::vector<int>& lit, int steps) {
+  std::vector<double> all(steps, 0.0);
+  for (size_t c = 0; c < lit.size(); ++c) all[lit[c]] = lux(view, static_cast<Eigen::Index>(c));
+  return all;
+}
+
+}  // namespace
+
+absl::StatusOr<ViewGlareResult> ComputeViewGlare(const Scene& scene, const BlindDesign& design,
+                                                 const SkyMatrix& sky,
+                                                 const std::vector<bool>& occupied,
+                                                 const ViewGlareOptions& options,
+                                                 DcBackend* backend) {
+  const auto start = std::chrono::steady_clock::now();
+  if (scene.views.empty()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(scene.source_path, ": the scene has no view points (scene.proto, views)"));
+  }
+  if (options.tracing.batches < 2) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "glare needs at least 2 batches for its standard errors, got ", options.tracing.batches));
+  }
+  const int steps = static_cast<int>(sky.steps.size());
+  if (static_cast<int>(occupied.size()) != steps) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("glare: ", occupied.size(), " occupancy flags for ", steps, " sky steps"));
+  }
+  // The eyes as sensors of the same room
+  Scene eyes = scene;
+  eyes.sensors.clear();
+  for (const ViewPoint& v : scene.views) eyes.sensors.push_back(EyeSensor(v));
+  const int views = static_cast<int>(eyes.sensors.size());
+
+  FENESTRA_ASSIGN_OR_RETURN(traced, ComputeOneStage(eyes, design, options.tracing, backend));
+  const std::vector<int> lit = LitColumns(sky.radiance);
+  FENESTRA_ASSIGN_OR_RETURN(split, SplitSkyColumnsInLux(sky, lit));
+  FENESTRA_ASSIGN_OR_RETURN(
+      sun, DirectSun::Trace(eyes, SunColumnsOf(sky, lit), static_cast<int>(lit.size())));
+  const Matrix sun_lux = sun->Illuminance(design);
+
+  // Each batch's eye illuminance, E_b = [D_b D_0,b] [S; -S_sun] + E_sun
+  std::vector<Matrix> batches;
+  for (size_t b = 0; b < traced.batch_coefficients.size(); ++b) {
+    const Matrix& d = traced.batch_coefficients[b];
+    Matrix both(d.rows(), 2 * d.cols());
+    both << d, traced.batch_direct_coefficients[b];
+    batches.push_back(both * split + sun_lux);
+  }
+  const double count = static_cast<double>(batches.size());
+  Matrix mean = Matrix::Zero(views, static_cast<Eigen::Index>(lit.size()));
+  for (const Matrix& e : batches) mean += e / count;
+  Matrix squares = Matrix::Zero(mean.rows(), mean.cols());
+  for (const Matrix& e : batches) squares += (e - mean).cwiseAbs2();
+  const Matrix error = (squares / (count - 1) / count).cwiseSqrt();
+
+  ViewGlareResult result;
+  result.eye_lux = Matrix::Zero(views, steps);
+  result.eye_lux_standard_error = Matrix::Zero(views, steps);
+  result.sun_lux = Matrix::Zero(views, steps);
+  for (size_t c = 0; c < lit.size(); ++c) {
+    const Eigen::Index i = static_cast<Eigen::Index>(c);
+    result.eye_lux.col(lit[c]) = mean.col(i).cwiseMax(0.0);
+    result.eye_lux_standard_error.col(lit[c]) = error.col(i);
+    result.sun_lux.col(lit[c]) = sun_lux.col(i);
+  }
+  for (int v = 0; v < views; ++v) {
+    const std::vector<double> eye(result.eye_lux.row(v).begin(), result.eye_lux.row(v).end());
+    const std::vector<double> beam(result.sun_lux.row(v).begin(), result.sun_lux.row(v).end());
+    FENESTRA_ASSIGN_OR_RETURN(glare, GlareOfView(eye, occupied, options.threshold, beam));
+    result.views.push_back(glare);
+    // The batches' own figures, for the errors (a batch's noise may dip below 0 lx)
+    std::vector<double> autonomy, mean_dgp;
+    for (const Matrix& e : batches) {
+      const Matrix clamped = e.cwiseMax(0.0);
+      FENESTRA_ASSIGN_OR_RETURN(
+          g, GlareOfView(EveryStep(clamped, v, lit, steps), occupied, options.threshold));
+      autonomy.push_back(g.autonomy_percent);
+      mean_dgp.push_back(g.mean_dgp);
+    }
+    result.autonomy_standard_error.push_back(BatchStandardError(autonomy));
+    result.mean_dgp_standard_error.push_back(BatchStandardError(mean_dgp));
+  }
+  result.paths_per_view = traced.paths_per_sensor;
+  result.seconds = SecondsSince(start);
+  return result;
+}
+
+}  // namespace fenestra
