@@ -9,20 +9,11 @@
 #include "core/dc/direct_sun.h"
 #include "core/dc/one_stage.h"
 #include "core/metrics/illuminance.h"
+#include "core/metrics/metric_errors.h"
 #include "core/optimize/hourly_illuminance.h"
 
 namespace fenestra {
 namespace {
-
-// The standard error of the mean of `values` (one per batch) from their spread.
-double BatchStandardError(const std::vector<double>& values) {
-  const double n = static_cast<double>(values.size());
-  double mean = 0;
-  for (const double v : values) mean += v / n;
-  double squares = 0;
-  for (const double v : values) squares += (v - mean) * (v - mean);
-  return std::sqrt(squares / (n - 1) / n);
-}
 
 // Row `view` of `lux` over the steps `lit` of `steps` steps, the other steps 0.
 std::vector<double> EveryStep(const Matrix& lux, int view, const std::vector<int>& lit, int steps) {
@@ -95,17 +86,18 @@ absl::StatusOr<ViewGlareResult> ComputeViewGlare(const Scene& scene, const Blind
     const std::vector<double> beam(result.sun_lux.row(v).begin(), result.sun_lux.row(v).end());
     FENESTRA_ASSIGN_OR_RETURN(glare, GlareOfView(eye, occupied, options.threshold, beam));
     result.views.push_back(glare);
-    // The batches' own figures, for the errors (a batch's noise may dip below 0 lx)
+    // The errors by the delete-one jackknife over the batches (metric_errors.h): the figures
+    // of E_(-b) = (B E - E_b) / (B - 1), whose noise may dip below 0 lx
     std::vector<double> autonomy, mean_dgp;
     for (const Matrix& e : batches) {
-      const Matrix clamped = e.cwiseMax(0.0);
+      const Matrix without = ((count * mean - e) / (count - 1)).cwiseMax(0.0);
       FENESTRA_ASSIGN_OR_RETURN(
-          g, GlareOfView(EveryStep(clamped, v, lit, steps), occupied, options.threshold));
+          g, GlareOfView(EveryStep(without, v, lit, steps), occupied, options.threshold));
       autonomy.push_back(g.autonomy_percent);
       mean_dgp.push_back(g.mean_dgp);
     }
-    result.autonomy_standard_error.push_back(BatchStandardError(autonomy));
-    result.mean_dgp_standard_error.push_back(BatchStandardError(mean_dgp));
+    result.autonomy_standard_error.push_back(JackknifeStandardError(autonomy));
+    result.mean_dgp_standard_error.push_back(JackknifeStandardError(mean_dgp));
   }
   result.paths_per_view = traced.paths_per_sensor;
   result.seconds = SecondsSince(start);

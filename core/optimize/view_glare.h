@@ -4,7 +4,7 @@
 // vertical eye illuminance per time step, as a sensor at the eye facing the view direction
 // traced by the one-stage method with the direct sun where it is (E = D S - D_0 S_sun +
 // E_sun), its simplified DGP and annual figures (core/metrics/glare.h), with standard errors
-// from the batches' spread.
+// by the delete-one jackknife over the batches (core/metrics/metric_errors.h).
 #include <string>
 #include <vector>
 
