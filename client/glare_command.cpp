@@ -36,34 +36,33 @@ void PrintViews(const Scene& scene, const ViewGlareResult& r, const GlareArgs& a
                v.position.x, v.position.y, v.position.z, v.direction.x, v.direction.y,
                v.direction.z);
     fmt::print(
-        "  glare autonomy {:.1f} ± {:.1f} % of {} occupied hours (DGPs < {:.2f}; target "
+        "  glare autonomy {:.1f} ± {:.1f} % of {} occupied hours (DGP < {:.2f}; target "
         "{:.0f}%: {})\n",
         g.autonomy_percent, r.autonomy_standard_error[i], g.occupied_hours, args.threshold,
         args.target, g.autonomy_percent >= args.target ? "met" : "not met");
     fmt::print(
-        "  mean DGPs {:.3f} ± {:.3f}; EN 17037 glare protection {} (DGPs {:.3f} exceeded in "
+        "  mean DGP {:.3f} ± {:.3f}; EN 17037 glare protection {} (DGP {:.3f} exceeded in "
         "at most {:.0f}% of the hours)\n",
         g.mean_dgp, r.mean_dgp_standard_error[i], En17037GlareName(g.en17037), g.dgp_95,
         kEn17037ExceedancePercent);
     fmt::print("  hours imperceptible {}, perceptible {}, disturbing {}, intolerable {}\n",
                g.class_hours[0], g.class_hours[1], g.class_hours[2], g.class_hours[3]);
     if (g.sunlit_hours > 0) {
-      fmt::print(
-          "  the sun's beam reaches the eye in {} of the hours: DGPs leaves out the sun as a "
-          "glare source there, so it understates their glare\n",
-          g.sunlit_hours);
+      fmt::print("  the sun's beam reaches the eye in {} of the hours, a glare source there\n",
+                 g.sunlit_hours);
     }
   }
 }
 
-// The hourly table: step, then each view's Ev, its standard error and DGPs.
+// The hourly table: step, then each view's Ev, its standard error, DGPs and the DGP with the
+// sun.
 void WriteHourly(const std::string& path, const Scene& scene, const SkyMatrix& sky,
                  const ViewGlareResult& r) {
   std::ofstream out(path);
   out << "month,day,hour";
   for (const ViewPoint& v : scene.views) {
     out << "," << CsvField(v.name + " Ev [lx]") << "," << CsvField(v.name + " Ev SE [lx]") << ","
-        << CsvField(v.name + " DGPs");
+        << CsvField(v.name + " DGPs") << "," << CsvField(v.name + " DGP");
   }
   out << "\n";
   for (size_t s = 0; s < sky.steps.size(); ++s) {
@@ -73,7 +72,8 @@ void WriteHourly(const std::string& path, const Scene& scene, const SkyMatrix& s
       const double ev = r.eye_lux(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(s));
       out << "," << ev << ","
           << r.eye_lux_standard_error(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(s))
-          << "," << SimplifiedDgp(ev);
+          << "," << SimplifiedDgp(ev) << ","
+          << r.dgp(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(s));
     }
     out << "\n";
   }
@@ -124,8 +124,9 @@ void AddGlareCommand(CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "glare",
       "The annual glare at the scene's view points: vertical eye illuminance per hour, the "
-      "simplified daylight glare probability (DGPs = 6.22e-5 Ev + 0.184), glare autonomy and the "
-      "EN 17037 glare protection class");
+      "daylight glare probability with the sun as glare source where its beam reaches the eye "
+      "(evalglare's DGP; the simplified DGPs = 6.22e-5 Ev + 0.184 beside it), glare autonomy "
+      "and the EN 17037 glare protection class");
   AddDcFlags(command, &args->flags);
   command->add_option("--weather", args->weather,
                       "EnergyPlus weather file (default: the scene's site.weather_file)");
@@ -142,7 +143,7 @@ void AddGlareCommand(CLI::App& app) {
   command->add_option("--occupied-to", args->occupancy.end_hour, "Occupied until [h]")
       ->capture_default_str();
   command->add_option("--hourly", args->hourly,
-                      "Also write each view's Ev, its standard error and DGPs per step (CSV)");
+                      "Also write each view's Ev, its standard error, DGPs and DGP per step (CSV)");
   command->callback([args] { RunGlare(*args); });
 }
 

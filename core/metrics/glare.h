@@ -2,9 +2,15 @@
 
 // Glare at a view point from its vertical eye illuminance Ev (core/README.md, "Glare").
 //
-// The simplified daylight glare probability of Wienold (2009), DGPs = 6.22e-5 Ev + 0.184, holds
-// where no glare source as bright as the sun's disc is in view; a view whose eye the sun's
-// beam reaches is counted apart (ViewGlare::sunlit_hours), as DGPs understates its glare.
+// - The simplified daylight glare probability (Wienold 2009), DGPs = 6.22e-5 Ev + 0.184: Ev
+//   alone, which holds where no glare source as bright as the sun's disc is in view.
+// - The daylight glare probability (Wienold & Christoffersen 2006) with the sun as its glare
+//   source, as the enhanced simplified DGP takes it: DGP = 5.87e-5 Ev + 0.092 log10(1 +
+//   sum L^2 w / (Ev^1.87 P^2)) + 0.159, at most 1, with evalglare's constants and without its
+//   low-light correction (off unless asked for, -C l+); the sun's luminance L is the normal
+//   illuminance of its beam through glazing and blind over its disc's solid angle w, P its
+//   position index after Guth (above the line of sight) or Iwata (below), as evalglare
+//   computes them. Without the sun in view it is 5.87e-5 Ev + 0.159.
 // Comfort classes: DGP < 0.35 imperceptible, < 0.40 perceptible, < 0.45 disturbing, else
 // intolerable. Annual figures over the occupied hours: the glare autonomy (share of hours
 // below a threshold, 0.40 as Honeybee's imageless annual glare; its target 95%) and the
@@ -16,11 +22,14 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/common/vec3.h"
 
 namespace fenestra {
 
 inline constexpr double kDgpsSlopePerLux = 6.22e-5;
 inline constexpr double kDgpsOffset = 0.184;
+// The solid angle of the sun's disc, 0.533 degrees across [sr].
+inline constexpr double kSunSolidAngleSr = 6.805e-5;
 // Honeybee's imageless annual glare: the threshold and the share of hours below it to reach.
 inline constexpr double kDefaultGlareThreshold = 0.40;
 inline constexpr double kDefaultGlareAutonomyTargetPercent = 95.0;
@@ -29,6 +38,26 @@ inline constexpr double kEn17037ExceedancePercent = 5.0;
 
 // DGPs from the vertical eye illuminance [lx].
 inline double SimplifiedDgp(double eye_lux) { return kDgpsSlopePerLux * eye_lux + kDgpsOffset; }
+
+// A glare source: its mean luminance [cd/m2], solid angle [sr] and position index.
+struct GlareSource {
+  double luminance = 0;
+  double solid_angle = 0;
+  double position_index = 1;
+};
+
+// The DGP at vertical eye illuminance `eye_lux` (> 0) with `sources`.
+double Dgp(double eye_lux, std::span<const GlareSource> sources);
+
+// The position index of a source in direction `to_source` from an eye looking along `view`
+// with `up` (unit vectors; up not along view): Guth's above the line of sight, Iwata's below,
+// at most 16.
+double PositionIndex(Vec3d view, Vec3d up, Vec3d to_source);
+
+// The DGP with the sun as glare source: the sun in direction `to_sun` whose beam, through
+// whatever lies between, gives the eye plane (facing `view`) `sun_eye_lux` of the eye's
+// `eye_lux`. Without the beam (sun_eye_lux 0) the DGP of Ev alone.
+double DgpWithSun(double eye_lux, double sun_eye_lux, Vec3d view, Vec3d up, Vec3d to_sun);
 
 enum class GlareClass { kImperceptible, kPerceptible, kDisturbing, kIntolerable };
 GlareClass ClassOfDgp(double dgp);
@@ -48,13 +77,13 @@ struct ViewGlare {
   int sunlit_hours = 0;              // hours the sun's beam reaches the eye
 };
 
-// The glare of one view from its eye illuminance per time step [lx] (`eye_lux`), the steps'
-// occupancy, and where given the sun's beam alone at the eye per step (`sun_lux`, as
-// DirectSun gives it). InvalidArgument for lengths that differ, a threshold outside (0, 1) or
-// an eye illuminance that is negative or not finite; no occupied step gives all zeros.
-absl::StatusOr<ViewGlare> GlareOfView(std::span<const double> eye_lux,
+// The glare of one view from its DGP per time step (`dgp`), the steps' occupancy and, where
+// given, whether the sun's beam reaches the eye per step (`sunlit`). InvalidArgument for
+// lengths that differ, a threshold outside (0, 1) or a DGP outside [0, 1]; no occupied step
+// gives all zeros.
+absl::StatusOr<ViewGlare> GlareOfView(std::span<const double> dgp,
                                       const std::vector<bool>& occupied,
                                       double threshold = kDefaultGlareThreshold,
-                                      std::span<const double> sun_lux = {});
+                                      const std::vector<bool>& sunlit = {});
 
 }  // namespace fenestra

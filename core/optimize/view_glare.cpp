@@ -15,11 +15,18 @@
 namespace fenestra {
 namespace {
 
-// Row `view` of `lux` over the steps `lit` of `steps` steps, the other steps 0.
-std::vector<double> EveryStep(const Matrix& lux, int view, const std::vector<int>& lit, int steps) {
-  std::vector<double> all(steps, 0.0);
-  for (size_t c = 0; c < lit.size(); ++c) all[lit[c]] = lux(view, static_cast<Eigen::Index>(c));
-  return all;
+// The DGP with the sun of view `v` at every step of `sky`, from its eye illuminance `eye` at
+// the steps `lit` (views x lit steps, lx; negative noise read as 0) and the sun's beam alone
+// `sun` (the same layout); the other steps are dark (DGP of 0 lx).
+std::vector<double> HourlyDgp(const Matrix& eye, const Matrix& sun, int v, const ViewPoint& view,
+                              const SkyMatrix& sky, const std::vector<int>& lit) {
+  std::vector<double> dgp(sky.steps.size(), Dgp(0, {}));
+  for (size_t c = 0; c < lit.size(); ++c) {
+    const Eigen::Index i = static_cast<Eigen::Index>(c);
+    dgp[lit[c]] = DgpWithSun(std::max(0.0, eye(v, i)), sun(v, i), view.direction, view.up,
+                             SunDirection(sky.steps[lit[c]]));
+  }
+  return dgp;
 }
 
 }  // namespace
@@ -81,18 +88,22 @@ absl::StatusOr<ViewGlareResult> ComputeViewGlare(const Scene& scene, const Blind
     result.eye_lux_standard_error.col(lit[c]) = error.col(i);
     result.sun_lux.col(lit[c]) = sun_lux.col(i);
   }
+  result.dgp = Matrix::Zero(views, steps);
   for (int v = 0; v < views; ++v) {
-    const std::vector<double> eye(result.eye_lux.row(v).begin(), result.eye_lux.row(v).end());
-    const std::vector<double> beam(result.sun_lux.row(v).begin(), result.sun_lux.row(v).end());
-    FENESTRA_ASSIGN_OR_RETURN(glare, GlareOfView(eye, occupied, options.threshold, beam));
+    const ViewPoint& view = scene.views[v];
+    std::vector<bool> sunlit(steps, false);
+    for (int s = 0; s < steps; ++s) sunlit[s] = result.sun_lux(v, s) > 0;
+    const std::vector<double> dgp = HourlyDgp(mean, sun_lux, v, view, sky, lit);
+    for (int s = 0; s < steps; ++s) result.dgp(v, s) = dgp[s];
+    FENESTRA_ASSIGN_OR_RETURN(glare, GlareOfView(dgp, occupied, options.threshold, sunlit));
     result.views.push_back(glare);
     // The errors by the delete-one jackknife over the batches (metric_errors.h): the figures
-    // of E_(-b) = (B E - E_b) / (B - 1), whose noise may dip below 0 lx
+    // of E_(-b) = (B E - E_b) / (B - 1)
     std::vector<double> autonomy, mean_dgp;
     for (const Matrix& e : batches) {
-      const Matrix without = ((count * mean - e) / (count - 1)).cwiseMax(0.0);
-      FENESTRA_ASSIGN_OR_RETURN(
-          g, GlareOfView(EveryStep(without, v, lit, steps), occupied, options.threshold));
+      const Matrix without = (count * mean - e) / (count - 1);
+      FENESTRA_ASSIGN_OR_RETURN(g, GlareOfView(HourlyDgp(without, sun_lux, v, view, sky, lit),
+                                               occupied, options.threshold));
       autonomy.push_back(g.autonomy_percent);
       mean_dgp.push_back(g.mean_dgp);
     }

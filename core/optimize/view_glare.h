@@ -3,8 +3,9 @@
 // The glare at a scene's view points over a year (core/README.md, "Glare"): each view's
 // vertical eye illuminance per time step, as a sensor at the eye facing the view direction
 // traced by the one-stage method with the direct sun where it is (E = D S - D_0 S_sun +
-// E_sun), its simplified DGP and annual figures (core/metrics/glare.h), with standard errors
-// by the delete-one jackknife over the batches (core/metrics/metric_errors.h).
+// E_sun), its DGP per step with the sun as glare source where its beam reaches the eye, and
+// annual figures (core/metrics/glare.h), with standard errors by the delete-one jackknife over
+// the batches (core/metrics/metric_errors.h).
 #include <string>
 #include <vector>
 
@@ -29,6 +30,7 @@ struct ViewGlareResult {
   Matrix eye_lux;  // views x every step of the sky [lx], night steps 0
   Matrix eye_lux_standard_error;
   Matrix sun_lux;  // the sun's beam alone at each eye [lx], exact
+  Matrix dgp;      // views x steps: DgpWithSun of eye_lux and sun_lux
   int64_t paths_per_view = 0;
   double seconds = 0;
 };

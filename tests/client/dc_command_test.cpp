@@ -280,7 +280,7 @@ TEST_F(GlareCommandTest, PrintsEachViewsYearAndWritesItsHours) {
   ASSERT_EQ(run.exit_code, 0) << run.output;
   for (const char* text :
        {"view desk facing the window at (0.00, 2.00, 4.20)", "view desk facing the side wall",
-        "glare autonomy", "of 3650 occupied hours (DGPs < 0.40; target 95%: not met)",
+        "glare autonomy", "of 3650 occupied hours (DGP < 0.40; target 95%: not met)",
         "EN 17037 glare protection", "hours imperceptible"}) {
     EXPECT_NE(run.output.find(text), std::string::npos) << text << "\n" << run.output;
   }
@@ -288,7 +288,7 @@ TEST_F(GlareCommandTest, PrintsEachViewsYearAndWritesItsHours) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 8761);
   EXPECT_EQ(csv.substr(0, csv.find(",desk facing the side wall")),
             "month,day,hour,desk facing the window Ev [lx],desk facing the window Ev SE "
-            "[lx],desk facing the window DGPs");
+            "[lx],desk facing the window DGPs,desk facing the window DGP");
 }
 
 TEST_F(GlareCommandTest, ASceneWithoutViewsOrATwoStageRunIsRefused) {

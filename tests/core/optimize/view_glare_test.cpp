@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -115,7 +116,8 @@ ViewGlareResult Glare(const Scene& scene, const Year& year, double alpha) {
 
 // Closed slats (alpha 0, in the window plane) against open ones (alpha 1.2): the eye facing
 // the window gets more glare with the slats open, beyond 5 standard errors, and more than the
-// eye looking along the wall; every figure is finite, the hourly DGPs are Ev's by hand.
+// eye looking along the wall; every figure is finite, the hourly DGP without the sun is Ev's
+// by hand, and an hour the sun's beam reaches the eye facing the window is intolerable.
 TEST(ViewGlareTest, GlareFollowsTheBlindAndTheViewDirection) {
   absl::StatusOr<Scene> scene = ValidateScene(SunnyOfficeWithViews(), kSunnyOffice);
   ASSERT_TRUE(scene.ok()) << scene.status();
@@ -137,15 +139,28 @@ TEST(ViewGlareTest, GlareFollowsTheBlindAndTheViewDirection) {
             5.0);
   EXPECT_EQ(open.views[0].occupied_hours, 3650);
   EXPECT_GT(open.views[0].class_hours[3], 0);  // intolerable hours with the slats open
+  ASSERT_GT(open.views[0].sunlit_hours, 0);
+  for (Eigen::Index s = 0; s < open.sun_lux.cols(); ++s) {
+    if (open.sun_lux(0, s) > 0) {
+      EXPECT_GT(open.dgp(0, s), 0.45) << "step " << s;
+    }
+  }
   for (const ViewGlareResult* r : {&closed, &open}) {
     EXPECT_TRUE(r->eye_lux.allFinite() && r->eye_lux_standard_error.allFinite());
     EXPECT_GE(r->eye_lux.minCoeff(), 0.0);
     EXPECT_GT(r->eye_lux.maxCoeff(), 1000.0);
-    // The mean DGPs is that of the hourly Ev, by hand
+    // The hours without the sun's beam at the eye have Ev's DGP alone, by hand; the mean
+    // DGP is that of the hours
     double sum = 0;
+    int sunless = 0;
     for (Eigen::Index s = 0; s < r->eye_lux.cols(); ++s) {
-      if (year.occupied[s]) sum += 6.22e-5 * r->eye_lux(0, s) + 0.184;
+      if (r->sun_lux(0, s) == 0 && r->eye_lux(0, s) > 0) {
+        EXPECT_NEAR(r->dgp(0, s), std::min(1.0, 5.87e-5 * r->eye_lux(0, s) + 0.159), 1e-12);
+        ++sunless;
+      }
+      if (year.occupied[s]) sum += r->dgp(0, s);
     }
+    EXPECT_GT(sunless, 1000);
     EXPECT_NEAR(r->views[0].mean_dgp, sum / 3650, 1e-9);
   }
 }
