@@ -158,6 +158,11 @@ absl::Status SceneJson(std::string_view bytes) {
   for (const Sensor& s : scene->sensors) {
     Require(AllFinite({s.position, s.direction}), "a scene that loads has a non-finite sensor");
   }
+  for (const ViewPoint& v : scene->views) {
+    Require(AllFinite({v.position, v.direction, v.up}), "a scene that loads has a non-finite view");
+    Require(std::abs(Length(v.direction) - 1) < 1e-9 && Length(Cross(v.direction, v.up)) > 0,
+            "a view's direction is not a unit vector apart from its up");
+  }
   return absl::OkStatus();
 }
 
