@@ -8,6 +8,7 @@
 #include <map>
 #include <string_view>
 
+#include "core/common/text.h"
 #include "core/optimize/design_variables.h"
 #include "core/optimize/final_check.h"
 
@@ -21,8 +22,8 @@ std::string Clock(double seconds) {
   return fmt::format("{:02}:{:02}", s / 60, s % 60);
 }
 
-std::string Value(const v1::Estimate& e) {
-  return fmt::format("{:.2f} ± {:.2f}", e.value(), e.standard_error());
+std::string Value(const v1::Estimate& e, int digits = 2) {
+  return fmt::format("{:.{}f} ± {:.{}f}", e.value(), digits, e.standard_error(), digits);
 }
 
 // "+13.21 ± 1.91 % (6.9 SE)"
@@ -159,6 +160,13 @@ std::string FormatResult(const v1::JobResult& r) {
     out += "\n";
   }
   for (const v1::ConstraintResult& c : r.best_constraints()) out += ConstraintLine(c);
+  for (const v1::ViewGlare& g : r.best_glare()) {
+    out += fmt::format(
+        "glare at {}: autonomy {} % of {} hours (DGP < 0.40), mean DGP {}, EN 17037 {}, the sun "
+        "in view {} hours ({:.2f} s for all views)\n",
+        QuoteText(g.view()), Value(g.autonomy()), g.analysed_hours(), Value(g.mean_dgp(), 3),
+        g.en17037(), g.sunlit_hours(), r.timings().glare_seconds());
+  }
   out += fmt::format(
       "{} evaluations ({}), backend {}: sky {:.2f} s, outdoor {:.2f} s, evaluations {:.2f} s, "
       "total {:.2f} s\n",

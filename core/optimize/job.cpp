@@ -29,6 +29,7 @@
 #include "core/optimize/metric_objective.h"
 #include "core/optimize/operated_blind.h"
 #include "core/optimize/racing.h"
+#include "core/optimize/view_glare.h"
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
 #include "core/sky/sky_matrix.h"
@@ -184,6 +185,31 @@ absl::Status CheckBestDesign(const PreparedJob& job, const AnnualSetting& settin
   return absl::OkStatus();
 }
 
+// Mixed into the job's seed so that the views trace streams of their own (as the final
+// check's, final_check.cpp).
+constexpr uint64_t kGlareSeedKey = 0x94D049BB133111EB;
+
+// The glare at the scene's view points at the best design (job.proto, JobResult.best_glare),
+// on a backend of its own; nothing for a scene without views, a cancelled search or one
+// without an evaluation.
+absl::Status GlareOfBestDesign(const PreparedJob& job, const AnnualSetting& setting,
+                               const VnsResult& search, const JobCallbacks& callbacks,
+                               v1::JobResult& result) {
+  if (job.scene.views.empty() || search.evaluations == 0) return absl::OkStatus();
+  if (callbacks.cancelled && callbacks.cancelled()) return absl::OkStatus();
+  FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(job.job.sampling().backend()));
+  ViewGlareOptions options;
+  options.tracing.paths_per_sensor = job.job.sampling().indoor_paths_per_sensor();
+  options.tracing.batches = job.job.sampling().batches();
+  options.tracing.seed = job.job.sampling().seed() ^ kGlareSeedKey;
+  FENESTRA_ASSIGN_OR_RETURN(
+      glare, ComputeViewGlare(WithJobRanges(job.scene, job.job), DesignAt(job, search.best_x),
+                              *setting.sky, setting.occupied, options, backend.get()));
+  for (v1::ViewGlare& v : ViewGlareProtos(job.scene, glare)) *result.add_best_glare() = v;
+  result.mutable_timings()->set_glare_seconds(glare.seconds);
+  return absl::OkStatus();
+}
+
 // The best design's hourly illuminance, for reports and other tools, by the search's replay
 // and annual product (`tallies`, its O_b already on the device), on a thread of its own; beside
 // it, on a backend of its own, the final check of the best design by the one-stage method.
@@ -239,7 +265,7 @@ absl::Status HourlyAndCheck(const PreparedJob& job, const AnnualSetting& setting
     *result.mutable_best_hourly() = std::move(values);
     result.mutable_timings()->set_best_hourly_seconds(hourly_seconds);
   }
-  return absl::OkStatus();
+  return GlareOfBestDesign(job, setting, search, callbacks, result);
 }
 
 // The lanes a job's designs are evaluated on at once (Sampling.candidates_at_once): the

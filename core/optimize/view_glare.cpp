@@ -115,4 +115,23 @@ absl::StatusOr<ViewGlareResult> ComputeViewGlare(const Scene& scene, const Blind
   return result;
 }
 
+std::vector<v1::ViewGlare> ViewGlareProtos(const Scene& scene, const ViewGlareResult& result) {
+  std::vector<v1::ViewGlare> out;
+  for (size_t v = 0; v < result.views.size(); ++v) {
+    const ViewGlare& g = result.views[v];
+    v1::ViewGlare& p = out.emplace_back();
+    p.set_view(scene.views[v].name);
+    p.mutable_autonomy()->set_value(g.autonomy_percent);
+    p.mutable_autonomy()->set_standard_error(result.autonomy_standard_error[v]);
+    p.mutable_mean_dgp()->set_value(g.mean_dgp);
+    p.mutable_mean_dgp()->set_standard_error(result.mean_dgp_standard_error[v]);
+    p.set_dgp_95(g.dgp_95);
+    p.set_en17037(std::string(En17037GlareName(g.en17037)));
+    for (const int hours : g.class_hours) p.add_class_hours(hours);
+    p.set_sunlit_hours(g.sunlit_hours);
+    p.set_analysed_hours(g.occupied_hours);
+  }
+  return out;
+}
+
 }  // namespace fenestra

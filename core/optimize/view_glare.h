@@ -15,6 +15,7 @@
 #include "core/geometry/scene.h"
 #include "core/metrics/glare.h"
 #include "core/sky/sky_matrix.h"
+#include "fenestra/v1/job.pb.h"
 
 namespace fenestra {
 
@@ -43,5 +44,8 @@ absl::StatusOr<ViewGlareResult> ComputeViewGlare(const Scene& scene, const Blind
                                                  const std::vector<bool>& occupied,
                                                  const ViewGlareOptions& options,
                                                  DcBackend* backend = nullptr);
+
+// `result`'s figures of each of `scene`'s views, as a job result holds them.
+std::vector<v1::ViewGlare> ViewGlareProtos(const Scene& scene, const ViewGlareResult& result);
 
 }  // namespace fenestra
