@@ -199,6 +199,29 @@ TEST(ReportDataTest, ConstraintsHoldWithinTheirStandardErrors) {
   EXPECT_EQ(Count(page, "<td>at least</td>"), 0);
 }
 
+// The glare at the view points, where the result holds it, is a table of its own, the view's
+// name escaped; a result without views has none.
+TEST(ReportDataTest, TheGlareAtTheViewPointsIsATable) {
+  v1::JobResult r = QuickJobResult();
+  EXPECT_THAT(Page(r), Not(HasSubstr("glare-table")));
+  v1::ViewGlare& g = *r.add_best_glare();
+  g.set_view("desk <1>");
+  g.mutable_autonomy()->set_value(93.25);
+  g.mutable_autonomy()->set_standard_error(1.5);
+  g.mutable_mean_dgp()->set_value(0.3125);
+  g.mutable_mean_dgp()->set_standard_error(0.004);
+  g.set_dgp_95(0.4125);
+  g.set_en17037("minimum");
+  for (const int hours : {3000, 400, 200, 50}) g.add_class_hours(hours);
+  g.set_sunlit_hours(12);
+  g.set_analysed_hours(3650);
+  const std::string page = Page(r);
+  EXPECT_THAT(page, HasSubstr("<tr><td>desk &lt;1&gt;</td><td class=\"num\">93.25 ± 1.50</td>"
+                              "<td class=\"num\">0.312 ± 0.004</td><td>minimum (0.412)</td>"
+                              "<td class=\"num\">3000 / 400 / 200 / 50</td>"
+                              "<td class=\"num\">12</td></tr>"));
+}
+
 // A result from before the direct-sun fields renders without their sections
 TEST(ReportDataTest, AResultWithoutTheDirectSunLeavesItsSectionsOut) {
   const v1::JobResult old = WithoutDirectSun(QuickJobResult());
