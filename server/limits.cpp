@@ -71,7 +71,8 @@ absl::Status CheckSceneLimits(const v1::Scene& scene, const v1::Limits& limits,
     return OverLimit("the scene's triangle count (the blind at its most slats included)", triangles,
                      "max_triangles", limits.max_triangles());
   }
-  double sensors = scene.sensors_size();
+  // Each view point is traced as a sensor is (the glare at a job's best design)
+  double sensors = scene.sensors_size() + scene.views_size();
   for (const v1::SensorGrid& g : scene.sensor_grids()) {
     if (!(g.spacing_m() > 0)) continue;  // invalid; the scene check reports it
     const double nx = std::floor((g.x_max_m() - g.x_min_m()) / g.spacing_m()) + 1;
@@ -79,8 +80,8 @@ absl::Status CheckSceneLimits(const v1::Scene& scene, const v1::Limits& limits,
     if (nx > 0 && ny > 0) sensors += nx * ny;
   }
   if (!(sensors <= limits.max_sensors())) {
-    return OverLimit("the scene's sensor count (grids expanded)", sensors, "max_sensors",
-                     limits.max_sensors());
+    return OverLimit("the scene's sensor count (grids expanded, views included)", sensors,
+                     "max_sensors", limits.max_sensors());
   }
   return absl::OkStatus();
 }

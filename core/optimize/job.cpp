@@ -196,6 +196,11 @@ absl::Status GlareOfBestDesign(const PreparedJob& job, const AnnualSetting& sett
                                const VnsResult& search, const JobCallbacks& callbacks,
                                v1::JobResult& result) {
   if (job.scene.views.empty() || search.evaluations == 0) return absl::OkStatus();
+  // The hourly figures of every view are held as the best design's hourly illuminance is
+  if (static_cast<int64_t>(job.scene.views.size() * setting.sky->steps.size()) >
+      kMaxHourlyIlluminanceValues) {
+    return absl::OkStatus();
+  }
   if (callbacks.cancelled && callbacks.cancelled()) return absl::OkStatus();
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(job.job.sampling().backend()));
   ViewGlareOptions options;

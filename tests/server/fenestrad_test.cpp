@@ -661,6 +661,36 @@ TEST_F(FenestradTest, BadInputIsRefusedBeforeAnythingIsStored) {
        "windows[0].blind.group: must be at most 64 letters"},
       {"a blind beside windows", [](v1::Scene& s) { AsWindowList(s, {"north"}, true); },
        "blind: belongs to window; with windows each window has its blind"},
+      // View points (Scene.views)
+      {"view name with a newline",
+       [](v1::Scene& s) {
+         v1::ViewPoint& v = *s.add_views();
+         *v.mutable_position() = s.sensors(0).position();
+         v.mutable_direction()->set_y(1);
+         v.set_name("desk\n[info] job-1 succeeded");
+       },
+       "views[0].name: holds the control character U+000A"},
+      {"view at NaN",
+       [](v1::Scene& s) {
+         v1::ViewPoint& v = *s.add_views();
+         v.mutable_position()->set_x(std::nan(""));
+         v.mutable_direction()->set_y(1);
+       },
+       "views[0].position"},
+      {"view up along its direction",
+       [](v1::Scene& s) {
+         v1::ViewPoint& v = *s.add_views();
+         *v.mutable_position() = s.sensors(0).position();
+         v.mutable_direction()->set_y(1);
+         v.mutable_up()->set_y(-3);
+       },
+       "views[0].up: must not lie along the view direction"},
+      {"1001 views",
+       [](v1::Scene& s) {
+         for (int i = 0; i < 1001; ++i)
+           *s.add_views()->mutable_position() = s.sensors(0).position();
+       },
+       "at most 1000 views, got 1001"},
   };
   using JobEdit = std::function<void(v1::SubmitJobRequest&)>;
   std::vector<std::tuple<std::string, JobEdit, std::string>> job_cases = {

@@ -78,6 +78,11 @@ TEST(LimitsTest, SensorGridsAreExpanded) {
   grid.set_spacing_m(1e-6);
   limits.set_max_sensors(10'000);
   EXPECT_THAT(CheckSceneLimits(scene, limits).message(), HasSubstr("max_sensors"));
+  // View points count as the sensors they are traced as
+  grid.set_spacing_m(1);
+  limits.set_max_sensors(51);
+  scene.add_views();
+  EXPECT_THAT(CheckSceneLimits(scene, limits).message(), HasSubstr("max_sensors = 51"));
 }
 
 TEST(LimitsTest, PathsAndEvaluations) {
