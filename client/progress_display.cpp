@@ -137,6 +137,27 @@ void EndProgress() {
   std::fflush(stdout);
 }
 
+// A Pareto search's front: one line per member, its objectives with their errors.
+std::string FormatFront(const v1::JobResult& r) {
+  if (!r.has_pareto()) return "";
+  const v1::ParetoResult& p = r.pareto();
+  std::string names;
+  for (const v1::Objective& o : r.job().pareto().objectives()) {
+    names += fmt::format("{}{} ({})", names.empty() ? "" : " against ", v1::Metric_Name(o.metric()),
+                         o.goal() == v1::GOAL_MINIMIZE ? "minimized" : "maximized");
+  }
+  std::string out =
+      fmt::format("Pareto front of {}: {} designs after {} generations, hypervolume {:.4g}\n",
+                  names, p.front_size(), p.generations(),
+                  p.hypervolume_size() > 0 ? p.hypervolume(p.hypervolume_size() - 1) : 0.0);
+  for (const v1::FrontMember& m : p.front()) {
+    std::string values;
+    for (const v1::Estimate& o : m.objectives()) values += fmt::format(" {}", Value(o));
+    out += fmt::format("  step {}:{} at {}\n", m.evaluation(), values, FormatDesign(m.design()));
+  }
+  return out;
+}
+
 std::string FormatResult(const v1::JobResult& r) {
   const v1::Metrics& m = r.best_metrics();
   std::string out = fmt::format("best design: {}\n", FormatDesign(r.best_design()));
@@ -159,6 +180,14 @@ std::string FormatResult(const v1::JobResult& r) {
     }
     out += "\n";
   }
+  if (m.has_glare_autonomy() || m.has_solar_gain_kwh()) {
+    out += fmt::format(
+        "comfort: glare autonomy {} %, hours of glare {} % (DGP >= {:g}), solar gain {} kWh, in "
+        "the cooling season {} kWh\n",
+        Value(m.glare_autonomy()), Value(m.glare_hours()), r.job().metrics().glare_threshold(),
+        Value(m.solar_gain_kwh()), Value(m.cooling_solar_gain_kwh()));
+  }
+  out += FormatFront(r);
   for (const v1::ConstraintResult& c : r.best_constraints()) out += ConstraintLine(c);
   for (const v1::ViewGlare& g : r.best_glare()) {
     out += fmt::format(

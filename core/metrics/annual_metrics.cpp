@@ -15,7 +15,7 @@
 namespace fenestra {
 namespace {
 
-constexpr std::array<std::pair<SceneMetric, std::string_view>, 12> kSceneMetricNames = {{
+constexpr std::array<std::pair<SceneMetric, std::string_view>, 16> kSceneMetricNames = {{
     {SceneMetric::kUdiAll, "udi_all"},
     {SceneMetric::kUdiAllFellShort, "udi_all_fell_short"},
     {SceneMetric::kUdiAllExceeded, "udi_all_exceeded"},
@@ -28,6 +28,10 @@ constexpr std::array<std::pair<SceneMetric, std::string_view>, 12> kSceneMetricN
     {SceneMetric::kAse, "ase"},
     {SceneMetric::kMeanIlluminance, "mean_illuminance"},
     {SceneMetric::kBlindInPlace, "blind_in_place"},
+    {SceneMetric::kGlareAutonomy, "glare_autonomy"},
+    {SceneMetric::kGlareHours, "glare_hours"},
+    {SceneMetric::kSolarGain, "solar_gain"},
+    {SceneMetric::kCoolingSolarGain, "cooling_solar_gain"},
 }};
 
 }  // namespace
@@ -58,6 +62,14 @@ double SceneMetricValue(const SceneMetrics& s, SceneMetric metric) {
       return s.mean_illuminance_lux;
     case SceneMetric::kBlindInPlace:
       return s.blind_in_place_percent;
+    case SceneMetric::kGlareAutonomy:
+      return s.glare_autonomy_percent;
+    case SceneMetric::kGlareHours:
+      return s.glare_hours_percent;
+    case SceneMetric::kSolarGain:
+      return s.solar_gain_kwh;
+    case SceneMetric::kCoolingSolarGain:
+      return s.cooling_solar_gain_kwh;
   }
   return 0;
 }

@@ -72,6 +72,11 @@ struct SceneMetrics {
   double ase_percent = 0;               // sensors with ase_hours >= ase_min_hours; 0 without input
   double blind_in_place_percent = 100;  // analysed hours with the blind in place
   double mean_illuminance_lux = 0;      // over sensors and analysed hours
+  // The comfort metrics (core/optimize/comfort.h); 0 where not computed
+  double glare_autonomy_percent = 0;  // occupied hours with DGP below the threshold, mean of views
+  double glare_hours_percent = 0;     // occupied hours in which some view's DGP reaches it
+  double solar_gain_kwh = 0;          // transmitted through every window over the year
+  double cooling_solar_gain_kwh = 0;  // the same over the cooling season
 };
 
 struct AnnualMetrics {
@@ -95,7 +100,15 @@ enum class SceneMetric {
   kAse,
   kMeanIlluminance,
   kBlindInPlace,
+  // The comfort metrics (core/optimize/comfort.h), set only where a job weighs one
+  kGlareAutonomy,
+  kGlareHours,
+  kSolarGain,
+  kCoolingSolarGain,
 };
+
+// Whether `metric` is one of the comfort metrics, which the daylight tallies do not give.
+inline bool IsComfortMetric(SceneMetric metric) { return metric >= SceneMetric::kGlareAutonomy; }
 
 double SceneMetricValue(const SceneMetrics& scene, SceneMetric metric);
 
@@ -106,7 +119,8 @@ int LeedDaylightPoints(double sda_percent);
 
 // Stable lower-case names: "udi_all", "udi_all_fell_short", "udi_all_exceeded", "udi_mean",
 // "udi_mean_fell_short", "udi_mean_exceeded", "da_mean", "cda_mean", "sda", "ase",
-// "mean_illuminance", "blind_in_place".
+// "mean_illuminance", "blind_in_place", "glare_autonomy", "glare_hours", "solar_gain",
+// "cooling_solar_gain".
 std::string_view SceneMetricName(SceneMetric metric);
 // InvalidArgument listing the valid names when `name` is none of them.
 absl::StatusOr<SceneMetric> SceneMetricFromName(std::string_view name);

@@ -23,6 +23,8 @@ double Dgp(double eye_lux, std::span<const GlareSource> sources) {
   return std::min(dgp, 1.0);
 }
 
+double EyeLuxAtDgp(double dgp) { return (dgp - kDgpOffset) / kDgpEvSlope; }
+
 double PositionIndex(Vec3d view, Vec3d up, Vec3d to_source) {
   constexpr double kDegrees = 180 / std::numbers::pi;
   const Vec3d v = Normalize(view), d = Normalize(to_source);

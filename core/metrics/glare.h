@@ -49,6 +49,10 @@ struct GlareSource {
 // The DGP at vertical eye illuminance `eye_lux` (> 0) with `sources`.
 double Dgp(double eye_lux, std::span<const GlareSource> sources);
 
+// The eye illuminance at which the DGP without a glare source is `dgp` [lx] (negative below
+// the DGP of darkness): with no source in view, DGP >= dgp exactly when Ev >= this.
+double EyeLuxAtDgp(double dgp);
+
 // The position index of a source in direction `to_source` from an eye looking along `view`
 // with `up` (unit vectors; up not along view): Guth's above the line of sight, Iwata's below,
 // at most 16.

@@ -25,25 +25,26 @@ void SetAxes(const Scene& scene, const SkyMatrix& sky, v1::HourlyIlluminance& ou
 
 }  // namespace
 
-Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns) {
+Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns, double scale) {
   // Row by row, as both matrices lie in memory
   Matrix lux(radiance.rows(), static_cast<Eigen::Index>(columns.size()));
   for (Eigen::Index i = 0; i < radiance.rows(); ++i) {
     for (size_t c = 0; c < columns.size(); ++c) {
-      lux(i, static_cast<Eigen::Index>(c)) = kWhiteEfficacyLumensPerWatt * radiance(i, columns[c]);
+      lux(i, static_cast<Eigen::Index>(c)) = scale * radiance(i, columns[c]);
     }
   }
   return lux;
 }
 
-absl::StatusOr<Matrix> SplitSkyColumnsInLux(const SkyMatrix& sky, std::span<const int> columns) {
+absl::StatusOr<Matrix> SplitSkyColumnsInLux(const SkyMatrix& sky, std::span<const int> columns,
+                                            double scale) {
   if (sky.radiance.rows() != kDaylightBins) {
     return absl::InvalidArgumentError(absl::StrCat("a split sky needs the ", kDaylightBins,
                                                    " Tregenza bins, not ", sky.radiance.rows()));
   }
   FENESTRA_ASSIGN_OR_RETURN(patches, SkyPatches::Reinhart(1));
   Matrix split(kSplitSkyRows, static_cast<Eigen::Index>(columns.size()));
-  split.topRows(kDaylightBins) = SkyColumnsInLux(sky.radiance, columns);
+  split.topRows(kDaylightBins) = SkyColumnsInLux(sky.radiance, columns, scale);
   std::vector<double> sun(kDaylightBins);
   for (size_t c = 0; c < columns.size(); ++c) {
     const SkyStep& step = sky.steps[columns[c]];
@@ -52,20 +53,19 @@ absl::StatusOr<Matrix> SplitSkyColumnsInLux(const SkyMatrix& sky, std::span<cons
       AddSunToPatches(patches, SunDirection(step), step.direct_normal, sun);
     }
     for (int j = 0; j < kDaylightBins; ++j) {
-      split(kDaylightBins + j, static_cast<Eigen::Index>(c)) =
-          -kWhiteEfficacyLumensPerWatt * sun[j];
+      split(kDaylightBins + j, static_cast<Eigen::Index>(c)) = -scale * sun[j];
     }
   }
   return split;
 }
 
-std::vector<SunColumn> SunColumnsOf(const SkyMatrix& sky, std::span<const int> columns) {
+std::vector<SunColumn> SunColumnsOf(const SkyMatrix& sky, std::span<const int> columns,
+                                    double scale) {
   std::vector<SunColumn> suns;
   for (size_t c = 0; c < columns.size(); ++c) {
     const SkyStep& step = sky.steps[columns[c]];
     if (!(step.direct_normal > 0) || !(step.solar_altitude_rad > 0)) continue;
-    suns.push_back({static_cast<int>(c), SunDirection(step),
-                    kWhiteEfficacyLumensPerWatt * step.direct_normal});
+    suns.push_back({static_cast<int>(c), SunDirection(step), scale * step.direct_normal});
   }
   return suns;
 }

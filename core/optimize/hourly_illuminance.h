@@ -14,6 +14,7 @@
 #include "core/dc/direct_sun.h"
 #include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
+#include "core/metrics/illuminance.h"
 #include "core/sky/sky_matrix.h"
 #include "fenestra/v1/job.pb.h"
 
@@ -25,17 +26,24 @@ inline constexpr int64_t kMaxHourlyIlluminanceValues = 2'000'000;
 
 // Columns `columns` of a sky matrix's visible radiance [W sr-1 m-2] times the luminous
 // efficacy, so that (I O) S comes out in lux.
-Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns);
+// `scale`: units of the result per W sr-1 m-2 (the luminous efficacy; 1 for a solar matrix,
+// whose products come out in W m-2).
+Matrix SkyColumnsInLux(const Matrix& radiance, std::span<const int> columns,
+                       double scale = kWhiteEfficacyLumensPerWatt);
 
 // The split sky (kSplitSkyRows rows; core/README.md, "Direct sun") of columns `columns` of a
 // Tregenza sky matrix with the sun, in lux: S, then -S_sun, the sun alone as the matrix
 // spreads it over patches. InvalidArgument for a matrix of other bins.
-absl::StatusOr<Matrix> SplitSkyColumnsInLux(const SkyMatrix& sky, std::span<const int> columns);
+// `scale` as SkyColumnsInLux's.
+absl::StatusOr<Matrix> SplitSkyColumnsInLux(const SkyMatrix& sky, std::span<const int> columns,
+                                            double scale = kWhiteEfficacyLumensPerWatt);
 
 // The sun of each of `columns` that has one (SkyStep::direct_normal > 0, the disc's centre
 // above the horizon), for the direct sun (core/dc/direct_sun.h); column c of the list is
 // columns[c].
-std::vector<SunColumn> SunColumnsOf(const SkyMatrix& sky, std::span<const int> columns);
+// `scale` as SkyColumnsInLux's (SunColumn::normal_lux then in its units).
+std::vector<SunColumn> SunColumnsOf(const SkyMatrix& sky, std::span<const int> columns,
+                                    double scale = kWhiteEfficacyLumensPerWatt);
 
 // A design's E_b = (I_b O_b) S' through a sky S' in lux (as the product's rows x any steps),
 // one per batch, the direct sun included where the sky is split:

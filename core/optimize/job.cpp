@@ -22,12 +22,15 @@
 #include "core/metrics/illuminance.h"
 #include "core/metrics/metric_errors.h"
 #include "core/metrics/occupancy.h"
+#include "core/optimize/comfort.h"
 #include "core/optimize/final_check.h"
 #include "core/optimize/hourly_illuminance.h"
 #include "core/optimize/job_checkpoint.h"
+#include "core/optimize/job_pareto.h"
 #include "core/optimize/job_proto.h"
 #include "core/optimize/metric_objective.h"
 #include "core/optimize/operated_blind.h"
+#include "core/optimize/pareto_search.h"
 #include "core/optimize/racing.h"
 #include "core/optimize/view_glare.h"
 #include "core/optimize/vns.h"
@@ -54,8 +57,25 @@ struct AnnualSetting {
   std::shared_ptr<const DirectSun> sun;
   int analysed_hours = 0;
   MetricOptions options;
-  SceneMetric metric = SceneMetric::kUdiMean;
+  SceneMetric metric = SceneMetric::kUdiMean;  // a Pareto search's: its first objective's
+  // The skies of the comfort metrics the search weighs (comfort.h); null: none
+  std::shared_ptr<const ComfortSky> comfort;
 };
+
+// The comfort part of `setting` where the job's search weighs a comfort metric: the solar sky
+// matrix of the same weather beside the visible one.
+absl::Status AddComfortSky(const PreparedJob& job, AnnualSetting& setting) {
+  if (!NeedsOf(SearchMetrics(job.job)).Any()) return absl::OkStatus();
+  SkyMatrixOptions options = JobSkyOptions(job);
+  options.quantity = SkyQuantity::kSolar;
+  FENESTRA_ASSIGN_OR_RETURN(solar, BuildSkyMatrix(job.weather, options));
+  const v1::MetricSettings& m = job.job.metrics();
+  FENESTRA_ASSIGN_OR_RETURN(
+      sky, MakeComfortSky(*setting.sky, solar, setting.columns, setting.occupied,
+                          m.glare_threshold(), {m.cooling_start_month(), m.cooling_end_month()}));
+  setting.comfort = std::make_shared<const ComfortSky>(std::move(sky));
+  return absl::OkStatus();
+}
 
 absl::StatusOr<AnnualSetting> MakeAnnualSetting(const PreparedJob& job) {
   const v1::MetricSettings& m = job.job.metrics();
@@ -88,8 +108,11 @@ absl::StatusOr<AnnualSetting> MakeAnnualSetting(const PreparedJob& job) {
   setting.options.ase_threshold_lux = m.ase_threshold_lux();
   setting.options.ase_min_hours = m.ase_min_hours();
   setting.options.hours = hour_basis;
-  FENESTRA_ASSIGN_OR_RETURN(metric, ToSceneMetric(job.job.objective().metric()));
+  FENESTRA_ASSIGN_OR_RETURN(
+      metric, ToSceneMetric(job.job.has_pareto() ? job.job.pareto().objectives(0).metric()
+                                                 : job.job.objective().metric()));
   setting.metric = metric;
+  FENESTRA_RETURN_IF_ERROR(AddComfortSky(job, setting));
   return setting;
 }
 
@@ -210,7 +233,15 @@ absl::Status GlareOfBestDesign(const PreparedJob& job, const AnnualSetting& sett
   FENESTRA_ASSIGN_OR_RETURN(
       glare, ComputeViewGlare(WithJobRanges(job.scene, job.job), DesignAt(job, search.best_x),
                               *setting.sky, setting.occupied, options, backend.get()));
-  for (v1::ViewGlare& v : ViewGlareProtos(job.scene, glare)) *result.add_best_glare() = v;
+  std::vector<v1::ViewGlare> views = ViewGlareProtos(job.scene, glare);
+  for (size_t v = 0; v < views.size(); ++v) {
+    // Every step, for the report's map of the year
+    const Eigen::Index row = static_cast<Eigen::Index>(v);
+    for (Eigen::Index s = 0; s < glare.dgp.cols(); ++s) {
+      views[v].add_dgp(static_cast<float>(glare.dgp(row, s)));
+    }
+    *result.add_best_glare() = std::move(views[v]);
+  }
   result.mutable_timings()->set_glare_seconds(glare.seconds);
   return absl::OkStatus();
 }
@@ -260,7 +291,8 @@ absl::Status HourlyAndCheck(const PreparedJob& job, const AnnualSetting& setting
           return values;
         });
   }
-  if (job.job.sampling().final_check()) {
+  // The one-stage check takes the daylight metrics alone
+  if (job.job.sampling().final_check() && !IsComfortMetric(setting.metric)) {
     FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(job.job.sampling().backend()));
     FENESTRA_RETURN_IF_ERROR(
         CheckBestDesign(job, setting, operation, search, backend.get(), callbacks, clock, result));
@@ -279,18 +311,29 @@ absl::Status HourlyAndCheck(const PreparedJob& job, const AnnualSetting& setting
 struct Lanes {
   std::vector<std::unique_ptr<DcBackend>> more;  // the backends after the job's
   std::vector<std::unique_ptr<DesignTallies>> tallies;
+  // Per lane, the comfort metrics where the search weighs one; else empty
+  std::vector<std::unique_ptr<DesignComfort>> comfort;
+  bool on_gpu = false;
 
   std::vector<DesignTallies*> Tallies() const {
     std::vector<DesignTallies*> out;
     for (const auto& t : tallies) out.push_back(t.get());
     return out;
   }
+  std::vector<DesignComfort*> Comfort() const {
+    std::vector<DesignComfort*> out;
+    for (const auto& c : comfort) out.push_back(c.get());
+    return out;
+  }
 };
 
 // How the search's designs are evaluated: on the lanes, in rounds where the job asks for racing
-// (by default where the backend races, DesignTallies::RacesByDefault).
-Racer::Setting RacerSetting(const v1::Sampling& sampling, const Lanes& lanes,
-                            const AnnualSetting& setting, const SearchSettings& search) {
+// (by default where the backend races, DesignTallies::RacesByDefault), never for a Pareto
+// search or comfort metrics (its rounds race against one incumbent by the daylight tallies).
+Racer::Setting RacerSetting(const v1::Job& job, const Lanes& lanes, const AnnualSetting& setting,
+                            const SearchSettings& search) {
+  const v1::Sampling& sampling = job.sampling();
+  const bool may_race = !job.has_pareto() && lanes.comfort.empty();
   return {.lanes = lanes.Tallies(),
           .options = setting.options,
           .analysed_hours = setting.analysed_hours,
@@ -300,9 +343,11 @@ Racer::Setting RacerSetting(const v1::Sampling& sampling, const Lanes& lanes,
           .constraint_metrics = search.constraint_metrics,
           .racing = {.rounds = {sampling.racing_rounds().begin(), sampling.racing_rounds().end()},
                      .standard_errors = sampling.racing_standard_errors()},
-          .enabled =
-              sampling.has_racing() ? sampling.racing() : lanes.tallies.front()->RacesByDefault(),
-          .audit = sampling.racing_audit()};
+          .enabled = may_race && (sampling.has_racing() ? sampling.racing()
+                                                        : lanes.tallies.front()->RacesByDefault()),
+          .audit = sampling.racing_audit(),
+          .comfort = lanes.Comfort(),
+          .comfort_beside = lanes.on_gpu};
 }
 
 // The lanes' backends after `first`, made on the job's thread: the GPUs a lane may take are
@@ -321,11 +366,13 @@ absl::StatusOr<Lanes> MakeLanes(const v1::Sampling& sampling, const DcBackend& f
 // The lanes' design tallies, their indoor records made at once but no annual product yet
 // (SetLaneProducts).
 absl::Status StartLanes(Lanes& lanes, DcBackend& first, const Scene& scene,
-                        const IndoorOptions& options) {
+                        const IndoorOptions& options, ComfortNeeds needs) {
   std::vector<DcBackend*> backends = {&first};
   for (const auto& backend : lanes.more) backends.push_back(backend.get());
   const int count = static_cast<int>(backends.size());
   lanes.tallies.resize(count);
+  if (needs.Any()) lanes.comfort.resize(count);
+  lanes.on_gpu = first.Gpu() >= 0;
   std::vector<absl::Status> made(count);
   ParallelFor(count, count, [&](uint64_t l) {
     absl::StatusOr<std::unique_ptr<DesignTallies>> tallies =
@@ -334,6 +381,15 @@ absl::Status StartLanes(Lanes& lanes, DcBackend& first, const Scene& scene,
       lanes.tallies[l] = *std::move(tallies);
     } else {
       made[l] = tallies.status();
+      return;
+    }
+    if (!needs.Any()) return;
+    absl::StatusOr<std::unique_ptr<DesignComfort>> comfort =
+        DesignComfort::Start(scene, options, *backends[l], needs);
+    if (comfort.ok()) {
+      lanes.comfort[l] = *std::move(comfort);
+    } else {
+      made[l] = comfort.status();
     }
   });
   for (const absl::Status& status : made) FENESTRA_RETURN_IF_ERROR(status);
@@ -360,6 +416,9 @@ absl::StatusOr<std::shared_ptr<const BlindOperation>> SetLaneEvaluation(
   if (!job.scene.blind() || !job.scene.blind()->automated_sun) {
     FENESTRA_RETURN_IF_ERROR(SetLaneProducts(lanes, matrix, setting.lit_sky));
     for (const auto& tallies : lanes.tallies) tallies->SetDirectSun(setting.sun);
+    for (const auto& comfort : lanes.comfort) {
+      FENESTRA_RETURN_IF_ERROR(comfort->SetSky(matrix.batches, setting.comfort));
+    }
     return std::shared_ptr<const BlindOperation>();
   }
   FENESTRA_ASSIGN_OR_RETURN(made, OperateBlind(ranged, setting.lit_sky, setting.suns, *setting.sun,
@@ -594,8 +653,9 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   const IndoorOptions indoor_options = JobIndoorOptions(job);
   const Scene ranged = WithJobRanges(job.scene, spec);
   FENESTRA_ASSIGN_OR_RETURN(lanes, MakeLanes(spec.sampling(), *backend));
-  std::future<absl::Status> started = std::async(
-      std::launch::async, [&] { return StartLanes(lanes, *backend, ranged, indoor_options); });
+  std::future<absl::Status> started = std::async(std::launch::async, [&] {
+    return StartLanes(lanes, *backend, ranged, indoor_options, NeedsOf(SearchMetrics(job.job)));
+  });
 
   // Sky matrix, the occupied hours and the lit analysed ones, the metric settings; the outdoor
   // matrix: the cached one, or traced now
@@ -616,17 +676,32 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   // (5-15 ms at the job's end) made beside the search
   std::future<double> outdoor_error =
       std::async(std::launch::async, [&matrix] { return OutdoorMeanRelativeError(matrix); });
-  Racer racer(RacerSetting(spec.sampling(), lanes, setting, search_settings));
+  Racer racer(RacerSetting(spec, lanes, setting, search_settings));
 
   // The search
   if (callbacks.stage) callbacks.stage("search");
-  search_settings.options.lookahead = SearchLookahead(racer, lanes);
-  FENESTRA_ASSIGN_OR_RETURN(search,
-                            RunJobSearch(job, search_settings, racer, callbacks, clock,
-                                         from.so_far ? &*from.so_far : nullptr, checkpoint));
-  if (racer.Races()) AddRacing(racer, result);
-  result.set_candidates_at_once(search_settings.options.lookahead);
-  result.set_evaluations_discarded(search.discarded);
+  VnsResult search;
+  if (spec.has_pareto()) {
+    // A generation's designs at once, as many as the lanes trace together
+    FENESTRA_ASSIGN_OR_RETURN(
+        outcome, RunJobPareto(
+                     job, search_settings, racer, callbacks, [&clock] { return clock.Seconds(); },
+                     from.pareto_so_far ? &*from.pareto_so_far : nullptr, checkpoint));
+    AddParetoResult(job, outcome, result);
+    result.set_candidates_at_once(
+        std::min(spec.pareto().population(),
+                 static_cast<int>(lanes.tallies.size()) * lanes.tallies.front()->DesignsAtOnce()));
+    search = std::move(outcome.search);
+  } else {
+    search_settings.options.lookahead = SearchLookahead(racer, lanes);
+    FENESTRA_ASSIGN_OR_RETURN(made,
+                              RunJobSearch(job, search_settings, racer, callbacks, clock,
+                                           from.so_far ? &*from.so_far : nullptr, checkpoint));
+    search = std::move(made);
+    if (racer.Races()) AddRacing(racer, result);
+    result.set_candidates_at_once(search_settings.options.lookahead);
+    result.set_evaluations_discarded(search.discarded);
+  }
 
   DescribeRun(spec, ranged, job.weather.location, result);
 

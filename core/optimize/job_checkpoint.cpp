@@ -11,6 +11,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
+#include "core/optimize/job_pareto.h"
 
 namespace fenestra {
 namespace {
@@ -59,7 +60,7 @@ absl::StatusOr<VnsRecord> ResumedStep(const v1::Evaluation& e,
 // The search so far that `checkpoint` holds, once it is known to be of this format, of the
 // job whose content hash is `job_hash` and a history its search makes (CheckVnsResume).
 absl::StatusOr<VnsResult> ResumedSearch(const std::string& job_hash, const SearchSettings& search,
-                                        const v1::SearchCheckpoint& checkpoint) {
+                                        const v1::SearchCheckpoint& checkpoint, bool pareto) {
   FENESTRA_RETURN_IF_ERROR(CheckCheckpointFormat(checkpoint));
   if (checkpoint.job_hash() != job_hash) {
     return absl::InvalidArgumentError(
@@ -81,11 +82,38 @@ absl::StatusOr<VnsResult> ResumedSearch(const std::string& job_hash, const Searc
     FENESTRA_ASSIGN_OR_RETURN(record, ResumedStep(e, search.variables, search_start));
     so_far.history.push_back(std::move(record));
   }
+  if (pareto) return so_far;  // replayed by ResumedPareto
   if (absl::Status replay = CheckVnsResume(search.variables, search.options, so_far);
       !replay.ok()) {
     return absl::InvalidArgumentError(absl::StrCat("search checkpoint: ", replay.message()));
   }
   return so_far;
+}
+
+// The same for a Pareto search: the history with each step's objectives, checked by replaying
+// the generations it holds.
+absl::StatusOr<ParetoOutcome> ResumedPareto(const v1::Job& job, const SearchSettings& search,
+                                            const v1::SearchCheckpoint& checkpoint,
+                                            VnsResult so_far) {
+  ParetoOutcome outcome;
+  for (const v1::Evaluation& e : checkpoint.history()) {
+    outcome.objectives.push_back(ParetoObjectivesOf(e));
+    outcome.generation.push_back(e.generation());
+  }
+  outcome.search = std::move(so_far);
+  const ParetoOptions options = MakeParetoOptions(job, search);
+  for (size_t s = 0; s < outcome.objectives.size(); ++s) {
+    if (outcome.objectives[s].size() != options.objectives.size()) {
+      return absl::InvalidArgumentError(absl::StrCat("search checkpoint: step ", s, " has ",
+                                                     outcome.objectives[s].size(), " objectives"));
+    }
+  }
+  if (absl::StatusOr<ParetoOutcome> replay = RunPareto(search.variables, {}, options, {}, &outcome);
+      !replay.ok()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("search checkpoint: ", replay.status().message()));
+  }
+  return outcome;
 }
 
 }  // namespace
@@ -110,14 +138,20 @@ absl::StatusOr<SearchStart> StartOfSearch(const PreparedJob& job, const SearchSe
     start.checkpoint.set_job_hash(JobContentHash(job));
     return start;
   }
-  FENESTRA_ASSIGN_OR_RETURN(so_far, ResumedSearch(JobContentHash(job), settings, *resume));
+  FENESTRA_ASSIGN_OR_RETURN(
+      so_far, ResumedSearch(JobContentHash(job), settings, *resume, job.job.has_pareto()));
   start.checkpoint = *resume;
   // Each step's feasibility as this search takes it, from the constraints' values it holds
   for (int i = 0; i < start.checkpoint.history_size(); ++i) {
     start.checkpoint.mutable_history(i)->set_feasible(
         Feasible(settings.options.constraints, so_far.history[i].evaluation));
   }
-  start.so_far = std::move(so_far);
+  if (job.job.has_pareto()) {
+    FENESTRA_ASSIGN_OR_RETURN(pareto, ResumedPareto(job.job, settings, *resume, std::move(so_far)));
+    start.pareto_so_far = std::move(pareto);
+  } else {
+    start.so_far = std::move(so_far);
+  }
   start.resumed_seconds = resume->history(resume->history_size() - 1).elapsed_seconds();
   return start;
 }

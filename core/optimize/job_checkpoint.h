@@ -15,9 +15,10 @@ namespace fenestra {
 
 // Where a job's search starts: from nothing, or from a checkpoint.
 struct SearchStart {
-  v1::SearchCheckpoint checkpoint;  // kept up to date after each step
-  std::optional<VnsResult> so_far;  // the search resumed
-  double resumed_seconds = 0;       // the job's clock at the checkpoint [s]
+  v1::SearchCheckpoint checkpoint;             // kept up to date after each step
+  std::optional<VnsResult> so_far;             // the search resumed
+  std::optional<ParetoOutcome> pareto_so_far;  // the same of a Pareto search (so_far unset)
+  double resumed_seconds = 0;                  // the job's clock at the checkpoint [s]
 };
 
 // The start of the job's search: from `resume` when given, else new (a checkpoint of this

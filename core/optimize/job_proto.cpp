@@ -78,7 +78,11 @@ SearchSettings MakeSearchSettings(const v1::Job& spec) {
       vns.neighborhoods.push_back({n.variables(), n.radius()});
     }
   }
-  switch (spec.objective().goal()) {
+  // A Pareto search's evaluations carry its first objective as their value
+  const v1::Objective& objective = spec.has_pareto() && spec.pareto().objectives_size() > 0
+                                       ? spec.pareto().objectives(0)
+                                       : spec.objective();
+  switch (objective.goal()) {
     case v1::GOAL_MINIMIZE:
       vns.objective.sense = ObjectiveSense::kMinimize;
       break;
@@ -96,6 +100,36 @@ SearchSettings MakeSearchSettings(const v1::Job& spec) {
   vns.failed_cycles_to_stop = std::max(0, spec.budget().failed_cycles_to_stop());
   vns.seed = spec.sampling().seed();
   return search;
+}
+
+std::vector<SceneMetric> SearchMetrics(const v1::Job& spec) {
+  std::vector<SceneMetric> metrics;
+  if (spec.has_pareto()) {
+    for (const v1::Objective& o : spec.pareto().objectives()) {
+      metrics.push_back(ToSceneMetric(o.metric()).value_or(SceneMetric::kUdiMean));
+    }
+  } else {
+    metrics.push_back(ToSceneMetric(spec.objective().metric()).value_or(SceneMetric::kUdiMean));
+  }
+  for (const v1::Constraint& c : spec.objective().constraints()) {
+    metrics.push_back(ToSceneMetric(c.metric()).value_or(SceneMetric::kUdiMean));
+  }
+  return metrics;
+}
+
+ParetoOptions MakeParetoOptions(const v1::Job& spec, const SearchSettings& search) {
+  ParetoOptions options;
+  for (const v1::Objective& o : spec.pareto().objectives()) {
+    options.objectives.push_back(
+        {ToSceneMetric(o.metric()).value_or(SceneMetric::kUdiMean), o.goal() != v1::GOAL_MINIMIZE});
+  }
+  options.population = spec.pareto().population();
+  options.dominance_z = spec.pareto().dominance_standard_errors();
+  options.max_evaluations = spec.budget().max_evaluations();
+  options.max_seconds = spec.budget().max_seconds();
+  options.seed = spec.sampling().seed();
+  options.constraints = search.options.constraints;
+  return options;
 }
 
 absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric) {
@@ -119,6 +153,14 @@ absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric) {
       return SceneMetric::kAse;
     case v1::METRIC_BLIND_IN_PLACE:
       return SceneMetric::kBlindInPlace;
+    case v1::METRIC_GLARE_AUTONOMY:
+      return SceneMetric::kGlareAutonomy;
+    case v1::METRIC_GLARE_HOURS:
+      return SceneMetric::kGlareHours;
+    case v1::METRIC_SOLAR_GAIN:
+      return SceneMetric::kSolarGain;
+    case v1::METRIC_COOLING_SOLAR_GAIN:
+      return SceneMetric::kCoolingSolarGain;
     default:
       return InvalidJobField("objective.metric", "unknown metric");
   }
@@ -185,6 +227,13 @@ v1::Metrics MetricsProto(const AnnualMetricsEstimate& m) {
   SetEstimate(out.mutable_ase(), v.ase_percent, se.ase_percent);
   SetEstimate(out.mutable_blind_in_place(), v.blind_in_place_percent, se.blind_in_place_percent);
   out.set_leed_points(LeedDaylightPoints(v.sda_percent));
+  if (m.has_comfort) {
+    SetEstimate(out.mutable_glare_autonomy(), v.glare_autonomy_percent, se.glare_autonomy_percent);
+    SetEstimate(out.mutable_glare_hours(), v.glare_hours_percent, se.glare_hours_percent);
+    SetEstimate(out.mutable_solar_gain_kwh(), v.solar_gain_kwh, se.solar_gain_kwh);
+    SetEstimate(out.mutable_cooling_solar_gain_kwh(), v.cooling_solar_gain_kwh,
+                se.cooling_solar_gain_kwh);
+  }
   for (const SensorMetrics& s : m.value.sensors) {
     out.add_sensor_sunlit_hours(static_cast<int32_t>(s.ase_hours));
   }

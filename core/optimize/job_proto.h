@@ -13,6 +13,7 @@
 #include "core/metrics/annual_metrics.h"
 #include "core/metrics/metric_errors.h"
 #include "core/optimize/job.h"
+#include "core/optimize/pareto_search.h"
 #include "core/optimize/racing.h"
 #include "core/optimize/vns.h"
 #include "core/sky/epw.h"
@@ -33,6 +34,13 @@ struct SearchSettings {
 // The search `spec` asks for: its variables, neighborhoods, objective with its constraints,
 // budget and seed (the job validated, its defaults filled in). The lookahead is left at one.
 SearchSettings MakeSearchSettings(const v1::Job& spec);
+
+// The metrics the job's search weighs: the objective's (each Pareto objective's, for a Pareto
+// search), then each constraint's (the job validated).
+std::vector<SceneMetric> SearchMetrics(const v1::Job& spec);
+
+// The Pareto search `spec` asks for (spec.pareto set, the job validated: defaults filled in).
+ParetoOptions MakeParetoOptions(const v1::Job& spec, const SearchSettings& search);
 
 // The scene metric of an objective's (or a constraint's) metric; InvalidArgument "job
 // objective.metric" for an unknown one.

@@ -12,7 +12,9 @@
 #include "core/common/text.h"
 #include "core/dc/two_stage.h"
 #include "core/metrics/annual_metrics.h"
+#include "core/metrics/glare.h"
 #include "core/metrics/occupancy.h"
+#include "core/optimize/comfort.h"
 #include "core/optimize/design_variables.h"
 #include "core/optimize/job.h"
 #include "core/optimize/job_proto.h"
@@ -34,6 +36,14 @@ constexpr int kDefaultBasisCells = 288;
 constexpr bool kFinalCheckByDefault = true;
 // Constraints of an objective, and the most standard errors a design may be beyond a bound.
 constexpr int kMaxConstraints = 8;
+// The largest solar gain a bound or a target may name [kWh].
+constexpr double kMaxGainKwh = 1e9;
+
+// The largest value of `metric`: 100 for a share [%], kMaxGainKwh for a solar gain [kWh].
+double MetricUpperBound(v1::Metric metric) {
+  return metric == v1::METRIC_SOLAR_GAIN || metric == v1::METRIC_COOLING_SOLAR_GAIN ? kMaxGainKwh
+                                                                                    : 100;
+}
 constexpr double kMaxConstraintStandardErrors = 100;
 
 bool AllFinite(std::initializer_list<double> values) {
@@ -249,10 +259,10 @@ absl::Status CheckObjective(const v1::Objective& objective) {
                            absl::StrCat("unknown goal ", static_cast<int>(objective.goal()),
                                         " (GOAL_MAXIMIZE, GOAL_MINIMIZE or GOAL_TARGET)"));
   }
-  if (!(objective.target() >= 0 && objective.target() <= 100)) {
-    return InvalidJobField(
-        "objective.target",
-        absl::StrCat("must be in [0, 100] % (a metric's value), got ", objective.target()));
+  if (!(objective.target() >= 0 && objective.target() <= MetricUpperBound(objective.metric()))) {
+    return InvalidJobField("objective.target",
+                           absl::StrCat("must be in [0, ", MetricUpperBound(objective.metric()),
+                                        "] (the metric's range), got ", objective.target()));
   }
   if (!(objective.target_tolerance() >= 0 && objective.target_tolerance() <= 100)) {
     return InvalidJobField(
@@ -281,11 +291,10 @@ absl::Status FillConstraints(v1::Objective& objective) {
       return InvalidJobField(field + ".bound", absl::StrCat("must be AT_MOST or AT_LEAST, got ",
                                                             static_cast<int>(c.bound())));
     }
-    // Every metric a job takes is a share [%]
-    if (!(c.value() >= 0 && c.value() <= 100)) {
-      return InvalidJobField(
-          field + ".value",
-          absl::StrCat("must be in [0, 100] % (the metric's range), got ", c.value()));
+    if (!(c.value() >= 0 && c.value() <= MetricUpperBound(c.metric()))) {
+      return InvalidJobField(field + ".value",
+                             absl::StrCat("must be in [0, ", MetricUpperBound(c.metric()),
+                                          "] (the metric's range), got ", c.value()));
     }
   }
   const double k = objective.constraint_standard_errors();
@@ -297,6 +306,107 @@ absl::Status FillConstraints(v1::Objective& objective) {
   }
   if (k == 0 && objective.constraints_size() > 0) {
     objective.set_constraint_standard_errors(kDefaultConstraintStandardErrors);
+  }
+  return absl::OkStatus();
+}
+
+// One objective of a Pareto search: a known metric, maximized or minimized (the goal filled
+// in), nothing else.
+absl::Status FillParetoObjective(v1::Objective& o, const std::string& field) {
+  if (!v1::Metric_IsValid(o.metric()) || !ToSceneMetric(o.metric()).ok()) {
+    return InvalidJobField(field + ".metric",
+                           absl::StrCat("unknown metric ", static_cast<int>(o.metric())));
+  }
+  if (o.goal() == v1::GOAL_UNSPECIFIED) o.set_goal(v1::GOAL_MAXIMIZE);
+  if (o.goal() != v1::GOAL_MAXIMIZE && o.goal() != v1::GOAL_MINIMIZE) {
+    return InvalidJobField(field + ".goal", "must be GOAL_MAXIMIZE or GOAL_MINIMIZE");
+  }
+  if (o.target() != 0 || o.target_tolerance() != 0 || o.constraints_size() > 0 ||
+      o.constraint_standard_errors() != 0) {
+    return InvalidJobField(field,
+                           "a Pareto objective has a metric and a goal only (constraints "
+                           "go to the job's objective.constraints)");
+  }
+  return absl::OkStatus();
+}
+
+// A Pareto search checked, its defaults filled in (job.proto, ParetoSearch).
+absl::Status FillPareto(v1::Job& job) {
+  if (!job.has_pareto()) return absl::OkStatus();
+  const v1::Objective& single = job.objective();
+  if (single.metric() != v1::METRIC_UNSPECIFIED || single.goal() != v1::GOAL_UNSPECIFIED ||
+      single.target() != 0 || single.target_tolerance() != 0) {
+    return InvalidJobField("objective",
+                           "a Pareto search takes its objectives from "
+                           "pareto.objectives: objective holds only constraints");
+  }
+  v1::ParetoSearch& p = *job.mutable_pareto();
+  if (p.objectives_size() < 2 || p.objectives_size() > 3) {
+    return InvalidJobField("pareto.objectives",
+                           absl::StrCat("two or three objectives, got ", p.objectives_size()));
+  }
+  std::set<int> metrics;
+  for (int i = 0; i < p.objectives_size(); ++i) {
+    const std::string field = absl::StrCat("pareto.objectives[", i, "]");
+    FENESTRA_RETURN_IF_ERROR(FillParetoObjective(*p.mutable_objectives(i), field));
+    if (!metrics.insert(p.objectives(i).metric()).second) {
+      return InvalidJobField(field + ".metric", "the same metric twice");
+    }
+  }
+  if (p.population() == 0) p.set_population(kDefaultParetoPopulation);
+  if (p.population() < 4 || p.population() > kMaxParetoPopulation || p.population() % 2 != 0) {
+    return InvalidJobField(
+        "pareto.population",
+        absl::StrCat("must be even and in [4, ", kMaxParetoPopulation, "], got ", p.population()));
+  }
+  if (!p.has_dominance_standard_errors()) {
+    p.set_dominance_standard_errors(kDefaultDominanceStandardErrors);
+  }
+  const double z = p.dominance_standard_errors();
+  if (!(z >= 0 && z <= kMaxConstraintStandardErrors)) {
+    return InvalidJobField(
+        "pareto.dominance_standard_errors",
+        absl::StrCat("must be in [0, ", kMaxConstraintStandardErrors, "], got ", z));
+  }
+  if (job.budget().max_evaluations() < p.population()) {
+    return InvalidJobField("budget.max_evaluations",
+                           absl::StrCat("must hold at least one generation of ", p.population(),
+                                        " designs, got ", job.budget().max_evaluations()));
+  }
+  return absl::OkStatus();
+}
+
+// The comfort settings filled in (job.proto, MetricSettings), and what the comfort metrics
+// the search weighs need of the scene.
+absl::Status FillComfort(v1::Job& job, const Scene& scene) {
+  v1::MetricSettings& m = *job.mutable_metrics();
+  if (m.glare_threshold() == 0) m.set_glare_threshold(kDefaultGlareThreshold);
+  if (!(m.glare_threshold() > 0 && m.glare_threshold() < 1)) {
+    return InvalidJobField("metrics.glare_threshold",
+                           absl::StrCat("must be in (0, 1), got ", m.glare_threshold()));
+  }
+  if (m.cooling_start_month() == 0 && m.cooling_end_month() == 0) {
+    const CoolingSeason season = DefaultCoolingSeason(scene.site.latitude_deg);
+    m.set_cooling_start_month(season.start_month);
+    m.set_cooling_end_month(season.end_month);
+  }
+  for (const auto& [month, field] : {std::pair{m.cooling_start_month(), "cooling_start_month"},
+                                     std::pair{m.cooling_end_month(), "cooling_end_month"}}) {
+    if (month < 1 || month > 12) {
+      return InvalidJobField(absl::StrCat("metrics.", field),
+                             absl::StrCat("must be a month, 1-12, got ", month));
+    }
+  }
+  const ComfortNeeds needs = NeedsOf(SearchMetrics(job));
+  if (needs.glare && scene.views.empty()) {
+    return InvalidJobField("objective", "glare metrics need view points in the scene (views)");
+  }
+  for (const SceneWindow& w : scene.windows) {
+    if (needs.Any() && w.blind && w.blind->automated_sun) {
+      return InvalidJobField("objective",
+                             "comfort metrics (glare, solar gains) are not taken "
+                             "with an AUTOMATED_SUN blind");
+    }
   }
   return absl::OkStatus();
 }
@@ -485,6 +595,8 @@ absl::StatusOr<PreparedJob> ValidateJob(const v1::Job& job, const std::string& b
   FENESTRA_RETURN_IF_ERROR(CheckNeighborhoods(filled));
   FENESTRA_RETURN_IF_ERROR(CheckObjective(filled.objective()));
   FENESTRA_RETURN_IF_ERROR(FillConstraints(*filled.mutable_objective()));
+  FENESTRA_RETURN_IF_ERROR(FillPareto(filled));
+  FENESTRA_RETURN_IF_ERROR(FillComfort(filled, prepared.scene));
   FENESTRA_RETURN_IF_ERROR(CheckWindowCells(filled.sampling(), prepared.scene));
   FENESTRA_RETURN_IF_ERROR(CheckRoomAtEveryDesign(prepared));
   return prepared;

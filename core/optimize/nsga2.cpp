@@ -13,7 +13,9 @@ namespace {
 
 using Engine = std::mt19937_64;
 
-double Uniform(Engine& engine) { return std::uniform_real_distribution<double>(0, 1)(engine); }
+// U[0, 1) from the top 53 bits, by fixed bit arithmetic (no std:: distributions), so that a
+// seed gives the same search on every standard library.
+double Uniform(Engine& engine) { return static_cast<double>(engine() >> 11) * 0x1p-53; }
 
 Engine EngineOf(const std::string& state) {
   Engine engine;
@@ -82,9 +84,12 @@ void Mutate(std::vector<double>& x, const Nsga2State& s, Engine& engine) {
 
 // The better of two members by rank, then crowding; a tie is drawn.
 const Nsga2Member& Tournament(const std::vector<Nsga2Member>& p, Engine& engine) {
-  std::uniform_int_distribution<size_t> pick(0, p.size() - 1);
-  const Nsga2Member& a = p[pick(engine)];
-  const Nsga2Member& b = p[pick(engine)];
+  const auto pick = [&] {
+    return std::min(p.size() - 1,
+                    static_cast<size_t>(Uniform(engine) * static_cast<double>(p.size())));
+  };
+  const Nsga2Member& a = p[pick()];
+  const Nsga2Member& b = p[pick()];
   if (a.rank != b.rank) return a.rank < b.rank ? a : b;
   if (a.crowding != b.crowding) return a.crowding > b.crowding ? a : b;
   return Uniform(engine) < 0.5 ? a : b;
@@ -124,6 +129,8 @@ bool BetterForNext(const Nsga2Member& a, const Nsga2Member& b) {
 }  // namespace
 
 bool Dominates(const Nsga2Member& a, const Nsga2Member& b, double z) {
+  // Deb's constrained dominance: the smaller violation first
+  if (a.violation > 0 || b.violation > 0) return a.violation < b.violation;
   bool better = false;
   for (size_t k = 0; k < a.objectives.size(); ++k) {
     const double ea = a.standard_errors.empty() ? 0 : a.standard_errors[k];
@@ -233,9 +240,11 @@ absl::StatusOr<Nsga2> Nsga2::Restore(const Nsga2State& state) {
 const std::vector<std::vector<double>>& Nsga2::Ask() { return state_.asked; }
 
 absl::Status Nsga2::Tell(const std::vector<std::vector<double>>& objectives,
-                         const std::vector<std::vector<double>>& standard_errors) {
+                         const std::vector<std::vector<double>>& standard_errors,
+                         const std::vector<double>& violations) {
   if (objectives.size() != state_.asked.size() ||
-      (!standard_errors.empty() && standard_errors.size() != objectives.size())) {
+      (!standard_errors.empty() && standard_errors.size() != objectives.size()) ||
+      (!violations.empty() && violations.size() != objectives.size())) {
     return absl::InvalidArgumentError(absl::StrCat("NSGA-II: ", objectives.size(),
                                                    " objective vectors for ", state_.asked.size(),
                                                    " designs asked"));
@@ -256,7 +265,12 @@ absl::Status Nsga2::Tell(const std::vector<std::vector<double>>& objectives,
             absl::StrCat("NSGA-II: design ", d, " objective ", k, " is ", objectives[d][k]));
       }
     }
-    told.push_back({state_.asked[d], objectives[d], errors, 0, 0});
+    const double violation = violations.empty() ? 0 : violations[d];
+    if (!(violation >= 0) || !std::isfinite(violation)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("NSGA-II: design ", d, " has the violation ", violation));
+    }
+    told.push_back({state_.asked[d], objectives[d], errors, 0, 0, violation});
   }
   const bool first = state_.population.empty();
   std::vector<Nsga2Member> all = std::move(state_.population);
@@ -300,6 +314,32 @@ double Hypervolume2d(const std::vector<Nsga2Member>& front, double reference_0,
     if (f1 >= lowest) continue;
     volume += (reference_0 - f0) * (lowest - f1);
     lowest = f1;
+  }
+  return volume;
+}
+
+double Hypervolume(const std::vector<Nsga2Member>& front, const std::vector<double>& reference) {
+  if (reference.size() == 2) return Hypervolume2d(front, reference[0], reference[1]);
+  if (reference.size() != 3) return 0;
+  // Slices along the third objective: between consecutive levels, the area the members at or
+  // below the level dominate in the first two
+  std::vector<const Nsga2Member*> inside;
+  for (const Nsga2Member& m : front) {
+    if (m.objectives[0] < reference[0] && m.objectives[1] < reference[1] &&
+        m.objectives[2] < reference[2]) {
+      inside.push_back(&m);
+    }
+  }
+  std::sort(inside.begin(), inside.end(), [](const Nsga2Member* a, const Nsga2Member* b) {
+    return a->objectives[2] < b->objectives[2];
+  });
+  double volume = 0;
+  std::vector<Nsga2Member> below;
+  for (size_t i = 0; i < inside.size(); ++i) {
+    below.push_back(*inside[i]);
+    const double next = i + 1 < inside.size() ? inside[i + 1]->objectives[2] : reference[2];
+    const double thickness = next - inside[i]->objectives[2];
+    if (thickness > 0) volume += thickness * Hypervolume2d(below, reference[0], reference[1]);
   }
   return volume;
 }

@@ -37,6 +37,9 @@ struct Nsga2Member {
   std::vector<double> objectives, standard_errors;
   int rank = 0;  // 0 = the first front
   double crowding = 0;
+  // How far the design breaks its constraints (0: feasible); a smaller violation dominates
+  // (Deb's constrained dominance), objectives decide between feasible designs.
+  double violation = 0;
 };
 
 // Everything a search is, to save and restore.
@@ -61,10 +64,11 @@ class Nsga2 {
 
   // The designs to evaluate next (the same ones again until Tell).
   const std::vector<std::vector<double>>& Ask();
-  // Their objectives (and standard errors, or none), in Ask's order. InvalidArgument for
-  // counts that do not match or values that are not finite.
+  // Their objectives (and standard errors, or none; constraint violations, or none), in Ask's
+  // order. InvalidArgument for counts that do not match or values that are not finite.
   absl::Status Tell(const std::vector<std::vector<double>>& objectives,
-                    const std::vector<std::vector<double>>& standard_errors = {});
+                    const std::vector<std::vector<double>>& standard_errors = {},
+                    const std::vector<double>& violations = {});
 
   // The population's first front (rank 0), by its first objective.
   std::vector<Nsga2Member> Front() const;
@@ -87,5 +91,9 @@ void RankAndCrowd(std::vector<Nsga2Member>& members, double z);
 // The hypervolume a two-objective front (minimizing) dominates below `reference`; members
 // beyond the reference in either objective count for nothing.
 double Hypervolume2d(const std::vector<Nsga2Member>& front, double reference_0, double reference_1);
+
+// The hypervolume of a front of two or three objectives below `reference` (one value per
+// objective; 0 for another count).
+double Hypervolume(const std::vector<Nsga2Member>& front, const std::vector<double>& reference);
 
 }  // namespace fenestra

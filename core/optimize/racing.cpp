@@ -1,6 +1,7 @@
 #include "core/optimize/racing.h"
 
 #include <algorithm>
+#include <future>
 #include <utility>
 
 #include "core/common/status_macros.h"
@@ -39,10 +40,13 @@ Racer::Racer(Setting setting)
 Racer::~Racer() = default;
 
 absl::StatusOr<Racer::Scored> Racer::ScoreTallies(const std::vector<HourTally>& versions,
-                                                  bool partial) const {
+                                                  bool partial,
+                                                  const ComfortEstimate* comfort) const {
   std::vector<AnnualMetrics> version_metrics;
   FENESTRA_ASSIGN_OR_RETURN(
       metrics, AnnualMetricsFromTallies(versions, s_.analysed_hours, s_.options, &version_metrics));
+  // The comfort metrics have no versions here: their scores serve no round (racing is off)
+  if (comfort != nullptr) AddComfort(*comfort, metrics);
   Scored scored;
   for (const AnnualMetrics& m : version_metrics) {
     scored.scores.push_back(Score(s_.objective, SceneMetricValue(m.scene, s_.metric)));
@@ -106,34 +110,50 @@ void Racer::StartStats(Candidate& c) const {
 }
 
 // c's evaluation from the tallies of all its paths, which took `rays`.
-absl::Status Racer::TakeFull(const std::vector<HourTally>& versions, uint64_t rays,
-                             Candidate& c) const {
+absl::Status Racer::TakeFull(const std::vector<HourTally>& versions, uint64_t rays, Candidate& c,
+                             const ComfortEstimate* comfort) const {
   c.stats.parts_traced = kDesignParts;
   c.stats.rays_traced = rays;
   c.paths_fraction = 1;
-  FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, false));
+  FENESTRA_ASSIGN_OR_RETURN(scored, ScoreTallies(versions, false, comfort));
   if (s_.audit) c.full = std::move(scored.scores);
   c.evaluation = std::move(scored.evaluation);
   return absl::OkStatus();
 }
 
-// Without racing: the candidates in full, as many at a time as the lane traces together.
-void Racer::TraceTogether(DesignTallies& lane, const std::vector<Candidate*>& candidates) const {
+// Without racing: the candidates in full, as many at a time as the lane traces together, with
+// their comfort metrics where the lane has them.
+void Racer::TraceTogether(DesignTallies& lane, DesignComfort* comfort,
+                          const std::vector<Candidate*>& candidates) const {
   const size_t at_once = static_cast<size_t>(std::max(1, lane.DesignsAtOnce()));
   for (size_t first = 0; first < candidates.size(); first += at_once) {
     const size_t count = std::min(at_once, candidates.size() - first);
     std::vector<BlindDesign> designs;
     for (size_t k = 0; k < count; ++k) designs.push_back(candidates[first + k]->design);
+    std::vector<absl::StatusOr<ComfortEstimate>> comforts;
+    std::future<void> comfort_done;
+    if (comfort != nullptr) {
+      comfort_done =
+          std::async(s_.comfort_beside ? std::launch::async : std::launch::deferred, [&] {
+            for (const BlindDesign& d : designs) {
+              comforts.push_back(comfort->Evaluate(d));
+            }
+          });
+    }
     const uint64_t rays_before = lane.RaysTraced();
     std::vector<absl::StatusOr<std::vector<HourTally>>> tallies =
         lane.TallyDesigns(designs, s_.options);
+    if (comfort_done.valid()) comfort_done.get();
     // Each design's share of the pass's rays
     const uint64_t rays = (lane.RaysTraced() - rays_before) / count;
     for (size_t k = 0; k < count; ++k) {
       Candidate& c = *candidates[first + k];
       StartStats(c);
-      const absl::Status taken =
-          tallies[k].ok() ? TakeFull(*tallies[k], rays, c) : tallies[k].status();
+      absl::Status taken = tallies[k].status();
+      if (taken.ok() && comfort != nullptr) taken = comforts[k].status();
+      if (taken.ok()) {
+        taken = TakeFull(*tallies[k], rays, c, comfort != nullptr ? &*comforts[k] : nullptr);
+      }
       if (!taken.ok()) c.evaluation = taken;
     }
   }
@@ -192,7 +212,7 @@ std::vector<absl::StatusOr<Evaluation>> Racer::EvaluateBatch(
     DesignTallies& lane = *s_.lanes[l];
     std::vector<Candidate*> mine;
     for (size_t i = l; i < last_batch_.size(); i += lanes) mine.push_back(&last_batch_[i]);
-    if (!Races()) return TraceTogether(lane, mine);
+    if (!Races()) return TraceTogether(lane, s_.comfort.empty() ? nullptr : s_.comfort[l], mine);
     for (Candidate* c : mine) {
       if (const absl::Status raced = Race(lane, *c); !raced.ok()) c->evaluation = raced;
     }

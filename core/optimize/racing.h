@@ -28,6 +28,7 @@
 #include "core/common/thread_pool.h"
 #include "core/dc/dc_backend.h"
 #include "core/metrics/annual_metrics.h"
+#include "core/optimize/comfort.h"
 #include "core/optimize/vns.h"
 
 namespace fenestra {
@@ -110,6 +111,11 @@ class Racer {
     // Trace rejected candidates to the end too, and count those a full evaluation would
     // have accepted (RacingStats::rejected_would_improve); their result stays the rejection.
     bool audit = false;
+    // Per lane, the comfort metrics of its designs (core/optimize/comfort.h), or empty for
+    // none; where set, racing must be off (the rounds do not give them). `comfort_beside`:
+    // taken while the lane traces the designs (on a GPU, whose host thread waits), else after.
+    std::vector<DesignComfort*> comfort = {};
+    bool comfort_beside = false;
   };
   explicit Racer(Setting setting);
   ~Racer();
@@ -148,13 +154,16 @@ class Racer {
     double paths_fraction = 0;  // of its paths traced
     RacingStats stats;          // what racing did for it
   };
-  absl::StatusOr<Scored> ScoreTallies(const std::vector<HourTally>& versions, bool partial) const;
+  absl::StatusOr<Scored> ScoreTallies(const std::vector<HourTally>& versions, bool partial,
+                                      const ComfortEstimate* comfort = nullptr) const;
   absl::Status PrepareIncumbent();
   absl::StatusOr<Scored> FullScores(DesignTallies& lane, const BlindDesign& design) const;
   absl::Status Race(DesignTallies& lane, Candidate& c) const;
   void StartStats(Candidate& c) const;
-  absl::Status TakeFull(const std::vector<HourTally>& versions, uint64_t rays, Candidate& c) const;
-  void TraceTogether(DesignTallies& lane, const std::vector<Candidate*>& candidates) const;
+  absl::Status TakeFull(const std::vector<HourTally>& versions, uint64_t rays, Candidate& c,
+                        const ComfortEstimate* comfort = nullptr) const;
+  void TraceTogether(DesignTallies& lane, DesignComfort* comfort,
+                     const std::vector<Candidate*>& candidates) const;
   absl::Status Audit(DesignTallies& lane, Candidate& c) const;
   void AddStats(const RacingStats& s);
 
