@@ -44,6 +44,12 @@ double MetricUpperBound(v1::Metric metric) {
   return metric == v1::METRIC_SOLAR_GAIN || metric == v1::METRIC_COOLING_SOLAR_GAIN ? kMaxGainKwh
                                                                                     : 100;
 }
+
+// "[0, <upper>] <unit>", the range of `metric`'s values.
+std::string MetricRange(v1::Metric metric) {
+  const bool gain = MetricUpperBound(metric) == kMaxGainKwh;
+  return absl::StrCat("[0, ", MetricUpperBound(metric), "] ", gain ? "kWh" : "%");
+}
 constexpr double kMaxConstraintStandardErrors = 100;
 
 bool AllFinite(std::initializer_list<double> values) {
@@ -261,8 +267,8 @@ absl::Status CheckObjective(const v1::Objective& objective) {
   }
   if (!(objective.target() >= 0 && objective.target() <= MetricUpperBound(objective.metric()))) {
     return InvalidJobField("objective.target",
-                           absl::StrCat("must be in [0, ", MetricUpperBound(objective.metric()),
-                                        "] (the metric's range), got ", objective.target()));
+                           absl::StrCat("must be in ", MetricRange(objective.metric()),
+                                        " (a metric's value), got ", objective.target()));
   }
   if (!(objective.target_tolerance() >= 0 && objective.target_tolerance() <= 100)) {
     return InvalidJobField(
@@ -293,8 +299,8 @@ absl::Status FillConstraints(v1::Objective& objective) {
     }
     if (!(c.value() >= 0 && c.value() <= MetricUpperBound(c.metric()))) {
       return InvalidJobField(field + ".value",
-                             absl::StrCat("must be in [0, ", MetricUpperBound(c.metric()),
-                                          "] (the metric's range), got ", c.value()));
+                             absl::StrCat("must be in ", MetricRange(c.metric()),
+                                          " (the metric's range), got ", c.value()));
     }
   }
   const double k = objective.constraint_standard_errors();
