@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# On the device: unpacks the binaries, runs the GPU tests and the benchmarks into $OUT.
+cd "$(dirname "$0")/.."
+tar xJf device/pack.tar.xz
+export LD_LIBRARY_PATH=$PWD/device_pack/lib
+B=$PWD/device_pack/bin
+mkdir -p /work 2>/dev/null; ln -sfn "$PWD" /work/main 2>/dev/null || echo "no link to /work/main"
+R=$(mktemp -d)
+nvidia-smi --query-gpu=name,driver_version --format=csv > "$R/gpu.txt" 2>&1; nproc >> "$R/gpu.txt"
+run() { local name=$1; shift; local t0=$SECONDS; "$@" > "$R/$name.txt" 2>&1; echo "$name rc=$? $((SECONDS - t0)) s" | tee -a "$R/summary.txt"; }
+case "${1:-all}" in
+  tests|all)
+    run cuda_backend_test $B/cuda_backend_test
+    run cuda_tracer_test $B/cuda_tracer_test
+    run annual_tally_test $B/annual_tally_test
+    run optimize_gpu $B/optimize_test --gtest_filter='*Gpu*'
+    ;;&
+  bench|all)
+    run job_corner $B/gpu_bench job 4 examples/corner_office/tilt_and_spacing.json
+    run job_one_window $B/gpu_bench job 4 device/one_window/tilt_and_spacing.json
+    run job_city $B/gpu_bench job 4
+    run cpu_corner $B/fenestra optimize --local examples/corner_office/tilt_and_spacing.json --backend cpu -o "$R/cpu_corner.json"
+    run cpu_one_window $B/fenestra optimize --local device/one_window/tilt_and_spacing.json --backend cpu -o "$R/cpu_one_window.json"
+    ;;
+  comfort)
+    F="$B/fenestra optimize --local"
+    for k in 1 2; do
+      run pareto_$k $F examples/sunny_office/pareto_sda_glare.json -o "$R/pareto_$k.json"
+      run plain_$k $F bench/comfort/sda_plain.json -o "$R/plain_$k.json"
+      run glare_$k $F bench/comfort/sda_glare.json -o "$R/glare_$k.json"
+      run gain_$k $F bench/comfort/sda_gain.json -o "$R/gain_$k.json"
+    done
+    run cpu_plain $F bench/comfort/sda_plain.json --backend cpu -o "$R/cpu_plain.json"
+    run cpu_glare $F bench/comfort/sda_glare.json --backend cpu -o "$R/cpu_glare.json"
+    run cuda_backend_test $B/cuda_backend_test
+    ;;
+esac
+tar cJf "$OUT/results.tar.xz" -C "$R" .
