@@ -180,12 +180,17 @@ std::string FormatResult(const v1::JobResult& r) {
     }
     out += "\n";
   }
-  if (m.has_glare_autonomy() || m.has_solar_gain_kwh()) {
-    out += fmt::format(
-        "comfort: glare autonomy {} %, hours of glare {} % (DGP >= {:g}), solar gain {} kWh, in "
-        "the cooling season {} kWh\n",
-        Value(m.glare_autonomy()), Value(m.glare_hours()), r.job().metrics().glare_threshold(),
-        Value(m.solar_gain_kwh()), Value(m.cooling_solar_gain_kwh()));
+  if (m.has_glare_autonomy()) {
+    out += fmt::format("glare at the views: autonomy {} %, hours of glare {} % (DGP >= {:g})\n",
+                       Value(m.glare_autonomy()), Value(m.glare_hours()),
+                       r.job().metrics().glare_threshold());
+  }
+  if (m.has_solar_gain_kwh()) {
+    out += fmt::format("solar gain through the windows: {} kWh a year, {} kWh in the cooling "
+                       "season (months {}-{})\n",
+                       Value(m.solar_gain_kwh()), Value(m.cooling_solar_gain_kwh()),
+                       r.job().metrics().cooling_start_month(),
+                       r.job().metrics().cooling_end_month());
   }
   out += FormatFront(r);
   for (const v1::ConstraintResult& c : r.best_constraints()) out += ConstraintLine(c);

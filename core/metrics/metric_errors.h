@@ -30,7 +30,9 @@ struct AnnualMetricsEstimate {
   AnnualMetrics value;           // the metrics of the mean over all batches
   AnnualMetrics standard_error;  // same layout; analysed_hours and has_ase copied
   int batches = 0;
-  bool has_comfort = false;  // the comfort metrics (SceneMetrics) were computed
+  // The comfort metrics (SceneMetrics) computed: glare, solar gains
+  bool has_glare = false;
+  bool has_gains = false;
 };
 
 // The jackknife standard error from the B leave-one-out values; 0 when B < 2.

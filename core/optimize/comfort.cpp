@@ -266,6 +266,8 @@ absl::StatusOr<ComfortEstimate> DesignComfort::Evaluate(const BlindDesign& desig
   ComfortEstimate out;
   if (eyes_) FENESTRA_RETURN_IF_ERROR(EvaluateGlare(design, out));
   if (gains_) FENESTRA_RETURN_IF_ERROR(EvaluateGains(design, out));
+  out.glare = eyes_ != nullptr;
+  out.gains = gains_ != nullptr;
   return out;
 }
 
@@ -361,7 +363,8 @@ void AddComfort(const ComfortEstimate& comfort, AnnualMetricsEstimate& estimate)
   se.glare_hours_percent = comfort.standard_error.glare_hours_percent;
   se.solar_gain_kwh = comfort.standard_error.solar_gain_kwh;
   se.cooling_solar_gain_kwh = comfort.standard_error.cooling_solar_gain_kwh;
-  estimate.has_comfort = true;
+  estimate.has_glare = comfort.glare;
+  estimate.has_gains = comfort.gains;
 }
 
 }  // namespace fenestra

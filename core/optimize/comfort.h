@@ -106,6 +106,7 @@ absl::StatusOr<ComfortSky> MakeComfortSky(const SkyMatrix& visible, const SkyMat
 // The comfort metrics of one design, with standard errors.
 struct ComfortEstimate {
   SceneMetrics value, standard_error;  // only the comfort fields set
+  bool glare = false, gains = false;   // which of them
 };
 
 // The comfort metrics of a job's designs on one lane: on backends of their own on the lane's
@@ -142,7 +143,7 @@ class DesignComfort {
   std::shared_ptr<const ComfortSky> sky_;
 };
 
-// `estimate` with the comfort metrics of `comfort` (has_comfort set).
+// `estimate` with the comfort metrics of `comfort` (has_glare, has_gains as it has them).
 void AddComfort(const ComfortEstimate& comfort, AnnualMetricsEstimate& estimate);
 
 }  // namespace fenestra

@@ -227,9 +227,11 @@ v1::Metrics MetricsProto(const AnnualMetricsEstimate& m) {
   SetEstimate(out.mutable_ase(), v.ase_percent, se.ase_percent);
   SetEstimate(out.mutable_blind_in_place(), v.blind_in_place_percent, se.blind_in_place_percent);
   out.set_leed_points(LeedDaylightPoints(v.sda_percent));
-  if (m.has_comfort) {
+  if (m.has_glare) {
     SetEstimate(out.mutable_glare_autonomy(), v.glare_autonomy_percent, se.glare_autonomy_percent);
     SetEstimate(out.mutable_glare_hours(), v.glare_hours_percent, se.glare_hours_percent);
+  }
+  if (m.has_gains) {
     SetEstimate(out.mutable_solar_gain_kwh(), v.solar_gain_kwh, se.solar_gain_kwh);
     SetEstimate(out.mutable_cooling_solar_gain_kwh(), v.cooling_solar_gain_kwh,
                 se.cooling_solar_gain_kwh);
