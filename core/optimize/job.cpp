@@ -453,11 +453,7 @@ absl::StatusOr<VnsResult> RunJobSearch(const PreparedJob& job, const SearchSetti
       break;
     }
   }
-  const BatchObjective objective = [&](const std::vector<std::vector<double>>& xs) {
-    std::vector<BlindDesign> designs;
-    for (const std::vector<double>& x : xs) designs.push_back(DesignAt(job, x));
-    return racer.EvaluateBatch(designs);
-  };
+  const BatchObjective objective = RacerObjective(job, racer);
   VnsCallbacks vns_callbacks;
   vns_callbacks.cancelled = callbacks.cancelled;
   vns_callbacks.checkpoint = [&](const VnsResult& state) {

@@ -4,6 +4,14 @@
 
 namespace fenestra {
 
+BatchObjective RacerObjective(const PreparedJob& job, Racer& racer) {
+  return [&job, &racer](const std::vector<std::vector<double>>& xs) {
+    std::vector<BlindDesign> designs;
+    for (const std::vector<double>& x : xs) designs.push_back(DesignAt(job, x));
+    return racer.EvaluateBatch(designs);
+  };
+}
+
 absl::StatusOr<ParetoOutcome> RunJobPareto(const PreparedJob& job, const SearchSettings& search,
                                            Racer& racer, const JobCallbacks& callbacks,
                                            const std::function<double()>& job_seconds,
@@ -12,11 +20,7 @@ absl::StatusOr<ParetoOutcome> RunJobPareto(const PreparedJob& job, const SearchS
   // When the search started, on the job's clock
   const double search_start = job_seconds() - (so_far ? so_far->search.elapsed_seconds : 0);
   const ParetoOptions options = MakeParetoOptions(job.job, search);
-  const BatchObjective objective = [&](const std::vector<std::vector<double>>& xs) {
-    std::vector<BlindDesign> designs;
-    for (const std::vector<double>& x : xs) designs.push_back(DesignAt(job, x));
-    return racer.EvaluateBatch(designs);
-  };
+  const BatchObjective objective = RacerObjective(job, racer);
   ParetoCallbacks pareto_callbacks;
   pareto_callbacks.cancelled = callbacks.cancelled;
   pareto_callbacks.step = [&](const ParetoOutcome& state) {

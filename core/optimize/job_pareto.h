@@ -13,6 +13,10 @@
 
 namespace fenestra {
 
+// The search's objective: the designs at `xs` evaluated by `racer` (on its lanes); both must
+// outlive it.
+BatchObjective RacerObjective(const PreparedJob& job, Racer& racer);
+
 // The search from the start or from `so_far`, `checkpoint` (that of `so_far`, else new) kept
 // up to date after each step and handed out with the progress; `job_seconds` is the job's
 // clock.
