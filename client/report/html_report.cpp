@@ -117,8 +117,8 @@ std::string Page(const ReportData& data) {
       "<title>Fenestra report: {}</title>\n<style>{}</style>\n</head>\n<body>\n<main>\n",
       EscapeXml(data.result.job().name()), kStyle);
   html += Header(data);
-  for (auto section : {SummarySection, SearchSection, DesignSpaceSection, FloorPlanSection,
-                       TemporalMapSection, BlindSection, SettingsSection}) {
+  for (auto section : {SummarySection, SearchSection, ParetoSection, DesignSpaceSection,
+                       FloorPlanSection, TemporalMapSection, BlindSection, SettingsSection}) {
     html += section(data);
   }
   const auto version = data.result.versions().find("fenestra");

@@ -13,6 +13,8 @@ namespace fenestra {
 
 std::string SummarySection(const ReportData& data);
 std::string SearchSection(const ReportData& data);
+// Empty for a result without a Pareto search.
+std::string ParetoSection(const ReportData& data);
 std::string DesignSpaceSection(const ReportData& data);
 std::string FloorPlanSection(const ReportData& data);
 std::string TemporalMapSection(const ReportData& data);

@@ -222,6 +222,45 @@ TEST(ReportDataTest, TheGlareAtTheViewPointsIsATable) {
                               "<td class=\"num\">12</td></tr>"));
 }
 
+// A Pareto search's front is a figure (one diamond per member, every evaluated design a
+// point), a hypervolume line and a table; a result without one has no such section.
+TEST(ReportDataTest, TheParetoFrontIsDrawnWithItsMembers) {
+  v1::JobResult r = QuickJobResult();
+  EXPECT_THAT(Page(r), Not(HasSubstr("id=\"pareto\"")));
+  v1::Job& job = *r.mutable_job();
+  v1::Objective& sda = *job.mutable_pareto()->add_objectives();
+  sda.set_metric(v1::METRIC_SDA);
+  sda.set_goal(v1::GOAL_MAXIMIZE);
+  v1::Objective& glare = *job.mutable_pareto()->add_objectives();
+  glare.set_metric(v1::METRIC_GLARE_HOURS);
+  glare.set_goal(v1::GOAL_MINIMIZE);
+  job.mutable_pareto()->set_population(4);
+  job.mutable_pareto()->set_dominance_standard_errors(1);
+  for (int s = 0; s < r.history_size(); ++s) {
+    v1::Evaluation& e = *r.mutable_history(s);
+    for (const double v : {50.0 + 10 * s, 5.0 * s}) {
+      v1::Estimate& o = *e.add_objectives();
+      o.set_value(v);
+      o.set_standard_error(0.5);
+    }
+  }
+  v1::ParetoResult& p = *r.mutable_pareto();
+  for (const int s : {3, 2, 1}) {
+    v1::FrontMember& m = *p.add_front();
+    m.set_evaluation(s);
+    *m.mutable_objectives() = r.history(s).objectives();
+    (*m.mutable_design())["alpha"] = 0.1 * s;
+  }
+  for (const double h : {10.0, 12.0, 12.5}) p.add_hypervolume(h);
+  p.set_generations(3);
+  const std::string page = Page(r);
+  EXPECT_THAT(page, HasSubstr("id=\"pareto\""));
+  EXPECT_EQ(Count(page, "front-member"), 3);
+  EXPECT_THAT(page, HasSubstr("plot-hypervolume"));
+  EXPECT_THAT(page, HasSubstr("glare hours [%] (lower is better)"));
+  EXPECT_THAT(page, HasSubstr("<td class=\"num\">80.00 ± 0.50</td>"));
+}
+
 // A result from before the direct-sun fields renders without their sections
 TEST(ReportDataTest, AResultWithoutTheDirectSunLeavesItsSectionsOut) {
   const v1::JobResult old = WithoutDirectSun(QuickJobResult());
