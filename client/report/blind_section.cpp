@@ -155,12 +155,13 @@ std::string StackLabel(bool vertical) {
                   : "height from the opening's centre [m]";
 }
 
-std::string SectionFigure(const BlindCut& s) {
+// The section as figure `id`; `what` names the design in its title and caption.
+std::string SectionFigure(const BlindCut& s, std::string_view id, std::string_view what) {
   const SectionExtent e = ExtentOf(s);
   const double scale = std::min(kMaxWidth / (e.u1 - e.u0), kMaxHeight / (e.v1 - e.v0));
-  Svg svg("plot-blind-section", "blind-plot", kSectionLeft + (e.u1 - e.u0) * scale + kSectionRight,
+  Svg svg(id, "blind-plot", kSectionLeft + (e.u1 - e.u0) * scale + kSectionRight,
           kSectionTop + (e.v1 - e.v0) * scale + kSectionBottom,
-          "The blind at the best design in section");
+          fmt::format("The blind at {} in section", what));
   Chart chart = EqualScaleChart(svg, e.u0, e.u1, e.v0, e.v1, kMaxWidth, kMaxHeight,
                                 "depth from the window's outer face [m]", StackLabel(s.vertical));
   chart.DrawAxes(5, 8);
@@ -182,9 +183,10 @@ std::string SectionFigure(const BlindCut& s) {
               {chart.X(front) + 6, chart.Y(s.centers.front().second)}, {1, 0}, 6,
               fmt::format("{} slats, axes {:.3f} m apart", s.layout.slat_count, s.layout.pitch_m));
   }
-  return "<figure class=\"plot\">" + svg.Finish() +
-         "<figcaption>Section through the window at the best design, to scale (1 m = " +
-         fmt::format("{:.0f}", scale) + " px).</figcaption></figure>\n";
+  return "<figure class=\"plot\">" + svg.Finish() + "<figcaption>" +
+         EscapeXml(fmt::format("Section through the window at {}, to scale (1 m = {:.0f} px).",
+                               what, scale)) +
+         "</figcaption></figure>\n";
 }
 
 // The tilt: the window plane's direction from the slat's centre past its end, and an arc
@@ -277,6 +279,11 @@ std::string BlindTable(const Scene& scene, const BlindCut& s, const BlindDesign&
 
 }  // namespace
 
+std::string BlindSectionFigure(const Scene& scene, const BlindDesign& design, std::string_view id,
+                               std::string_view what) {
+  return SectionFigure(SectionOf(scene, design), id, what);
+}
+
 std::string BlindSection(const ReportData& data) {
   const std::string heading = "The blind at the best design";
   if (!data.scene) {
@@ -289,8 +296,8 @@ std::string BlindSection(const ReportData& data) {
   std::string body = Note(
       "Drawn from the slats the tracer used (core/geometry/blind): each slat's cross-section, "
       "the wall cut through above and below the opening, outdoors on the left.");
-  body +=
-      "<div class=\"figures\">" + SectionFigure(s) + DetailFigure(s, data.best_design) + "</div>\n";
+  body += "<div class=\"figures\">" + SectionFigure(s, "plot-blind-section", "the best design") +
+          DetailFigure(s, data.best_design) + "</div>\n";
   return Section("blind", heading, body + BlindTable(*data.scene, s, data.best_design));
 }
 

@@ -1,12 +1,16 @@
 // The floor plan: the room's indoor surfaces projected on the floor plane (x east, y north),
 // the window, and the sensors coloured by the best design's UDI and DA, and by their sunlit
-// hours (ASE's) where the result holds them.
+// hours (ASE's) where the result holds them; the scene's view points with their view
+// directions.
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <string_view>
 
+#include "absl/strings/str_join.h"
 #include "client/report/sections.h"
 #include "client/report/svg.h"
 
@@ -18,8 +22,25 @@ constexpr double kPlanLeft = 64, kPlanTop = 30, kLabelRoom = 40, kBarRoom = 56, 
 constexpr double kPadding = 0.5;  // around the room [m]
 constexpr double kSensorRadius = 7;
 constexpr size_t kMaxLabelledSensors = 200;
+constexpr double kViewArrow = 26;  // a horizontal view direction's arrow [px]
 
 using Xy = std::pair<double, double>;
+
+// What a text or mark covers on the page [px], for placing the view points' names.
+struct PlanBox {
+  double x0, y0, x1, y1;
+  bool Meets(const PlanBox& o) const { return x0 < o.x1 && o.x0 < x1 && y0 < o.y1 && o.y0 < y1; }
+  bool Within(const PlanBox& o) const {
+    return x0 >= o.x0 && x1 <= o.x1 && y0 >= o.y0 && y1 <= o.y1;
+  }
+};
+
+// The box of `text` drawn `px` high with its baseline at (x, y), anchored as `anchor`.
+PlanBox TextBox(double x, double y, std::string_view text, double px, Anchor anchor) {
+  const double w = TextWidth(text, px);
+  const double x0 = anchor == Anchor::kStart ? x : (anchor == Anchor::kEnd ? x - w : x - w / 2);
+  return {x0, y - 0.8 * px, x0 + w, y + 0.3 * px};
+}
 
 // The eight corners of the window's opening (outer and inner face) in plan.
 std::vector<Xy> WindowCorners(const Window& w) {
@@ -57,6 +78,7 @@ Extent PlanExtent(const Scene& scene) {
     for (const auto& [x, y] : WindowCorners(w.window)) e.Add(x, y);
   }
   for (const Sensor& s : scene.sensors) e.Add(s.position.x, s.position.y);
+  for (const ViewPoint& v : scene.views) e.Add(v.position.x, v.position.y);
   e.min_x -= kPadding, e.min_y -= kPadding, e.max_x += kPadding, e.max_y += kPadding;
   return e;
 }
@@ -103,13 +125,15 @@ void DrawRoom(Svg& svg, const Chart& chart, const Scene& scene) {
 }
 
 // "window 2.00 x 1.50 m" (a named window: "north 2.00 x 1.50 m") just outside the window's
-// outer face, along it.
-void LabelWindow(Svg& svg, const Chart& chart, const std::string& name, const Window& w) {
+// outer face, along it; its box goes to `taken`.
+void LabelWindow(Svg& svg, const Chart& chart, const std::string& name, const Window& w,
+                 std::vector<PlanBox>& taken) {
   const std::string text = fmt::format("{} {:.2f} × {:.2f} m", name, w.width_m, w.height_m);
   const double n = std::hypot(w.normal.x, w.normal.y);
   const double x = chart.X(w.center.x), y = chart.Y(w.center.y);
   if (n < 0.5) {  // a roof light: the label over its middle
     svg.Text(x, y - 8, text, "plan-label", Anchor::kMiddle);
+    taken.push_back(TextBox(x, y - 8, text, 12, Anchor::kMiddle));
     return;
   }
   // Outward on the page; the text reads along the wall, glyphs rising up or to the left
@@ -117,12 +141,18 @@ void LabelWindow(Svg& svg, const Chart& chart, const std::string& name, const Wi
   const bool along_x = std::abs(oy) >= std::abs(ox);
   const double rises_outward = along_x ? -oy : -ox;
   const double gap = rises_outward >= 0 ? 6 : 17;
-  svg.Text(x + gap * ox, y + gap * oy, text, "plan-label", Anchor::kMiddle, along_x ? 0 : -90);
+  const double tx = x + gap * ox, ty = y + gap * oy;
+  svg.Text(tx, ty, text, "plan-label", Anchor::kMiddle, along_x ? 0 : -90);
+  const PlanBox b = TextBox(tx, ty, text, 12, Anchor::kMiddle);
+  // Turned by -90° about (tx, ty): x's offsets become upward ones, y's rightward ones
+  taken.push_back(
+      along_x ? b : PlanBox{tx + b.y0 - ty, ty - (b.x1 - tx), tx + b.y1 - ty, ty - (b.x0 - tx)});
 }
 
-void DrawNorthArrow(Svg& svg, double x, double y) {
+void DrawNorthArrow(Svg& svg, double x, double y, std::vector<PlanBox>& taken) {
   svg.Polygon({{x, y}, {x + 6, y + 16}, {x, y + 12}, {x - 6, y + 16}}, "north-arrow");
   svg.Text(x, y - 4, "N", "plan-label", Anchor::kMiddle);
+  taken.push_back({x - 8, y - 15, x + 8, y + 16});
 }
 
 // Each sensor's name sits above it and its value below, centred; they fit when no two
@@ -164,8 +194,10 @@ PlanValues EstimatePlan(const std::string& id, const std::string& what,
   return plan;
 }
 
-// The sensors: coloured dots, with names and values where they fit, the marked ones squared.
-bool DrawSensors(Svg& svg, const Scene& scene, const std::vector<Xy>& at, const PlanValues& plan) {
+// The sensors: coloured dots, with names and values where they fit, the marked ones squared;
+// what they cover goes to `taken`.
+bool DrawSensors(Svg& svg, const Scene& scene, const std::vector<Xy>& at, const PlanValues& plan,
+                 std::vector<PlanBox>& taken) {
   double longest = 0;
   for (size_t i = 0; i < plan.labels.size(); ++i) {
     longest =
@@ -176,18 +208,115 @@ bool DrawSensors(Svg& svg, const Scene& scene, const std::vector<Xy>& at, const 
   for (size_t i = 0; i < at.size(); ++i) {
     const double fraction = (plan.values[i] - plan.lo) / (plan.hi - plan.lo);
     svg.Circle(at[i].first, at[i].second, kSensorRadius, "sensor", ViridisColor(fraction));
+    const double reach = kSensorRadius + 4;  // the map sensor's ring
+    taken.push_back(
+        {at[i].first - reach, at[i].second - reach, at[i].first + reach, at[i].second + reach});
     if (!plan.marked.empty() && plan.marked[i]) {
       const double half = kSensorRadius + 2;
       svg.Rect(at[i].first - half, at[i].second - half, 2 * half, 2 * half, "marked-sensor");
     }
     if (!labelled) continue;
-    svg.Text(at[i].first, at[i].second - kSensorRadius - 4, scene.sensors[i].name, "sensor-name",
-             Anchor::kMiddle);
-    svg.Text(at[i].first, at[i].second + kSensorRadius + 13, plan.labels[i], "sensor-value",
-             Anchor::kMiddle);
+    const double name_y = at[i].second - kSensorRadius - 4;
+    const double value_y = at[i].second + kSensorRadius + 13;
+    svg.Text(at[i].first, name_y, scene.sensors[i].name, "sensor-name", Anchor::kMiddle);
+    svg.Text(at[i].first, value_y, plan.labels[i], "sensor-value", Anchor::kMiddle);
+    taken.push_back(TextBox(at[i].first, name_y, scene.sensors[i].name, 10.5, Anchor::kMiddle));
+    taken.push_back(TextBox(at[i].first, value_y, plan.labels[i], 11.5, Anchor::kMiddle));
   }
   svg.EndGroup();
   return labelled;
+}
+
+// A view point on the page: the eye, its arrow's unit direction (up where it looks straight up
+// or down) and the arrow's tip [px].
+struct ViewMark {
+  double x, y, ux, uy, tx, ty;
+};
+
+// A view's dot and arrow (the arrow's length the view direction's share in the plan); what
+// they cover goes to `taken`.
+ViewMark DrawViewMark(Svg& svg, const Chart& chart, const ViewPoint& v,
+                      std::vector<PlanBox>& taken) {
+  const double x = chart.X(v.position.x), y = chart.Y(v.position.y);
+  const double dx = v.direction.x, dy = -v.direction.y;  // on the page, y points south
+  const double length = std::hypot(dx, dy);
+  const bool level = length > 0.05;
+  const ViewMark m{x,
+                   y,
+                   level ? dx / length : 0,
+                   level ? dy / length : -1,
+                   x + kViewArrow * dx,
+                   y + kViewArrow * dy};
+  if (level) {
+    svg.Line(x, y, m.tx - 6 * m.ux, m.ty - 6 * m.uy, "view-arrow");
+    svg.Polygon({{m.tx, m.ty},
+                 {m.tx - 8 * m.ux - 4 * m.uy, m.ty - 8 * m.uy + 4 * m.ux},
+                 {m.tx - 8 * m.ux + 4 * m.uy, m.ty - 8 * m.uy - 4 * m.ux}},
+                "view-arrow-head");
+  }
+  svg.Circle(x, y, 4, "view-point");
+  taken.push_back(
+      {std::min(x, m.tx) - 5, std::min(y, m.ty) - 5, std::max(x, m.tx) + 5, std::max(y, m.ty) + 5});
+  return m;
+}
+
+struct NameSpot {
+  double x, y;
+  Anchor anchor;
+};
+
+// Where a view's name may go, in order: beyond the arrow's tip, behind the eye, below, above,
+// right and left of it.
+std::vector<NameSpot> NameSpots(const ViewMark& m) {
+  const auto along = [](double u) {
+    return u > 0.4 ? Anchor::kStart : (u < -0.4 ? Anchor::kEnd : Anchor::kMiddle);
+  };
+  const auto baseline = [](double y, double u) {
+    return u > 0.4 ? y + 10 : (u < -0.4 ? y - 2 : y + 4);
+  };
+  const double bx = m.tx + 5 * m.ux, by = m.ty + 5 * m.uy;
+  const double ex = m.x - 8 * m.ux, ey = m.y - 8 * m.uy;
+  return {{bx, baseline(by, m.uy), along(m.ux)}, {ex, baseline(ey, -m.uy), along(-m.ux)},
+          {m.x, m.y + 17, Anchor::kMiddle},      {m.x, m.y - 8, Anchor::kMiddle},
+          {m.x + 8, m.y + 4, Anchor::kStart},    {m.x - 8, m.y + 4, Anchor::kEnd}};
+}
+
+// The first spot where `text` meets nothing `taken` and stays within `bounds`.
+std::optional<NameSpot> FreeSpot(const ViewMark& m, std::string_view text,
+                                 const std::vector<PlanBox>& taken, const PlanBox& bounds) {
+  for (const NameSpot& spot : NameSpots(m)) {
+    const PlanBox box = TextBox(spot.x, spot.y, text, 10.5, spot.anchor);
+    if (box.Within(bounds) &&
+        std::none_of(taken.begin(), taken.end(), [&](const PlanBox& t) { return t.Meets(box); })) {
+      return spot;
+    }
+  }
+  return std::nullopt;
+}
+
+// The view points: each a dot with an arrow of its view direction projected on the plan, and
+// its name where it fits clear of what is `taken` within `bounds`; where it does not, the
+// view's tag "V1", "V2", ... (by its order in the scene). Returns "V2 = name" for each tag.
+std::vector<std::string> DrawViews(Svg& svg, const Chart& chart,
+                                   const std::vector<ViewPoint>& views, std::vector<PlanBox>& taken,
+                                   const PlanBox& bounds) {
+  svg.BeginGroup("views");
+  std::vector<ViewMark> marks;
+  for (const ViewPoint& v : views) marks.push_back(DrawViewMark(svg, chart, v, taken));
+  std::vector<std::string> tags;
+  for (size_t k = 0; k < views.size(); ++k) {
+    std::string text = views[k].name;
+    std::optional<NameSpot> spot = FreeSpot(marks[k], text, taken, bounds);
+    if (!spot) {
+      text = fmt::format("V{}", k + 1);
+      tags.push_back(fmt::format("{} = {}", text, views[k].name));
+      spot = FreeSpot(marks[k], text, taken, bounds).value_or(NameSpots(marks[k]).front());
+    }
+    svg.Text(spot->x, spot->y, text, "view-name", spot->anchor);
+    taken.push_back(TextBox(spot->x, spot->y, text, 10.5, spot->anchor));
+  }
+  svg.EndGroup();
+  return tags;
 }
 
 // One plan with the sensors coloured by `plan`'s values.
@@ -204,16 +333,23 @@ std::string PlanFigure(const ReportData& data, const PlanValues& plan) {
   chart.DrawAxes(std::max(2, static_cast<int>(width / 60)),
                  std::max(2, static_cast<int>(height / 60)));
   DrawRoom(svg, chart, scene);
-  for (const SceneWindow& w : scene.windows) LabelWindow(svg, chart, w.name, w.window);
-  DrawNorthArrow(svg, kPlanLeft + width - 14, kPlanTop + 20);
+  std::vector<PlanBox> taken;
+  for (const SceneWindow& w : scene.windows) LabelWindow(svg, chart, w.name, w.window, taken);
+  DrawNorthArrow(svg, kPlanLeft + width - 14, kPlanTop + 20, taken);
 
   std::vector<Xy> at;
   for (const Sensor& s : scene.sensors)
     at.emplace_back(chart.X(s.position.x), chart.Y(s.position.y));
-  const bool labelled = DrawSensors(svg, scene, at, plan);
+  const bool labelled = DrawSensors(svg, scene, at, plan, taken);
   if (data.map_sensor >= 0) {
     svg.Circle(at[data.map_sensor].first, at[data.map_sensor].second, kSensorRadius + 4,
                "map-sensor");
+  }
+  std::vector<std::string> tags;
+  if (!scene.views.empty()) {
+    const PlanBox bounds{kPlanLeft, kPlanTop, kPlanLeft + width + kLabelRoom - 4,
+                         kPlanTop + height};
+    tags = DrawViews(svg, chart, scene.views, taken, bounds);
   }
   ViridisColorBar(svg, kPlanLeft + width + kLabelRoom, kPlanTop + 20, std::min(height - 20, 220.0),
                   plan.lo, plan.hi, plan.bar_label);
@@ -222,6 +358,8 @@ std::string PlanFigure(const ReportData& data, const PlanValues& plan) {
       EscapeXml(plan.caption.empty() ? plan.what + " of each sensor, best design" : plan.caption);
   if (!labelled) figure += " (values in the table below)";
   if (data.map_sensor >= 0) figure += "; the ring marks the temporal map's sensor";
+  if (!scene.views.empty()) figure += "; the arrows mark the view points and where they look";
+  if (!tags.empty()) figure += EscapeXml(" (" + absl::StrJoin(tags, ", ") + ")");
   return figure + "</figcaption></figure>\n";
 }
 

@@ -73,6 +73,16 @@ footer { margin-top: 36px; font-size: 13px; border-top: 1px solid #d0d7de; paddi
 .dim-text { font-size: 11.5px; fill: #1a1a1a; }
 .reference-line { stroke: #888; stroke-width: 0.8; stroke-dasharray: 3 3; }
 .angle-arc { fill: none; stroke: #d55e00; stroke-width: 1.5; }
+.point.evaluated { fill: #b3b3b3; stroke: none; }
+.pareto-best { fill: none; stroke: #1a1a1a; stroke-width: 1.6; }
+.pareto-label { font-size: 13px; font-weight: 700; fill: #1a1a1a; }
+.better { stroke: #444; stroke-width: 1.3; }
+.better-head { fill: #444; }
+.better-label { font-size: 11.5px; font-style: italic; fill: #444; }
+.view-point { fill: #cc79a7; stroke: #1a1a1a; stroke-width: 1; }
+.view-arrow { stroke: #a0406f; stroke-width: 2; }
+.view-arrow-head { fill: #a0406f; }
+.view-name { font-size: 10.5px; fill: #7a2a55; }
 @page { size: A4; margin: 14mm; }
 @media print {
   body { font-size: 10pt; }
@@ -117,8 +127,9 @@ std::string Page(const ReportData& data) {
       "<title>Fenestra report: {}</title>\n<style>{}</style>\n</head>\n<body>\n<main>\n",
       EscapeXml(data.result.job().name()), kStyle);
   html += Header(data);
-  for (auto section : {SummarySection, SearchSection, ParetoSection, DesignSpaceSection,
-                       FloorPlanSection, TemporalMapSection, BlindSection, SettingsSection}) {
+  for (auto section :
+       {SummarySection, SearchSection, ParetoSection, DesignSpaceSection, FloorPlanSection,
+        TemporalMapSection, GlareSection, BlindSection, SettingsSection}) {
     html += section(data);
   }
   const auto version = data.result.versions().find("fenestra");

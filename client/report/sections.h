@@ -3,8 +3,10 @@
 // The report's sections, each an HTML fragment (a <section> with its heading, figures and
 // tables) made from the gathered data; html_report.cpp puts them on the page. Figures carry
 // element ids ("plot-...") and the class "figure", so tests and readers can find them.
+#include <functional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "client/report/report_data.h"
@@ -18,10 +20,27 @@ std::string ParetoSection(const ReportData& data);
 std::string DesignSpaceSection(const ReportData& data);
 std::string FloorPlanSection(const ReportData& data);
 std::string TemporalMapSection(const ReportData& data);
+// Empty for a result without glare at view points (JobResult.best_glare).
+std::string GlareSection(const ReportData& data);
 std::string BlindSection(const ReportData& data);
 std::string SettingsSection(const ReportData& data);
 
 // Helpers the sections share.
+
+// The blind at `design` in section, to scale, as figure `id` (blind_section.cpp); `what` names
+// the design in its title and caption, e.g. "the best design".
+std::string BlindSectionFigure(const Scene& scene, const BlindDesign& design, std::string_view id,
+                               std::string_view what);
+
+// A temporal map (temporal_map.cpp) of one value per time step of the result's best_hourly
+// (`values`, in its columns' order): every day (x) by hour (y), each cell coloured by
+// color_of(the mean of its steps), the occupied hours outlined, `legend` (Legend's entries)
+// with the occupancy after it, and `caption`. The result must hold best_hourly.
+std::string DayHourMap(const ReportData& data, const std::vector<double>& values,
+                       std::string_view id, std::string_view title,
+                       const std::function<std::string_view(double)>& color_of,
+                       std::vector<std::pair<std::string, std::string>> legend,
+                       std::string_view caption);
 
 // <p class="not-recorded">: `what` is not recorded, and why.
 std::string NotRecorded(std::string_view what, std::string_view why);

@@ -114,32 +114,6 @@ std::string ConstraintsTable(const ReportData& data) {
          "</div>";
 }
 
-// The glare at the scene's view points at the best design (JobResult.best_glare).
-std::string GlareTable(const v1::JobResult& result) {
-  Rows rows;
-  for (const v1::ViewGlare& g : result.best_glare()) {
-    std::string hours;
-    for (int i = 0; i < g.class_hours_size(); ++i) {
-      hours += (i > 0 ? " / " : "") + std::to_string(g.class_hours(i));
-    }
-    rows.push_back({g.view(), WithError(g.autonomy().value(), g.autonomy().standard_error()),
-                    WithError(g.mean_dgp().value(), g.mean_dgp().standard_error(), 3),
-                    fmt::format("{} ({:.3f})", g.en17037(), g.dgp_95()), hours,
-                    std::to_string(g.sunlit_hours())});
-  }
-  return "<div><h3>Glare at the view points</h3>" +
-         HtmlTable("glare-table",
-                   {"view", "glare autonomy ± SE [%]", "mean DGP ± SE", "EN 17037 (DGP at 95%)",
-                    "hours imperceptible / perceptible / disturbing / intolerable",
-                    "hours with the sun in view"},
-                   rows) +
-         Note(
-             "Over the analysed hours, the blind in place: per hour the daylight glare "
-             "probability with the sun as glare source where its beam reaches the eye; glare "
-             "autonomy is the share of hours below 0.40.") +
-         "</div>";
-}
-
 Rows JobRows(const ReportData& data) {
   const v1::Job& job = data.result.job();
   const v1::Budget& b = job.budget();
@@ -250,7 +224,6 @@ std::string SummarySection(const ReportData& data) {
   body += "<div><h3>Best design</h3>" + BestDesignTable(data) + "</div>";
   body += "<div><h3>Its annual metrics</h3>" + BestMetricsTable(data) + "</div>";
   if (!data.constraints.empty()) body += ConstraintsTable(data);
-  if (data.result.best_glare_size() > 0) body += GlareTable(data.result);
   body += "</div>\n" + LeedLine(data);
   return Section("summary", "Summary", body);
 }

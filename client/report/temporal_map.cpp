@@ -1,7 +1,7 @@
 // The temporal maps, every day of the year (x) by hour of the day (y), the occupied hours
 // outlined: the best design's illuminance at one sensor, coloured by the UDI bands; where the
 // result holds them, the direct sun at the most sunlit sensor and the hours an operated
-// blind is in place.
+// blind is in place; and such a map for other sections (DayHourMap).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -261,6 +261,15 @@ std::string BlindMap(const ReportData& data) {
 }
 
 }  // namespace
+
+std::string DayHourMap(const ReportData& data, const std::vector<double>& values,
+                       std::string_view id, std::string_view title,
+                       const std::function<std::string_view(double)>& color_of,
+                       std::vector<std::pair<std::string, std::string>> legend,
+                       std::string_view caption) {
+  const DayHourGrid grid = GridOf(data.result.best_hourly(), [&](int j) { return values[j]; });
+  return MapFigure(data, grid, id, title, color_of, std::move(legend), caption);
+}
 
 std::string TemporalMapSection(const ReportData& data) {
   const std::string heading = "Temporal maps";

@@ -18,6 +18,11 @@
 #include "tests/quick_job.h"
 
 namespace fenestra {
+
+// Results with a Pareto front, and with glare at view points (report_data_test.cpp).
+v1::JobResult WithParetoFront(v1::JobResult r, bool three);
+v1::JobResult WithGlareAtViews(v1::JobResult r);
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -236,6 +241,47 @@ TEST_F(HtmlReportTest, DrawsTheDirectSunAndTheOperatedBlind) {
   EXPECT_EQ(values[0].number_value(), 1);
   EXPECT_EQ(values[1].number_value(), 9);
   EXPECT_EQ(values[2].string_value(), "LEED v4.1 daylight option 1: 1 point; ASE at most 10%: no");
+}
+
+// A Pareto search's page with glare at view points: the front with its members, letters and
+// error bars, the hypervolume, the blinds of A, B and C, the DGP maps and the views on the
+// plans, with no text overlapping or leaving its figure
+TEST_F(HtmlReportTest, DrawsTheParetoFrontTheGlareMapsAndTheViews) {
+  const v1::JobResult result = WithGlareAtViews(WithParetoFront(QuickJobResult(), false));
+  const std::string page = (dir_ / "pareto.html").string();
+  ASSERT_TRUE(WriteReport(result, {"pareto.json", ""}, page).ok());
+  ASSERT_TRUE(browser_->Load("file://" + page, 1200, 900).ok());
+  EXPECT_THAT(browser_->problems(), IsEmpty());
+  const Value inspected = Inspect();
+  EXPECT_THAT(Strings(Get(inspected, "overlaps")), IsEmpty());
+  EXPECT_THAT(Strings(Get(inspected, "outside")), IsEmpty());
+  const Value figures = Get(inspected, "figures");
+  for (const char* id :
+       {"plot-pareto-front", "plot-hypervolume", "plot-pareto-blind-a", "plot-pareto-blind-b",
+        "plot-pareto-blind-c", "plot-glare-map-0", "plot-glare-map-1"}) {
+    const Value& figure = Get(figures, id);
+    ASSERT_TRUE(figure.has_struct_value()) << id << " is missing";
+    EXPECT_GT(Get(figure, "width").number_value(), 200) << id;
+    EXPECT_GT(Get(figure, "height").number_value(), 150) << id;
+  }
+  EXPECT_EQ(Get(Get(figures, "plot-pareto-front"), "points").number_value(), 9);
+  EXPECT_GT(Get(Get(figures, "plot-pareto-blind-c"), "slats").number_value(), 1);
+  EXPECT_GT(Get(Get(figures, "plot-glare-map-0"), "cells").number_value(), 24);
+  EXPECT_EQ(Get(Get(figures, "plot-glare-map-0"), "occupancy").number_value(), 1);
+  absl::StatusOr<Value> counts = browser_->Evaluate(
+      "[document.querySelectorAll('#plot-pareto-front .front .front-member').length, "
+      "[...document.querySelectorAll('#plot-pareto-front .pareto-label')].map(t => "
+      "t.textContent).join(''), "
+      "document.querySelectorAll('#pareto-front-table tbody tr').length, "
+      "document.querySelectorAll('#plot-floor-udi .views .view-point').length, "
+      "document.querySelectorAll('#glare-table tbody tr').length]");
+  ASSERT_TRUE(counts.ok()) << counts.status();
+  const auto& values = counts->list_value().values();
+  EXPECT_EQ(values[0].number_value(), 5);
+  EXPECT_EQ(values[1].string_value(), "ABC");
+  EXPECT_EQ(values[2].number_value(), 5);
+  EXPECT_EQ(values[3].number_value(), 3);
+  EXPECT_EQ(values[4].number_value(), 3);
 }
 
 // The inspection itself finds overlapping and clipped texts

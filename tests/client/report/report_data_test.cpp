@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 #include "client/report/html_report.h"
@@ -11,6 +12,111 @@
 #include "tests/quick_job.h"
 
 namespace fenestra {
+
+// The quick job's result as a Pareto search's: sDA maximized against glare hours minimized
+// (with `three`, the solar gain minimized too, 1000 kWh + 10 x the glare hours), a history of
+// ten steps (nine designs and the third again, from the cache), five designs on the front,
+// listed in the order of the history, their UDI, and three generations' hypervolume. By sDA,
+// best first, the front runs (90, 30), (85, 12), (80, 6), (70, 4), (50, 3): A is the first,
+// the best design (tilt 0.3), B the last (0.5), C (80, 6) (0.8) nearest the ideal corner.
+// Used by html_report_test.cpp too.
+v1::JobResult WithParetoFront(v1::JobResult r, bool three) {
+  v1::ParetoSearch& search = *r.mutable_job()->mutable_pareto();
+  const auto add = [&](v1::Metric metric, v1::Goal goal) {
+    v1::Objective& o = *search.add_objectives();
+    o.set_metric(metric);
+    o.set_goal(goal);
+  };
+  add(v1::METRIC_SDA, v1::GOAL_MAXIMIZE);
+  add(v1::METRIC_GLARE_HOURS, v1::GOAL_MINIMIZE);
+  if (three) add(v1::METRIC_SOLAR_GAIN, v1::GOAL_MINIMIZE);
+  search.set_population(4);
+  search.set_dominance_standard_errors(1.5);
+  const std::vector<std::array<double, 3>> designs = {// sDA, glare hours, on the front
+                                                      {70, 4, 1},  {60, 20, 0}, {90, 30, 1},
+                                                      {75, 15, 0}, {50, 3, 1},  {40, 10, 0},
+                                                      {85, 12, 1}, {80, 6, 1},  {65, 25, 0}};
+  r.clear_history();
+  (*r.mutable_best_design())["alpha"] = 0.3;
+  for (int i = 0; i <= static_cast<int>(designs.size()); ++i) {
+    const bool repeat = i == static_cast<int>(designs.size());
+    const int d = repeat ? 2 : i;
+    v1::Evaluation& e = *r.add_history();
+    e.set_index(i);
+    *e.mutable_design() = r.best_design();
+    (*e.mutable_design())["alpha"] = 0.1 * (d + 1);
+    e.mutable_value()->set_value(designs[d][0]);
+    e.mutable_value()->set_standard_error(0.8);
+    e.set_seconds(repeat ? 0 : 0.5);
+    e.set_cached(repeat);
+    e.set_generation(i / 4);
+    std::vector<double> objectives = {designs[d][0], designs[d][1]};
+    if (three) objectives.push_back(1000 + 10 * designs[d][1]);
+    for (const double v : objectives) {
+      e.add_objectives()->set_value(v);
+      e.mutable_objectives()->rbegin()->set_standard_error(0.8);
+    }
+  }
+  v1::ParetoResult& p = *r.mutable_pareto();
+  for (int i = 0; i < static_cast<int>(designs.size()); ++i) {
+    if (!designs[i][2]) continue;
+    v1::FrontMember& m = *p.add_front();
+    m.set_evaluation(i);
+    *m.mutable_design() = r.history(i).design();
+    *m.mutable_objectives() = r.history(i).objectives();
+    m.mutable_metrics()->mutable_udi()->set_value(40 + i);
+    m.mutable_metrics()->mutable_udi()->set_standard_error(1);
+  }
+  for (const double h : {300.0, 650.0, 700.0}) p.add_hypervolume(h);
+  for (const double v : {40.0, 30.0, 1300.0}) {
+    if (p.reference_size() < search.objectives_size()) p.add_reference(v);
+  }
+  p.set_generations(3);
+  return r;
+}
+
+// The quick job's result with three view points in its scene and their glare: "desk <1>"
+// facing north with its DGP at every step (intolerable, 0.5, from 12 to 14 h in June;
+// disturbing, 0.42, in July; perceptible, 0.37, in August; 0.159 otherwise), "screen"
+// facing east with its DGP (0.5 from 12 to 14 h in December), and "v3" (unnamed) facing
+// west with 10 values only. Used by html_report_test.cpp too.
+v1::JobResult WithGlareAtViews(v1::JobResult r) {
+  v1::Scene& scene = *r.mutable_job()->mutable_scene();
+  const std::vector<std::array<double, 4>> views = {
+      {-0.5, -2, 0, 1}, {0.5, -4, 1, 0}, {-0.5, -4, -1, 0}};  // x, y, direction x, y
+  const std::vector<std::string> names = {"desk <1>", "screen", ""};
+  for (size_t k = 0; k < views.size(); ++k) {
+    v1::ViewPoint& v = *scene.add_views();
+    v.set_name(names[k]);
+    v.mutable_position()->set_x(views[k][0]);
+    v.mutable_position()->set_y(views[k][1]);
+    v.mutable_position()->set_z(7.2);
+    v.mutable_direction()->set_x(views[k][2]);
+    v.mutable_direction()->set_y(views[k][3]);
+  }
+  const v1::HourlyIlluminance& h = r.best_hourly();
+  for (const std::string name : {"desk <1>", "screen", "v3"}) {
+    v1::ViewGlare& g = *r.add_best_glare();
+    g.set_view(name);
+    g.mutable_autonomy()->set_value(95);
+    g.mutable_mean_dgp()->set_value(0.2);
+    g.set_en17037("medium");
+    g.set_analysed_hours(3650);
+    const int steps = name == "v3" ? 10 : h.month_size();
+    for (int j = 0; j < steps; ++j) {
+      const bool noon = h.hour(j) > 12 && h.hour(j) < 14;
+      const int month = h.month(j);
+      float dgp = 0.159f;
+      if (name == "screen" && noon && month == 12) dgp = 0.5f;
+      if (name == "desk <1>" && noon && month >= 6 && month <= 8) {
+        dgp = month == 6 ? 0.5f : month == 7 ? 0.42f : 0.37f;
+      }
+      g.add_dgp(dgp);
+    }
+  }
+  return r;
+}
+
 namespace {
 
 using ::testing::HasSubstr;
@@ -259,6 +365,129 @@ TEST(ReportDataTest, TheParetoFrontIsDrawnWithItsMembers) {
   EXPECT_THAT(page, HasSubstr("plot-hypervolume"));
   EXPECT_THAT(page, HasSubstr("glare hours [%] (lower is better)"));
   EXPECT_THAT(page, HasSubstr("<td class=\"num\">80.00 ± 0.50</td>"));
+}
+
+// A Pareto search's front: the evaluated designs in grey (the repeat from the cache left out),
+// the members with their error bars in both objectives, the ring around the best design, the
+// letters A, B, C, the "better" arrows, the hypervolume, the table and the chosen members'
+// blinds; the third objective is said to be left out of the figure.
+TEST(ReportDataTest, TheParetoFrontShowsItsMembersAndTheChosenOnes) {
+  const std::string page = Page(WithParetoFront(QuickJobResult(), false));
+  const std::string front = Figure(page, "plot-pareto-front");
+  ASSERT_FALSE(front.empty());
+  EXPECT_EQ(Count(front, "front-member"), 5);
+  EXPECT_EQ(Count(front, "class=\"point evaluated\""), 9 + 1);  // the legend's sample too
+  EXPECT_EQ(Count(front, "class=\"errorbar improved\""), 5 * 6);
+  EXPECT_EQ(Count(front, "class=\"pareto-best\""), 1 + 1);
+  EXPECT_EQ(Count(front, "class=\"pareto-label\""), 3);
+  for (const char* label : {">A</text>", ">B</text>", ">C</text>", ">sDA300/50% [%]</text>",
+                            ">glare hours [%]</text>"}) {
+    EXPECT_EQ(Count(front, label), 1) << label;
+  }
+  EXPECT_EQ(Count(front, ">better</text>"), 2);
+  EXPECT_THAT(page, HasSubstr("Chosen: A evaluation 3, B evaluation 5, C evaluation 8."));
+  EXPECT_THAT(page, HasSubstr("by more than 1.5 combined standard errors"));
+  EXPECT_THAT(page, Not(HasSubstr("Three objectives")));
+  // The hypervolume, one point per generation
+  EXPECT_EQ(Count(Figure(page, "plot-hypervolume"), "class=\"point\""), 3);
+  EXPECT_THAT(page, HasSubstr("hypervolume [% × %]"));
+  // The table, best first by sDA: the members' tilt, objectives and UDI
+  EXPECT_THAT(page, HasSubstr("<tr><td>A, best</td><td class=\"num\">3</td><td class=\"num\">"
+                              "0.3000 rad (17.2°)</td><td class=\"num\">90.00 ± 0.80</td>"
+                              "<td class=\"num\">30.00 ± 0.80</td><td class=\"num\">"
+                              "42.00 ± 1.00</td></tr>"));
+  EXPECT_THAT(page, HasSubstr("<tr><td>C</td><td class=\"num\">8</td>"));
+  EXPECT_THAT(page, HasSubstr("<tr><td></td><td class=\"num\">7</td>"));
+  EXPECT_THAT(page, HasSubstr("<th>UDI 100–3000 lx [%]</th>"));
+  const size_t table = page.find("id=\"pareto-front-table\"");
+  ASSERT_NE(table, std::string::npos);
+  EXPECT_EQ(Count(page.substr(table, page.find("</table>", table) - table), "<tr>"), 1 + 5);
+  // The blinds of A, B and C
+  EXPECT_THAT(page, HasSubstr("<h3>The blind at A, B and C</h3>"));
+  for (const char* id : {"plot-pareto-blind-a", "plot-pareto-blind-b", "plot-pareto-blind-c"}) {
+    EXPECT_THAT(Figure(page, id), HasSubstr("class=\"slat\"")) << id;
+  }
+  EXPECT_THAT(page, HasSubstr("Section through the window at front member C (evaluation 8)"));
+
+  // A long front's table: one member in every 3, and C
+  v1::JobResult r = WithParetoFront(QuickJobResult(), false);
+  const v1::ParetoResult five = r.pareto();
+  for (int copy = 1; copy < 20; ++copy) {
+    for (const v1::FrontMember& m : five.front()) *r.mutable_pareto()->add_front() = m;
+  }
+  EXPECT_THAT(Page(r), HasSubstr("35 of the 100 members shown: one in every 3 by sDA300/50%, and "
+                                 "the chosen ones and the best design."));
+
+  const std::string three = Page(WithParetoFront(QuickJobResult(), true));
+  EXPECT_THAT(three, HasSubstr("Three objectives: the figure plots the first two (sDA300/50% "
+                               "across, glare hours up); the table holds solar gain as well."));
+  EXPECT_THAT(three, HasSubstr("hypervolume [% × % × kWh]"));
+  EXPECT_THAT(three, HasSubstr("<th>solar gain [kWh] (lower is better)</th>"));
+  EXPECT_EQ(Count(Figure(three, "plot-pareto-front"), "front-member"), 5);
+  EXPECT_THAT(Page(QuickJobResult()), Not(HasSubstr("plot-pareto-front")));
+}
+
+// The DGP of each view that holds it per time step is a map by day and hour coloured by
+// comfort class, in the glare section with the glare table; a view without it has no map, one
+// whose values do not match the time steps says so.
+TEST(ReportDataTest, TheDgpIsMappedPerView) {
+  const std::string page = Page(WithGlareAtViews(QuickJobResult()));
+  const size_t section = page.find("<section id=\"glare\">");
+  ASSERT_NE(section, std::string::npos);
+  EXPECT_GT(page.find("id=\"glare-table\""), section);
+  EXPECT_LT(page.find("id=\"glare-table\""), page.find("<section id=\"blind\">"));
+  const std::string desk = Figure(page, "plot-glare-map-0");
+  ASSERT_FALSE(desk.empty());
+  for (const char* color : {"#e5f5e0", "#fee391", "#fe9929", "#b2182b"}) {
+    EXPECT_THAT(desk, HasSubstr(std::string("class=\"map-cell\" fill=\"") + color)) << color;
+  }
+  for (const char* name : {">imperceptible<", ">perceptible<", ">disturbing<", ">intolerable<"}) {
+    EXPECT_THAT(desk, HasSubstr(name));
+  }
+  EXPECT_THAT(page, HasSubstr("Daylight glare probability at desk &lt;1&gt; by day and hour, best "
+                              "design, the blind in place (dark hours at 0.159, the DGP of no "
+                              "light). Of its 3650 analysed hours: 3466 imperceptible (DGP below "
+                              "0.35), 62 perceptible (below 0.40), 62 disturbing (below 0.45), 60 "
+                              "intolerable."));
+  const std::string screen = Figure(page, "plot-glare-map-1");
+  ASSERT_FALSE(screen.empty());
+  EXPECT_THAT(screen, HasSubstr("class=\"map-cell\" fill=\"#b2182b\""));
+  EXPECT_THAT(screen, Not(HasSubstr("class=\"map-cell\" fill=\"#fee391\"")));
+  EXPECT_THAT(page, Not(HasSubstr("plot-glare-map-2")));
+  EXPECT_THAT(page, HasSubstr("The DGP by day and hour at v3: not recorded (it holds 10 values "
+                              "for the 8760 time steps of the hourly illuminance)."));
+  EXPECT_THAT(Page(QuickJobResult()), Not(HasSubstr("<section id=\"glare\">")));
+}
+
+// The view points on each floor plan: a dot, an arrow along the view direction and the name
+TEST(ReportDataTest, TheViewsAreDrawnOnThePlan) {
+  const std::string page = Page(WithGlareAtViews(QuickJobResult()));
+  for (const char* id : {"plot-floor-udi", "plot-floor-da"}) {
+    const std::string plan = Figure(page, id);
+    ASSERT_FALSE(plan.empty()) << id;
+    EXPECT_EQ(Count(plan, "class=\"view-point\""), 3) << id;
+    EXPECT_EQ(Count(plan, "class=\"view-arrow\""), 3) << id;
+    EXPECT_EQ(Count(plan, "class=\"view-arrow-head\""), 3) << id;
+    for (const char* name : {">desk &lt;1&gt;</text>", ">screen</text>", ">v3</text>"}) {
+      EXPECT_EQ(Count(plan, name), 1) << id << " " << name;
+    }
+    // The desk looks north: its name above its dot, the screen's right of it, v3's left of it
+    EXPECT_THAT(plan, HasSubstr("text-anchor=\"middle\" class=\"view-name\">desk"));
+    EXPECT_THAT(plan, HasSubstr("text-anchor=\"start\" class=\"view-name\">screen"));
+    EXPECT_THAT(plan, HasSubstr("text-anchor=\"end\" class=\"view-name\">v3"));
+  }
+  EXPECT_THAT(page, HasSubstr("the arrows mark the view points and where they look"));
+  // A name that fits nowhere on the plan is a tag there, named in the caption
+  v1::JobResult r = WithGlareAtViews(QuickJobResult());
+  v1::ViewPoint& far = *r.mutable_job()->mutable_scene()->add_views();
+  far.set_name("a view point whose name is longer than the whole floor plan is wide");
+  far.mutable_position()->set_z(7.2);
+  far.mutable_direction()->set_y(1);
+  const std::string tagged = Page(r);
+  EXPECT_EQ(Count(Figure(tagged, "plot-floor-udi"), "class=\"view-name\">V4</text>"), 1);
+  EXPECT_THAT(tagged, HasSubstr("where they look (V4 = a view point whose name is longer than "
+                                "the whole floor plan is wide)</figcaption>"));
+  EXPECT_THAT(Figure(Page(QuickJobResult()), "plot-floor-udi"), Not(HasSubstr("view-point")));
 }
 
 // A result from before the direct-sun fields renders without their sections
