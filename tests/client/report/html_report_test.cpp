@@ -119,6 +119,20 @@ class HtmlReportTest : public testing::Test {
     return value.ok() ? *value : Value();
   }
 
+  // The page of `result` (as `name`.html) loaded, checked for console problems, text that
+  // overlaps or leaves its figure; its figures' measurements.
+  Value LoadAndInspect(const v1::JobResult& result, const std::string& name) {
+    const std::string page = (dir_ / (name + ".html")).string();
+    EXPECT_TRUE(WriteReport(result, {name + ".json", ""}, page).ok());
+    const absl::Status loaded = browser_->Load("file://" + page, 1200, 900);
+    EXPECT_TRUE(loaded.ok()) << loaded;
+    EXPECT_THAT(browser_->problems(), IsEmpty());
+    const Value inspected = Inspect();
+    EXPECT_THAT(Strings(Get(inspected, "overlaps")), IsEmpty());
+    EXPECT_THAT(Strings(Get(inspected, "outside")), IsEmpty());
+    return Get(inspected, "figures");
+  }
+
   fs::path dir_;
   std::string page_;
   std::unique_ptr<HeadlessChromium> browser_;
@@ -212,14 +226,7 @@ TEST_F(HtmlReportTest, PrintsWithEveryFigure) {
 // the blind in place, with no text overlapping or leaving them
 TEST_F(HtmlReportTest, DrawsTheDirectSunAndTheOperatedBlind) {
   const v1::JobResult sunny = WithDirectSun(QuickJobResult());
-  const std::string page = (dir_ / "sunny.html").string();
-  ASSERT_TRUE(WriteReport(sunny, {"sunny.json", ""}, page).ok());
-  ASSERT_TRUE(browser_->Load("file://" + page, 1200, 900).ok());
-  EXPECT_THAT(browser_->problems(), IsEmpty());
-  const Value inspected = Inspect();
-  EXPECT_THAT(Strings(Get(inspected, "overlaps")), IsEmpty());
-  EXPECT_THAT(Strings(Get(inspected, "outside")), IsEmpty());
-  const Value figures = Get(inspected, "figures");
+  const Value figures = LoadAndInspect(sunny, "sunny");
   EXPECT_EQ(static_cast<int>(figures.struct_value().fields().size()), FigureCount(sunny));
   for (const char* id : {"plot-floor-sunlit", "plot-direct-sun-map", "plot-blind-map"}) {
     const Value& figure = Get(figures, id);
@@ -248,14 +255,7 @@ TEST_F(HtmlReportTest, DrawsTheDirectSunAndTheOperatedBlind) {
 // plans, with no text overlapping or leaving its figure
 TEST_F(HtmlReportTest, DrawsTheParetoFrontTheGlareMapsAndTheViews) {
   const v1::JobResult result = WithGlareAtViews(WithParetoFront(QuickJobResult(), false));
-  const std::string page = (dir_ / "pareto.html").string();
-  ASSERT_TRUE(WriteReport(result, {"pareto.json", ""}, page).ok());
-  ASSERT_TRUE(browser_->Load("file://" + page, 1200, 900).ok());
-  EXPECT_THAT(browser_->problems(), IsEmpty());
-  const Value inspected = Inspect();
-  EXPECT_THAT(Strings(Get(inspected, "overlaps")), IsEmpty());
-  EXPECT_THAT(Strings(Get(inspected, "outside")), IsEmpty());
-  const Value figures = Get(inspected, "figures");
+  const Value figures = LoadAndInspect(result, "pareto");
   for (const char* id :
        {"plot-pareto-front", "plot-hypervolume", "plot-pareto-blind-a", "plot-pareto-blind-b",
         "plot-pareto-blind-c", "plot-glare-map-0", "plot-glare-map-1"}) {
