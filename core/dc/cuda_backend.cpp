@@ -3,6 +3,7 @@
 // importance map) are CPU-only: on the GPU the one-stage method uses plain roulette.
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <memory>
 
 #include "absl/strings/str_cat.h"
@@ -182,21 +183,23 @@ class CudaAnnualProduct : public AnnualProduct {
   }
   const Matrix& Sky() const override { return sky_; }
 
-  // E_b through `sky` (as ApplyToSky) of one design's indoor sums on the device
-  // (CudaTracer::DeviceSums), batch b's divided by batch_paths[b].
+  // E_b through `sky` (as ApplyToSky; null: S, which the device holds) of one design's
+  // indoor sums on the device (CudaTracer::DeviceSums), batch b's divided by batch_paths[b].
   absl::StatusOr<std::vector<Matrix>> ApplyToSkySums(const double* device_sums, int sensors,
                                                      const std::vector<uint64_t>& batch_paths,
-                                                     const Matrix& sky,
+                                                     const Matrix* sky,
                                                      std::span<const SunEntry> sun) {
-    FENESTRA_RETURN_IF_ERROR(CheckSkyRows(sky));
-    if (sky.rows() != sky_.rows()) {
+    const Matrix& through = sky != nullptr ? *sky : sky_;
+    FENESTRA_RETURN_IF_ERROR(CheckSkyRows(through));
+    if (through.rows() != sky_.rows()) {
       return absl::InvalidArgumentError("the sky of a call has other rows than the product's");
     }
-    FENESTRA_RETURN_IF_ERROR(CheckSunEntries(sun, std::vector<Matrix>{Matrix(sensors, 0)}, sky));
-    Matrix illuminance(Eigen::Index{batches_} * sensors, sky.cols());
     FENESTRA_RETURN_IF_ERROR(
-        annual_->IlluminanceOfSums(device_sums, batches_, sensors, batch_paths.data(), sky.data(),
-                                   static_cast<int>(sky.cols()), illuminance.data()));
+        CheckSunEntries(sun, std::vector<Matrix>{Matrix(sensors, 0)}, through));
+    Matrix illuminance(Eigen::Index{batches_} * sensors, through.cols());
+    FENESTRA_RETURN_IF_ERROR(annual_->IlluminanceOfSums(
+        device_sums, batches_, sensors, batch_paths.data(), sky != nullptr ? sky->data() : nullptr,
+        static_cast<int>(through.cols()), illuminance.data()));
     AddSunEntries(sun, sensors, illuminance);
     return SplitBatches(illuminance, batches_);
   }
@@ -548,46 +551,17 @@ class CudaDesignTallies : public DesignTallies {
     if (replay_ == nullptr || designs.size() < 2 || product_ == nullptr) {
       return DesignTallies::TallyDesigns(designs, options);
     }
-    std::vector<absl::StatusOr<std::vector<HourTally>>> out(designs.size(),
-                                                            absl::UnknownError("not traced"));
-    // The designs the replay takes (in order; a design it refuses gets the refusal), each
-    // with its scene
-    std::vector<size_t> traced;
-    std::vector<CudaTracer::DesignScene> scenes;
-    std::vector<BvhLayout> bvhs(designs.size());
-    std::vector<std::vector<uint32_t>> materials(designs.size());
-    for (size_t i = 0; i < designs.size(); ++i) {
-      absl::StatusOr<CudaTracer::DesignScene> scene =
-          replay_->MakeScene(designs[i], &bvhs[i], &materials[i]);
-      if (!scene.ok()) {
-        out[i] = scene.status();
-        continue;
-      }
-      traced.push_back(i);
-      scenes.push_back(*scene);
-    }
-    held_parts_ = 0;  // the tracer's sums are now these designs'
-    for (size_t first = 0; first < scenes.size(); first += CudaTracer::kMaxReplayDesigns) {
-      const size_t count = std::min<size_t>(CudaTracer::kMaxReplayDesigns, scenes.size() - first);
-      CudaCounters counters;
-      const absl::Status replayed = replay_->ReplayDesigns(
-          {scenes.begin() + first, scenes.begin() + first + count}, &counters);
-      rays_ += counters.rays;
-      std::vector<absl::StatusOr<std::vector<HourTally>>> tallies;
+    return InReplayGroups<std::vector<HourTally>>(designs, [&](const std::vector<size_t>& group) {
       std::vector<std::vector<SunEntry>> sun;
-      for (size_t k = 0; k < count; ++k) sun.push_back(SunOf(designs[traced[first + k]]));
-      if (replayed.ok()) {
-        tallies = product_->TallySums(
-            tracer_->DeviceSums(), tracer_->DesignSums(), static_cast<int>(count),
-            static_cast<int>(scene_.sensors.size()), FullBatchPaths(), options, sun);
-      } else {
-        tallies.assign(count, replayed);
+      for (const size_t i : group) sun.push_back(SunOf(designs[i]));
+      std::vector<absl::StatusOr<std::vector<HourTally>>> tallies = product_->TallySums(
+          tracer_->DeviceSums(), tracer_->DesignSums(), static_cast<int>(group.size()),
+          static_cast<int>(scene_.sensors.size()), FullBatchPaths(), options, sun);
+      for (size_t k = 0; k < group.size(); ++k) {
+        tallies[k] = WithSunlitHours(std::move(tallies[k]), sun[k], options);
       }
-      for (size_t k = 0; k < count; ++k) {
-        out[traced[first + k]] = WithSunlitHours(std::move(tallies[k]), sun[k], options);
-      }
-    }
-    return out;
+      return tallies;
+    });
   }
   // The replay's sums stay on the device for the product
   absl::StatusOr<std::vector<Matrix>> DesignIlluminance(const BlindDesign& design,
@@ -595,8 +569,25 @@ class CudaDesignTallies : public DesignTallies {
     if (replay_ == nullptr) return DesignTallies::DesignIlluminance(design, sky);
     FENESTRA_RETURN_IF_ERROR(CheckProductSet(product_.get()));
     FENESTRA_RETURN_IF_ERROR(Replay(design, kDesignParts));
+    // The product's own S is on the device already
     return product_->ApplyToSkySums(tracer_->DeviceSums(), static_cast<int>(scene_.sensors.size()),
-                                    FullBatchPaths(), sky, {});
+                                    FullBatchPaths(), &sky == &product_->Sky() ? nullptr : &sky,
+                                    {});
+  }
+  std::vector<absl::StatusOr<std::vector<Matrix>>> DesignsIlluminance(
+      const std::vector<BlindDesign>& designs) override {
+    if (replay_ == nullptr || designs.size() < 2 || product_ == nullptr) {
+      return DesignTallies::DesignsIlluminance(designs);
+    }
+    return InReplayGroups<std::vector<Matrix>>(designs, [&](const std::vector<size_t>& group) {
+      std::vector<absl::StatusOr<std::vector<Matrix>>> out;
+      for (size_t k = 0; k < group.size(); ++k) {
+        out.push_back(product_->ApplyToSkySums(tracer_->DeviceSums() + k * tracer_->DesignSums(),
+                                               static_cast<int>(scene_.sensors.size()),
+                                               FullBatchPaths(), nullptr, {}));
+      }
+      return out;
+    });
   }
   AnnualProduct* Product() override { return product_.get(); }
   int DesignsAtOnce() const override { return replay_ != nullptr ? kReplayDesignsAtOnce : 1; }
@@ -648,6 +639,45 @@ class CudaDesignTallies : public DesignTallies {
     held_design_ = design;
     held_parts_ = parts;
     return absl::OkStatus();
+  }
+
+  // `designs` replayed in launches of up to kMaxReplayDesigns, in order: per launch,
+  // `take(group)` (the indices into `designs` of its designs; design k of the group's sums at
+  // DeviceSums() + k * DesignSums()) gives their results. A design the replay refuses gets
+  // the refusal, a failed launch its error.
+  template <typename Result>
+  std::vector<absl::StatusOr<Result>> InReplayGroups(
+      const std::vector<BlindDesign>& designs,
+      const std::function<std::vector<absl::StatusOr<Result>>(const std::vector<size_t>&)>& take) {
+    std::vector<absl::StatusOr<Result>> out(designs.size(), absl::UnknownError("not traced"));
+    // The designs the replay takes (in order), each with its scene
+    std::vector<size_t> traced;
+    std::vector<CudaTracer::DesignScene> scenes;
+    std::vector<BvhLayout> bvhs(designs.size());
+    std::vector<std::vector<uint32_t>> materials(designs.size());
+    for (size_t i = 0; i < designs.size(); ++i) {
+      absl::StatusOr<CudaTracer::DesignScene> scene =
+          replay_->MakeScene(designs[i], &bvhs[i], &materials[i]);
+      if (!scene.ok()) {
+        out[i] = scene.status();
+        continue;
+      }
+      traced.push_back(i);
+      scenes.push_back(*scene);
+    }
+    held_parts_ = 0;  // the tracer's sums are now these designs'
+    for (size_t first = 0; first < scenes.size(); first += CudaTracer::kMaxReplayDesigns) {
+      const size_t count = std::min<size_t>(CudaTracer::kMaxReplayDesigns, scenes.size() - first);
+      CudaCounters counters;
+      const absl::Status replayed = replay_->ReplayDesigns(
+          {scenes.begin() + first, scenes.begin() + first + count}, &counters);
+      rays_ += counters.rays;
+      const std::vector<size_t> group(traced.begin() + first, traced.begin() + first + count);
+      std::vector<absl::StatusOr<Result>> results =
+          replayed.ok() ? take(group) : std::vector<absl::StatusOr<Result>>(count, replayed);
+      for (size_t k = 0; k < count; ++k) out[group[k]] = std::move(results[k]);
+    }
+    return out;
   }
 
   // Paths per batch of a design traced in full

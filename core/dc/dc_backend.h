@@ -182,6 +182,12 @@ class DesignTallies {
   // ApplyToSky.
   virtual absl::StatusOr<std::vector<Matrix>> DesignIlluminance(const BlindDesign& design,
                                                                 const Matrix& sky);
+  // E_b through the product's own S (SetProduct's sky) of several designs, every part of
+  // each, in their order (an error for one design leaves the others): by default
+  // DesignIlluminance(design, Product()->Sky()) one after the other; the GPU's replay traces
+  // up to DesignsAtOnce() of them in one launch and forms each E with the S it holds.
+  virtual std::vector<absl::StatusOr<std::vector<Matrix>>> DesignsIlluminance(
+      const std::vector<BlindDesign>& designs);
   // Sets the annual product the tallies form E with (DcBackend::MakeAnnualProduct's O_b and
   // S); Tally and Product need it. InvalidArgument where O_b's rows are not the indoor
   // stage's columns or its batches not the stage's batches. `on_device`: the same O_b where

@@ -531,6 +531,19 @@ absl::StatusOr<std::vector<Matrix>> DesignTallies::DesignIlluminance(const Blind
   return Product()->ApplyToSky(indoor, sky);
 }
 
+std::vector<absl::StatusOr<std::vector<Matrix>>> DesignTallies::DesignsIlluminance(
+    const std::vector<BlindDesign>& designs) {
+  std::vector<absl::StatusOr<std::vector<Matrix>>> out;
+  for (const BlindDesign& design : designs) {
+    if (const absl::Status set = CheckProductSet(Product()); !set.ok()) {
+      out.push_back(set);
+    } else {
+      out.push_back(DesignIlluminance(design, Product()->Sky()));
+    }
+  }
+  return out;
+}
+
 absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::StartDesignTallies(
     const Scene& scene, const IndoorOptions& options) {
   FENESTRA_ASSIGN_OR_RETURN(stages, MakeIndoorStages(scene, options));

@@ -262,17 +262,40 @@ absl::Status DesignComfort::SetSky(const std::vector<Matrix>& outdoor_batches,
 }
 
 absl::StatusOr<ComfortEstimate> DesignComfort::Evaluate(const BlindDesign& design) {
-  if (sky_ == nullptr) return absl::FailedPreconditionError("comfort: no sky set");
-  ComfortEstimate out;
-  if (eyes_) FENESTRA_RETURN_IF_ERROR(EvaluateGlare(design, out));
-  if (gains_) FENESTRA_RETURN_IF_ERROR(EvaluateGains(design, out));
-  out.glare = eyes_ != nullptr;
-  out.gains = gains_ != nullptr;
+  return std::move(EvaluateDesigns({design}).front());
+}
+
+std::vector<absl::StatusOr<ComfortEstimate>> DesignComfort::EvaluateDesigns(
+    const std::vector<BlindDesign>& designs) {
+  if (sky_ == nullptr) {
+    return {designs.size(), absl::FailedPreconditionError("comfort: no sky set")};
+  }
+  std::vector<absl::StatusOr<ComfortEstimate>> out(designs.size(), ComfortEstimate{});
+  // Each part's E through its product's own sky, the designs' paths replayed together
+  const auto take = [&](Part* part, auto figures) {
+    if (part == nullptr) return;
+    std::vector<absl::StatusOr<std::vector<Matrix>>> e = part->tallies->DesignsIlluminance(designs);
+    for (size_t i = 0; i < designs.size(); ++i) {
+      if (!out[i].ok()) continue;
+      if (!e[i].ok()) {
+        out[i] = e[i].status();
+        continue;
+      }
+      (this->*figures)(designs[i], *e[i], *out[i]);
+    }
+  };
+  take(eyes_.get(), &DesignComfort::GlareOf);
+  take(gains_.get(), &DesignComfort::GainsOf);
+  for (absl::StatusOr<ComfortEstimate>& o : out) {
+    if (!o.ok()) continue;
+    o->glare = eyes_ != nullptr;
+    o->gains = gains_ != nullptr;
+  }
   return out;
 }
 
-absl::Status DesignComfort::EvaluateGlare(const BlindDesign& design, ComfortEstimate& out) {
-  FENESTRA_ASSIGN_OR_RETURN(batches, eyes_->tallies->DesignIlluminance(design, sky_->lit_sky));
+void DesignComfort::GlareOf(const BlindDesign& design, const std::vector<Matrix>& batches,
+                            ComfortEstimate& out) const {
   const int views = static_cast<int>(views_.size());
   const Eigen::Index columns = static_cast<Eigen::Index>(sky_->columns.size());
   Matrix sun = Matrix::Zero(views, columns);
@@ -318,11 +341,10 @@ absl::Status DesignComfort::EvaluateGlare(const BlindDesign& design, ComfortEsti
       JackknifeStandardError(std::span<const double>(autonomy).subspan(1));
   out.standard_error.glare_hours_percent =
       JackknifeStandardError(std::span<const double>(hours).subspan(1));
-  return absl::OkStatus();
 }
 
-absl::Status DesignComfort::EvaluateGains(const BlindDesign& design, ComfortEstimate& out) {
-  FENESTRA_ASSIGN_OR_RETURN(batches, gains_->tallies->DesignIlluminance(design, sky_->gain_sky));
+void DesignComfort::GainsOf(const BlindDesign& design, const std::vector<Matrix>& batches,
+                            ComfortEstimate& out) const {
   // The beam, exact: the same in every batch [Wh]
   double sun_year = 0, sun_season = 0;
   for (const SunEntry& e : gains_->sun->Entries(design)) {
@@ -345,7 +367,6 @@ absl::Status DesignComfort::EvaluateGains(const BlindDesign& design, ComfortEsti
   out.standard_error.solar_gain_kwh = y.standard_error;
   out.value.cooling_solar_gain_kwh = s.value;
   out.standard_error.cooling_solar_gain_kwh = s.standard_error;
-  return absl::OkStatus();
 }
 
 uint64_t DesignComfort::RaysTraced() const {

@@ -127,14 +127,21 @@ class DesignComfort {
                       std::shared_ptr<const ComfortSky> sky);
 
   absl::StatusOr<ComfortEstimate> Evaluate(const BlindDesign& design);
+  // Evaluate of each of `designs`, in their order (an error for one leaves the others): on
+  // the GPU's replay several in one launch (DesignTallies::DesignsIlluminance).
+  std::vector<absl::StatusOr<ComfortEstimate>> EvaluateDesigns(
+      const std::vector<BlindDesign>& designs);
   // Closest-hit queries of every evaluation so far.
   uint64_t RaysTraced() const;
 
  private:
   struct Part;
   DesignComfort() = default;
-  absl::Status EvaluateGlare(const BlindDesign& design, ComfortEstimate& out);
-  absl::Status EvaluateGains(const BlindDesign& design, ComfortEstimate& out);
+  // The figures of one design from its E per batch (DesignTallies::DesignsIlluminance)
+  void GlareOf(const BlindDesign& design, const std::vector<Matrix>& batches,
+               ComfortEstimate& out) const;
+  void GainsOf(const BlindDesign& design, const std::vector<Matrix>& batches,
+               ComfortEstimate& out) const;
 
   ComfortNeeds needs_;
   std::vector<ViewPoint> views_;

@@ -133,12 +133,8 @@ void Racer::TraceTogether(DesignTallies& lane, DesignComfort* comfort,
     std::vector<absl::StatusOr<ComfortEstimate>> comforts;
     std::future<void> comfort_done;
     if (comfort != nullptr) {
-      comfort_done =
-          std::async(s_.comfort_beside ? std::launch::async : std::launch::deferred, [&] {
-            for (const BlindDesign& d : designs) {
-              comforts.push_back(comfort->Evaluate(d));
-            }
-          });
+      comfort_done = std::async(s_.comfort_beside ? std::launch::async : std::launch::deferred,
+                                [&] { comforts = comfort->EvaluateDesigns(designs); });
     }
     const uint64_t rays_before = lane.RaysTraced();
     std::vector<absl::StatusOr<std::vector<HourTally>>> tallies =

@@ -478,6 +478,32 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
     EXPECT_LE(((*from_sums)[b] - (*from_host)[b]).cwiseAbs().maxCoeff(),
               1e-12 * (*from_host)[b].maxCoeff());
   }
+  // Several designs replayed in one launch, each E through the product's own S, are each
+  // design's E replayed alone through a copy of S (uploaded for the call); a design the
+  // replay refuses gets its refusal and leaves the others
+  BlindDesign without_blind = tilted;
+  without_blind.has_blind = false;
+  const std::vector<BlindDesign> several = {*DesignWithOverrides(scene, {{"alpha", 0.0}}), tilted,
+                                            without_blind,
+                                            *DesignWithOverrides(scene, {{"alpha", 1.2}})};
+  std::vector<absl::StatusOr<std::vector<Matrix>>> together =
+      (*on_device)->DesignsIlluminance(several);
+  ASSERT_EQ(together.size(), several.size());
+  EXPECT_EQ(together[2].status().code(), absl::StatusCode::kInvalidArgument);
+  const Matrix sky_copy = sky;
+  for (const size_t k : {0, 1, 3}) {
+    ASSERT_TRUE(together[k].ok()) << together[k].status();
+    absl::StatusOr<std::vector<Matrix>> alone =
+        (*on_device)->DesignIlluminance(several[k], sky_copy);
+    ASSERT_TRUE(alone.ok()) << alone.status();
+    ASSERT_EQ(together[k]->size(), alone->size());
+    for (size_t b = 0; b < alone->size(); ++b) {
+      ASSERT_EQ((*together[k])[b].cols(), sky.cols());
+      EXPECT_GT((*alone)[b].maxCoeff(), 0);
+      EXPECT_LE(((*together[k])[b] - (*alone)[b]).cwiseAbs().maxCoeff(),
+                1e-9 * (*alone)[b].maxCoeff());
+    }
+  }
   // Without a blind there is nothing to replay: the design is traced in full, and its I is
   // still the indoor stage's (the outdoor stage never sees the blind, so O stays)
   Scene bare = scene;
