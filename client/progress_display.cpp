@@ -186,11 +186,11 @@ std::string FormatResult(const v1::JobResult& r) {
                        r.job().metrics().glare_threshold());
   }
   if (m.has_solar_gain_kwh()) {
-    out += fmt::format("solar gain through the windows: {} kWh a year, {} kWh in the cooling "
-                       "season (months {}-{})\n",
-                       Value(m.solar_gain_kwh()), Value(m.cooling_solar_gain_kwh()),
-                       r.job().metrics().cooling_start_month(),
-                       r.job().metrics().cooling_end_month());
+    out += fmt::format(
+        "solar gain through the windows: {} kWh a year, {} kWh in the cooling "
+        "season (months {}-{})\n",
+        Value(m.solar_gain_kwh()), Value(m.cooling_solar_gain_kwh()),
+        r.job().metrics().cooling_start_month(), r.job().metrics().cooling_end_month());
   }
   out += FormatFront(r);
   for (const v1::ConstraintResult& c : r.best_constraints()) out += ConstraintLine(c);
@@ -201,11 +201,16 @@ std::string FormatResult(const v1::JobResult& r) {
         QuoteText(g.view()), Value(g.autonomy()), g.analysed_hours(), Value(g.mean_dgp(), 3),
         g.en17037(), g.sunlit_hours(), r.timings().glare_seconds());
   }
+  const v1::Timings& t = r.timings();
+  const std::string comfort =
+      t.comfort_seconds() > 0
+          ? fmt::format(" (comfort metrics {:.2f} s of them)", t.comfort_seconds())
+          : "";
   out += fmt::format(
-      "{} evaluations ({}), backend {}: sky {:.2f} s, outdoor {:.2f} s, evaluations {:.2f} s, "
-      "total {:.2f} s\n",
-      r.evaluations(), r.stop_reason(), r.backend(), r.timings().sky_seconds(),
-      r.timings().outdoor_seconds(), r.timings().evaluation_seconds(), r.timings().total_seconds());
+      "{} evaluations ({}), backend {}: sky {:.2f} s, outdoor {:.2f} s, search started at "
+      "{:.2f} s, evaluations {:.2f} s{}, total {:.2f} s\n",
+      r.evaluations(), r.stop_reason(), r.backend(), t.sky_seconds(), t.outdoor_seconds(),
+      t.start_seconds(), t.evaluation_seconds(), comfort, t.total_seconds());
   if (r.candidates_at_once() > 1) {
     out += fmt::format("{} candidates at once: {} evaluations made ahead and dropped\n",
                        r.candidates_at_once(), r.evaluations_discarded());

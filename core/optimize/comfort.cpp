@@ -1,9 +1,11 @@
 #include "core/optimize/comfort.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <utility>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
@@ -270,6 +272,7 @@ std::vector<absl::StatusOr<ComfortEstimate>> DesignComfort::EvaluateDesigns(
   if (sky_ == nullptr) {
     return {designs.size(), absl::FailedPreconditionError("comfort: no sky set")};
   }
+  const auto start = std::chrono::steady_clock::now();
   std::vector<absl::StatusOr<ComfortEstimate>> out(designs.size(), ComfortEstimate{});
   // Each part's E through its product's own sky, the designs' paths replayed together
   const auto take = [&](Part* part, auto figures) {
@@ -291,6 +294,7 @@ std::vector<absl::StatusOr<ComfortEstimate>> DesignComfort::EvaluateDesigns(
     o->glare = eyes_ != nullptr;
     o->gains = gains_ != nullptr;
   }
+  seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }
 
@@ -306,32 +310,39 @@ void DesignComfort::GlareOf(const BlindDesign& design, const std::vector<Matrix>
   // Below this eye illuminance a step without the sun in view is no glare step
   const double threshold = sky_->glare_threshold;
   const double eye_limit = EyeLuxAtDgp(threshold);
+  using Mask = Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>;
+  Mask occupied_steps(1, columns);
+  for (Eigen::Index c = 0; c < columns; ++c) occupied_steps(0, c) = sky_->occupied_column[c];
+  // The occupied steps without the sun at the eye, decided by Ev alone; those with it, one by one
+  const Mask sunless = (sun.array() == 0) && occupied_steps.replicate(views, 1);
+  std::vector<std::pair<int, Eigen::Index>> sunny;
+  for (Eigen::Index c = 0; c < columns; ++c) {
+    for (int v = 0; v < views; ++v) {
+      if (sun(v, c) > 0 && occupied_steps(0, c)) sunny.emplace_back(v, c);
+    }
+  }
   // Version 0: the mean of the batches; version 1 + b: the mean without batch b
   std::vector<double> autonomy(count + 1), hours(count + 1);
-  std::vector<int> glare_steps(views);
+  Matrix e(views, columns);
+  Mask glare(views, columns);
   for (int version = 0; version <= count; ++version) {
     const double weight = version == 0 ? 1.0 / count : 1.0 / (count - 1);
-    std::fill(glare_steps.begin(), glare_steps.end(), 0);
-    int any = 0;
-    for (Eigen::Index c = 0; c < columns; ++c) {
-      if (!sky_->occupied_column[c]) continue;
-      bool some = false;
-      for (int v = 0; v < views; ++v) {
-        double e = total(v, c);
-        if (version > 0) e -= batches[version - 1](v, c);
-        e = std::max(0.0, e * weight) + sun(v, c);
-        const bool glare = sun(v, c) > 0
-                               ? DgpWithSun(e, sun(v, c), views_[v].direction, views_[v].up,
-                                            sky_->sun_direction[c]) >= threshold
-                               : e >= eye_limit;
-        glare_steps[v] += glare ? 1 : 0;
-        some |= glare;
-      }
-      any += some ? 1 : 0;
+    if (version == 0) {
+      e.noalias() = weight * total;
+    } else {
+      e.noalias() = weight * (total - batches[version - 1]);
     }
+    glare = sunless && (e.array() >= eye_limit);
+    for (const auto& [v, c] : sunny) {
+      glare(v, c) = DgpWithSun(std::max(0.0, e(v, c)) + sun(v, c), sun(v, c), views_[v].direction,
+                               views_[v].up, sky_->sun_direction[c]) >= threshold;
+    }
+    const int any = static_cast<int>(glare.colwise().any().count());
     const double occupied = std::max(1, sky_->occupied_hours);
     double mean_autonomy = 0;
-    for (const int g : glare_steps) mean_autonomy += 100.0 * (1 - g / occupied) / views;
+    for (int v = 0; v < views; ++v) {
+      mean_autonomy += 100.0 * (1 - static_cast<double>(glare.row(v).count()) / occupied) / views;
+    }
     autonomy[version] = mean_autonomy;
     hours[version] = 100.0 * any / occupied;
   }

@@ -133,6 +133,8 @@ class DesignComfort {
       const std::vector<BlindDesign>& designs);
   // Closest-hit queries of every evaluation so far.
   uint64_t RaysTraced() const;
+  // Wall time of every evaluation so far [s].
+  double Seconds() const { return seconds_; }
 
  private:
   struct Part;
@@ -148,6 +150,7 @@ class DesignComfort {
   std::vector<double> gain_area_m2_;
   std::unique_ptr<Part> eyes_, gains_;
   std::shared_ptr<const ComfortSky> sky_;
+  double seconds_ = 0;
 };
 
 // `estimate` with the comfort metrics of `comfort` (has_glare, has_gains as it has them).

@@ -676,6 +676,7 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
 
   // The search
   if (callbacks.stage) callbacks.stage("search");
+  result.mutable_timings()->set_start_seconds(SecondsSince(start));
   VnsResult search;
   if (spec.has_pareto()) {
     // A generation's designs at once, as many as the lanes trace together
@@ -707,6 +708,10 @@ absl::StatusOr<v1::JobResult> RunJob(const PreparedJob& job, const OutdoorMatrix
   result.set_backend(backend->Name());
   FENESTRA_RETURN_IF_ERROR(HourlyAndCheck(job, setting, operation.get(), search,
                                           *lanes.tallies.front(), callbacks, clock, result));
+  for (const auto& comfort : lanes.comfort) {
+    result.mutable_timings()->set_comfort_seconds(result.timings().comfort_seconds() +
+                                                  comfort->Seconds());
+  }
   lanes.tallies.clear();  // the search's paths are no longer needed
   result.mutable_timings()->set_total_seconds(clock.Seconds());
   return result;
