@@ -6,7 +6,7 @@ packages=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler libabsl-dev
   libembree-dev libtbb-dev libeigen3-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libcli11-dev libtinyobjloader-dev libsqlite3-dev libpq-dev zlib1g-dev libexpat1-dev
-  libssl-dev openssl chromium
+  libssl-dev openssl chromium libcpp-httplib-dev
   postgresql-15  # the store and cluster tests start a throwaway PostgreSQL server
   python3 python3-grpcio python3-grpc-tools python3-numpy python3-yaml
   # tests/run_all.sh's sanitizer and fuzzing builds: clang, libFuzzer, llvm-symbolizer

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string_view>
+#include <utility>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
@@ -27,6 +28,7 @@ constexpr int64_t kDefaultMaxDataDirBytes = int64_t{10} << 30;
 constexpr int kDefaultMaxConcurrentHeavyRequests = 2;
 // Defaults of the settings added with several candidates at once (daemon.proto documents them)
 constexpr int kDefaultMaxCandidatesAtOnce = 4;
+constexpr int kDefaultMaxHttpRequestsPerMinute = 1200;
 // Defaults of the settings added with replicas (daemon.proto documents them)
 constexpr double kDefaultLeaseSeconds = 10;
 constexpr int64_t kDefaultOutdoorMemoryBytes = int64_t{1} << 30;
@@ -53,22 +55,27 @@ absl::Status CheckExposure(const v1::DaemonConfig& config) {
                    "(--tls-client-ca) needs tls_cert_file and tls_key_file: client certificates "
                    "are checked on top of the server's TLS");
   }
-  if (IsLoopbackAddress(config.listen_address())) return absl::OkStatus();
-  if (config.auth() == "none") {
-    return Invalid("auth", absl::StrCat("none makes every caller an administrator, so it is "
-                                        "allowed only on a loopback listen_address (localhost, "
-                                        "127.0.0.1, [::1]), not on '",
-                                        config.listen_address(),
-                                        "'; use auth token with users from `fenestrad user add`"));
-  }
-  if (config.tls_cert_file().empty() && !config.allow_plaintext()) {
-    return Invalid(
-        "listen_address",
-        absl::StrCat("'", config.listen_address(),
-                     "' is reachable from other machines, and without TLS tokens and scenes "
-                     "would cross the network in clear: give tls_cert_file and tls_key_file "
-                     "(--tls-cert, --tls-key), or set allow_plaintext (--allow-plaintext) when "
-                     "a proxy in front terminates TLS"));
+  // The gRPC port and the dashboard's answer the same callers the same way
+  for (const auto& [field, address] :
+       {std::pair<const char*, const std::string&>{"listen_address", config.listen_address()},
+        {"http_listen", config.http_listen()}}) {
+    if (address.empty() || IsLoopbackAddress(address)) continue;
+    if (config.auth() == "none") {
+      return Invalid("auth",
+                     absl::StrCat("none makes every caller an administrator, so it is "
+                                  "allowed only on a loopback ",
+                                  field, " (localhost, 127.0.0.1, [::1]), not on '", address,
+                                  "'; use auth token with users from `fenestrad user add`"));
+    }
+    if (config.tls_cert_file().empty() && !config.allow_plaintext()) {
+      return Invalid(
+          field,
+          absl::StrCat("'", address,
+                       "' is reachable from other machines, and without TLS tokens and scenes "
+                       "would cross the network in clear: give tls_cert_file and tls_key_file "
+                       "(--tls-cert, --tls-key), or set allow_plaintext (--allow-plaintext) when "
+                       "a proxy in front terminates TLS"));
+    }
   }
   return absl::OkStatus();
 }
@@ -111,6 +118,9 @@ absl::Status ResolveLimits(v1::Limits& limits) {
                 [&](int v) { limits.set_max_concurrent_heavy_requests(v); }),
            fill(limits.max_candidates_at_once(), kDefaultMaxCandidatesAtOnce,
                 "max_candidates_at_once", [&](int v) { limits.set_max_candidates_at_once(v); }),
+           fill(limits.max_http_requests_per_minute(), kDefaultMaxHttpRequestsPerMinute,
+                "max_http_requests_per_minute",
+                [&](int v) { limits.set_max_http_requests_per_minute(v); }),
        }) {
     if (!s.ok()) return s;
   }
@@ -160,6 +170,11 @@ absl::StatusOr<v1::DaemonConfig> ResolveConfig(v1::DaemonConfig config) {
                                                  config.listen_address(),
                                                  "'): the health port serves only "
                                                  "health checks, in plaintext"));
+  }
+  if (!config.http_listen().empty() && !absl::EndsWith(config.http_listen(), ":0") &&
+      (config.http_listen() == config.listen_address() ||
+       config.http_listen() == config.health_listen())) {
+    return Invalid("http_listen", "must be another address than listen_address and health_listen");
   }
   if (config.worker_threads() < 0) return Invalid("worker_threads", "must be >= 0");
   if (config.backend().empty()) config.set_backend("auto");

@@ -142,6 +142,12 @@ absl::StatusOr<std::unique_ptr<Daemon>> Daemon::Start(const v1::DaemonConfig& co
   d->MakeManagers();
   if (absl::Status s = d->Recover(); !s.ok()) return s;
   if (absl::Status s = d->Serve(*credentials); !s.ok()) return s;
+  if (!config.http_listen().empty()) {
+    absl::StatusOr<std::unique_ptr<HttpGateway>> http =
+        HttpGateway::Start(config, {*d->auth_, *d->jobs_, *d->sites_});
+    if (!http.ok()) return http.status();
+    d->http_ = *std::move(http);
+  }
   d->server_->GetHealthCheckService()->SetServingStatus(kReadinessService, true);
   if (d->health_) d->health_->SetReady(true);
   return d;
@@ -238,6 +244,7 @@ void Daemon::Shutdown() {
   } else if (scheduler_) {
     scheduler_->Join();
   }
+  http_.reset();
   if (server_) {
     server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
     server_->Wait();

@@ -10,6 +10,7 @@
 #include "server/data_dir.h"
 #include "server/health.h"
 #include "server/heavy_requests.h"
+#include "server/http_gateway.h"
 #include "server/job_manager.h"
 #include "server/outdoor_cache.h"
 #include "server/scheduler.h"
@@ -42,6 +43,8 @@ class Daemon {
   int port() const { return port_; }
   // The health port (config.health_listen), or 0 when there is none.
   int health_port() const { return health_ ? health_->port() : 0; }
+  // The dashboard's port; 0 without one.
+  int http_port() const { return http_ ? http_->port() : 0; }
 
   // Reports NOT_SERVING to health checks, refuses new work, lets running jobs reach the
   // end or a checkpoint (see JobManager::Shutdown), then stops the gRPC server.
@@ -62,6 +65,7 @@ class Daemon {
 
   v1::DaemonConfig config_;
   std::unique_ptr<HealthServer> health_;
+  std::unique_ptr<HttpGateway> http_;
   std::unique_ptr<DataDir> data_dir_;     // SQLite only
   std::unique_ptr<UploadStore> weather_;  // SQLite only
   std::unique_ptr<Store> store_;

@@ -34,12 +34,12 @@ namespace fs = std::filesystem;
 // The settings given as flags; 0, empty or false = not given.
 struct Flags {
   std::string config_file, port_file;
-  std::string listen, health_listen, data_dir, backend, gpus, log_level, auth, store;
+  std::string listen, health_listen, http_listen, data_dir, backend, gpus, log_level, auth, store;
   std::string tls_cert, tls_key, tls_client_ca;
   bool allow_plaintext = false, check_config = false;
   int workers = 0, max_sensors = 0, max_evaluations = 0, max_message_bytes = 0, max_queued_jobs = 0,
       max_sites = 0, max_queued_jobs_per_user = 0, max_sites_per_user = 0, max_heavy_requests = 0,
-      max_candidates_at_once = 0;
+      max_candidates_at_once = 0, max_http_requests_per_minute = 0;
   int64_t max_outdoor_paths = 0, max_indoor_paths = 0, max_triangles = 0,
           max_upload_bytes_per_user = 0, max_data_dir_bytes = 0, outdoor_memory_bytes = 0;
   double grace = 0, lease_seconds = 0;
@@ -51,6 +51,11 @@ void AddDaemonFlags(CLI::App& app, Flags& f) {
   app.add_option("--health-listen", f.health_listen,
                  "host:port of a plaintext port serving only gRPC health checks, for probes "
                  "(services liveness, fenestrad and \"\") [none]");
+  app.add_option("--http", f.http_listen,
+                 "host:port of the web dashboard (HTTPS with --tls-cert/--tls-key; plain HTTP "
+                 "only on loopback or with --allow-plaintext) [none]");
+  app.add_option("--max-http-requests-per-minute", f.max_http_requests_per_minute,
+                 "limit: dashboard requests per client address and minute [1200]");
   app.add_option("--data-dir", f.data_dir,
                  "job store, users, outdoor cache and weather files [fenestra-data]");
   app.add_option("--store", f.store,
@@ -103,8 +108,8 @@ void AddDaemonFlags(CLI::App& app, Flags& f) {
                  "seconds running jobs may go on after SIGTERM before they are interrupted [10]");
   app.add_option("--log-level", f.log_level, "trace, debug, info, warn, error [info]");
   app.add_option("--port-file", f.port_file,
-                 "write the port listened on to this file (the health port on a second line "
-                 "with --health-listen)");
+                 "write the port listened on to this file (then, each on a line of its own, "
+                 "the health port with --health-listen and the dashboard's with --http)");
   app.add_flag("--check-config", f.check_config,
                "check the configuration (--config and the flags given), print it with its "
                "defaults as JSON and exit (0: valid, 2: not) without opening or serving "
@@ -116,6 +121,10 @@ void ApplyFlags(const Flags& f, fenestra::v1::DaemonConfig& config) {
   fenestra::v1::Limits& l = *config.mutable_limits();
   if (!f.listen.empty()) config.set_listen_address(f.listen);
   if (!f.health_listen.empty()) config.set_health_listen(f.health_listen);
+  if (!f.http_listen.empty()) config.set_http_listen(f.http_listen);
+  if (f.max_http_requests_per_minute) {
+    l.set_max_http_requests_per_minute(f.max_http_requests_per_minute);
+  }
   if (!f.data_dir.empty()) config.set_data_dir(f.data_dir);
   if (!f.store.empty()) config.set_store(f.store);
   if (f.lease_seconds) config.set_lease_seconds(f.lease_seconds);
@@ -289,6 +298,7 @@ int Serve(const fenestra::v1::DaemonConfig& config, const std::string& port_file
     std::ofstream ports(port_file + ".tmp");
     ports << (*daemon)->port() << "\n";
     if ((*daemon)->health_port() != 0) ports << (*daemon)->health_port() << "\n";
+    if ((*daemon)->http_port() != 0) ports << (*daemon)->http_port() << "\n";
     ports.close();
     std::rename((port_file + ".tmp").c_str(), port_file.c_str());
   }

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "core/common/status_macros.h"
 #include "core/dc/dc_backend.h"
 #include "server/checksum.h"
 #include "server/limits.h"
@@ -215,6 +216,18 @@ absl::StatusOr<v1::JobInfo> JobManager::Cancel(const std::string& id, const Call
                  caller.name);
   }
   return ForCaller(std::move(cancelled->info), caller);
+}
+
+absl::Status JobManager::Delete(const std::string& id, const Caller& caller) {
+  absl::StatusOr<v1::JobInfo> found = Find(id, caller);
+  if (!found.ok()) return found.status();
+  if (!IsTerminal(found->state())) {
+    return absl::FailedPreconditionError(
+        absl::StrCat("job ", id, " has not ended: cancel it first, then delete it"));
+  }
+  FENESTRA_RETURN_IF_ERROR(store_.DeleteJob(id));
+  spdlog::info("job {}: deleted by {}", id, LogSafe(caller.name));
+  return absl::OkStatus();
 }
 
 absl::Status JobManager::Watch(const std::string& id, const Caller& caller,

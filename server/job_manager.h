@@ -59,6 +59,9 @@ class JobManager {
                                                 const Caller& caller);
   // See JobService.Cancel; NotFound when unknown or not the caller's.
   absl::StatusOr<v1::JobInfo> Cancel(const std::string& id, const Caller& caller);
+  // Forgets an ended job (JobService.Delete): FailedPrecondition while it is queued or
+  // running, NotFound when unknown or another user's.
+  absl::Status Delete(const std::string& id, const Caller& caller);
   // Sends a snapshot, then every later event until the job ends, `write` fails or
   // `client_gone` turns true; a job run by another replica too (its events come from the
   // store as they are stored). NotFound when unknown or not the caller's; Unavailable when

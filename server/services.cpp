@@ -181,6 +181,17 @@ grpc::Status JobServiceImpl::StreamedCancel(
                });
 }
 
+grpc::Status JobServiceImpl::StreamedDelete(
+    grpc::ServerContext* context,
+    grpc::ServerUnaryStreamer<v1::DeleteJobRequest, v1::DeleteJobResponse>* stream) {
+  return Unary(auth_, "JobService.Delete", context, stream,
+               [&](const Caller& caller,
+                   const v1::DeleteJobRequest& request) -> absl::StatusOr<v1::DeleteJobResponse> {
+                 if (absl::Status s = jobs_.Delete(request.id(), caller); !s.ok()) return s;
+                 return v1::DeleteJobResponse();
+               });
+}
+
 grpc::Status JobServiceImpl::StreamedWatch(
     grpc::ServerContext* context,
     grpc::ServerSplitStreamer<v1::WatchJobRequest, v1::JobEvent>* stream) {

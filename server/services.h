@@ -55,6 +55,9 @@ class JobServiceImpl final : public v1::JobService::StreamedService {
   grpc::Status StreamedWatch(
       grpc::ServerContext* context,
       grpc::ServerSplitStreamer<v1::WatchJobRequest, v1::JobEvent>* stream) override;
+  grpc::Status StreamedDelete(
+      grpc::ServerContext* context,
+      grpc::ServerUnaryStreamer<v1::DeleteJobRequest, v1::DeleteJobResponse>* stream) override;
 
  private:
   JobManager& jobs_;

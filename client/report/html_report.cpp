@@ -185,6 +185,8 @@ std::string Note(std::string_view text) {
   return fmt::format("<p class=\"note\">{}</p>\n", EscapeXml(text));
 }
 
+std::string_view ReportStyleSheet() { return kStyle; }
+
 absl::StatusOr<std::string> RenderReport(const v1::JobResult& result,
                                          const ReportOptions& options) {
   FENESTRA_ASSIGN_OR_RETURN(data, GatherReportData(result, options.source, options.sensor));

@@ -6,6 +6,7 @@
 // sensors' metrics and sunlit hours, temporal maps of one sensor's illuminance, the direct
 // sun and an operated blind, the blind in section, and the settings, timings and versions.
 #include <string>
+#include <string_view>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -23,6 +24,10 @@ struct ReportOptions {
 // The page. InvalidArgument naming the field when the result is inconsistent, or naming
 // --sensor when there is no such sensor.
 absl::StatusOr<std::string> RenderReport(const v1::JobResult& result, const ReportOptions& options);
+
+// The page's one stylesheet, the text of its <style> element (a page that shows the report
+// in a frame allows it by its hash).
+std::string_view ReportStyleSheet();
 
 // RenderReport written to `path` (atomically: nothing is left at `path` on failure).
 absl::Status WriteReport(const v1::JobResult& result, const ReportOptions& options,

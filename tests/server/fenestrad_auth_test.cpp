@@ -108,16 +108,6 @@ bool IsTerminal(v1::JobState s) {
 
 class FenestradAuthTest : public FenestradTest {
  protected:
-  // `fenestrad user add NAME` on this test's data directory; the token it prints.
-  std::string AddUser(const std::string& name, bool admin = false) {
-    std::vector<std::string> args = {FENESTRAD, "user", "add", name, "--data-dir", dir_ + "/data"};
-    if (admin) args.push_back("--admin");
-    const CliResult r = Daemon::RunCli(args);
-    EXPECT_EQ(r.code, 0) << r.err;
-    std::string token = r.out;
-    while (!token.empty() && token.back() == '\n') token.pop_back();
-    return token;
-  }
   // A daemon with token auth and TLS (server certificate for 127.0.0.1), and channels that
   // trust its CA.
   std::unique_ptr<Daemon> StartTls(std::vector<std::string> flags = {}) {

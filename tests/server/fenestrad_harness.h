@@ -229,6 +229,17 @@ class FenestradTest : public testing::Test {
     if (!HasFailure()) fs::remove_all(dir_);
   }
 
+  // `fenestrad user add NAME` on this test's data directory; the token it prints.
+  std::string AddUser(const std::string& name, bool admin = false) {
+    std::vector<std::string> args = {FENESTRAD, "user", "add", name, "--data-dir", dir_ + "/data"};
+    if (admin) args.push_back("--admin");
+    const CliResult r = Daemon::RunCli(args);
+    EXPECT_EQ(r.code, 0) << r.err;
+    std::string token = r.out;
+    while (!token.empty() && token.back() == '\n') token.pop_back();
+    return token;
+  }
+
   // A daemon with auth none, so that the fenestra client drives it as the local user.
   std::unique_ptr<Daemon> StartDaemon(std::vector<std::string> flags = {}) {
     flags.insert(flags.begin(), {"--auth", "none"});

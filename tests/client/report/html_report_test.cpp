@@ -14,7 +14,7 @@
 #include "core/geometry/blind.h"
 #include "core/geometry/scene.h"
 #include "tests/client/report/direct_sun_result.h"
-#include "tests/client/report/headless_chromium.h"
+#include "tests/headless_chromium.h"
 #include "tests/quick_job.h"
 
 namespace fenestra {

@@ -1,4 +1,4 @@
-#include "tests/client/report/headless_chromium.h"
+#include "tests/headless_chromium.h"
 
 #include <fcntl.h>
 #include <google/protobuf/util/json_util.h>
@@ -234,6 +234,22 @@ absl::StatusOr<Value> HeadlessChromium::Evaluate(const std::string& expression) 
     return absl::InvalidArgumentError(Text(Field(*r, "exceptionDetails")));
   }
   return Field(Field(*r, "result").struct_value(), "value");
+}
+
+absl::Status HeadlessChromium::SetInputFiles(const std::string& selector,
+                                             const std::vector<std::string>& paths) {
+  if (selector.find_first_of("'\\") != std::string::npos) {
+    return absl::InvalidArgumentError("a selector without quotes or backslashes");
+  }
+  Struct query =
+      Params({{"expression", String(absl::StrCat("document.querySelector('", selector, "')"))}});
+  absl::StatusOr<Struct> found = Call("Runtime.evaluate", query);
+  if (!found.ok()) return found.status();
+  const Value& id = Field(Field(*found, "result").struct_value(), "objectId");
+  if (id.string_value().empty()) return absl::NotFoundError(absl::StrCat("no element ", selector));
+  Value files;
+  for (const std::string& p : paths) *files.mutable_list_value()->add_values() = String(p);
+  return Call("DOM.setFileInputFiles", Params({{"files", files}, {"objectId", id}})).status();
 }
 
 absl::Status HeadlessChromium::EmulateMedia(const std::string& media) {

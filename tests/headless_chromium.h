@@ -32,6 +32,9 @@ class HeadlessChromium {
   absl::Status Load(const std::string& url, int width, int height);
   // The value of a JavaScript expression evaluated in the page (returned by value).
   absl::StatusOr<google::protobuf::Value> Evaluate(const std::string& expression);
+  // Chooses `paths` (files on this machine) in the file input `selector` names, as a user
+  // would in the browser's file dialog (its change event fires).
+  absl::Status SetInputFiles(const std::string& selector, const std::vector<std::string>& paths);
   // Media the page's CSS sees: "print" or "screen".
   absl::Status EmulateMedia(const std::string& media);
   // A PNG of the whole page (the viewport grown to the page's height).
