@@ -36,6 +36,8 @@ TEST(ConfigTest, EmptyConfigGetsTheDocumentedDefaults) {
   EXPECT_EQ(config->limits().max_data_dir_bytes(), int64_t{10} << 30);
   EXPECT_EQ(config->limits().max_concurrent_heavy_requests(), 2);
   EXPECT_EQ(config->limits().max_candidates_at_once(), 4);
+  EXPECT_EQ(config->limits().max_http_requests_per_minute(), 1200);
+  EXPECT_EQ(config->http_listen(), "");  // no dashboard
   EXPECT_EQ(config->limits().max_queued_jobs_per_user(), 8);
   EXPECT_EQ(config->limits().max_sites_per_user(), 100);
   EXPECT_EQ(config->limits().max_upload_bytes_per_user(), 256 << 20);
@@ -171,6 +173,21 @@ TEST(ConfigTest, BeyondLoopbackNeedsTlsAndTokens) {
   EXPECT_TRUE(ResolveConfig(config).ok());
   config.set_auth("password");
   EXPECT_THAT(ResolveConfig(config).status().message(), HasSubstr("auth must be token or none"));
+  // The dashboard's port on the same terms, and on a port of its own
+  config = v1::DaemonConfig();
+  config.set_http_listen("0.0.0.0:8080");
+  status = ResolveConfig(config).status();
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), HasSubstr("http_listen"));
+  EXPECT_THAT(status.message(), HasSubstr("allow_plaintext"));
+  config.set_tls_cert_file("server.crt");
+  config.set_tls_key_file("server.key");
+  EXPECT_TRUE(ResolveConfig(config).ok());
+  config.set_auth("none");
+  EXPECT_THAT(ResolveConfig(config).status().message(), HasSubstr("loopback http_listen"));
+  config = v1::DaemonConfig();
+  config.set_http_listen("localhost:50051");
+  EXPECT_THAT(ResolveConfig(config).status().message(), HasSubstr("another address"));
   // Client certificates are checked on top of the server's TLS
   config = v1::DaemonConfig();
   config.set_tls_client_ca_file("ca.pem");
