@@ -68,7 +68,8 @@ std::pair<double, double> Usage(pid_t pid) {
   std::vector<std::string> fields;
   while (stat >> field) fields.push_back(field);
   const double ticks = static_cast<double>(sysconf(_SC_CLK_TCK));
-  const double cpu = fields.size() > 15 ? (std::stod(fields[13]) + std::stod(fields[14])) / ticks : 0;
+  const double cpu =
+      fields.size() > 15 ? (std::stod(fields[13]) + std::stod(fields[14])) / ticks : 0;
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
   double hwm_mib = 0;
   for (std::string line; std::getline(status, line);) {
@@ -166,17 +167,19 @@ Run RunOnce(const std::string& dir, int jobs, int pages) {
 int main(int argc, char** argv) {
   const int jobs = argc > 1 ? std::atoi(argv[1]) : 50;
   const int pages = argc > 2 ? std::atoi(argv[2]) : 20;
-  const std::string dir = fs::temp_directory_path().string() + "/dashboard_bench." +
-                          std::to_string(getpid());
-  std::printf("# dashboard_bench: %d tiny jobs (6 evaluations each) through the JSON API, one "
-              "CPU worker; %d pages polling the list each second in the second run\n",
-              jobs, pages);
+  const std::string dir =
+      fs::temp_directory_path().string() + "/dashboard_bench." + std::to_string(getpid());
+  std::printf(
+      "# dashboard_bench: %d tiny jobs (6 evaluations each) through the JSON API, one "
+      "CPU worker; %d pages polling the list each second in the second run\n",
+      jobs, pages);
   for (int pass = 0; pass < 2; ++pass) {
     for (const int p : {0, pages}) {
       const Run r = RunOnce(dir, jobs, p);
-      std::printf("pages %2d: %d/%d succeeded, %.1f s (%.2f jobs/s), daemon CPU %.1f s, peak "
-                  "RSS %.0f MiB\n",
-                  p, r.succeeded, jobs, r.wall_s, r.succeeded / r.wall_s, r.cpu_s, r.peak_mib);
+      std::printf(
+          "pages %2d: %d/%d succeeded, %.1f s (%.2f jobs/s), daemon CPU %.1f s, peak "
+          "RSS %.0f MiB\n",
+          p, r.succeeded, jobs, r.wall_s, r.succeeded / r.wall_s, r.cpu_s, r.peak_mib);
       std::fflush(stdout);
     }
   }

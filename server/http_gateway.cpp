@@ -27,9 +27,8 @@ namespace {
 
 // Threads answering requests; a page polls twice a second, so a few serve many pages.
 constexpr int kHttpThreads = 8;
-// A request's reads and writes, and an idle kept-alive connection [s].
+// A request's reads and writes [s].
 constexpr int kHttpTimeoutSeconds = 10;
-constexpr int kKeepAliveSeconds = 5;
 // Client addresses whose request budgets are remembered; beyond it the full ones are dropped.
 constexpr size_t kMaxTrackedClients = 10000;
 // Where a Submit error's field (job, scene, weather) travels inside the status.
@@ -252,38 +251,8 @@ void Api::Serve(const char* route, const httplib::Request& req, httplib::Respons
 
 absl::Status Api::Submit(const Caller& caller, const httplib::Request& req,
                          httplib::Response& res) const {
-  // {"job": {...}, "scene": {...}, "weatherEpw": base64, "weatherName": "..."}: each part
-  // checked by itself first, so that an error names the file it is in
-  google::protobuf::Struct body;
-  FENESTRA_RETURN_IF_ERROR(WithField(FromJson(req.body, &body, "request"), "job"));
-  v1::SubmitJobRequest request;
-  v1::Scene scene;
-  for (const auto& [key, value] : body.fields()) {
-    if (key == "job" || key == "scene") {
-      if (!value.has_struct_value()) {
-        return WithField(absl::InvalidArgumentError(absl::StrCat(key, ": must be an object")), key);
-      }
-      google::protobuf::Message* into =
-          key == "job" ? static_cast<google::protobuf::Message*>(request.mutable_job()) : &scene;
-      const std::string json = ToJson(value.struct_value());
-      FENESTRA_RETURN_IF_ERROR(WithField(FromJson(json, into, key), key));
-    } else if (key == "weatherEpw" || key == "weatherName") {
-      if (!value.has_string_value()) {
-        return WithField(absl::InvalidArgumentError(absl::StrCat(key, ": must be a string")),
-                         "weather");
-      }
-      if (key == "weatherName") {
-        request.set_weather_name(value.string_value());
-      } else if (!absl::Base64Unescape(value.string_value(), request.mutable_weather_epw())) {
-        return WithField(absl::InvalidArgumentError("weatherEpw: not base64"), "weather");
-      }
-    } else {
-      return WithField(
-          absl::InvalidArgumentError(absl::StrCat("unknown field '", LogSafe(key, 64), "'")), "");
-    }
-  }
-  if (body.fields().contains("scene")) {
-    *request.mutable_job()->mutable_scene() = std::move(scene);
+  FENESTRA_ASSIGN_OR_RETURN(request, ParseDashboardSubmission(req.body));
+  if (request.job().has_scene()) {
     FENESTRA_RETURN_IF_ERROR(WithField(CheckInlineScene(request.job().scene()), "scene"));
     FENESTRA_RETURN_IF_ERROR(
         WithField(CheckSceneLimits(request.job().scene(), config_.limits()), "scene"));
@@ -405,6 +374,39 @@ void Api::Route(httplib::Server& server) {
 
 }  // namespace
 
+absl::StatusOr<v1::SubmitJobRequest> ParseDashboardSubmission(const std::string& body) {
+  // Each part parsed by itself, so that an error names the file it is in
+  google::protobuf::Struct parts;
+  FENESTRA_RETURN_IF_ERROR(WithField(FromJson(body, &parts, "request"), "job"));
+  v1::SubmitJobRequest request;
+  v1::Scene scene;
+  for (const auto& [key, value] : parts.fields()) {
+    if (key == "job" || key == "scene") {
+      if (!value.has_struct_value()) {
+        return WithField(absl::InvalidArgumentError(absl::StrCat(key, ": must be an object")), key);
+      }
+      google::protobuf::Message* into =
+          key == "job" ? static_cast<google::protobuf::Message*>(request.mutable_job()) : &scene;
+      FENESTRA_RETURN_IF_ERROR(WithField(FromJson(ToJson(value.struct_value()), into, key), key));
+    } else if (key == "weatherEpw" || key == "weatherName") {
+      if (!value.has_string_value()) {
+        return WithField(absl::InvalidArgumentError(absl::StrCat(key, ": must be a string")),
+                         "weather");
+      }
+      if (key == "weatherName") {
+        request.set_weather_name(value.string_value());
+      } else if (!absl::Base64Unescape(value.string_value(), request.mutable_weather_epw())) {
+        return WithField(absl::InvalidArgumentError("weatherEpw: not base64"), "weather");
+      }
+    } else {
+      return WithField(
+          absl::InvalidArgumentError(absl::StrCat("unknown field '", LogSafe(key, 64), "'")), "");
+    }
+  }
+  if (parts.fields().contains("scene")) *request.mutable_job()->mutable_scene() = std::move(scene);
+  return request;
+}
+
 absl::StatusOr<std::unique_ptr<HttpGateway>> HttpGateway::Start(const v1::DaemonConfig& config,
                                                                 Services services) {
   FENESTRA_ASSIGN_OR_RETURN(address, HostAndPort(config.http_listen()));
@@ -426,7 +428,10 @@ absl::StatusOr<std::unique_ptr<HttpGateway>> HttpGateway::Start(const v1::Daemon
   server.set_payload_max_length(static_cast<size_t>(config.limits().max_message_bytes()));
   server.set_read_timeout(kHttpTimeoutSeconds);
   server.set_write_timeout(kHttpTimeoutSeconds);
-  server.set_keep_alive_timeout(kKeepAliveSeconds);
+  // One request per connection: httplib holds a thread for each open connection, and a page
+  // that polls every second would keep its own for good, so that a few pages would take
+  // every thread and stall the others' requests
+  server.set_keep_alive_max_count(1);
   auto api = std::make_shared<Api>(config, services);
   api->Route(server);
   gateway->routes_ = api;

@@ -13,6 +13,7 @@
 
 #include "absl/status/statusor.h"
 #include "fenestra/v1/daemon.pb.h"
+#include "fenestra/v1/service.pb.h"
 #include "server/job_manager.h"
 #include "server/site_manager.h"
 #include "server/users.h"
@@ -22,6 +23,13 @@ class Server;
 }
 
 namespace fenestra {
+
+// The body of the dashboard's POST /api/v1/jobs, {"job", "scene", "weatherEpw",
+// "weatherName"} (server/web/README.md), as the SubmitJobRequest it stands for: the scene put
+// into the job, the weather decoded from base64. InvalidArgument for what does not parse,
+// with the part it is in as the status's payload (what the API's error names as `field`).
+// The request's own checks are JobService.Submit's, after it.
+absl::StatusOr<v1::SubmitJobRequest> ParseDashboardSubmission(const std::string& body);
 
 class HttpGateway {
  public:

@@ -25,6 +25,7 @@
 #include "fenestra/v1/service.pb.h"
 #include "server/checksum.h"
 #include "server/config.h"
+#include "server/http_gateway.h"
 #include "server/limits.h"
 #include "server/outdoor_cache.h"
 
@@ -269,6 +270,12 @@ absl::Status DaemonRequest(std::string_view bytes) {
   return CheckSubmitJobRequest(request, DefaultConfig());
 }
 
+absl::Status DashboardSubmission(std::string_view bytes) {
+  absl::StatusOr<v1::SubmitJobRequest> request = ParseDashboardSubmission(std::string(bytes));
+  if (!request.ok()) return request.status();
+  return CheckSubmitJobRequest(*request, DefaultConfig());
+}
+
 absl::Status RadImport(std::string_view bytes) {
   const size_t nul = bytes.find('\0');
   const std::string rad(bytes.substr(0, nul));
@@ -345,6 +352,7 @@ std::span<const Target> Targets() {
       {"daemon_request", &DaemonRequest},
       {"rad_import", &RadImport},
       {"hbjson_import", &HbjsonImport},
+      {"dashboard_submission", &DashboardSubmission},
   };
   return kTargets;
 }

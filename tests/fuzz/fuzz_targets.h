@@ -52,6 +52,10 @@ absl::Status RadImport(std::string_view bytes);
 // (BuildScene), which may refuse it only as bad input too.
 absl::Status HbjsonImport(std::string_view bytes);
 
+// The body of a dashboard submission (POST /api/v1/jobs: ParseDashboardSubmission), then the
+// door of JobService.Submit on the request it stands for (CheckJobRequest).
+absl::Status DashboardSubmission(std::string_view bytes);
+
 struct Target {
   const char* name;  // folder under tests/fuzz/corpus and tests/fuzz/regressions
   absl::Status (*run)(std::string_view bytes);
