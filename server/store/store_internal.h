@@ -26,6 +26,9 @@ inline constexpr int64_t kQueued = v1::JOB_STATE_QUEUED;
 inline constexpr int64_t kRunning = v1::JOB_STATE_RUNNING;
 inline constexpr int64_t kComputing = v1::SITE_STATE_COMPUTING;
 
+// A stored JobInfo without its result (field 7, the bulk of a finished job's record), which
+// is skipped unparsed: what listings show.
+bool ParseWithoutResult(v1::JobInfo& info, const std::string& bytes);
 template <typename Message>
 bool Parse(Message& message, const std::string& bytes) {
   return message.ParseFromString(bytes);

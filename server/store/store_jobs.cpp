@@ -1,4 +1,7 @@
 // Store: jobs, their events and, for a claimed job, its writes and checkpoints.
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
+#include <google/protobuf/wire_format_lite.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -221,6 +224,26 @@ absl::StatusOr<v1::JobInfo> Store::GetJob(const std::string& id, bool position) 
   return info;
 }
 
+bool store_internal::ParseWithoutResult(v1::JobInfo& info, const std::string& bytes) {
+  using google::protobuf::internal::WireFormatLite;
+  google::protobuf::io::CodedInputStream in(reinterpret_cast<const uint8_t*>(bytes.data()),
+                                            static_cast<int>(bytes.size()));
+  std::string kept;
+  {
+    google::protobuf::io::StringOutputStream sink(&kept);
+    google::protobuf::io::CodedOutputStream out(&sink);
+    while (const uint32_t tag = in.ReadTag()) {
+      const bool result = WireFormatLite::GetTagFieldNumber(tag) == v1::JobInfo::kResultFieldNumber;
+      if (!(result ? WireFormatLite::SkipField(&in, tag)
+                   : WireFormatLite::SkipField(&in, tag, &out))) {
+        return false;
+      }
+    }
+    if (!in.ConsumedEntireMessage()) return false;
+  }
+  return info.ParseFromString(kept);
+}
+
 absl::StatusOr<std::vector<v1::JobInfo>> Store::ListJobs(const std::string& owner,
                                                          v1::JobState state, int limit) {
   // A claimed job is RUNNING in its row before its info says so: the rows of both states
@@ -256,10 +279,10 @@ absl::StatusOr<std::vector<v1::JobInfo>> Store::ListJobs(const std::string& owne
           for (const SqlRow& r : rows.rows) {
             before = r.Int(0);
             v1::JobInfo info;
-            if (!Parse(info, r.Bytes(2)) || info.id() != r.Bytes(1)) continue;
+            if (!store_internal::ParseWithoutResult(info, r.Bytes(2)) || info.id() != r.Bytes(1))
+              continue;
             if (state != v1::JOB_STATE_UNSPECIFIED && info.state() != state) continue;
             if (static_cast<int>(jobs.size()) >= limit) break;
-            info.clear_result();
             FillFromRow(info, r.Bytes(3), r.Int(4) != 0, r.Bytes(5));
             if (info.state() == v1::JOB_STATE_QUEUED) {
               if (!positions) {
