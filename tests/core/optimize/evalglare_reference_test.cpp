@@ -4,9 +4,9 @@
 // overcast one (tests/data/evalglare/reference.csv, made by bench/evalglare/make_reference.sh;
 // bench/evalglare/README.md). evalglare counts only the solar disc as glare source there, as
 // Fenestra's DGP does. The tolerance is 0.02 in DGP. Ev: not below rtrace's (less 3 standard
-// errors; those are below 3% of Ev), and within 25% of it: rtrace stops at 6 ambient bounces (-ab 6) where Fenestra's
-// paths go on, and with walls of reflectance 0.8 the later reflections carry 1-20% of an eye's
-// light (most at the desk 2.5 m in). Seed fixed.
+// errors; those are below 3% of Ev), and within 25% of it: rtrace stops at 6 ambient bounces (-ab
+// 6) where Fenestra's paths go on, and with walls of reflectance 0.8 the later reflections carry
+// 1-20% of an eye's light (most at the desk 2.5 m in). Seed fixed.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -21,6 +21,7 @@
 #include "core/optimize/view_glare.h"
 #include "core/sky/epw.h"
 #include "core/trace/room_check.h"
+#include "tests/core/optimize/scene_year.h"
 
 namespace fenestra {
 namespace {
@@ -57,17 +58,8 @@ TEST(EvalglareReferenceTest, DgpWithTheSunMatchesEvalglareWithin002) {
   ASSERT_TRUE(proto.ok()) << proto.status();
   absl::StatusOr<Scene> scene = ValidateScene(*proto, path);
   ASSERT_TRUE(scene.ok()) << scene.status();
-  absl::StatusOr<EpwData> epw = ReadEpw(scene->site.weather_file);
-  ASSERT_TRUE(epw.ok()) << epw.status();
-  SkyMatrixOptions sky_options;
-  sky_options.ground_reflectance = scene->site.ground_reflectance;
-  absl::StatusOr<SkyMatrix> sky = BuildSkyMatrix(*epw, sky_options);
-  ASSERT_TRUE(sky.ok()) << sky.status();
-  std::vector<double> hours;
-  for (const EpwRecord& r : epw->records)
-    hours.push_back(StepCentreHours(r, epw->records_per_hour));
-  absl::StatusOr<std::vector<bool>> occupied = OccupiedSteps(hours);
-  ASSERT_TRUE(occupied.ok());
+  const SceneYear year = YearOf(*scene);
+  const std::vector<double>& hours = year.hours;
   // The design the references were rendered with: horizontal slats, 0.1 m apart
   absl::StatusOr<BlindDesign> design =
       DesignWithOverrides(*scene, {{"alpha", 0}, {"spacing", 0.1}});
@@ -76,7 +68,8 @@ TEST(EvalglareReferenceTest, DgpWithTheSunMatchesEvalglareWithin002) {
   options.tracing.paths_per_sensor = 400000;
   options.tracing.batches = 32;
   options.tracing.seed = 1;
-  absl::StatusOr<ViewGlareResult> r = ComputeViewGlare(*scene, *design, *sky, *occupied, options);
+  absl::StatusOr<ViewGlareResult> r =
+      ComputeViewGlare(*scene, *design, year.sky, year.occupied, options);
   ASSERT_TRUE(r.ok()) << r.status();
 
   const std::vector<Reference> references = ReadReference();
@@ -85,8 +78,8 @@ TEST(EvalglareReferenceTest, DgpWithTheSunMatchesEvalglareWithin002) {
   for (const Reference& ref : references) {
     // The record of the reference's hour
     int step = -1;
-    for (size_t s = 0; s < sky->steps.size(); ++s) {
-      if (sky->steps[s].month == ref.month && sky->steps[s].day == ref.day &&
+    for (size_t s = 0; s < year.sky.steps.size(); ++s) {
+      if (year.sky.steps[s].month == ref.month && year.sky.steps[s].day == ref.day &&
           std::abs(hours[s] - ref.hour) < 1e-6) {
         step = static_cast<int>(s);
       }

@@ -15,6 +15,7 @@
 #include "core/optimize/job.h"
 #include "core/sky/epw.h"
 #include "core/trace/room_check.h"
+#include "tests/core/optimize/scene_year.h"
 #include "tests/quick_job.h"
 
 namespace fenestra {
@@ -84,24 +85,8 @@ TEST(ViewGlareTest, BadViewsAreRefusedNamingTheirField) {
   EXPECT_NE(error(many).find("at most 1000 views"), std::string::npos);
 }
 
-struct Year {
-  SkyMatrix sky;
-  std::vector<bool> occupied;
-};
-Year PhoenixYear(const Scene& scene) {
-  absl::StatusOr<EpwData> epw = ReadEpw(scene.site.weather_file);
-  EXPECT_TRUE(epw.ok()) << epw.status();
-  SkyMatrixOptions options;
-  options.ground_reflectance = scene.site.ground_reflectance;
-  absl::StatusOr<SkyMatrix> sky = BuildSkyMatrix(*epw, options);
-  EXPECT_TRUE(sky.ok()) << sky.status();
-  std::vector<double> hours;
-  for (const EpwRecord& r : epw->records)
-    hours.push_back(StepCentreHours(r, epw->records_per_hour));
-  absl::StatusOr<std::vector<bool>> occupied = OccupiedSteps(hours);
-  EXPECT_TRUE(occupied.ok());
-  return {*std::move(sky), *std::move(occupied)};
-}
+using Year = SceneYear;
+Year PhoenixYear(const Scene& scene) { return YearOf(scene); }
 
 ViewGlareResult Glare(const Scene& scene, const Year& year, double alpha) {
   ViewGlareOptions options;
