@@ -266,6 +266,12 @@ absl::StatusOr<v1::JobInfo> FenestraClient::CancelJob(const std::string& id) {
   return Call(*jobs_, &v1::JobService::Stub::Cancel, request);
 }
 
+absl::Status FenestraClient::DeleteJob(const std::string& id) {
+  v1::DeleteJobRequest request;
+  request.set_id(id);
+  return Call(*jobs_, &v1::JobService::Stub::Delete, request).status();
+}
+
 absl::Status FenestraClient::WatchJob(const std::string& id,
                                       absl::FunctionRef<void(const v1::JobEvent&)> on_event) {
   const std::unique_ptr<grpc::ClientContext> context = NewContext(/*with_deadline=*/false);

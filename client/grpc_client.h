@@ -62,6 +62,8 @@ class FenestraClient {
   absl::StatusOr<v1::JobInfo> GetJob(const std::string& id);
   absl::StatusOr<v1::ListJobsResponse> ListJobs(const v1::ListJobsRequest& request);
   absl::StatusOr<v1::JobInfo> CancelJob(const std::string& id);
+  // Forgets an ended job (JobService.Delete).
+  absl::Status DeleteJob(const std::string& id);
   // Passes the job's events to `on_event` as they come, until fenestrad closes the stream
   // (after the job's last event). No deadline: keepalive pings notice a dead connection.
   absl::Status WatchJob(const std::string& id,

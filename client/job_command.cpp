@@ -317,6 +317,23 @@ void AddJobCancel(CLI::App* job) {
   });
 }
 
+// fenestra job delete
+void AddJobDelete(CLI::App* job) {
+  struct DeleteArgs {
+    ServerOptions server;
+    std::string id;
+  };
+  auto args = std::make_shared<DeleteArgs>();
+  CLI::App* cmd = job->add_subcommand(
+      "delete", "Forget an ended job with its result (a queued or running one: cancel it first)");
+  cmd->add_option("ID", args->id, "Job id")->required();
+  AddServerOptions(cmd, args->server);
+  cmd->callback([args] {
+    if (const absl::Status s = ConnectOrFail(args->server).DeleteJob(args->id); !s.ok()) Fail(s);
+    fmt::print("{}: deleted\n", args->id);
+  });
+}
+
 // fenestra job result
 void AddJobResult(CLI::App* job) {
   struct ResultArgs {
@@ -381,6 +398,7 @@ void AddJobCommand(CLI::App& app) {
   AddJobList(job);
   AddJobShow(job);
   AddJobCancel(job);
+  AddJobDelete(job);
   AddJobResult(job);
   AddJobReport(job);
 }

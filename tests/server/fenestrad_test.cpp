@@ -1173,5 +1173,31 @@ TEST_F(FenestradStorageTest, LargeRegistrationMemoryIsBoundedAndGivenBack) {
 #endif
 }
 
+// `fenestra job delete`: an ended job is forgotten with its result; a running one is refused
+// until cancelled.
+TEST_F(FenestradTest, EndedJobsAreDeletedAndRunningOnesRefused) {
+  auto d = StartDaemon();
+  const std::string done = Submit(*d, WriteJob("tiny", TinyJob()));
+  const std::string running = Submit(*d, WriteJob("long", LongJob()));
+  WaitJob(*d, done, Ended);
+  WaitJob(*d, running, Running);
+  CliResult r = d->Cli({"job", "delete", running});
+  EXPECT_NE(r.code, 0);
+  EXPECT_THAT(r.err, HasSubstr("cancel it first"));
+  r = d->Cli({"job", "delete", done});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr(done + ": deleted"));
+  v1::GetJobRequest get;
+  get.set_id(done);
+  v1::JobInfo gone;
+  EXPECT_EQ(d->jobs().Get(d->Context().get(), get, &gone).error_code(),
+            grpc::StatusCode::NOT_FOUND);
+  r = d->Cli({"job", "delete", done});
+  EXPECT_NE(r.code, 0);
+  ASSERT_EQ(d->Cli({"job", "cancel", running}).code, 0);
+  WaitJob(*d, running, Ended);
+  EXPECT_EQ(d->Cli({"job", "delete", running}).code, 0);
+}
+
 }  // namespace
 }  // namespace fenestra
