@@ -16,6 +16,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "client/report/html_report.h"
+#include "core/common/json_proto.h"
 #include "core/common/status_macros.h"
 #include "server/checksum.h"
 #include "server/limits.h"
@@ -89,12 +90,7 @@ std::string ToJson(const google::protobuf::Message& message) {
 // `json` (protobuf's JSON mapping, unknown fields refused) into `message`.
 absl::Status FromJson(const std::string& json, google::protobuf::Message* message,
                       std::string_view what) {
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;
-  const auto parsed = google::protobuf::util::JsonStringToMessage(json, message, options);
-  if (parsed.ok()) return absl::OkStatus();
-  return absl::InvalidArgumentError(
-      absl::StrCat(std::string(what), ": malformed JSON: ", std::string(parsed.message())));
+  return ParseJsonProto(json, absl::StrCat(std::string(what), ": malformed JSON"), message);
 }
 
 // The host and port of "host:port" or "[v6]:port".

@@ -14,4 +14,9 @@ namespace fenestra {
 absl::Status ReadJsonProtoFile(const std::string& path, const char* what,
                                google::protobuf::Message* message);
 
+// Parses `json` (protobuf's JSON mapping; unknown fields are errors) into `message`;
+// InvalidArgument "<context>: <reason>".
+absl::Status ParseJsonProto(const std::string& json, const std::string& context,
+                            google::protobuf::Message* message);
+
 }  // namespace fenestra
