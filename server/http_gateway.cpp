@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string_view>
@@ -61,6 +62,25 @@ int HttpStatusOf(absl::StatusCode code) {
     default:
       return 500;
   }
+}
+
+// Sets `body` as the answer, sent as it is. cpp-httplib compresses a body given to
+// set_content with Brotli at its slowest setting whenever the client accepts "br", as every
+// browser does: with pages polling, that took over half the daemon's CPU for answers of a
+// few kilobytes on a local network. A body of known length from a content provider is sent
+// uncompressed (an empty one has nothing to compress).
+void SetBody(httplib::Response& res, std::string body, const char* content_type) {
+  res.headers.erase("Content-Type");
+  res.body.clear();
+  if (body.empty()) {
+    res.set_content(body, content_type);
+    return;
+  }
+  auto shared = std::make_shared<const std::string>(std::move(body));
+  res.set_content_provider(shared->size(), content_type,
+                           [shared](size_t offset, size_t length, httplib::DataSink& sink) {
+                             return sink.write(shared->data() + offset, length);
+                           });
 }
 
 // `status` as the API's error body: {"code", "message", "field"}.
@@ -193,7 +213,7 @@ httplib::Server::HandlerResponse Api::Screen(const httplib::Request& req, httpli
   res.set_header("Content-Security-Policy", page_policy_);
   const auto refuse = [&](absl::Status status) {
     res.status = HttpStatusOf(status.code());
-    res.set_content(ErrorJson(status), "application/json");
+    SetBody(res, ErrorJson(status), "application/json");
     spdlog::info("http {} {} {} -> {}: {}", LogSafe(req.method), LogSafe(req.path),
                  LogSafe(req.remote_addr), res.status, LogSafe(std::string(status.message())));
     return httplib::Server::HandlerResponse::Handled;
@@ -232,7 +252,7 @@ void Api::Serve(const char* route, const httplib::Request& req, httplib::Respons
   }();
   if (!status.ok()) {
     res.status = HttpStatusOf(status.code());
-    res.set_content(ErrorJson(status), "application/json");
+    SetBody(res, ErrorJson(status), "application/json");
   }
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -260,7 +280,7 @@ absl::Status Api::Submit(const Caller& caller, const httplib::Request& req,
   // The rest as the gRPC port checks it
   absl::StatusOr<v1::JobInfo> info = services_.jobs.Submit(request, caller);
   if (!info.ok()) return WithField(info.status(), "job");
-  res.set_content(ToJson(*info), "application/json");
+  SetBody(res, ToJson(*info), "application/json");
   return absl::OkStatus();
 }
 
@@ -271,7 +291,7 @@ absl::Status Api::Report(const Caller& caller, const std::string& id,
     return absl::FailedPreconditionError(absl::StrCat("job ", id, " has no result yet"));
   }
   FENESTRA_ASSIGN_OR_RETURN(html, RenderReport(info.result(), {.source = id, .sensor = ""}));
-  res.set_content(std::move(html), "text/html; charset=utf-8");
+  SetBody(res, std::move(html), "text/html; charset=utf-8");
   return absl::OkStatus();
 }
 
@@ -281,20 +301,20 @@ void Api::Route(httplib::Server& server) {
   // Answers without a body of their own (unknown routes, oversized bodies) get one
   const httplib::Server::HandlerWithResponse with_body = [](const httplib::Request&,
                                                             httplib::Response& res) {
-    if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
+    if (res.has_header("Content-Type")) return httplib::Server::HandlerResponse::Unhandled;
     const absl::StatusCode code = res.status == 404   ? absl::StatusCode::kNotFound
                                   : res.status == 413 ? absl::StatusCode::kResourceExhausted
                                                       : absl::StatusCode::kInvalidArgument;
     const char* message = res.status == 404   ? "no such page or API route"
                           : res.status == 413 ? "the request is larger than max_message_bytes"
                                               : "the request is malformed";
-    res.set_content(ErrorJson(absl::Status(code, message)), "application/json");
+    SetBody(res, ErrorJson(absl::Status(code, message)), "application/json");
     return httplib::Server::HandlerResponse::Handled;
   };
   server.set_error_handler(with_body);
   for (const WebFile& file : WebFiles()) {
     const auto serve = [file](const httplib::Request&, httplib::Response& res) {
-      res.set_content(std::string(file.content), file.content_type);
+      SetBody(res, std::string(file.content), file.content_type);
     };
     server.Get(std::string(file.path), serve);
     if (file.path == "/index.html") server.Get("/", serve);
@@ -306,7 +326,7 @@ void Api::Route(httplib::Server& server) {
         };
   };
   const auto json = [](httplib::Response& res, const google::protobuf::Message& message) {
-    res.set_content(ToJson(message), "application/json");
+    SetBody(res, ToJson(message), "application/json");
     return absl::OkStatus();
   };
   const std::string job = absl::StrCat("/api/v1/jobs/", kId);
@@ -315,7 +335,7 @@ void Api::Route(httplib::Server& server) {
                google::protobuf::Struct me;
                (*me.mutable_fields())["name"].set_string_value(caller.name);
                (*me.mutable_fields())["admin"].set_bool_value(caller.admin);
-               res.set_content(ToJson(me), "application/json");
+               SetBody(res, ToJson(me), "application/json");
                return absl::OkStatus();
              }));
   server.Get(

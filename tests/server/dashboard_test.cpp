@@ -270,6 +270,21 @@ TEST_F(DashboardTest, HostileRequestsAreRefusedWith4xxAndTheDaemonServesOn) {
   EXPECT_THAT(index->get_header_value("Content-Security-Policy"),
               HasSubstr("default-src 'none'; script-src 'self'"));
   EXPECT_EQ(index->get_header_value("Access-Control-Allow-Origin"), "");
+
+  // Answers travel uncompressed whatever the client accepts, as a browser asks
+  client.set_decompress(false);
+  httplib::Headers accepting = auth;
+  accepting.emplace("Accept-Encoding", "gzip, deflate, br");
+  for (const char* path : {"/api/v1/me", "/", "/api/v1/nothing-here"}) {
+    httplib::Result raw = client.Get(path, accepting);
+    ASSERT_TRUE(raw) << path;
+    EXPECT_EQ(raw->get_header_value("Content-Encoding"), "") << path;
+    EXPECT_EQ(raw->get_header_value_count("Content-Type"), 1u) << path;
+    EXPECT_EQ(raw->get_header_value("Content-Length"), std::to_string(raw->body.size())) << path;
+  }
+  EXPECT_THAT(client.Get("/api/v1/me", accepting)->body, HasSubstr(R"("name":"ann")"));
+  EXPECT_THAT(client.Get("/api/v1/nothing-here", accepting)->body,
+              HasSubstr("no such page or API route"));
 }
 
 TEST_F(DashboardTest, RequestsBeyondTheRateAreRefusedWith429) {
