@@ -1,11 +1,21 @@
 #!/usr/bin/env bash
-# On the device: unpacks the binaries, runs the GPU tests and the benchmarks into $OUT.
+# On a GPU machine without the build's dependencies: unpacks what bench/gpu_pack.sh packed
+# (gpu_pack/pack.tar.xz at the repository's root), runs the GPU tests and the benchmarks and
+# leaves their outputs in $OUT/results.tar.xz (a summary line per run on stdout).
+# Usage: bench/gpu_pack_run.sh [tests|bench|comfort|all]
+set -u
 cd "$(dirname "$0")/.."
-tar xJf device/pack.tar.xz
-export LD_LIBRARY_PATH=$PWD/device_pack/lib
-B=$PWD/device_pack/bin
-mkdir -p /work 2>/dev/null; ln -sfn "$PWD" /work/main 2>/dev/null || echo "no link to /work/main"
+tar xJf gpu_pack/pack.tar.xz -C gpu_pack
+export LD_LIBRARY_PATH=$PWD/gpu_pack/root/lib
+B=$PWD/gpu_pack/root/bin
+# The tests look for their data where the packed build's sources were
+source_dir="$(cat gpu_pack/root/source_dir)"
+if [ "$source_dir" != "$PWD" ] && [ ! -e "$source_dir" ]; then
+  mkdir -p "$(dirname "$source_dir")" && ln -s "$PWD" "$source_dir" || echo "no link to $source_dir"
+fi
 R=$(mktemp -d)
+OUT="${OUT:-$PWD/gpu_pack/out}"
+mkdir -p "$OUT"
 nvidia-smi --query-gpu=name,driver_version --format=csv > "$R/gpu.txt" 2>&1; nproc >> "$R/gpu.txt"
 run() { local name=$1; shift; local t0=$SECONDS; "$@" > "$R/$name.txt" 2>&1; echo "$name rc=$? $((SECONDS - t0)) s" | tee -a "$R/summary.txt"; }
 case "${1:-all}" in
@@ -17,10 +27,8 @@ case "${1:-all}" in
     ;;&
   bench|all)
     run job_corner $B/gpu_bench job 4 examples/corner_office/tilt_and_spacing.json
-    run job_one_window $B/gpu_bench job 4 device/one_window/tilt_and_spacing.json
     run job_city $B/gpu_bench job 4
     run cpu_corner $B/fenestra optimize --local examples/corner_office/tilt_and_spacing.json --backend cpu -o "$R/cpu_corner.json"
-    run cpu_one_window $B/fenestra optimize --local device/one_window/tilt_and_spacing.json --backend cpu -o "$R/cpu_one_window.json"
     ;;
   comfort)
     F="$B/fenestra optimize --local"
