@@ -8,6 +8,7 @@
 #include "absl/strings/str_cat.h"
 #include "fenestra/v1/job.pb.h"
 #include "fenestra/v1/service.pb.h"
+#include "server/store/store_internal.h"
 #include "server/users.h"
 
 namespace fenestra {
@@ -85,6 +86,32 @@ absl::Status FillReplicaColumns(const Database&, SqlSession& s) {
       .status();
 }
 
+// Moves each finished job's result out of its info into the result column version 3 added
+// (store_internal::ColumnsOf); rows that do not parse stay as they are and are quarantined at
+// the next start.
+absl::Status MoveResults(const Database&, SqlSession& s) {
+  for (int64_t after = 0;;) {
+    absl::StatusOr<SqlResult> rows =
+        s.Run("SELECT number, info FROM jobs WHERE number > ? ORDER BY number LIMIT ?",
+              {after, kRowsPerRead});
+    if (!rows.ok()) return rows.status();
+    if (rows->rows.empty()) break;
+    for (const SqlRow& row : rows->rows) {
+      after = row.Int(0);
+      v1::JobInfo info;
+      if (!info.ParseFromString(row.Bytes(1)) || !info.has_result()) continue;
+      const store_internal::JobInfoColumns columns = store_internal::ColumnsOf(info);
+      if (absl::Status st = s.Run("UPDATE jobs SET info = ?, result = ? WHERE number = ?",
+                                  {columns.Info(), columns.Result(), after})
+                                .status();
+          !st.ok()) {
+        return st;
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 std::string WeatherOfPath(const std::string& path) {
@@ -147,6 +174,13 @@ const std::vector<Migration>& Migrations() {
            "sha256 {blob} NOT NULL, created_unix_ms {int} NOT NULL)",
        },
        FillReplicaColumns},
+      {3,
+       "finished jobs' results in a column of their own, which listings do not read",
+       {
+           "ALTER TABLE jobs ADD COLUMN result {blob}",
+           "ALTER TABLE quarantine ADD COLUMN result {blob}",
+       },
+       MoveResults},
   };
   return migrations;
 }

@@ -4,6 +4,7 @@
 // names, blobs, messages and the admission checks. Not for use outside server/store/.
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -26,9 +27,19 @@ inline constexpr int64_t kQueued = v1::JOB_STATE_QUEUED;
 inline constexpr int64_t kRunning = v1::JOB_STATE_RUNNING;
 inline constexpr int64_t kComputing = v1::SITE_STATE_COMPUTING;
 
-// A stored JobInfo without its result (field 7, the bulk of a finished job's record), which
-// is skipped unparsed: what listings show.
-bool ParseWithoutResult(v1::JobInfo& info, const std::string& bytes);
+// A JobInfo as the jobs table keeps it: `info` without the result (the bulk of a finished
+// job's record, which listings do not read), and `result` the result alone as a JobInfo
+// serialization holding only that field (so that `info` then `result` parse as the whole),
+// NULL without one.
+struct JobInfoColumns {
+  std::string info;
+  std::optional<std::string> result;
+  SqlParam Info() const { return SqlBlob{info}; }
+  SqlParam Result() const { return result ? SqlParam(SqlBlob{*result}) : SqlParam(nullptr); }
+};
+JobInfoColumns ColumnsOf(const v1::JobInfo& info);
+// The whole JobInfo from a row's info and result columns (the result NULL or not).
+bool ParseJobInfo(v1::JobInfo& info, const SqlRow& row, size_t info_column, size_t result_column);
 template <typename Message>
 bool Parse(Message& message, const std::string& bytes) {
   return message.ParseFromString(bytes);

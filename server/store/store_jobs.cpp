@@ -136,9 +136,9 @@ absl::StatusOr<v1::JobInfo> Store::InsertJob(NewJob job, const v1::Limits& limit
     info.set_id(absl::StrCat("job-", number));
     info.set_state(v1::JOB_STATE_QUEUED);
     info.set_last_sequence(1);
-    const std::string info_bytes = info.SerializeAsString();
-    FENESTRA_RETURN_IF_ERROR(s.Run("UPDATE jobs SET id = ?, info = ? WHERE number = ?",
-                                   {info.id(), Blob(info_bytes), number})
+    const store_internal::JobInfoColumns columns = store_internal::ColumnsOf(info);
+    FENESTRA_RETURN_IF_ERROR(s.Run("UPDATE jobs SET id = ?, info = ?, result = ? WHERE number = ?",
+                                   {info.id(), columns.Info(), columns.Result(), number})
                                  .status());
     v1::JobEvent event;
     event.set_sequence(1);
@@ -198,12 +198,12 @@ absl::StatusOr<v1::JobInfo> Store::GetJob(const std::string& id, bool position) 
   FENESTRA_RETURN_IF_ERROR(Transact(
       [&](SqlSession& s) -> absl::Status {
         FENESTRA_ASSIGN_OR_RETURN(
-            row, s.Run("SELECT number, info, owner, cancel_requested, lease_owner FROM jobs "
-                       "WHERE id = ?",
+            row, s.Run("SELECT number, info, owner, cancel_requested, lease_owner, result FROM "
+                       "jobs WHERE id = ?",
                        {id}));
         if (row.rows.empty()) return store_internal::NoJob(id);
         const SqlRow& r = row.rows[0];
-        if (!Parse(info, r.Bytes(1)) || info.id() != id) {
+        if (!store_internal::ParseJobInfo(info, r, 1, 5) || info.id() != id) {
           bad = r.Int(0);
           return absl::OkStatus();
         }
@@ -224,24 +224,34 @@ absl::StatusOr<v1::JobInfo> Store::GetJob(const std::string& id, bool position) 
   return info;
 }
 
-bool store_internal::ParseWithoutResult(v1::JobInfo& info, const std::string& bytes) {
-  using google::protobuf::internal::WireFormatLite;
-  google::protobuf::io::CodedInputStream in(reinterpret_cast<const uint8_t*>(bytes.data()),
-                                            static_cast<int>(bytes.size()));
-  std::string kept;
-  {
-    google::protobuf::io::StringOutputStream sink(&kept);
-    google::protobuf::io::CodedOutputStream out(&sink);
-    while (const uint32_t tag = in.ReadTag()) {
-      const bool result = WireFormatLite::GetTagFieldNumber(tag) == v1::JobInfo::kResultFieldNumber;
-      if (!(result ? WireFormatLite::SkipField(&in, tag)
-                   : WireFormatLite::SkipField(&in, tag, &out))) {
-        return false;
-      }
-    }
-    if (!in.ConsumedEntireMessage()) return false;
+store_internal::JobInfoColumns store_internal::ColumnsOf(const v1::JobInfo& info) {
+  JobInfoColumns columns;
+  if (!info.has_result()) {
+    columns.info = info.SerializeAsString();
+    return columns;
   }
-  return info.ParseFromString(kept);
+  v1::JobInfo head = info;
+  head.clear_result();
+  columns.info = head.SerializeAsString();
+  // The field as JobInfo's serialization writes it: tag, length, the result's bytes
+  using google::protobuf::internal::WireFormatLite;
+  const std::string body = info.result().SerializeAsString();
+  columns.result.emplace();
+  {
+    google::protobuf::io::StringOutputStream sink(&*columns.result);
+    google::protobuf::io::CodedOutputStream out(&sink);
+    out.WriteTag(WireFormatLite::MakeTag(v1::JobInfo::kResultFieldNumber,
+                                         WireFormatLite::WIRETYPE_LENGTH_DELIMITED));
+    out.WriteVarint32(static_cast<uint32_t>(body.size()));
+    out.WriteString(body);
+  }
+  return columns;
+}
+
+bool store_internal::ParseJobInfo(v1::JobInfo& info, const SqlRow& row, size_t info_column,
+                                  size_t result_column) {
+  if (!info.ParseFromString(row.Bytes(info_column))) return false;
+  return row.IsNull(result_column) || info.MergeFromString(row.Bytes(result_column));
 }
 
 absl::StatusOr<std::vector<v1::JobInfo>> Store::ListJobs(const std::string& owner,
@@ -279,8 +289,7 @@ absl::StatusOr<std::vector<v1::JobInfo>> Store::ListJobs(const std::string& owne
           for (const SqlRow& r : rows.rows) {
             before = r.Int(0);
             v1::JobInfo info;
-            if (!store_internal::ParseWithoutResult(info, r.Bytes(2)) || info.id() != r.Bytes(1))
-              continue;
+            if (!Parse(info, r.Bytes(2)) || info.id() != r.Bytes(1)) continue;
             if (state != v1::JOB_STATE_UNSPECIFIED && info.state() != state) continue;
             if (static_cast<int>(jobs.size()) >= limit) break;
             FillFromRow(info, r.Bytes(3), r.Int(4) != 0, r.Bytes(5));
@@ -376,23 +385,24 @@ absl::StatusOr<Store::Cancelled> Store::CancelJob(
   Cancelled cancelled;
   FENESTRA_RETURN_IF_ERROR(Transact([&](SqlSession& s) -> absl::Status {
     FENESTRA_ASSIGN_OR_RETURN(
-        row, s.Run(Sql("SELECT info, state, owner, weather, lease_owner FROM jobs WHERE id = ?"
-                       "{for_update}"),
+        row, s.Run(Sql("SELECT info, state, owner, weather, lease_owner, result FROM jobs WHERE "
+                       "id = ?{for_update}"),
                    {id}));
     if (row.rows.empty()) return store_internal::NoJob(id);
     const SqlRow& r = row.rows[0];
     cancelled = Cancelled{};
-    if (!Parse(cancelled.info, r.Bytes(0))) {
+    if (!store_internal::ParseJobInfo(cancelled.info, r, 0, 5)) {
       return UnparsableRecord(id, absl::StrCat("the stored job ", id, " does not parse"));
     }
     cancelled.weather = r.Bytes(3);
     FillFromRow(cancelled.info, r.Bytes(2), true, r.Bytes(4));
     if (r.Int(1) == kQueued) {
       const v1::JobEvent event = end(cancelled.info);
-      const std::string info_bytes = cancelled.info.SerializeAsString();
+      const store_internal::JobInfoColumns columns = store_internal::ColumnsOf(cancelled.info);
       FENESTRA_RETURN_IF_ERROR(
-          s.Run("UPDATE jobs SET info = ?, state = ?, cancel_requested = 1 WHERE id = ?",
-                {Blob(info_bytes), int64_t{cancelled.info.state()}, id})
+          s.Run(
+               "UPDATE jobs SET info = ?, result = ?, state = ?, cancel_requested = 1 WHERE id = ?",
+               {columns.Info(), columns.Result(), int64_t{cancelled.info.state()}, id})
               .status());
       cancelled.ended = true;
       return StoreEnd(*db_, s, cancelled.info, event);
@@ -420,14 +430,15 @@ absl::Status Store::DeleteJob(const std::string& id) {
 absl::Status Store::UpdateJob(const Lease& lease, const v1::JobInfo& info,
                               const v1::JobEvent* event, bool durable, bool* cancel_requested,
                               const std::string* checkpoint) {
-  const std::string info_bytes = info.SerializeAsString();
+  const store_internal::JobInfoColumns columns = store_internal::ColumnsOf(info);
   const std::string event_bytes = event ? event->SerializeAsString() : "";
   return Transact(
       [&](SqlSession& s) -> absl::Status {
         absl::StatusOr<SqlResult> updated = s.Run(
-            "UPDATE jobs SET info = ?, state = ? WHERE id = ? AND run = ? AND state = ? "
-            "RETURNING cancel_requested",
-            {Blob(info_bytes), int64_t{info.state()}, lease.id, lease.run, kRunning});
+            "UPDATE jobs SET info = ?, result = ?, state = ? WHERE id = ? AND run = ? AND "
+            "state = ? RETURNING cancel_requested",
+            {columns.Info(), columns.Result(), int64_t{info.state()}, lease.id, lease.run,
+             kRunning});
         FENESTRA_RETURN_IF_ERROR(Fenced(updated, lease));
         if (cancel_requested) *cancel_requested = updated->rows[0].Int(0) != 0;
         if (checkpoint) {
@@ -448,13 +459,14 @@ absl::Status Store::UpdateJob(const Lease& lease, const v1::JobInfo& info,
 
 absl::Status Store::FinishJob(const Lease& lease, const v1::JobInfo& info,
                               const v1::JobEvent& event) {
-  const std::string info_bytes = info.SerializeAsString();
+  const store_internal::JobInfoColumns columns = store_internal::ColumnsOf(info);
   return Transact([&](SqlSession& s) -> absl::Status {
     FENESTRA_RETURN_IF_ERROR(
-        Fenced(s.Run("UPDATE jobs SET info = ?, state = ?, lease_owner = '', "
+        Fenced(s.Run("UPDATE jobs SET info = ?, result = ?, state = ?, lease_owner = '', "
                      "lease_expires_unix_ms = 0, checkpoint = NULL WHERE id = ? AND run = ? AND "
                      "state = ?",
-                     {Blob(info_bytes), int64_t{info.state()}, lease.id, lease.run, kRunning}),
+                     {columns.Info(), columns.Result(), int64_t{info.state()}, lease.id, lease.run,
+                      kRunning}),
                lease));
     return StoreEnd(*db_, s, info, event);
   });

@@ -402,9 +402,9 @@ absl::Status Store::QuarantineRow(SqlSession& s, const std::string& table, int64
                                   const std::string& reason) {
   const bool jobs = table == "jobs";
   FENESTRA_RETURN_IF_ERROR(
-      s.Run(Sql(jobs ? "INSERT INTO quarantine (source, id, reason, info, body, "
-                       "quarantined_unix_ms) SELECT 'jobs', id, ?, info, job, {now} FROM jobs "
-                       "WHERE number = ?"
+      s.Run(Sql(jobs ? "INSERT INTO quarantine (source, id, reason, info, result, body, "
+                       "quarantined_unix_ms) SELECT 'jobs', id, ?, info, result, job, {now} FROM "
+                       "jobs WHERE number = ?"
                      : "INSERT INTO quarantine (source, id, reason, info, body, weather_path, "
                        "quarantined_unix_ms) SELECT 'sites', id, ?, info, scene, weather, {now} "
                        "FROM sites WHERE number = ?"),

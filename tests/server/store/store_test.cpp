@@ -305,7 +305,14 @@ TYPED_TEST(StoreTest, AFinishedJobKeepsOnlyItsFinalEventAndNoCheckpoint) {
   finished.mutable_finished()->set_evaluations(1);
   info.set_state(v1::JOB_STATE_SUCCEEDED);
   info.set_last_sequence(3);
+  info.mutable_result()->set_evaluations(7);
   ASSERT_TRUE(store.FinishJob(claim.lease, info, finished).ok());
+  // Its result comes with the job, not with the listing
+  EXPECT_EQ(store.GetJob(id)->result().evaluations(), 7);
+  absl::StatusOr<std::vector<v1::JobInfo>> listed = store.ListJobs("", v1::JOB_STATE_SUCCEEDED, 10);
+  ASSERT_TRUE(listed.ok() && listed->size() == 1u) << listed.status();
+  EXPECT_EQ((*listed)[0].id(), id);
+  EXPECT_FALSE((*listed)[0].has_result());
   // Its events stay a while for watchers that lag behind, then only the final one
   EXPECT_EQ(store.LoadEvents(id)->size(), 3u);
   ASSERT_TRUE(Exec(store, "UPDATE jobs SET events_expire_unix_ms = {now} - 1").ok());
@@ -678,6 +685,11 @@ TEST(SqliteStoreTest, AFileOfFenestradBeforeSchemaVersionsIsMigrated) {
   job_info.set_outdoor_key("k");
   v1::Job job;
   job.set_weather_file("/var/lib/fenestra/weather/" + std::string(64, 'e') + ".epw");
+  // And one that had ended, its result inside its info
+  v1::JobInfo ended;
+  ended.set_id("job-2");
+  ended.set_state(v1::JOB_STATE_SUCCEEDED);
+  ended.mutable_result()->set_evaluations(9);
   Sqlite(path,
          "CREATE TABLE sites (number INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT UNIQUE, info BLOB "
          "NOT NULL, weather_path TEXT NOT NULL); CREATE TABLE jobs (number INTEGER PRIMARY KEY "
@@ -686,7 +698,9 @@ TEST(SqliteStoreTest, AFileOfFenestradBeforeSchemaVersionsIsMigrated) {
              Hex(site.SerializeAsString()) +
              "', ''); INSERT INTO jobs (id, info, job) VALUES "
              "('job-1', x'" +
-             Hex(job_info.SerializeAsString()) + "', x'" + Hex(job.SerializeAsString()) + "')");
+             Hex(job_info.SerializeAsString()) + "', x'" + Hex(job.SerializeAsString()) +
+             "'), ('job-2', x'" + Hex(ended.SerializeAsString()) + "', x'" +
+             Hex(job.SerializeAsString()) + "')");
   absl::StatusOr<std::unique_ptr<Store>> store =
       OpenStoreUrl("sqlite:" + std::filesystem::path(path).parent_path().string() + "/unused");
   EXPECT_FALSE(store.ok());  // no such folder
@@ -701,6 +715,12 @@ TEST(SqliteStoreTest, AFileOfFenestradBeforeSchemaVersionsIsMigrated) {
   EXPECT_FALSE(migrated->info.has_scene());
   EXPECT_EQ((*store)->LoadSiteScene("site-1")->name(), "courtyard");
   EXPECT_EQ((*store)->GetJob("job-1")->owner(), "local");
+  // The result moved to its own column: with the job, not in listings
+  EXPECT_EQ((*store)->GetJob("job-2")->result().evaluations(), 9);
+  absl::StatusOr<std::vector<v1::JobInfo>> listed =
+      (*store)->ListJobs("", v1::JOB_STATE_SUCCEEDED, 10);
+  ASSERT_TRUE(listed.ok() && listed->size() == 1u) << listed.status();
+  EXPECT_FALSE((*listed)[0].has_result());
   // The job that was running is taken over, with its weather file found by content
   absl::StatusOr<std::optional<Claim>> claim = (*store)->ClaimWork("r", 60'000, {}, {});
   ASSERT_TRUE(claim.ok() && *claim) << claim.status();
