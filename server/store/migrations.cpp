@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <functional>
+#include <string>
 
 #include "absl/strings/str_cat.h"
 #include "fenestra/v1/job.pb.h"
@@ -27,57 +29,56 @@ absl::Status AddSceneColumn(const Database& db, SqlSession& s) {
   return s.Run("ALTER TABLE sites ADD COLUMN scene BLOB").status();
 }
 
+// Calls `each` on every row of `table` (its number, then `columns`), in order of number, a
+// page of kRowsPerRead rows at a time.
+absl::Status ForEachRow(SqlSession& s, const char* table, const char* columns,
+                        const std::function<absl::Status(const SqlRow&)>& each) {
+  const std::string sql = absl::StrCat("SELECT number, ", columns, " FROM ", table,
+                                       " WHERE number > ? ORDER BY number LIMIT ?");
+  for (int64_t after = 0;;) {
+    absl::StatusOr<SqlResult> rows = s.Run(sql, {after, kRowsPerRead});
+    if (!rows.ok()) return rows.status();
+    if (rows->rows.empty()) return absl::OkStatus();
+    for (const SqlRow& row : rows->rows) {
+      after = row.Int(0);
+      if (absl::Status st = each(row); !st.ok()) return st;
+    }
+  }
+}
+
 // Fills the columns version 2 added from each job's and site's stored protobufs; rows
 // that do not parse keep the defaults (state 0: never claimed) and are quarantined at the
 // next start.
 absl::Status FillReplicaColumns(const Database&, SqlSession& s) {
-  for (int64_t after = 0;;) {
-    absl::StatusOr<SqlResult> rows =
-        s.Run("SELECT number, info, job FROM jobs WHERE number > ? ORDER BY number LIMIT ?",
-              {after, kRowsPerRead});
-    if (!rows.ok()) return rows.status();
-    if (rows->rows.empty()) break;
-    for (const SqlRow& row : rows->rows) {
-      after = row.Int(0);
-      v1::JobInfo info;
-      if (!info.ParseFromString(row.Bytes(1))) continue;
-      v1::Job job;
-      const std::string weather =
-          job.ParseFromString(row.Bytes(2)) ? WeatherOfPath(job.weather_file()) : "";
-      const std::string owner = info.owner().empty() ? kLocalUser : info.owner();
-      if (absl::Status st = s.Run("UPDATE jobs SET owner = ?, state = ?, outdoor_key = ?, "
-                                  "upload_bytes = ?, weather = ?, queue_order = number "
-                                  "WHERE number = ?",
-                                  {owner, int64_t{info.state()}, info.outdoor_key(),
-                                   info.upload_bytes(), weather, after})
-                                .status();
-          !st.ok()) {
-        return st;
-      }
-    }
-  }
-  for (int64_t after = 0;;) {
-    absl::StatusOr<SqlResult> rows = s.Run(
-        "SELECT number, info, weather_path FROM sites WHERE number > ? ORDER BY number LIMIT ?",
-        {after, kRowsPerRead});
-    if (!rows.ok()) return rows.status();
-    if (rows->rows.empty()) break;
-    for (const SqlRow& row : rows->rows) {
-      after = row.Int(0);
-      v1::SiteInfo info;
-      if (!info.ParseFromString(row.Bytes(1))) continue;
-      const std::string owner = info.owner().empty() ? kLocalUser : info.owner();
-      if (absl::Status st =
-              s.Run("UPDATE sites SET owner = ?, state = ?, outdoor_key = ?, upload_bytes = ?, "
-                    "weather = ?, queue_order = number WHERE number = ?",
-                    {owner, int64_t{info.state()}, info.outdoor_key(), info.upload_bytes(),
-                     WeatherOfPath(row.Bytes(2)), after})
-                  .status();
-          !st.ok()) {
-        return st;
-      }
-    }
-  }
+  absl::Status jobs = ForEachRow(s, "jobs", "info, job", [&](const SqlRow& row) {
+    v1::JobInfo info;
+    if (!info.ParseFromString(row.Bytes(1))) return absl::OkStatus();
+    v1::Job job;
+    const std::string weather =
+        job.ParseFromString(row.Bytes(2)) ? WeatherOfPath(job.weather_file()) : "";
+    const std::string owner = info.owner().empty() ? kLocalUser : info.owner();
+    return s
+        .Run(
+            "UPDATE jobs SET owner = ?, state = ?, outdoor_key = ?, upload_bytes = ?, "
+            "weather = ?, queue_order = number WHERE number = ?",
+            {owner, int64_t{info.state()}, info.outdoor_key(), info.upload_bytes(), weather,
+             row.Int(0)})
+        .status();
+  });
+  if (!jobs.ok()) return jobs;
+  absl::Status sites = ForEachRow(s, "sites", "info, weather_path", [&](const SqlRow& row) {
+    v1::SiteInfo info;
+    if (!info.ParseFromString(row.Bytes(1))) return absl::OkStatus();
+    const std::string owner = info.owner().empty() ? kLocalUser : info.owner();
+    return s
+        .Run(
+            "UPDATE sites SET owner = ?, state = ?, outdoor_key = ?, upload_bytes = ?, "
+            "weather = ?, queue_order = number WHERE number = ?",
+            {owner, int64_t{info.state()}, info.outdoor_key(), info.upload_bytes(),
+             WeatherOfPath(row.Bytes(2)), row.Int(0)})
+        .status();
+  });
+  if (!sites.ok()) return sites;
   return s
       .Run(
           "INSERT INTO counters (name, value) SELECT 'queue', CAST(COALESCE(MAX(n), 0) AS "
@@ -90,26 +91,15 @@ absl::Status FillReplicaColumns(const Database&, SqlSession& s) {
 // (store_internal::ColumnsOf); rows that do not parse stay as they are and are quarantined at
 // the next start.
 absl::Status MoveResults(const Database&, SqlSession& s) {
-  for (int64_t after = 0;;) {
-    absl::StatusOr<SqlResult> rows =
-        s.Run("SELECT number, info FROM jobs WHERE number > ? ORDER BY number LIMIT ?",
-              {after, kRowsPerRead});
-    if (!rows.ok()) return rows.status();
-    if (rows->rows.empty()) break;
-    for (const SqlRow& row : rows->rows) {
-      after = row.Int(0);
-      v1::JobInfo info;
-      if (!info.ParseFromString(row.Bytes(1)) || !info.has_result()) continue;
-      const store_internal::JobInfoColumns columns = store_internal::ColumnsOf(info);
-      if (absl::Status st = s.Run("UPDATE jobs SET info = ?, result = ? WHERE number = ?",
-                                  {columns.Info(), columns.Result(), after})
-                                .status();
-          !st.ok()) {
-        return st;
-      }
-    }
-  }
-  return absl::OkStatus();
+  return ForEachRow(s, "jobs", "info", [&](const SqlRow& row) {
+    v1::JobInfo info;
+    if (!info.ParseFromString(row.Bytes(1)) || !info.has_result()) return absl::OkStatus();
+    const store_internal::JobInfoColumns columns = store_internal::ColumnsOf(info);
+    return s
+        .Run("UPDATE jobs SET info = ?, result = ? WHERE number = ?",
+             {columns.Info(), columns.Result(), row.Int(0)})
+        .status();
+  });
 }
 
 }  // namespace
