@@ -54,12 +54,23 @@ double PositionIndex(Vec3d view, Vec3d up, Vec3d to_source) {
 }
 
 double DgpWithSun(double eye_lux, double sun_eye_lux, Vec3d view, Vec3d up, Vec3d to_sun) {
+  return DgpWithSunFactor(eye_lux, sun_eye_lux, SunGlareFactor(view, up, to_sun));
+}
+
+double SunGlareFactor(Vec3d view, Vec3d up, Vec3d to_sun) {
   const double cos_view = Dot(Normalize(view), Normalize(to_sun));
-  if (!(sun_eye_lux > 0) || !(cos_view > 0) || !(eye_lux > 0)) return Dgp(eye_lux, {});
-  // The beam's normal illuminance at the eye, spread over the disc
-  const GlareSource sun{sun_eye_lux / cos_view / kSunSolidAngleSr, kSunSolidAngleSr,
-                        PositionIndex(view, up, to_sun)};
-  return Dgp(eye_lux, std::span<const GlareSource>(&sun, 1));
+  if (!(cos_view > 0)) return 0;
+  // The beam's normal illuminance at the eye spread over the disc: L = E_sun / (cos omega)
+  const double p = PositionIndex(view, up, to_sun);
+  return 1 / (cos_view * cos_view * kSunSolidAngleSr * p * p);
+}
+
+double DgpWithSunFactor(double eye_lux, double sun_eye_lux, double factor) {
+  if (!(sun_eye_lux > 0) || !(factor > 0) || !(eye_lux > 0)) return Dgp(eye_lux, {});
+  const double sum = sun_eye_lux * sun_eye_lux * factor;
+  const double dgp = kDgpEvSlope * eye_lux + kDgpOffset +
+                     kDgpLogFactor * std::log10(1 + sum / std::pow(eye_lux, kDgpEvExponent));
+  return std::min(dgp, 1.0);
 }
 
 GlareClass ClassOfDgp(double dgp) {

@@ -315,10 +315,15 @@ void DesignComfort::GlareOf(const BlindDesign& design, const std::vector<Matrix>
   for (Eigen::Index c = 0; c < columns; ++c) occupied_steps(0, c) = sky_->occupied_column[c];
   // The occupied steps without the sun at the eye, decided by Ev alone; those with it, one by one
   const Mask sunless = (sun.array() == 0) && occupied_steps.replicate(views, 1);
+  // (the sun's geometric factor of each, the same in every version)
   std::vector<std::pair<int, Eigen::Index>> sunny;
+  std::vector<double> factor;
   for (Eigen::Index c = 0; c < columns; ++c) {
     for (int v = 0; v < views; ++v) {
-      if (sun(v, c) > 0 && occupied_steps(0, c)) sunny.emplace_back(v, c);
+      if (sun(v, c) > 0 && occupied_steps(0, c)) {
+        sunny.emplace_back(v, c);
+        factor.push_back(SunGlareFactor(views_[v].direction, views_[v].up, sky_->sun_direction[c]));
+      }
     }
   }
   // Version 0: the mean of the batches; version 1 + b: the mean without batch b
@@ -333,9 +338,10 @@ void DesignComfort::GlareOf(const BlindDesign& design, const std::vector<Matrix>
       e.noalias() = weight * (total - batches[version - 1]);
     }
     glare = sunless && (e.array() >= eye_limit);
-    for (const auto& [v, c] : sunny) {
-      glare(v, c) = DgpWithSun(std::max(0.0, e(v, c)) + sun(v, c), sun(v, c), views_[v].direction,
-                               views_[v].up, sky_->sun_direction[c]) >= threshold;
+    for (size_t k = 0; k < sunny.size(); ++k) {
+      const auto [v, c] = sunny[k];
+      glare(v, c) =
+          DgpWithSunFactor(std::max(0.0, e(v, c)) + sun(v, c), sun(v, c), factor[k]) >= threshold;
     }
     const int any = static_cast<int>(glare.colwise().any().count());
     const double occupied = std::max(1, sky_->occupied_hours);
