@@ -13,14 +13,23 @@ constexpr double kDgpEvSlope = 5.87e-5, kDgpLogFactor = 0.092, kDgpOffset = 0.15
 constexpr double kDgpEvExponent = 1.87;
 constexpr double kMaxPositionIndex = 16;
 
+namespace {
+
+// The DGP from Ev and the sources' sum of L^2 omega / P^2.
+double DgpOfSum(double eye_lux, double sum) {
+  double dgp = kDgpEvSlope * eye_lux + kDgpOffset;
+  if (sum > 0) dgp += kDgpLogFactor * std::log10(1 + sum / std::pow(eye_lux, kDgpEvExponent));
+  return std::min(dgp, 1.0);
+}
+
+}  // namespace
+
 double Dgp(double eye_lux, std::span<const GlareSource> sources) {
   double sum = 0;
   for (const GlareSource& s : sources) {
     sum += s.luminance * s.luminance * s.solid_angle / (s.position_index * s.position_index);
   }
-  double dgp = kDgpEvSlope * eye_lux + kDgpOffset;
-  if (sum > 0) dgp += kDgpLogFactor * std::log10(1 + sum / std::pow(eye_lux, kDgpEvExponent));
-  return std::min(dgp, 1.0);
+  return DgpOfSum(eye_lux, sum);
 }
 
 double EyeLuxAtDgp(double dgp) { return (dgp - kDgpOffset) / kDgpEvSlope; }
@@ -66,11 +75,8 @@ double SunGlareFactor(Vec3d view, Vec3d up, Vec3d to_sun) {
 }
 
 double DgpWithSunFactor(double eye_lux, double sun_eye_lux, double factor) {
-  if (!(sun_eye_lux > 0) || !(factor > 0) || !(eye_lux > 0)) return Dgp(eye_lux, {});
-  const double sum = sun_eye_lux * sun_eye_lux * factor;
-  const double dgp = kDgpEvSlope * eye_lux + kDgpOffset +
-                     kDgpLogFactor * std::log10(1 + sum / std::pow(eye_lux, kDgpEvExponent));
-  return std::min(dgp, 1.0);
+  if (!(sun_eye_lux > 0) || !(factor > 0) || !(eye_lux > 0)) return DgpOfSum(eye_lux, 0);
+  return DgpOfSum(eye_lux, sun_eye_lux * sun_eye_lux * factor);
 }
 
 GlareClass ClassOfDgp(double dgp) {
