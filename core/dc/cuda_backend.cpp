@@ -21,6 +21,7 @@
 #include "absl/strings/match.h"
 #include "core/dc/cuda/annual_tally.h"
 #include "core/dc/indoor_replay.h"
+#include "core/metrics/glare.h"
 #include "core/trace/bvh.h"
 #include "core/trace/cuda/cuda_tracer.h"
 #include "core/trace/window_cells.h"
@@ -229,6 +230,54 @@ class CudaAnnualProduct : public AnnualProduct {
     return out;
   }
 
+  // Uploads `steps` (checked against S: DesignTallies::SetGlareSteps) for GlareSums.
+  absl::Status SetGlare(const GlareSteps& steps) {
+    const Eigen::Index views = steps.sun_factor.rows(), columns = steps.sun_factor.cols();
+    std::vector<double> factor(static_cast<size_t>(views * columns));
+    for (Eigen::Index v = 0; v < views; ++v) {
+      for (Eigen::Index c = 0; c < columns; ++c) factor[v * columns + c] = steps.sun_factor(v, c);
+    }
+    const std::vector<uint8_t> occupied(steps.occupied.begin(), steps.occupied.end());
+    FENESTRA_RETURN_IF_ERROR(annual_->SetGlare(factor.data(), occupied.data(),
+                                               static_cast<int>(views), steps.threshold,
+                                               EyeLuxAtDgp(steps.threshold)));
+    glare_views_ = static_cast<int>(views);
+    return absl::OkStatus();
+  }
+
+  // The glare counts of `designs` designs' indoor sums on the device, as TallySums takes
+  // them (the sensors the eyes of SetGlare), design k's beam at the eyes sun[k] (none where
+  // `sun` is shorter).
+  std::vector<absl::StatusOr<GlareCounts>> GlareSums(
+      const double* device_sums, size_t design_sums, int designs,
+      const std::vector<uint64_t>& batch_paths, const std::vector<std::vector<SunEntry>>& sun) {
+    std::vector<SunEntries> entries(designs);
+    for (int k = 0; k < designs && k < static_cast<int>(sun.size()); ++k) {
+      entries[k] = {sun[k].data(), sun[k].size()};
+    }
+    const int versions = batches_ + 1;
+    const size_t views = static_cast<size_t>(glare_views_);
+    std::vector<int64_t> counts(static_cast<size_t>(std::max(designs, 0)) * versions * (views + 1));
+    const absl::Status counted =
+        annual_->GlareSums(device_sums, design_sums, designs, batches_, batch_paths.data(),
+                           entries.data(), counts.data());
+    std::vector<absl::StatusOr<GlareCounts>> out;
+    for (int k = 0; k < designs; ++k) {
+      if (!counted.ok()) {
+        out.push_back(counted);
+        continue;
+      }
+      GlareCounts c;
+      for (int v = 0; v < versions; ++v) {
+        const int64_t* row = counts.data() + (static_cast<size_t>(k) * versions + v) * (views + 1);
+        c.view_steps.emplace_back(row, row + views);
+        c.any_steps.push_back(row[views]);
+      }
+      out.push_back(std::move(c));
+    }
+    return out;
+  }
+
  private:
   // batches_ of the product of the sky alone: its O_b, the identity, pair with any count
   static constexpr int kAnyBatches = 0;
@@ -271,8 +320,9 @@ class CudaAnnualProduct : public AnnualProduct {
 
   std::unique_ptr<CudaAnnualTally> annual_;
   int batches_;
-  Eigen::Index rows_;  // of each O_b
-  Matrix sky_;         // S, as uploaded
+  Eigen::Index rows_;    // of each O_b
+  Matrix sky_;           // S, as uploaded
+  int glare_views_ = 0;  // SetGlare's
 };
 
 // The tracer's outdoor scene (TracerSlot), shared by the indoor stages of one backend.
@@ -513,7 +563,31 @@ class CudaDesignTallies : public DesignTallies {
     FENESTRA_ASSIGN_OR_RETURN(product,
                               CudaAnnualProduct::Make(device_, outdoor_batches, sky, on_device));
     product_ = std::move(product);
+    // The glare steps go with the product's columns
+    if (GlareStepsSet() != nullptr &&
+        static_cast<Eigen::Index>(GlareStepsSet()->occupied.size()) == sky.cols()) {
+      FENESTRA_RETURN_IF_ERROR(product_->SetGlare(*GlareStepsSet()));
+    }
     return absl::OkStatus();
+  }
+  absl::Status SetGlareSteps(GlareSteps steps) override {
+    FENESTRA_RETURN_IF_ERROR(DesignTallies::SetGlareSteps(std::move(steps)));
+    return product_->SetGlare(*GlareStepsSet());
+  }
+  std::vector<absl::StatusOr<GlareCounts>> GlareDesigns(
+      const std::vector<BlindDesign>& designs,
+      const std::vector<std::vector<SunEntry>>& sun) override {
+    if (replay_ == nullptr || product_ == nullptr || GlareStepsSet() == nullptr) {
+      return DesignTallies::GlareDesigns(designs, sun);
+    }
+    std::vector<std::vector<SunEntry>> in_order = sun;
+    in_order.resize(designs.size());
+    return InReplayGroups<GlareCounts>(designs, [&](const std::vector<size_t>& group) {
+      std::vector<std::vector<SunEntry>> group_sun;
+      for (const size_t i : group) group_sun.push_back(in_order[i]);
+      return product_->GlareSums(tracer_->DeviceSums(), tracer_->DesignSums(),
+                                 static_cast<int>(group.size()), FullBatchPaths(), group_sun);
+    });
   }
   absl::StatusOr<std::vector<HourTally>> Tally(const BlindDesign& design,
                                                const MetricOptions& options, int parts) override {

@@ -9,6 +9,7 @@
 
 #include "absl/status/statusor.h"
 #include "core/common/radiance_matrix.h"
+#include "core/dc/glare_tally.h"
 #include "core/dc/sun_entry.h"
 #include "core/geometry/hemisphere_basis.h"
 #include "core/geometry/mesh.h"
@@ -188,6 +189,16 @@ class DesignTallies {
   // up to DesignsAtOnce() of them in one launch and forms each E with the S it holds.
   virtual std::vector<absl::StatusOr<std::vector<Matrix>>> DesignsIlluminance(
       const std::vector<BlindDesign>& designs);
+  // What decides a glare step where the tallies' sensors are eyes (GlareDesigns): after
+  // SetProduct, its columns the product's S's. InvalidArgument where they are not or the
+  // threshold is outside (0, 1); FailedPrecondition before SetProduct.
+  virtual absl::Status SetGlareSteps(GlareSteps steps);
+  // The glare counts (glare_tally.h) of several designs, every part of each, in their order,
+  // design k's beam at the eyes sun[k] (none where `sun` is shorter; an error for one design
+  // leaves the others): by default CountGlare of DesignsIlluminance; the GPU's replay counts
+  // where E lies, and only the counts come back. FailedPrecondition before SetGlareSteps.
+  virtual std::vector<absl::StatusOr<GlareCounts>> GlareDesigns(
+      const std::vector<BlindDesign>& designs, const std::vector<std::vector<SunEntry>>& sun);
   // Sets the annual product the tallies form E with (DcBackend::MakeAnnualProduct's O_b and
   // S); Tally and Product need it. InvalidArgument where O_b's rows are not the indoor
   // stage's columns or its batches not the stage's batches. `on_device`: the same O_b where
@@ -221,6 +232,8 @@ class DesignTallies {
  protected:
   // `design`'s direct sun in the product's columns; empty without SetDirectSun.
   std::vector<SunEntry> SunOf(const BlindDesign& design) const;
+  // SetGlareSteps' steps; null before it.
+  const GlareSteps* GlareStepsSet() const { return glare_steps_.get(); }
   // `versions` (tallies of E) with the sunlit hours of `sun` (SunOf), where there is a sun.
   absl::StatusOr<std::vector<HourTally>> WithSunlitHours(
       absl::StatusOr<std::vector<HourTally>> versions, const std::vector<SunEntry>& sun,
@@ -228,6 +241,7 @@ class DesignTallies {
 
  private:
   std::shared_ptr<const DirectSun> sun_;
+  std::unique_ptr<const GlareSteps> glare_steps_;
 };
 
 // A tracer backend for daylight coefficients (Embree on the CPU, CUDA on a GPU), chosen at

@@ -544,6 +544,33 @@ std::vector<absl::StatusOr<std::vector<Matrix>>> DesignTallies::DesignsIlluminan
   return out;
 }
 
+absl::Status DesignTallies::SetGlareSteps(GlareSteps steps) {
+  FENESTRA_RETURN_IF_ERROR(CheckProductSet(Product()));
+  FENESTRA_RETURN_IF_ERROR(CheckGlareSteps(steps, static_cast<int>(steps.sun_factor.rows()),
+                                           static_cast<int>(Product()->Sky().cols())));
+  glare_steps_ = std::make_unique<const GlareSteps>(std::move(steps));
+  return absl::OkStatus();
+}
+
+std::vector<absl::StatusOr<GlareCounts>> DesignTallies::GlareDesigns(
+    const std::vector<BlindDesign>& designs, const std::vector<std::vector<SunEntry>>& sun) {
+  if (glare_steps_ == nullptr) {
+    return {designs.size(), absl::FailedPreconditionError("glare: no glare steps set")};
+  }
+  std::vector<absl::StatusOr<std::vector<Matrix>>> e = DesignsIlluminance(designs);
+  std::vector<absl::StatusOr<GlareCounts>> out;
+  for (size_t k = 0; k < designs.size(); ++k) {
+    if (!e[k].ok()) {
+      out.push_back(e[k].status());
+      continue;
+    }
+    out.push_back(CountGlare(
+        *e[k], k < sun.size() ? std::span<const SunEntry>(sun[k]) : std::span<const SunEntry>(),
+        *glare_steps_));
+  }
+  return out;
+}
+
 absl::StatusOr<std::unique_ptr<DesignTallies>> DcBackend::StartDesignTallies(
     const Scene& scene, const IndoorOptions& options) {
   FENESTRA_ASSIGN_OR_RETURN(stages, MakeIndoorStages(scene, options));

@@ -5,24 +5,12 @@
 #include <numbers>
 
 #include "absl/strings/str_cat.h"
+#include "core/metrics/dgp_formula.h"
 
 namespace fenestra {
 
-// evalglare's constants of the DGP (c1, c2, c3; the exponents of L, w, Ev and P)
-constexpr double kDgpEvSlope = 5.87e-5, kDgpLogFactor = 0.092, kDgpOffset = 0.159;
-constexpr double kDgpEvExponent = 1.87;
+// The largest position index (evalglare's)
 constexpr double kMaxPositionIndex = 16;
-
-namespace {
-
-// The DGP from Ev and the sources' sum of L^2 omega / P^2.
-double DgpOfSum(double eye_lux, double sum) {
-  double dgp = kDgpEvSlope * eye_lux + kDgpOffset;
-  if (sum > 0) dgp += kDgpLogFactor * std::log10(1 + sum / std::pow(eye_lux, kDgpEvExponent));
-  return std::min(dgp, 1.0);
-}
-
-}  // namespace
 
 double Dgp(double eye_lux, std::span<const GlareSource> sources) {
   double sum = 0;
@@ -72,11 +60,6 @@ double SunGlareFactor(Vec3d view, Vec3d up, Vec3d to_sun) {
   // The beam's normal illuminance at the eye spread over the disc: L = E_sun / (cos omega)
   const double p = PositionIndex(view, up, to_sun);
   return 1 / (cos_view * cos_view * kSunSolidAngleSr * p * p);
-}
-
-double DgpWithSunFactor(double eye_lux, double sun_eye_lux, double factor) {
-  if (!(sun_eye_lux > 0) || !(factor > 0) || !(eye_lux > 0)) return DgpOfSum(eye_lux, 0);
-  return DgpOfSum(eye_lux, sun_eye_lux * sun_eye_lux * factor);
 }
 
 GlareClass ClassOfDgp(double dgp) {

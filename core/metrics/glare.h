@@ -23,6 +23,7 @@
 
 #include "absl/status/statusor.h"
 #include "core/common/vec3.h"
+#include "core/metrics/dgp_formula.h"
 
 namespace fenestra {
 
@@ -64,9 +65,9 @@ double PositionIndex(Vec3d view, Vec3d up, Vec3d to_source);
 double DgpWithSun(double eye_lux, double sun_eye_lux, Vec3d view, Vec3d up, Vec3d to_sun);
 // The same in two steps, for many illuminances of one view and sun: the part of the sun's
 // term that depends on the geometry alone, 1 / (cos^2 omega P^2) (L^2 omega / P^2 is
-// sun_eye_lux^2 times it; 0 where the sun is not in front of the eye), then the DGP from it.
+// sun_eye_lux^2 times it; 0 where the sun is not in front of the eye), then the DGP from it
+// (DgpWithSunFactor, dgp_formula.h).
 double SunGlareFactor(Vec3d view, Vec3d up, Vec3d to_sun);
-double DgpWithSunFactor(double eye_lux, double sun_eye_lux, double factor);
 
 enum class GlareClass { kImperceptible, kPerceptible, kDisturbing, kIntolerable };
 GlareClass ClassOfDgp(double dgp);

@@ -100,6 +100,23 @@ Estimated LinearEstimate(std::span<const double> batch_values) {
   return {sum / count, JackknifeStandardError(without)};
 }
 
+// What decides a glare step of `views` under `sky`: its occupied steps, threshold and
+// per view the sun's geometric factor in each column.
+GlareSteps GlareStepsOf(const std::vector<ViewPoint>& views, const ComfortSky& sky) {
+  GlareSteps steps;
+  steps.occupied = sky.occupied_column;
+  steps.threshold = sky.glare_threshold;
+  const Eigen::Index columns = static_cast<Eigen::Index>(sky.columns.size());
+  steps.sun_factor = Matrix::Zero(static_cast<Eigen::Index>(views.size()), columns);
+  for (const SunColumn& s : sky.suns) {
+    for (size_t v = 0; v < views.size(); ++v) {
+      steps.sun_factor(static_cast<Eigen::Index>(v), s.column) =
+          SunGlareFactor(views[v].direction, views[v].up, s.direction);
+    }
+  }
+  return steps;
+}
+
 }  // namespace
 
 // One set of comfort sensors: its scene, its backend (its own tracer), tallies and sun.
@@ -177,8 +194,6 @@ absl::StatusOr<ComfortSky> MakeComfortSky(const SkyMatrix& visible, const SkyMat
   FENESTRA_ASSIGN_OR_RETURN(lit_sky, SplitSkyColumnsInLux(visible, sky.columns));
   sky.lit_sky = std::move(lit_sky);
   sky.suns = SunColumnsOf(visible, sky.columns);
-  sky.sun_direction.assign(sky.columns.size(), Vec3d{0, 0, 0});
-  for (const SunColumn& s : sky.suns) sky.sun_direction[s.column] = s.direction;
   for (const int c : sky.columns) sky.occupied_column.push_back(occupied[c]);
   sky.occupied_hours = static_cast<int>(std::count(occupied.begin(), occupied.end(), true));
   sky.glare_threshold = glare_threshold;
@@ -253,6 +268,7 @@ absl::Status DesignComfort::SetSky(const std::vector<Matrix>& outdoor_batches,
     FENESTRA_ASSIGN_OR_RETURN(
         sun, DirectSun::Trace(eyes_->scene, sky_->suns, static_cast<int>(sky_->columns.size())));
     eyes_->sun = std::move(sun);
+    FENESTRA_RETURN_IF_ERROR(eyes_->tallies->SetGlareSteps(GlareStepsOf(views_, *sky_)));
   }
   if (gains_) {
     FENESTRA_RETURN_IF_ERROR(gains_->tallies->SetProduct(outdoor_batches, sky_->gain_sky));
@@ -274,21 +290,24 @@ std::vector<absl::StatusOr<ComfortEstimate>> DesignComfort::EvaluateDesigns(
   }
   const auto start = std::chrono::steady_clock::now();
   std::vector<absl::StatusOr<ComfortEstimate>> out(designs.size(), ComfortEstimate{});
-  // Each part's E through its product's own sky, the designs' paths replayed together
-  const auto take = [&](Part* part, auto figures) {
-    if (part == nullptr) return;
-    std::vector<absl::StatusOr<std::vector<Matrix>>> e = part->tallies->DesignsIlluminance(designs);
+  // Each part's figures of its product's own sky, the designs' paths replayed together
+  const auto take = [&](auto per_design, auto figures) {
     for (size_t i = 0; i < designs.size(); ++i) {
       if (!out[i].ok()) continue;
-      if (!e[i].ok()) {
-        out[i] = e[i].status();
+      if (!per_design[i].ok()) {
+        out[i] = per_design[i].status();
         continue;
       }
-      (this->*figures)(designs[i], *e[i], *out[i]);
+      (this->*figures)(designs[i], *per_design[i], *out[i]);
     }
   };
-  take(eyes_.get(), &DesignComfort::GlareOf);
-  take(gains_.get(), &DesignComfort::GainsOf);
+  if (eyes_ != nullptr) {
+    std::vector<std::vector<SunEntry>> sun;
+    for (const BlindDesign& design : designs) sun.push_back(eyes_->sun->Entries(design));
+    take(eyes_->tallies->GlareDesigns(designs, sun), &DesignComfort::GlareOf);
+  }
+  if (gains_ != nullptr)
+    take(gains_->tallies->DesignsIlluminance(designs), &DesignComfort::GainsOf);
   for (absl::StatusOr<ComfortEstimate>& o : out) {
     if (!o.ok()) continue;
     o->glare = eyes_ != nullptr;
@@ -298,59 +317,20 @@ std::vector<absl::StatusOr<ComfortEstimate>> DesignComfort::EvaluateDesigns(
   return out;
 }
 
-void DesignComfort::GlareOf(const BlindDesign& design, const std::vector<Matrix>& batches,
+void DesignComfort::GlareOf(const BlindDesign&, const GlareCounts& counts,
                             ComfortEstimate& out) const {
   const int views = static_cast<int>(views_.size());
-  const Eigen::Index columns = static_cast<Eigen::Index>(sky_->columns.size());
-  Matrix sun = Matrix::Zero(views, columns);
-  for (const SunEntry& e : eyes_->sun->Entries(design)) sun(e.sensor, e.column) = e.lux;
-  Matrix total = Matrix::Zero(views, columns);
-  for (const Matrix& e : batches) total += e;
-  const int count = static_cast<int>(batches.size());
-  // Below this eye illuminance a step without the sun in view is no glare step
-  const double threshold = sky_->glare_threshold;
-  const double eye_limit = EyeLuxAtDgp(threshold);
-  using Mask = Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>;
-  Mask occupied_steps(1, columns);
-  for (Eigen::Index c = 0; c < columns; ++c) occupied_steps(0, c) = sky_->occupied_column[c];
-  // The occupied steps without the sun at the eye, decided by Ev alone; those with it, one by one
-  const Mask sunless = (sun.array() == 0) && occupied_steps.replicate(views, 1);
-  // (the sun's geometric factor of each, the same in every version)
-  std::vector<std::pair<int, Eigen::Index>> sunny;
-  std::vector<double> factor;
-  for (Eigen::Index c = 0; c < columns; ++c) {
-    for (int v = 0; v < views; ++v) {
-      if (sun(v, c) > 0 && occupied_steps(0, c)) {
-        sunny.emplace_back(v, c);
-        factor.push_back(SunGlareFactor(views_[v].direction, views_[v].up, sky_->sun_direction[c]));
-      }
-    }
-  }
+  const double occupied = std::max(1, sky_->occupied_hours);
   // Version 0: the mean of the batches; version 1 + b: the mean without batch b
-  std::vector<double> autonomy(count + 1), hours(count + 1);
-  Matrix e(views, columns);
-  Mask glare(views, columns);
-  for (int version = 0; version <= count; ++version) {
-    const double weight = version == 0 ? 1.0 / count : 1.0 / (count - 1);
-    if (version == 0) {
-      e.noalias() = weight * total;
-    } else {
-      e.noalias() = weight * (total - batches[version - 1]);
-    }
-    glare = sunless && (e.array() >= eye_limit);
-    for (size_t k = 0; k < sunny.size(); ++k) {
-      const auto [v, c] = sunny[k];
-      glare(v, c) =
-          DgpWithSunFactor(std::max(0.0, e(v, c)) + sun(v, c), sun(v, c), factor[k]) >= threshold;
-    }
-    const int any = static_cast<int>(glare.colwise().any().count());
-    const double occupied = std::max(1, sky_->occupied_hours);
+  std::vector<double> autonomy, hours;
+  for (size_t version = 0; version < counts.any_steps.size(); ++version) {
     double mean_autonomy = 0;
     for (int v = 0; v < views; ++v) {
-      mean_autonomy += 100.0 * (1 - static_cast<double>(glare.row(v).count()) / occupied) / views;
+      mean_autonomy +=
+          100.0 * (1 - static_cast<double>(counts.view_steps[version][v]) / occupied) / views;
     }
-    autonomy[version] = mean_autonomy;
-    hours[version] = 100.0 * any / occupied;
+    autonomy.push_back(mean_autonomy);
+    hours.push_back(100.0 * static_cast<double>(counts.any_steps[version]) / occupied);
   }
   out.value.glare_autonomy_percent = autonomy[0];
   out.value.glare_hours_percent = hours[0];

@@ -72,7 +72,6 @@ struct ComfortSky {
   std::vector<int> columns;
   Matrix lit_sky;
   std::vector<SunColumn> suns;
-  std::vector<Vec3d> sun_direction;  // per column; zero without a sun
   std::vector<bool> occupied_column;
   int occupied_hours = 0;  // every occupied step, dark ones included: the denominator
   double glare_threshold = 0.4;
@@ -139,9 +138,9 @@ class DesignComfort {
  private:
   struct Part;
   DesignComfort() = default;
-  // The figures of one design from its E per batch (DesignTallies::DesignsIlluminance)
-  void GlareOf(const BlindDesign& design, const std::vector<Matrix>& batches,
-               ComfortEstimate& out) const;
+  // The figures of one design from its glare counts (DesignTallies::GlareDesigns) or its E
+  // per batch (DesignTallies::DesignsIlluminance)
+  void GlareOf(const BlindDesign& design, const GlareCounts& counts, ComfortEstimate& out) const;
   void GainsOf(const BlindDesign& design, const std::vector<Matrix>& batches,
                ComfortEstimate& out) const;
 

@@ -9,6 +9,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
 #include "core/dc/cuda/annual_tally.h"
+#include "core/metrics/dgp_formula.h"
 #include "core/metrics/hour_class.h"
 #include "core/trace/cuda/device_buffer.cuh"
 #include "core/trace/path.h"
@@ -355,6 +356,73 @@ __global__ void TallyKernel(const double* e, int designs, int batches, int senso
   }
 }
 
+// Writes each design's direct-sun entries into its dense views x steps block of `sun`
+// (zeroed before): entry e of design k to (k * views + sensor) * steps + column. The entries
+// of a design are one per sensor and column (DirectSun::Entries).
+__global__ void DenseSunKernel(const SunEntry* entries, const int* design_of, int count, int views,
+                               int steps, double* sun) {
+  const int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  if (i >= count) return;
+  const SunEntry entry = entries[i];
+  sun[(static_cast<size_t>(design_of[i]) * views + entry.sensor) * steps + entry.column] =
+      entry.lux;
+}
+
+// What decides a glare step (core/dc/glare_tally.h) beside the per-step tables.
+struct GlareLimits {
+  double threshold, eye_limit;
+  double weight, leave_one_out_weight;  // 1 / B and 1 / (B - 1)
+};
+
+// One thread per (step, version, design): each view's E of the version, formed as the CPU's
+// CountGlare forms it, then whether the step is glare there (Ev alone without the sun's
+// beam at the eye, the DGP with the sun as source with it); warps add their counts to the
+// version's. Design k's row (b, i) of E is (b * designs + k) * views + i; its counts at
+// (k * versions + version) * (views + 1), the last the steps in which some view is in glare.
+__global__ void GlareKernel(const double* e, const double* sun, const double* sun_factor,
+                            const uint8_t* occupied, int designs, int batches, int views, int steps,
+                            GlareLimits limits, unsigned long long* counts) {
+  const int version = static_cast<int>(blockIdx.y);
+  const int design = static_cast<int>(blockIdx.z);
+  const int t = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  const bool active = t < steps && occupied[t] != 0;
+  const unsigned all = 0xffffffffu;
+  unsigned long long* out =
+      counts + (static_cast<size_t>(design) * (batches + 1) + version) * (views + 1);
+  bool any = false;
+  for (int i = 0; i < views; ++i) {
+    bool glare = false;
+    if (active) {
+      double total = 0;
+      for (int b = 0; b < batches; ++b) {
+        total = __dadd_rn(total,
+                          e[((static_cast<size_t>(b) * designs + design) * views + i) * steps + t]);
+      }
+      double value;
+      if (version == 0) {
+        value = __dmul_rn(limits.weight, total);
+      } else {
+        const double left_out =
+            e[((static_cast<size_t>(version - 1) * designs + design) * views + i) * steps + t];
+        value = __dmul_rn(limits.leave_one_out_weight, __dsub_rn(total, left_out));
+      }
+      const double beam = sun[(static_cast<size_t>(design) * views + i) * steps + t];
+      if (beam == 0) {
+        glare = value >= limits.eye_limit;
+      } else if (beam > 0) {
+        const double eye = __dadd_rn(0.0 < value ? value : 0.0, beam);
+        glare = DgpWithSunFactor(eye, beam, sun_factor[static_cast<size_t>(i) * steps + t]) >=
+                limits.threshold;
+      }
+    }
+    any |= glare;
+    const unsigned in_glare = __popc(__ballot_sync(all, glare));
+    if (threadIdx.x % 32 == 0 && in_glare) atomicAdd(&out[i], in_glare);
+  }
+  const unsigned some = __popc(__ballot_sync(all, any));
+  if (threadIdx.x % 32 == 0 && some) atomicAdd(&out[views], some);
+}
+
 absl::Status CheckBins(int bins) {
   if (bins != kTregenzaBinCount && bins != 2 * kTregenzaBinCount) {
     return absl::InvalidArgumentError(absl::StrCat("CUDA annual product: a sky of ", bins,
@@ -378,6 +446,13 @@ struct CudaAnnualTally::Impl {
   DeviceBuffer<SunEntry> sun_entries;
   DeviceBuffer<int> sun_designs;
   DeviceBuffer<double> other_sky;  // a sky for one call to Illuminance
+  // Glare at the eyes (SetGlare): the tables, the designs' dense sun and the counts
+  DeviceBuffer<double> glare_factor, glare_sun;
+  DeviceBuffer<uint8_t> glare_occupied;
+  DeviceBuffer<unsigned long long> glare_counts;
+  std::vector<unsigned long long> host_glare_counts;
+  int glare_views = 0, glare_steps = 0;
+  double glare_threshold = 0, eye_limit = 0;
   // E's tallies in one buffer, zeroed and downloaded at once (TallyLayout per design)
   DeviceBuffer<unsigned long long> tallies;
   std::vector<unsigned long long> host_tallies;
@@ -456,9 +531,10 @@ struct CudaAnnualTally::Impl {
     FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
     return absl::OkStatus();
   }
-  // Adds design k's direct-sun entries sun[k] to its E (`designs` designs' rows as the
-  // tallies lay them out) in every batch.
-  absl::Status AddSun(const SunEntries* sun, int designs, int batches, int sensors, int sky_steps) {
+  // Uploads design k's direct-sun entries sun[k] (and the design of each) to sun_entries
+  // and sun_designs; returns their count. InvalidArgument for an entry outside `sensors` x
+  // `sky_steps`.
+  absl::StatusOr<int> UploadSun(const SunEntries* sun, int designs, int sensors, int sky_steps) {
     std::vector<SunEntry> entries;
     std::vector<int> design_of;
     for (int k = 0; k < designs; ++k) {
@@ -471,13 +547,20 @@ struct CudaAnnualTally::Impl {
         design_of.push_back(k);
       }
     }
-    if (entries.empty()) return absl::OkStatus();
+    if (entries.empty()) return 0;
+    FENESTRA_CUDA_RETURN_IF_ERROR(sun_entries.Upload(entries.data(), entries.size()));
+    FENESTRA_CUDA_RETURN_IF_ERROR(sun_designs.Upload(design_of.data(), design_of.size()));
+    return static_cast<int>(entries.size());
+  }
+  // Adds design k's direct-sun entries sun[k] to its E (`designs` designs' rows as the
+  // tallies lay them out) in every batch.
+  absl::Status AddSun(const SunEntries* sun, int designs, int batches, int sensors, int sky_steps) {
+    FENESTRA_ASSIGN_OR_RETURN(count, UploadSun(sun, designs, sensors, sky_steps));
+    if (count == 0) return absl::OkStatus();
     if (bins != 2 * kTregenzaBinCount) {
       return absl::InvalidArgumentError("CUDA annual product: the direct sun needs a split sky");
     }
-    FENESTRA_CUDA_RETURN_IF_ERROR(sun_entries.Upload(entries.data(), entries.size()));
-    FENESTRA_CUDA_RETURN_IF_ERROR(sun_designs.Upload(design_of.data(), design_of.size()));
-    const int count = static_cast<int>(entries.size()), threads = 256;
+    const int threads = 256;
     AddSunKernel<<<(count + threads - 1) / threads, threads>>>(sun_entries.get(), sun_designs.get(),
                                                                count, designs, batches, sensors,
                                                                sky_steps, illuminance.get());
@@ -517,6 +600,64 @@ struct CudaAnnualTally::Impl {
     return absl::OkStatus();
   }
 };
+
+absl::Status CudaAnnualTally::SetGlare(const double* sun_factor, const uint8_t* occupied, int views,
+                                       double threshold, double eye_limit) {
+  Impl& d = *impl_;
+  if (d.cells == 0) return NoProduct();
+  if (views < 1) {
+    return absl::InvalidArgumentError(absl::StrCat("CUDA glare: ", views, " views"));
+  }
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
+  FENESTRA_CUDA_RETURN_IF_ERROR(
+      d.glare_factor.Upload(sun_factor, static_cast<size_t>(views) * d.steps));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.glare_occupied.Upload(occupied, d.steps));
+  // Done before it returns, as SetProduct
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaStreamSynchronize(cudaStreamPerThread));
+  d.glare_views = views;
+  d.glare_steps = d.steps;
+  d.glare_threshold = threshold;
+  d.eye_limit = eye_limit;
+  return absl::OkStatus();
+}
+
+absl::Status CudaAnnualTally::GlareSums(const double* device_sums, size_t design_sums, int designs,
+                                        int batches, const uint64_t* batch_paths,
+                                        const SunEntries* sun, int64_t* counts) {
+  Impl& d = *impl_;
+  FENESTRA_RETURN_IF_ERROR(CheckPairs(d.cells, batches));
+  if (d.glare_views == 0 || d.glare_steps != d.steps) {
+    return absl::FailedPreconditionError("CUDA glare: no glare tables for the product's steps");
+  }
+  if (designs < 1) {
+    return absl::InvalidArgumentError(absl::StrCat("CUDA glare: ", designs, " designs"));
+  }
+  const int views = d.glare_views, versions = batches + 1;
+  FENESTRA_RETURN_IF_ERROR(
+      d.MeanOfSums(device_sums, design_sums, designs, batches, views, batch_paths));
+  FENESTRA_RETURN_IF_ERROR(d.FormIlluminance(designs * batches * views, batches));
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.glare_sun.Zero(static_cast<size_t>(designs) * views * d.steps));
+  FENESTRA_ASSIGN_OR_RETURN(entries, d.UploadSun(sun, designs, views, d.steps));
+  const int threads = 256;
+  if (entries > 0) {
+    DenseSunKernel<<<(entries + threads - 1) / threads, threads>>>(
+        d.sun_entries.get(), d.sun_designs.get(), entries, views, d.steps, d.glare_sun.get());
+    FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
+  }
+  const size_t total = static_cast<size_t>(designs) * versions * (views + 1);
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.glare_counts.Zero(total));
+  const GlareLimits limits{d.glare_threshold, d.eye_limit, 1.0 / batches, 1.0 / (batches - 1)};
+  const dim3 grid((d.steps + threads - 1) / threads, versions, designs);
+  GlareKernel<<<grid, threads>>>(d.illuminance.get(), d.glare_sun.get(), d.glare_factor.get(),
+                                 d.glare_occupied.get(), designs, batches, views, d.steps, limits,
+                                 d.glare_counts.get());
+  FENESTRA_CUDA_RETURN_IF_ERROR(cudaGetLastError());
+  d.host_glare_counts.resize(total);
+  FENESTRA_CUDA_RETURN_IF_ERROR(d.glare_counts.Download(d.host_glare_counts.data(), total));
+  static_assert(sizeof(int64_t) == sizeof(unsigned long long));
+  std::memcpy(counts, d.host_glare_counts.data(), total * sizeof(int64_t));
+  return absl::OkStatus();
+}
 
 CudaAnnualTally::CudaAnnualTally(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 CudaAnnualTally::~CudaAnnualTally() = default;

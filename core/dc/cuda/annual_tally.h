@@ -84,6 +84,19 @@ class CudaAnnualTally {
                                  const uint64_t* batch_paths, const double* other_sky,
                                  int other_steps, double* illuminance);
 
+  // Glare at `views` eyes (core/dc/glare_tally.h), after SetProduct and fitting its steps:
+  // per view and step the sun's geometric factor (`sun_factor`, views x steps, row-major),
+  // per step whether it is occupied, the DGP threshold and the eye illuminance at which a
+  // step without the sun reaches it. Kept until the next SetGlare.
+  absl::Status SetGlare(const double* sun_factor, const uint8_t* occupied, int views,
+                        double threshold, double eye_limit);
+  // The glare counts of `designs` designs' indoor sums on this device, as TallySums takes
+  // them (the sensors the views), design k's beam at the eyes sun[k]: per design, version v
+  // (as the tallies') and view i, counts[(k * (batches + 1) + v) * (views + 1) + i] gets the
+  // occupied steps in glare, and index views of each the steps in which some view is.
+  absl::Status GlareSums(const double* device_sums, size_t design_sums, int designs, int batches,
+                         const uint64_t* batch_paths, const SunEntries* sun, int64_t* counts);
+
   // Whether I_b O_b runs on the FP64 tensor cores: from Create on, where the device's code
   // has them (compute capability 8.0 and later); false takes the kernel of the CUDA cores
   // (the tests compare the two).

@@ -532,6 +532,90 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
             absl::StatusCode::kUnimplemented);
 }
 
+// Glare counted where the replay's E lies is the host's count of the same E (CountGlare of
+// DesignsIlluminance), design by design and version by version, for designs replayed
+// together with their own beams at the eyes; the steps re-uploaded with a new product. The
+// sky is scaled to eye illuminances around 3000 lx, so that steps fall on either side of the
+// eye limit (4106 lx at DGP 0.4), with and without the beam. (E's entries may differ from
+// the host's in their last bits, from the order of the product's atomic additions; a count
+// would differ only for a value within those bits of a limit.)
+TEST(CudaBackendTest, GlareCountsOnTheDeviceAreTheHostsCounts) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const Scene scene = LoadExample("city_office");
+  const OutdoorOptions outdoor = OutdoorInParts(scene, 500'000, 4);
+  absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor, gpu.get());
+  ASSERT_TRUE(o.ok()) << o.status();
+  const int steps = 400;
+  std::srand(7);
+  const auto uniform = [] { return static_cast<double>(std::rand()) / RAND_MAX; };
+  // Steps from dim to bright (a factor of 100), so that each sensor's E crosses the limit
+  Matrix unit_sky = Matrix::Random(kDaylightBins, steps).cwiseAbs();
+  for (int c = 0; c < steps; ++c) unit_sky.col(c) *= std::exp(std::log(100.0) * uniform());
+  absl::StatusOr<std::unique_ptr<DesignTallies>> tallies =
+      gpu->MakeDesignTallies(scene, IndoorPairedWith(outdoor, 20'000), o->batches, unit_sky);
+  ASSERT_TRUE(tallies.ok()) << tallies.status();
+  const std::vector<BlindDesign> designs = {*DesignWithOverrides(scene, {{"alpha", 0.0}}),
+                                            *DesignWithOverrides(scene, {{"alpha", 0.6}}),
+                                            *DesignWithOverrides(scene, {{"alpha", 1.2}})};
+  absl::StatusOr<std::vector<Matrix>> unit = (*tallies)->DesignIlluminance(designs[0], unit_sky);
+  ASSERT_TRUE(unit.ok()) << unit.status();
+  std::vector<double> values((*unit)[0].data(), (*unit)[0].data() + (*unit)[0].size());
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  ASSERT_GT(values[values.size() / 2], 0);
+  const Matrix sky = unit_sky * (3000 / values[values.size() / 2]);
+
+  const int views = static_cast<int>(scene.sensors.size());
+  GlareSteps glare;
+  glare.threshold = 0.4;
+  for (int c = 0; c < steps; ++c) glare.occupied.push_back(uniform() < 0.8);
+  glare.sun_factor = Matrix::Zero(views, steps);
+  std::vector<std::vector<SunEntry>> sun(designs.size());
+  for (int i = 0; i < views; ++i) {
+    for (int c = i % 5; c < steps; c += 5) {
+      glare.sun_factor(i, c) = 1e3 + 2e4 * uniform();
+      for (size_t k = 0; k < designs.size(); ++k) {
+        sun[k].push_back({i, c, 3000 * uniform() * static_cast<double>(k + 1) / 3});
+      }
+    }
+  }
+  EXPECT_EQ((*tallies)->GlareDesigns(designs, sun)[0].status().code(),
+            absl::StatusCode::kFailedPrecondition);
+  ASSERT_TRUE((*tallies)->SetGlareSteps(glare).ok());
+  ASSERT_TRUE((*tallies)->SetProduct(o->batches, sky).ok());  // the steps go with it
+  std::vector<absl::StatusOr<GlareCounts>> on_device = (*tallies)->GlareDesigns(designs, sun);
+  std::vector<absl::StatusOr<std::vector<Matrix>>> e = (*tallies)->DesignsIlluminance(designs);
+  ASSERT_EQ(on_device.size(), designs.size());
+  int64_t sunless_glare = 0, sunny_glare = 0, versions_differ = 0, glare_steps = 0;
+  const int occupied =
+      static_cast<int>(std::count(glare.occupied.begin(), glare.occupied.end(), true));
+  for (size_t k = 0; k < designs.size(); ++k) {
+    ASSERT_TRUE(on_device[k].ok() && e[k].ok()) << on_device[k].status() << e[k].status();
+    absl::StatusOr<GlareCounts> on_host = CountGlare(*e[k], sun[k], glare);
+    ASSERT_TRUE(on_host.ok()) << on_host.status();
+    ASSERT_EQ(on_device[k]->view_steps.size(), 5u);
+    EXPECT_EQ(on_device[k]->view_steps, on_host->view_steps) << "design " << k;
+    EXPECT_EQ(on_device[k]->any_steps, on_host->any_steps) << "design " << k;
+    for (size_t v = 1; v < 5; ++v) {
+      versions_differ += on_host->view_steps[v] != on_host->view_steps[0];
+    }
+    // The same with the beams dropped: the steps decided by Ev alone
+    absl::StatusOr<GlareCounts> sunless = CountGlare(*e[k], {}, glare);
+    ASSERT_TRUE(sunless.ok());
+    for (int i = 0; i < views; ++i) {
+      sunless_glare += sunless->view_steps[0][i];
+      sunny_glare += on_host->view_steps[0][i] - sunless->view_steps[0][i];
+      glare_steps += on_host->view_steps[0][i];
+    }
+  }
+  // Not a trivial case: Ev alone and the beam both make glare, a quarter of the steps or
+  // more are not glare, and the leave-one-out versions see other counts than the mean
+  EXPECT_GT(sunless_glare, 0);
+  EXPECT_GT(sunny_glare, 0);
+  EXPECT_LT(glare_steps, static_cast<int64_t>(designs.size()) * views * occupied * 3 / 4);
+  EXPECT_GT(versions_differ, 0);
+}
+
 // The outdoor stage's O_b stay on the GPU for its annual products: a product made from them
 // there equals one uploaded from the host's copy, and a copy said to lie on another device
 // is not taken.
