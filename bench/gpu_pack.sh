@@ -8,7 +8,8 @@ build="${1:-build}"
 root=gpu_pack/root
 rm -rf gpu_pack
 mkdir -p "$root/bin" "$root/lib"
-cp "$build/client/fenestra" "$build/bench/gpu_bench" "$build/tests/core/dc/cuda_backend_test" \
+cp "$build/client/fenestra" "$build/bench/gpu_bench" "$build/bench/qmc_bench" \
+  "$build/tests/core/dc/cuda_backend_test" \
   "$build/tests/core/optimize/optimize_test" "$root/bin/"
 for extra in cuda_tracer_test annual_tally_test; do
   found="$(find "$build/tests" -name "$extra" -type f -executable | head -1)"

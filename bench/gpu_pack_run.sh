@@ -2,7 +2,7 @@
 # On a GPU machine without the build's dependencies: unpacks what bench/gpu_pack.sh packed
 # (gpu_pack/pack.tar.xz at the repository's root), runs the GPU tests and the benchmarks and
 # leaves their outputs in $OUT/results.tar.xz (a summary line per run on stdout).
-# Usage: bench/gpu_pack_run.sh [tests|bench|comfort|all]
+# Usage: bench/gpu_pack_run.sh [tests|bench|comfort|qmc|all]
 set -u
 cd "$(dirname "$0")/.."
 tar xJf gpu_pack/pack.tar.xz -C gpu_pack
@@ -29,6 +29,9 @@ case "${1:-all}" in
     run job_corner $B/gpu_bench job 4 examples/corner_office/tilt_and_spacing.json
     run job_city $B/gpu_bench job 4
     run cpu_corner $B/fenestra optimize --local examples/corner_office/tilt_and_spacing.json --backend cpu -o "$R/cpu_corner.json"
+    ;;
+  qmc)
+    run qmc $B/qmc_bench cuda "${2:-32}"
     ;;
   comfort)
     F="$B/fenestra optimize --local"

@@ -66,6 +66,7 @@ PathSettings PathSettingsFor(const OneStageOptions& options) {
   settings.russian_roulette = options.russian_roulette;
   settings.roulette_threshold = static_cast<float>(options.roulette_threshold);
   settings.max_vertices = 1u << 20;
+  settings.sequence = options.sequence;
   return settings;
 }
 
@@ -149,12 +150,35 @@ void FillBatches(const std::vector<double>& batch_sum, int sensor_count, int bat
   }
 }
 
+// The standard errors of the coefficients and sky sums from the scatter of the batches'
+// (the standard error of the mean of B independent batch estimates).
+void ErrorsFromBatches(OneStageResult* result) {
+  const std::vector<Matrix>& batches = result->batch_coefficients;
+  const double count = static_cast<double>(batches.size());
+  Matrix squares = Matrix::Zero(result->coefficients.rows(), result->coefficients.cols());
+  Eigen::VectorXd sky_squares = Eigen::VectorXd::Zero(result->coefficients.rows());
+  for (const Matrix& d : batches) {
+    squares += (d - result->coefficients).array().square().matrix();
+    const Eigen::VectorXd sky = d.rightCols(kDaylightBins - 1).rowwise().sum() - result->sky_sum;
+    sky_squares += sky.array().square().matrix();
+  }
+  result->standard_error = (squares / (count * (count - 1))).cwiseSqrt();
+  result->sky_sum_standard_error = (sky_squares / (count * (count - 1))).cwiseSqrt();
+}
+
 }  // namespace
 
-void FillOneStageResult(const OneStageTally& tally, int64_t paths, OneStageResult* result) {
+int OneStageBatches(const OneStageOptions& options) {
+  if (options.sequence == Sequence::kSobol && options.batches < 2) return kSobolBatches;
+  return std::max(1, options.batches);
+}
+
+void FillOneStageResult(const OneStageTally& tally, int64_t paths, Sequence sequence,
+                        OneStageResult* result) {
   FillFromSums(tally.sum, tally.sum_squares, tally.sky_sum_squares, tally.sensor_count, paths,
                result);
   FillBatches(tally.batch_sum, tally.sensor_count, tally.batches, paths, result);
+  if (sequence == Sequence::kSobol && tally.batches >= 2) ErrorsFromBatches(result);
   result->rays_traced = tally.rays;
   result->branches = tally.branches;
   result->escaped_paths = tally.ends[static_cast<int>(PathEnd::kEscaped)];

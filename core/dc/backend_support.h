@@ -32,7 +32,11 @@ std::vector<TraceSensor> LocalSensors(const TraceGeometry& geometry,
 
 // The result of a one-stage trace of `paths` paths per sensor: coefficients, standard
 // errors, sky sums and batches from the tally's sums, and its counts.
-void FillOneStageResult(const OneStageTally& tally, int64_t paths, OneStageResult* result);
+// With Sequence::kSobol the standard errors are those of the batches' scatter.
+void FillOneStageResult(const OneStageTally& tally, int64_t paths, Sequence sequence,
+                        OneStageResult* result);
+// The batches a one-stage run traces (OneStageOptions::batches, sequence).
+int OneStageBatches(const OneStageOptions& options);
 
 // Weight windows need a pilot that saw light: with fewer scoring pilot paths than this
 // (all sensors), the importance map is mostly noise and plain roulette is used instead.

@@ -827,7 +827,7 @@ class CudaBackend : public DcBackend {
     FENESTRA_RETURN_IF_ERROR(Upload(geometry));
     const std::vector<TraceSensor> local = LocalSensors(geometry, sensors);
     const int sensor_count = static_cast<int>(local.size());
-    const int batches = std::max(1, options.batches);
+    const int batches = OneStageBatches(options);
     PathSettings path = PathSettingsFor(options);
     path.importance = nullptr;
 
@@ -861,7 +861,7 @@ class CudaBackend : public DcBackend {
     for (int e = 0; e < 6; ++e) tally.ends[e] = counters.ends[e];
     tally.max_weight = 1.0f;  // plain roulette: no path carries more than 1
     OneStageResult result;
-    FillOneStageResult(tally, options.paths_per_sensor, &result);
+    FillOneStageResult(tally, options.paths_per_sensor, options.sequence, &result);
     result.backend = Name();
     result.wall_seconds = SecondsSince(start);
     return result;

@@ -61,6 +61,9 @@ struct OutdoorBatches {
 OutdoorBatches FormOutdoorBatches(const OutdoorTally& tally);
 
 // How to trace the one-stage daylight coefficients.
+// The batches of a one-stage run with Sequence::kSobol that asks for fewer than 2.
+inline constexpr int kSobolBatches = 8;
+
 struct OneStageOptions {
   int64_t paths_per_sensor = 100000;  // at least 2
   // Surface reflections a path may make (Radiance's -ab is one more); 0 = none (the direct
@@ -87,6 +90,10 @@ struct OneStageOptions {
   // Also report D of this many independent batches (each sensor's paths split into equal,
   // contiguous ranges), for jackknife errors of non-linear results; 0 or 1 = none.
   int batches = 0;
+  // How the paths' first draws are made (PathRandom, core/trace/philox.h). With kSobol the
+  // standard errors come from the scatter of the batches (at least 2: kSobolBatches where
+  // fewer are asked), the paths of one batch not being independent.
+  Sequence sequence = kDefaultSequence;
 };
 
 // One-stage daylight coefficients with their Monte Carlo error.

@@ -37,7 +37,7 @@ class EmbreeBackend : public DcBackend {
     settings.paths_per_sensor = static_cast<uint64_t>(options.paths_per_sensor);
     settings.seed = options.seed;
     settings.threads = options.threads;
-    settings.batches = std::max(1, options.batches);
+    settings.batches = OneStageBatches(options);
     settings.path = PathSettingsFor(options);
     const std::vector<TraceSensor> local = LocalSensors(geometry, sensors);
     const EmbreeIntersector intersector = scene->Intersector();
@@ -58,7 +58,7 @@ class EmbreeBackend : public DcBackend {
 
     // Report
     OneStageResult result;
-    FillOneStageResult(tally, options.paths_per_sensor, &result);
+    FillOneStageResult(tally, options.paths_per_sensor, options.sequence, &result);
     result.rays_traced += pilot.rays;
     result.pilot_paths = static_cast<int64_t>(pilot.paths);
     result.importance_cells = settings.path.importance ? pilot.table.CellCount() : 0;

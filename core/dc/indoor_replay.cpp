@@ -389,6 +389,7 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
     chunk.paths = last - first;
     Recording scene_view{embree->Intersector(), data->envelopes};
     const TraceSensor& sensor = data->sensors[chunk.sensor];
+    const uint64_t batch_first = BatchStart(paths, batches, chunk.batch);
     RecordingSink<EmbreeIntersector, Chunk> sink{&scene_view, &chunk};
     using Mode = RecordingMode<EmbreeIntersector, Chunk, OutdoorEmbreeView>;
     for (uint64_t p = first; p < last; ++p) {
@@ -397,8 +398,9 @@ absl::StatusOr<std::unique_ptr<IndoorReplay>> IndoorReplay::Record(const Scene& 
                 &scene_view,
                 &chunk};
       // Without splitting, so that a path's records are one sequence
-      TracePath<Recording, Mode, 0>(scene_view, geometry.Surfaces(), settings,
-                                    PathRandom(options.seed, chunk.sensor, p), mode);
+      TracePath<Recording, Mode, 0>(
+          scene_view, geometry.Surfaces(), settings,
+          PathRandom(options.seed, chunk.sensor, p, settings.sequence, batch_first), mode);
     }
   });
   for (const Chunk& chunk : data->chunks) {
@@ -476,9 +478,11 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
           PathState pending[1];
           int pending_count = 0;
           uint32_t interactions = r.state.vertex;
-          stats.end = path_internal::FollowBranch(
-              full_view, surfaces, settings, PathRandom(d.options.seed, chunk.sensor, r.path), mode,
-              r.state, &interactions, pending, 0, &pending_count, &stats);
+          const PathRandom random(d.options.seed, chunk.sensor, r.path, settings.sequence,
+                                  BatchStart(tally.paths_per_sensor, tally.batches, chunk.batch));
+          stats.end =
+              path_internal::FollowBranch(full_view, surfaces, settings, random, mode, r.state,
+                                          &interactions, pending, 0, &pending_count, &stats);
           slot.counters.Add(stats);
         });
       },

@@ -20,8 +20,10 @@
 namespace fenestra {
 namespace {
 
-PathSettings Settings(int max_bounces, bool russian_roulette, double roulette_threshold) {
+PathSettings Settings(int max_bounces, bool russian_roulette, double roulette_threshold,
+                      Sequence sequence) {
   PathSettings settings;
+  settings.sequence = sequence;
   settings.max_bounces = max_bounces >= 0 ? max_bounces : kUnlimitedBounces;
   settings.russian_roulette = russian_roulette;
   settings.roulette_threshold = static_cast<float>(roulette_threshold);
@@ -225,10 +227,10 @@ absl::StatusOr<OutdoorResult> ComputeOutdoorStage(const Scene& scene, const Outd
   for (int w = 0; w < static_cast<int>(windows.size()); ++w) {
     FENESTRA_ASSIGN_OR_RETURN(
         formed,
-        backend->Outdoor(
-            geometry, windows, w, basis, per_cell, options.batches, options.seed,
-            Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold),
-            options.threads));
+        backend->Outdoor(geometry, windows, w, basis, per_cell, options.batches, options.seed,
+                         Settings(options.max_bounces, options.russian_roulette,
+                                  options.roulette_threshold, options.sequence),
+                         options.threads));
     each.push_back(std::move(formed));
   }
   OutdoorBatches formed = StackWindows(std::move(each), static_cast<int>(window_cells));
@@ -316,7 +318,8 @@ absl::Status CheckOutdoorFitsIndoor(const std::vector<Matrix>& outdoor_batches, 
 }
 
 PathSettings IndoorPathSettings(const IndoorOptions& options) {
-  return Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold);
+  return Settings(options.max_bounces, options.russian_roulette, options.roulette_threshold,
+                  options.sequence);
 }
 
 IndoorResult IndoorResultFromTally(const IndoorTally& tally, const IndoorOptions& options) {

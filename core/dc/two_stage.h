@@ -105,6 +105,7 @@ struct OutdoorOptions {
   // Independent batches of every window cell's paths; the indoor stage's batches pair
   // with them (CombineStages), so both must have the same count.
   int batches = kDefaultBatches;
+  Sequence sequence = kDefaultSequence;  // as OneStageOptions
 };
 
 // O: per unit radiance of each sky bin [-], rows part * basis_cells + direction cell: the
@@ -139,6 +140,7 @@ struct IndoorOptions {
   int batches = kDefaultBatches;  // independent batches of paths, as OutdoorOptions::batches
   bool russian_roulette = true;
   double roulette_threshold = 1.0;
+  Sequence sequence = kDefaultSequence;  // as OneStageOptions
 };
 
 // I [sr]: irradiance at each sensor per unit radiance arriving at each window part from

@@ -164,9 +164,11 @@ OneStageTally TraceOneStageCpu(const Intersector& scene, const SurfaceTable& sur
     const uint32_t s = chunk.sensor;
     one_stage_internal::ChunkSink sink{chunk.sum, chunk.sum_squares};
     OneStageMode<one_stage_internal::ChunkSink> mode{sensors[s].position, sensors[s].normal, &sink};
+    const uint64_t batch_first = BatchStart(n, batches, chunk.batch);
     for (uint64_t p = chunk.first; p < chunk.last; ++p) {
       const PathStats stats =
-          TracePath(scene, surfaces, path_settings[s], PathRandom(settings.seed, s, p), mode);
+          TracePath(scene, surfaces, path_settings[s],
+                    PathRandom(settings.seed, s, p, path_settings[s].sequence, batch_first), mode);
       chunk.rays += stats.rays;
       chunk.branches += stats.branches;
       for (int e = 0; e < 6; ++e) chunk.ends[e] += stats.ends[e];

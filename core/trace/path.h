@@ -102,6 +102,8 @@ struct PathSettings {
   // the estimate unbiased and every weight <= 1.
   const ImportanceMap* importance = nullptr;
   float window_scale = 0.0f;
+  // How the paths' first draws are made (PathRandom): the path's batch then matters
+  Sequence sequence = Sequence::kPseudoRandom;
 };
 
 // Branches a split path may hold waiting, and copies one split may make.

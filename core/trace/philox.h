@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "core/common/cpu_gpu.h"
+#include "core/trace/sobol.h"
 
 namespace fenestra {
 
@@ -61,10 +62,25 @@ struct Uniform4 {
   float u[4];
 };
 
+// How a path's first draws are made (Sampling.sequence): every draw pseudo-random, or those
+// of the first kQuasiRandomVertices vertices and kQuasiRandomPurposes purposes quasi-random,
+// from an Owen-scrambled Sobol sequence of its own per batch and stream (sobol.h).
+enum class Sequence : uint8_t { kPseudoRandom = 0, kSobol = 1 };
+inline constexpr uint32_t kQuasiRandomVertices = 2, kQuasiRandomPurposes = 2;
+// The sequence where a run does not name one (Sampling.sequence).
+inline constexpr Sequence kDefaultSequence = Sequence::kPseudoRandom;
+static_assert(4 * kQuasiRandomVertices * kQuasiRandomPurposes == kSobolDimensions);
+
 // The random stream of one path: counter = (path low, path high, stream, vertex << 4 |
 // purpose), key = seed. `stream` is the sensor (or start cell) index. Every draw is a pure
 // function of these, so CPU and GPU, any thread count and any scheduling see the same
 // numbers, and designs of one optimization share them (common random numbers).
+//
+// With Sequence::kSobol a path is also point (path - batch_first) of its batch's sequence:
+// its draws at vertex v < kQuasiRandomVertices for purpose p < kQuasiRandomPurposes are that
+// point's dimensions 4 (v kQuasiRandomPurposes + p) to 4 (v kQuasiRandomPurposes + p) + 3,
+// each dimension scrambled by a seed of (seed, stream, batch_first, dimension), so that the
+// batches are independent randomizations; its other draws are the pseudo-random ones.
 class PathRandom {
  public:
   FENESTRA_CPU_GPU PathRandom(uint64_t seed, uint32_t stream, uint64_t path)
@@ -73,9 +89,32 @@ class PathRandom {
         path_lo_(static_cast<uint32_t>(path)),
         path_hi_(static_cast<uint32_t>(path >> 32)),
         stream_(stream) {}
+  // Path `path` of the batch whose first path is `batch_first` (<= path, fewer than 2^32
+  // before it), drawn as `sequence` says.
+  FENESTRA_CPU_GPU PathRandom(uint64_t seed, uint32_t stream, uint64_t path, Sequence sequence,
+                              uint64_t batch_first)
+      : PathRandom(seed, stream, path) {
+    if (sequence != Sequence::kSobol) return;
+    point_ = static_cast<uint32_t>(path - batch_first);
+    const uint32_t batch_lo = static_cast<uint32_t>(batch_first);
+    const uint32_t batch_hi = static_cast<uint32_t>(batch_first >> 32);
+    scramble_ =
+        MixBits(key0_ ^ MixBits(key1_ ^ MixBits(stream ^ MixBits(batch_hi ^ MixBits(batch_lo)))));
+  }
 
   // Four uniforms for path vertex `vertex` (0 = the start) and `purpose` (0..15).
   FENESTRA_CPU_GPU Uniform4 Draw(uint32_t vertex, uint32_t purpose) const {
+    if (point_ != kNoPoint && vertex < kQuasiRandomVertices && purpose < kQuasiRandomPurposes) {
+      const int first = 4 * static_cast<int>(vertex * kQuasiRandomPurposes + purpose);
+      uint32_t x[4];
+      SobolPoints4(point_, first, x);
+      Uniform4 u;
+      for (int k = 0; k < 4; ++k) {
+        const uint32_t seed = MixBits(scramble_ + 0x9E3779B9u * static_cast<uint32_t>(first + k));
+        u.u[k] = UniformFloat(OwenScramble(x[k], seed));
+      }
+      return u;
+    }
     const Philox4x32 bits = Philox4x32_10(
         {{path_lo_, path_hi_, stream_, (vertex << 4) | (purpose & 15u)}}, key0_, key1_);
     return {{UniformFloat(bits.v[0]), UniformFloat(bits.v[1]), UniformFloat(bits.v[2]),
@@ -88,7 +127,9 @@ class PathRandom {
   }
 
  private:
+  static constexpr uint32_t kNoPoint = 0xFFFFFFFFu;  // pseudo-random throughout
   uint32_t key0_, key1_, path_lo_, path_hi_, stream_;
+  uint32_t point_ = kNoPoint, scramble_ = 0;
 };
 
 }  // namespace fenestra

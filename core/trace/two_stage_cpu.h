@@ -124,7 +124,8 @@ OutdoorTally TraceOutdoorCpu(const Intersector& scene, const SurfaceTable& surfa
         for (uint64_t p = batch_first + part * size / parts;
              p < batch_first + (part + 1) * size / parts; ++p) {
           slot.counters.Add(
-              TracePath(scene, surfaces, path, PathRandom(seed, streams + cell, p), mode));
+              TracePath(scene, surfaces, path,
+                        PathRandom(seed, streams + cell, p, path.sequence, batch_first), mode));
         }
       },
       [&](uint64_t c, const Slot& slot) {
@@ -194,7 +195,8 @@ IndoorTally TraceIndoorCpu(const Intersector& scene, const SurfaceTable& surface
         IndoorMode<Slot, Outdoor> mode{sensors[s].position, sensors[s].normal, all,  &basis,
                                        path.max_bounces,    &outdoor,          &slot};
         for (uint64_t p = first; p < last; ++p) {
-          slot.counters.Add(TracePath(scene, surfaces, path, PathRandom(seed, s, p), mode));
+          slot.counters.Add(TracePath(scene, surfaces, path,
+                                      PathRandom(seed, s, p, path.sequence, batch_first), mode));
         }
       },
       [&](uint64_t c, const Slot& slot) {

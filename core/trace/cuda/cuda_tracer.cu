@@ -161,7 +161,8 @@ __device__ void TraceItems(const Scene& scene, const SurfaceTable& surfaces,
              [](const PathStats&) {});
 }
 
-// Traces paths first + i of random stream `stream`, i below last - first (TraceItems).
+// Traces paths first + i of random stream `stream`, i below last - first (TraceItems); `first`
+// is their batch's first path.
 template <class Scene, class Mode>
 __device__ void TracePaths(const Scene& scene, const SurfaceTable& surfaces,
                            const PathSettings& settings, Mode& mode, uint64_t seed, uint32_t stream,
@@ -169,7 +170,7 @@ __device__ void TracePaths(const Scene& scene, const SurfaceTable& surfaces,
                            ThreadCounts& counts) {
   TraceItems(scene, surfaces, settings, mode, last - first, next_path, counts,
              [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
-               *random = PathRandom(seed, stream, first + i);
+               *random = PathRandom(seed, stream, first + i, settings.sequence, first);
                *path = path_internal::StartPath(scene, *random, mode, stats);
              });
 }
@@ -233,8 +234,10 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
   ThreadCounts counts;
   TraceItems(scene, surfaces, settings, mode, paths_per_cell, next_path + cell, counts,
              [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
-               sink.SetRow(rows + BatchOf(paths_per_cell, batches, i) * kOutdoorRowSize);
-               *random = PathRandom(seed, streams + cell, i);
+               const int b = BatchOf(paths_per_cell, batches, i);
+               sink.SetRow(rows + b * kOutdoorRowSize);
+               *random = PathRandom(seed, streams + cell, i, settings.sequence,
+                                    BatchFirst(paths_per_cell, batches, b));
                *path = path_internal::StartPath(scene, *random, mode, stats);
              });
   sink.Flush();
@@ -430,6 +433,7 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
 // each batch's paths in `parts` parts; a replay traces parts [first, last).
 struct ReplayParts {
   int batches, parts, first, last;
+  uint64_t paths_per_sensor;  // of every batch together
 };
 
 // A design of a replay on the device: the room with its blinds (BVH, and per triangle its
@@ -556,7 +560,8 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
       [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
         slot = ResumeSlot(records, order, first_row, i);
         const ReplayResume resume = records.resumes[slot];
-        *random = PathRandom(seed, static_cast<uint32_t>(s), resume.path);
+        *random = PathRandom(seed, static_cast<uint32_t>(s), resume.path, settings.sequence,
+                             BatchFirst(parts.paths_per_sensor, parts.batches, b));
         *path = resume.state;
         *stats = ResumedStats(resume.state);
       },
@@ -1195,7 +1200,7 @@ absl::Status CudaTracer::Impl::Replay(const ReplayDesigns& designs, const TraceM
                                                       first, " are no longer on the device"));
   }
   FENESTRA_CUDA_RETURN_IF_ERROR(cudaSetDevice(d.device));
-  const ReplayParts parts{r.batches, r.parts, first, last};
+  const ReplayParts parts{r.batches, r.parts, first, last, r.paths_per_sensor};
   const unsigned int rows = static_cast<unsigned int>(r.sensor_count * r.batches * designs.count);
   const int columns = IndoorColumnCount(r.windows);
   const size_t shared = static_cast<size_t>(columns) * sizeof(double);

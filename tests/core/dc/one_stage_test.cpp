@@ -75,6 +75,38 @@ TEST(OneStageTest, UnobstructedUpwardSensorSeesPiSplitByPatch) {
   EXPECT_LT(std::fabs(chi_square - 144), 4 * 17) << chi_square;
 }
 
+// The same sensor with Sobol draws: each patch's coefficient is the share of the first
+// directions that fall in it, where the scrambled points are stratified, so the batches'
+// scatter (the standard errors then) is far below the pseudo-random draws' and the values
+// still agree with the patches' within it.
+TEST(OneStageTest, SobolDrawsSplitTheSkyByPatchWithSmallerErrors) {
+  TriangleMesh mesh;
+  AddSquare(mesh, 0, 0, 50, -1, 0);
+  const std::vector<double> expected = CosineWeightedPatches();
+  double variance[2] = {0, 0}, chi_square = 0;
+  for (const Sequence sequence : {Sequence::kPseudoRandom, Sequence::kSobol}) {
+    OneStageOptions options = Options(400000, 1);
+    options.sequence = sequence;
+    options.batches = sequence == Sequence::kSobol ? 0 : 8;  // Sobol: kSobolBatches
+    const auto result =
+        ComputeOneStage(mesh, {{"floor", 0.2, -1}}, {MakeSensor({0, 0, 0}, {0, 0, 1})}, options);
+    ASSERT_TRUE(result.ok()) << result.status();
+    ASSERT_EQ(result->batch_coefficients.size(), static_cast<size_t>(kSobolBatches));
+    EXPECT_NEAR(result->sky_sum(0), kPi, 1e-12);
+    for (int b = 1; b < kDaylightBins; ++b) {
+      variance[static_cast<int>(sequence)] += std::pow(result->standard_error(0, b), 2);
+      if (sequence != Sequence::kSobol) continue;
+      const double z = (result->coefficients(0, b) - expected[b]) / result->standard_error(0, b);
+      chi_square += z * z;
+    }
+  }
+  std::printf("patches: variance %.3g pseudo-random, %.3g Sobol (%.0f times); chi-square %.0f\n",
+              variance[0], variance[1], variance[0] / variance[1], chi_square);
+  EXPECT_GT(variance[0] / variance[1], 20.0);
+  // 145 z-scores from 8 batches each (Student's t of 7 degrees: variance 1.4): mean 203
+  EXPECT_LT(chi_square, 203 + 4 * 40) << chi_square;
+}
+
 TEST(OneStageTest, DownwardSensorOverGroundSeesPiRhoLessWhatMissesTheGround) {
   const double rho = 0.3, half = 5000, height = 1;
   TriangleMesh mesh;
