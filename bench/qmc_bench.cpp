@@ -22,11 +22,34 @@ namespace {
 
 // Per entry of a figure, its values over the runs.
 struct Runs {
-  std::vector<Matrix> values;
+  std::vector<Matrix> values, errors;
   double seconds = 0;
-  void Add(const Matrix& m, double s) {
+  void Add(const Matrix& m, const Matrix& se, double s) {
     values.push_back(m);
+    errors.push_back(se);
     seconds += s;
+  }
+  // The standard deviation of z = (value - mean over the runs) / sqrt(mean squared standard
+  // error), scaled by sqrt(runs / (runs - 1)): 1 where the errors are calibrated.
+  double ZScoreSd() const {
+    const Matrix mean = Mean();
+    const double runs = static_cast<double>(values.size());
+    Matrix mean_variance = Matrix::Zero(mean.rows(), mean.cols());
+    for (const Matrix& e : errors) mean_variance += e.array().square().matrix() / runs;
+    double squares = 0;
+    int count = 0;
+    for (const Matrix& v : values) {
+      for (Eigen::Index r = 0; r < mean.rows(); ++r) {
+        const double largest = mean.row(r).cwiseAbs().maxCoeff();
+        for (Eigen::Index c = 0; c < mean.cols(); ++c) {
+          if (!(std::abs(mean(r, c)) > 0.01 * largest) || !(mean_variance(r, c) > 0)) continue;
+          const double z = (v(r, c) - mean(r, c)) / std::sqrt(mean_variance(r, c));
+          squares += z * z * runs / (runs - 1);
+          ++count;
+        }
+      }
+    }
+    return count > 0 ? std::sqrt(squares / count) : 0;
   }
   Matrix Variance() const {
     Matrix mean = Matrix::Zero(values[0].rows(), values[0].cols());
@@ -72,8 +95,9 @@ void Report(const char* what, const Runs& pseudo, const Runs& sobol, bool per_ro
     std::printf(" (least %.2f, largest %.2f)", *std::min_element(q.begin(), q.end()),
                 *std::max_element(q.begin(), q.end()));
   }
-  std::printf("; time %.3f s against %.3f s per run\n", sobol.seconds / sobol.values.size(),
-              pseudo.seconds / pseudo.values.size());
+  std::printf("; time %.3f s against %.3f s per run; z-score SD %.2f Sobol, %.2f pseudo-random\n",
+              sobol.seconds / sobol.values.size(), pseudo.seconds / pseudo.values.size(),
+              sobol.ZScoreSd(), pseudo.ZScoreSd());
 }
 
 double SecondsSince(std::chrono::steady_clock::time_point start) {
@@ -94,8 +118,8 @@ void OneStage(DcBackend* backend, const Scene& scene, int runs, int64_t paths, i
       const OneStageResult d =
           ValueOrExit(ComputeOneStage(scene, DefaultDesign(scene), options, backend));
       const double s = SecondsSince(start);
-      coefficients[k].Add(d.coefficients, s);
-      sums[k].Add(d.sky_sum.transpose(), s);
+      coefficients[k].Add(d.coefficients, d.standard_error, s);
+      sums[k].Add(d.sky_sum.transpose(), d.sky_sum_standard_error.transpose(), s);
     }
   }
   std::printf(
@@ -118,7 +142,9 @@ void TwoStage(DcBackend* backend, const Scene& scene, int runs, int64_t outdoor_
       outdoor.seed = 2000 + r;
       outdoor.sequence = sequence;
       const OutdoorResult out = ValueOrExit(ComputeOutdoorStage(scene, outdoor, backend));
-      o[k].Add(out.coefficients.topRows(out.sky_view.size()), out.wall_seconds);
+      const Eigen::Index cells = out.sky_view.size();
+      o[k].Add(out.coefficients.topRows(cells), out.standard_error.topRows(cells),
+               out.wall_seconds);
       IndoorOptions indoor;
       indoor.parts = parts;
       indoor.paths_per_sensor = indoor_paths;
@@ -126,9 +152,10 @@ void TwoStage(DcBackend* backend, const Scene& scene, int runs, int64_t outdoor_
       indoor.sequence = sequence;
       const IndoorResult in =
           ValueOrExit(ComputeIndoorStage(scene, DefaultDesign(scene), indoor, backend));
-      i[k].Add(in.coefficients, in.wall_seconds);
+      i[k].Add(in.coefficients, in.standard_error, in.wall_seconds);
       const TwoStageResult d = ValueOrExit(CombineStages(in, out));
-      sums[k].Add(d.sky_sum.transpose(), out.wall_seconds + in.wall_seconds);
+      sums[k].Add(d.sky_sum.transpose(), d.sky_sum_standard_error.transpose(),
+                  out.wall_seconds + in.wall_seconds);
     }
   }
   std::printf(" two-stage, %lld outdoor paths, %lld indoor paths per sensor:\n",

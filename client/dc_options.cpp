@@ -36,10 +36,15 @@ void SetRoulette(const DcFlags& flags, Options& options) {
   if (Given(flags, "--roulette-threshold")) options.roulette_threshold = flags.roulette_threshold;
 }
 
+Sequence SequenceFrom(const DcFlags& flags) {
+  return flags.sequence == "sobol" ? Sequence::kSobol : Sequence::kPseudoRandom;
+}
+
 // What both stages of the two-stage method take from the flags alike.
 template <class StageOptions>
 void SetStageOptions(const DcFlags& flags, WindowParts parts, StageOptions& options) {
   options.seed = flags.seed;
+  options.sequence = SequenceFrom(flags);
   options.threads = flags.threads;
   options.basis_cells = flags.basis;
   options.parts = parts;
@@ -132,6 +137,12 @@ void AddDcFlags(CLI::App* command, DcFlags* flags, int64_t paths_divisor) {
       ->check(CLI::IsMember({"cpu", "cuda", "auto"}))
       ->capture_default_str();
   command->add_option("--seed", flags->seed, "Random seed")->capture_default_str();
+  command
+      ->add_option("--sequence", flags->sequence,
+                   "How a path's first draws are made: pseudo-random, or sobol (Owen-scrambled "
+                   "Sobol points, one randomization per batch; standard errors from the batches)")
+      ->check(CLI::IsMember({"pseudo-random", "sobol"}))
+      ->capture_default_str();
   command->add_option("--threads", flags->threads, "CPU threads (0 = all cores)")
       ->capture_default_str();
 
@@ -192,6 +203,7 @@ OneStageOptions OneStageOptionsFrom(const DcFlags& flags) {
   options.seed = flags.seed;
   options.threads = flags.threads;
   options.weight_windows = !flags.no_weight_windows;
+  options.sequence = SequenceFrom(flags);
   SetRoulette(flags, options);
   return options;
 }

@@ -36,6 +36,8 @@ struct DcFlags {
   int threads = 0;
   bool no_roulette = false;
   double roulette_threshold = OneStageOptions{}.roulette_threshold;
+  // "pseudo-random" or "sobol" (Sampling.sequence)
+  std::string sequence = kDefaultSequence == Sequence::kSobol ? "sobol" : "pseudo-random";
   // Two-stage
   int64_t outdoor_paths = 0, indoor_paths = 0;
   int outdoor_bounces = 0, indoor_bounces = 0;

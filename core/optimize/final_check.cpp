@@ -24,9 +24,10 @@ int64_t RoundUp(int64_t n, int64_t multiple) { return (n + multiple - 1) / multi
 // One one-stage trace of `design` without a reflection limit, reduced to the metric.
 absl::StatusOr<Evaluation> TraceMetric(const Scene& scene, const BlindDesign& design,
                                        int64_t paths_per_sensor, uint64_t seed, int batches,
-                                       bool with_direct_part, const DaylightMetric& metric,
-                                       DcBackend* backend) {
+                                       Sequence sequence, bool with_direct_part,
+                                       const DaylightMetric& metric, DcBackend* backend) {
   OneStageOptions options;
+  options.sequence = sequence;
   options.paths_per_sensor = paths_per_sensor;
   options.max_bounces = kUnlimitedBounces;  // Russian roulette alone ends the paths
   options.seed = seed;
@@ -95,8 +96,9 @@ absl::StatusOr<FinalCheckOutcome> RunFinalCheck(const Scene& scene, const BlindD
   // The pilot: how the one-stage metric's error goes with paths
   if (cancelled()) return absl::CancelledError("cancelled before the final check");
   FENESTRA_ASSIGN_OR_RETURN(
-      pilot, TraceMetric(scene, design, pilot_paths, options.seed ^ kPilotSeedKey,
-                         kFinalCheckPilotBatches, options.with_direct_part, metric, backend));
+      pilot,
+      TraceMetric(scene, design, pilot_paths, options.seed ^ kPilotSeedKey, kFinalCheckPilotBatches,
+                  options.sequence, options.with_direct_part, metric, backend));
   bool limited = false;
   const int64_t paths =
       CheckPathsPerSensor(pilot_paths, pilot.standard_error, two_stage.standard_error(), max_paths,
@@ -106,7 +108,7 @@ absl::StatusOr<FinalCheckOutcome> RunFinalCheck(const Scene& scene, const BlindD
   if (cancelled()) return absl::CancelledError("cancelled during the final check");
   FENESTRA_ASSIGN_OR_RETURN(
       one_stage, TraceMetric(scene, design, paths, options.seed ^ kCheckSeedKey, options.batches,
-                             options.with_direct_part, metric, backend));
+                             options.sequence, options.with_direct_part, metric, backend));
   v1::Estimate estimate;
   estimate.set_value(one_stage.value);
   estimate.set_standard_error(one_stage.standard_error);

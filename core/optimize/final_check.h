@@ -51,6 +51,7 @@ struct FinalCheckOptions {
   bool with_direct_part = false;
   // The job's seed: the check's streams are derived from it, apart from the two stages'.
   uint64_t seed = kDefaultSeed;
+  Sequence sequence = kDefaultSequence;  // the job's (Sampling.sequence)
   // Polled before each trace; true leaves the check out (Cancelled).
   std::function<bool()> cancelled;
 };

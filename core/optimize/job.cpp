@@ -158,6 +158,7 @@ absl::StatusOr<v1::FinalCheck> CheckDesign(const PreparedJob& job, const AnnualS
   FinalCheckOptions options;
   options.batches = job.job.sampling().batches();
   options.seed = job.job.sampling().seed();
+  options.sequence = SequenceOf(job.job.sampling());
   options.cancelled = cancelled;
   options.with_direct_part = true;  // [D_b | D_0,b] for the split sky
   absl::StatusOr<FinalCheckOutcome> outcome =
@@ -535,6 +536,7 @@ absl::StatusOr<OutdoorMatrix> ComputeOutdoorMatrix(const Scene& scene, const v1:
   options.basis_cells = sampling.basis_cells();
   options.parts = SamplingWindowParts(sampling, scene);
   options.batches = sampling.batches();
+  options.sequence = SequenceOf(sampling);
   FENESTRA_ASSIGN_OR_RETURN(backend, MakeBackend(sampling.backend()));
   FENESTRA_ASSIGN_OR_RETURN(result, ComputeOutdoorStage(scene, options, backend.get()));
   OutdoorMatrix matrix;

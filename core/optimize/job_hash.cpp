@@ -35,6 +35,8 @@ std::string OutdoorMatrixKey(const Scene& scene, const v1::Sampling& sampling) {
   hash.Value(sampling.outdoor_paths()), hash.Value(sampling.outdoor_bounces());
   hash.Value(sampling.seed()), hash.Value(sampling.basis_cells());
   hash.Value(sampling.batches());
+  // (a cache of the pseudo-random draws keeps its key)
+  if (sampling.sequence() == v1::SEQUENCE_SOBOL) hash.String("sobol");
   const WindowParts parts = SamplingWindowParts(sampling, scene);
   hash.Value(parts.columns), hash.Value(parts.rows);
   return hash.Hex();

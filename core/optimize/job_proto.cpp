@@ -132,6 +132,10 @@ ParetoOptions MakeParetoOptions(const v1::Job& spec, const SearchSettings& searc
   return options;
 }
 
+Sequence SequenceOf(const v1::Sampling& sampling) {
+  return sampling.sequence() == v1::SEQUENCE_SOBOL ? Sequence::kSobol : Sequence::kPseudoRandom;
+}
+
 absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric) {
   switch (metric) {
     case v1::METRIC_UNSPECIFIED:
@@ -175,6 +179,7 @@ IndoorOptions JobIndoorOptions(const PreparedJob& job) {
   options.basis_cells = sampling.basis_cells();
   options.parts = SamplingWindowParts(sampling, job.scene);
   options.batches = sampling.batches();
+  options.sequence = SequenceOf(sampling);
   return options;
 }
 

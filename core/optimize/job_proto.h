@@ -45,6 +45,8 @@ ParetoOptions MakeParetoOptions(const v1::Job& spec, const SearchSettings& searc
 // The scene metric of an objective's (or a constraint's) metric; InvalidArgument "job
 // objective.metric" for an unknown one.
 absl::StatusOr<SceneMetric> ToSceneMetric(v1::Metric metric);
+// The tracer's sequence of a resolved job's Sampling.sequence (ResolveSampling).
+Sequence SequenceOf(const v1::Sampling& sampling);
 
 // The indoor stage of the job's designs: its sampling's paths, bounces, seed, basis, window
 // parts (resolved) and batches.

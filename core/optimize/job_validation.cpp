@@ -520,6 +520,13 @@ absl::StatusOr<v1::Sampling> ResolveSampling(const v1::Sampling& given) {
         "sampling.candidates_at_once",
         absl::StrCat("must be in [0, ", kMaxCandidatesAtOnce, "] (0 = the default)"));
   }
+  if (s.sequence() == v1::SEQUENCE_UNSPECIFIED) {
+    s.set_sequence(kDefaultSequence == Sequence::kSobol ? v1::SEQUENCE_SOBOL
+                                                        : v1::SEQUENCE_PSEUDO_RANDOM);
+  }
+  if (!v1::Sequence_IsValid(s.sequence())) {
+    return InvalidJobField("sampling.sequence", "unknown sequence");
+  }
   if (s.basis_cells() != 288 && s.basis_cells() != 1152) {
     return InvalidJobField("sampling.basis_cells", "must be 288 or 1152");
   }

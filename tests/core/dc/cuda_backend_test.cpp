@@ -98,7 +98,8 @@ TEST(CudaBackendTest, MissingGpuIsAClearError) {
   EXPECT_EQ((*automatic)->Name(), "embree-cpu");
 }
 
-void OneStageParity(const std::string& name, const BlindDesign* design, int bounces) {
+void OneStageParity(const std::string& name, const BlindDesign* design, int bounces,
+                    Sequence sequence = Sequence::kPseudoRandom) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
   const Scene scene = LoadExample(name);
@@ -107,6 +108,7 @@ void OneStageParity(const std::string& name, const BlindDesign* design, int boun
   options.max_bounces = bounces;
   options.seed = 5;
   options.weight_windows = false;  // the GPU plays plain roulette
+  options.sequence = sequence;
   const BlindDesign d = design ? *design : DefaultDesign(scene);
   absl::StatusOr<OneStageResult> cpu = ComputeOneStage(scene, d, options);
   absl::StatusOr<OneStageResult> cuda = ComputeOneStage(scene, d, options, gpu.get());
@@ -121,6 +123,10 @@ void OneStageParity(const std::string& name, const BlindDesign* design, int boun
 
 TEST(CudaBackendTest, LightwellOneStageMatchesEmbree) { OneStageParity("lightwell", nullptr, 29); }
 
+TEST(CudaBackendTest, LightwellOneStageOfSobolDrawsMatchesEmbree) {
+  OneStageParity("lightwell", nullptr, 29, Sequence::kSobol);
+}
+
 TEST(CudaBackendTest, CityOfficeOneStageMatchesEmbree) {
   const Scene scene = LoadExample("city_office");
   const BlindDesign design = *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}});
@@ -130,13 +136,16 @@ TEST(CudaBackendTest, CityOfficeOneStageMatchesEmbree) {
 // Both stages and their product on the GPU and on the CPU, each window in parts as by default
 // (4 x 3 for the city office's and the corner office's): the GPU's per-part cells and shared
 // rows.
-void ExpectTwoStageParity(DcBackend* gpu, const Scene& scene, const BlindDesign& design) {
+void ExpectTwoStageParity(DcBackend* gpu, const Scene& scene, const BlindDesign& design,
+                          Sequence sequence = Sequence::kPseudoRandom) {
   OutdoorOptions outdoor;
   outdoor.paths = 2'000'000;
   outdoor.parts = WindowParts{0, 0};
+  outdoor.sequence = sequence;
   IndoorOptions indoor;
   indoor.paths_per_sensor = 200'000;
   indoor.parts = outdoor.parts;
+  indoor.sequence = sequence;
   absl::StatusOr<OutdoorResult> o_cpu = ComputeOutdoorStage(scene, outdoor);
   absl::StatusOr<OutdoorResult> o_gpu = ComputeOutdoorStage(scene, outdoor, gpu);
   ASSERT_TRUE(o_cpu.ok() && o_gpu.ok());
@@ -175,6 +184,16 @@ TEST(CudaBackendTest, TwoStageMatchesEmbree) {
   const Scene scene = LoadExample("city_office");
   ExpectTwoStageParity(gpu.get(), scene,
                        *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}}));
+}
+
+// The same with the Sobol draws (PathRandom): the device draws what the host draws.
+TEST(CudaBackendTest, TwoStageOfSobolDrawsMatchesEmbree) {
+  std::unique_ptr<DcBackend> gpu = Gpu();
+  if (!gpu) GTEST_SKIP() << "no CUDA device";
+  const Scene scene = LoadExample("city_office");
+  ExpectTwoStageParity(gpu.get(), scene,
+                       *DesignWithOverrides(scene, {{"alpha", 0.6}, {"spacing", 0.05}}),
+                       Sequence::kSobol);
 }
 
 // Two windows on two walls (examples/corner_office): both backends stack the windows' cells

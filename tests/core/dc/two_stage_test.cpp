@@ -178,8 +178,9 @@ INSTANTIATE_TEST_SUITE_P(CityOffice, HardDesignTest,
 // sensors' sky sums scatter about their mean as their standard errors say. z = (x_k - mean)
 // / (the rms of the K reported errors) x sqrt(K / (K - 1)) has unit variance when the
 // errors are right; 8 seeds x 9 sensors give its standard deviation to about +-0.1 (and
-// sensors share O's noise, so less), hence the band [0.6, 1.4].
-TEST(TwoStageTest, SkySumErrorsMatchTheSpreadOverSeeds) {
+// sensors share O's noise, so less), hence the band [0.6, 1.4]. Both sequences: with the
+// Sobol draws the batches are independent randomizations, their scatter the error.
+void ExpectSkySumErrorsMatchTheSpreadOverSeeds(Sequence sequence) {
   const Scene scene = LoadExample("city_office");
   absl::StatusOr<BlindDesign> design = DesignWithOverrides(
       scene, {{"alpha", 0.0}, {"width", 0.13}, {"spacing", 0.07}, {"thickness", 0.014}});
@@ -192,11 +193,13 @@ TEST(TwoStageTest, SkySumErrorsMatchTheSpreadOverSeeds) {
     outdoor.max_bounces = -1;
     outdoor.parts = AutomaticWindowParts(scene.window());
     outdoor.seed = 100 + seed;
+    outdoor.sequence = sequence;
     IndoorOptions indoor;
     indoor.paths_per_sensor = 20'000;
     indoor.max_bounces = -1;
     indoor.parts = outdoor.parts;
     indoor.seed = 200 + seed;
+    indoor.sequence = sequence;
     absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor);
     absl::StatusOr<IndoorResult> i = ComputeIndoorStage(scene, *design, indoor);
     ASSERT_TRUE(o.ok() && i.ok());
@@ -224,6 +227,14 @@ TEST(TwoStageTest, SkySumErrorsMatchTheSpreadOverSeeds) {
               sd, z.size());
   EXPECT_GE(sd, 0.6);
   EXPECT_LE(sd, 1.4);
+}
+
+TEST(TwoStageTest, SkySumErrorsMatchTheSpreadOverSeeds) {
+  ExpectSkySumErrorsMatchTheSpreadOverSeeds(Sequence::kPseudoRandom);
+}
+
+TEST(TwoStageTest, SkySumErrorsOfSobolDrawsMatchTheSpreadOverSeeds) {
+  ExpectSkySumErrorsMatchTheSpreadOverSeeds(Sequence::kSobol);
 }
 
 TEST(TwoStageTest, StagesSeeOnlyTheirSide) {

@@ -483,6 +483,24 @@ TEST(JobValidationTest, CandidatesAtOnce) {
   }
 }
 
+// Sampling.sequence: unset is the default (pseudo-random), an unknown value is refused, and
+// the outdoor matrix of Sobol draws is cached under a key of its own.
+TEST(JobValidationTest, Sequence) {
+  v1::Job job = QuickJob();
+  job.mutable_sampling()->set_sequence(static_cast<v1::Sequence>(7));
+  EXPECT_THAT(ErrorOf(job), HasSubstr("job sampling.sequence: unknown sequence"));
+  job = QuickJob();
+  absl::StatusOr<PreparedJob> plain = ValidateJob(job, kOffice);
+  ASSERT_TRUE(plain.ok()) << plain.status();
+  EXPECT_EQ(plain->job.sampling().sequence(), v1::SEQUENCE_PSEUDO_RANDOM);
+  job.mutable_sampling()->set_sequence(v1::SEQUENCE_SOBOL);
+  absl::StatusOr<PreparedJob> sobol = ValidateJob(job, kOffice);
+  ASSERT_TRUE(sobol.ok()) << sobol.status();
+  EXPECT_EQ(sobol->job.sampling().sequence(), v1::SEQUENCE_SOBOL);
+  EXPECT_NE(OutdoorMatrixKey(sobol->scene, sobol->job.sampling()),
+            OutdoorMatrixKey(plain->scene, plain->job.sampling()));
+}
+
 TEST(JobValidationTest, Names) {
   v1::Job job = QuickJob();
   job.set_name("tilt\n2024-01-01 [info] job-9 succeeded");
