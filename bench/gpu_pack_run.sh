@@ -32,6 +32,7 @@ case "${1:-all}" in
     ;;
   qmc)
     run qmc $B/qmc_bench cuda "${2:-32}"
+    run qmc_jobs bash bench/qmc_jobs.sh $B/fenestra "${3:-4}"
     ;;
   comfort)
     F="$B/fenestra optimize --local"
