@@ -423,14 +423,28 @@ TEST(CudaBackendTest, SkyProductMatchesCpu) {
             absl::StatusCode::kInvalidArgument);
 }
 
+// The city office and its outdoor stage on the GPU, 500 000 paths in 4 batches.
+struct CityOfficeOutdoor {
+  Scene scene;
+  OutdoorOptions options;
+  absl::StatusOr<OutdoorResult> result;
+};
+CityOfficeOutdoor TraceCityOfficeOutdoor(DcBackend* gpu) {
+  CityOfficeOutdoor city{LoadExample("city_office"), {}, absl::UnknownError("not traced")};
+  city.options = OutdoorInParts(city.scene, 500'000, 4);
+  city.result = ComputeOutdoorStage(city.scene, city.options, gpu);
+  return city;
+}
+
 // A search's objective on the GPU, with I and E kept on the device, gives the tallies of
 // the indoor stage and annual product taken in turn.
 TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
-  const Scene scene = LoadExample("city_office");
-  const OutdoorOptions outdoor = OutdoorInParts(scene, 500'000, 4);
-  absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor, gpu.get());
+  const CityOfficeOutdoor city = TraceCityOfficeOutdoor(gpu.get());
+  const Scene& scene = city.scene;
+  const OutdoorOptions& outdoor = city.options;
+  const absl::StatusOr<OutdoorResult>& o = city.result;
   ASSERT_TRUE(o.ok()) << o.status();
   const Matrix sky = Matrix::Random(kDaylightBins, 500).cwiseAbs();
   const IndoorOptions indoor = IndoorPairedWith(outdoor, 40'000);
@@ -561,18 +575,17 @@ TEST(CudaBackendTest, DesignTalliesMatchTheStagesInTurn) {
 TEST(CudaBackendTest, GlareCountsOnTheDeviceAreTheHostsCounts) {
   std::unique_ptr<DcBackend> gpu = Gpu();
   if (!gpu) GTEST_SKIP() << "no CUDA device";
-  const Scene scene = LoadExample("city_office");
-  const OutdoorOptions outdoor = OutdoorInParts(scene, 500'000, 4);
-  absl::StatusOr<OutdoorResult> o = ComputeOutdoorStage(scene, outdoor, gpu.get());
-  ASSERT_TRUE(o.ok()) << o.status();
+  const CityOfficeOutdoor city = TraceCityOfficeOutdoor(gpu.get());
+  ASSERT_TRUE(city.result.ok()) << city.result.status();
+  const Scene& scene = city.scene;
   const int steps = 400;
   std::srand(7);
   const auto uniform = [] { return static_cast<double>(std::rand()) / RAND_MAX; };
   // Steps from dim to bright (a factor of 100), so that each sensor's E crosses the limit
   Matrix unit_sky = Matrix::Random(kDaylightBins, steps).cwiseAbs();
   for (int c = 0; c < steps; ++c) unit_sky.col(c) *= std::exp(std::log(100.0) * uniform());
-  absl::StatusOr<std::unique_ptr<DesignTallies>> tallies =
-      gpu->MakeDesignTallies(scene, IndoorPairedWith(outdoor, 20'000), o->batches, unit_sky);
+  absl::StatusOr<std::unique_ptr<DesignTallies>> tallies = gpu->MakeDesignTallies(
+      scene, IndoorPairedWith(city.options, 20'000), city.result->batches, unit_sky);
   ASSERT_TRUE(tallies.ok()) << tallies.status();
   const std::vector<BlindDesign> designs = {*DesignWithOverrides(scene, {{"alpha", 0.0}}),
                                             *DesignWithOverrides(scene, {{"alpha", 0.6}}),
@@ -601,7 +614,7 @@ TEST(CudaBackendTest, GlareCountsOnTheDeviceAreTheHostsCounts) {
   EXPECT_EQ((*tallies)->GlareDesigns(designs, sun)[0].status().code(),
             absl::StatusCode::kFailedPrecondition);
   ASSERT_TRUE((*tallies)->SetGlareSteps(glare).ok());
-  ASSERT_TRUE((*tallies)->SetProduct(o->batches, sky).ok());  // the steps go with it
+  ASSERT_TRUE((*tallies)->SetProduct(city.result->batches, sky).ok());  // the steps go with it
   std::vector<absl::StatusOr<GlareCounts>> on_device = (*tallies)->GlareDesigns(designs, sun);
   std::vector<absl::StatusOr<std::vector<Matrix>>> e = (*tallies)->DesignsIlluminance(designs);
   ASSERT_EQ(on_device.size(), designs.size());
