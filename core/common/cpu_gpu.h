@@ -8,3 +8,11 @@
 #else
 #define FENESTRA_CPU_GPU
 #endif
+
+// FENESTRA_NOINLINE keeps a function out of its callers (rarely taken paths whose code
+// would crowd the common one's registers).
+#if defined(__CUDACC__)
+#define FENESTRA_NOINLINE __noinline__
+#else
+#define FENESTRA_NOINLINE __attribute__((noinline))
+#endif

@@ -94,26 +94,13 @@ class PathRandom {
   FENESTRA_CPU_GPU PathRandom(uint64_t seed, uint32_t stream, uint64_t path, Sequence sequence,
                               uint64_t batch_first)
       : PathRandom(seed, stream, path) {
-    if (sequence != Sequence::kSobol) return;
-    point_ = static_cast<uint32_t>(path - batch_first);
-    const uint32_t batch_lo = static_cast<uint32_t>(batch_first);
-    const uint32_t batch_hi = static_cast<uint32_t>(batch_first >> 32);
-    scramble_ =
-        MixBits(key0_ ^ MixBits(key1_ ^ MixBits(stream ^ MixBits(batch_hi ^ MixBits(batch_lo)))));
+    if (sequence == Sequence::kSobol) point_ = static_cast<uint32_t>(path - batch_first);
   }
 
   // Four uniforms for path vertex `vertex` (0 = the start) and `purpose` (0..15).
   FENESTRA_CPU_GPU Uniform4 Draw(uint32_t vertex, uint32_t purpose) const {
     if (point_ != kNoPoint && vertex < kQuasiRandomVertices && purpose < kQuasiRandomPurposes) {
-      const int first = 4 * static_cast<int>(vertex * kQuasiRandomPurposes + purpose);
-      uint32_t x[4];
-      SobolPoints4(point_, first, x);
-      Uniform4 u;
-      for (int k = 0; k < 4; ++k) {
-        const uint32_t seed = MixBits(scramble_ + 0x9E3779B9u * static_cast<uint32_t>(first + k));
-        u.u[k] = UniformFloat(OwenScramble(x[k], seed));
-      }
-      return u;
+      return QuasiRandomDraw(4 * static_cast<int>(vertex * kQuasiRandomPurposes + purpose));
     }
     const Philox4x32 bits = Philox4x32_10(
         {{path_lo_, path_hi_, stream_, (vertex << 4) | (purpose & 15u)}}, key0_, key1_);
@@ -128,8 +115,27 @@ class PathRandom {
 
  private:
   static constexpr uint32_t kNoPoint = 0xFFFFFFFFu;  // pseudo-random throughout
+
+  // Dimensions first to first + 3 of the path's point, scrambled. Not inlined, so that the
+  // pseudo-random draws' code stays as it is without it.
+  FENESTRA_CPU_GPU FENESTRA_NOINLINE Uniform4 QuasiRandomDraw(int first) const {
+    uint32_t x[4];
+    SobolPoints4(point_, first, x);
+    const uint64_t batch_first = path() - point_;
+    const uint32_t scramble = MixBits(
+        key0_ ^
+        MixBits(key1_ ^ MixBits(stream_ ^ MixBits(static_cast<uint32_t>(batch_first >> 32) ^
+                                                  MixBits(static_cast<uint32_t>(batch_first))))));
+    Uniform4 u;
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t seed = MixBits(scramble + 0x9E3779B9u * static_cast<uint32_t>(first + k));
+      u.u[k] = UniformFloat(OwenScramble(x[k], seed));
+    }
+    return u;
+  }
+
   uint32_t key0_, key1_, path_lo_, path_hi_, stream_;
-  uint32_t point_ = kNoPoint, scramble_ = 0;
+  uint32_t point_ = kNoPoint;  // the point of its batch's sequence (kSobol)
 };
 
 }  // namespace fenestra

@@ -236,8 +236,10 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
              [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
                const int b = BatchOf(paths_per_cell, batches, i);
                sink.SetRow(rows + b * kOutdoorRowSize);
-               *random = PathRandom(seed, streams + cell, i, settings.sequence,
-                                    BatchFirst(paths_per_cell, batches, b));
+               const uint64_t batch_first = settings.sequence == Sequence::kSobol
+                                                ? BatchFirst(paths_per_cell, batches, b)
+                                                : 0;
+               *random = PathRandom(seed, streams + cell, i, settings.sequence, batch_first);
                *path = path_internal::StartPath(scene, *random, mode, stats);
              });
   sink.Flush();
@@ -555,13 +557,17 @@ __global__ void __launch_bounds__(kThreads, FENESTRA_CUDA_MIN_BLOCKS)
       sensors[s].position,  sensors[s].normal, windows, &shared_basis,
       settings.max_bounces, &outdoor,          &sink};
   size_t slot = 0;  // the lane's resumed path
+  // The row's batch's first path, for the Sobol draws (a division: once per row)
+  const uint64_t batch_first = settings.sequence == Sequence::kSobol
+                                   ? BatchFirst(parts.paths_per_sensor, parts.batches, b)
+                                   : 0;
   TraceItems(
       scene, surfaces, settings, mode, resume_count, next_item + y, counts,
       [&](uint64_t i, PathRandom* random, PathState* path, PathStats* stats) {
         slot = ResumeSlot(records, order, first_row, i);
         const ReplayResume resume = records.resumes[slot];
-        *random = PathRandom(seed, static_cast<uint32_t>(s), resume.path, settings.sequence,
-                             BatchFirst(parts.paths_per_sensor, parts.batches, b));
+        *random =
+            PathRandom(seed, static_cast<uint32_t>(s), resume.path, settings.sequence, batch_first);
         *path = resume.state;
         *stats = ResumedStats(resume.state);
       },
