@@ -473,13 +473,14 @@ absl::StatusOr<IndoorTally> IndoorReplay::TraceParts(const BlindDesign& design, 
         IndoorMode<Slot, OutdoorEmbreeView> mode{
             sensor.position,      sensor.normal,   d.Windows(), &d.basis,
             settings.max_bounces, &d.outdoor_view, &slot};
+        const uint64_t batch_first = BatchStart(tally.paths_per_sensor, tally.batches, chunk.batch);
         slot.counters.rays += FollowTouches(blinds, chunk, slot.sum, [&](const ReplayTouch& r) {
           PathStats stats = ResumedStats(r.state);
           PathState pending[1];
           int pending_count = 0;
           uint32_t interactions = r.state.vertex;
           const PathRandom random(d.options.seed, chunk.sensor, r.path, settings.sequence,
-                                  BatchStart(tally.paths_per_sensor, tally.batches, chunk.batch));
+                                  batch_first);
           stats.end =
               path_internal::FollowBranch(full_view, surfaces, settings, random, mode, r.state,
                                           &interactions, pending, 0, &pending_count, &stats);
