@@ -40,6 +40,19 @@ TEST(IndoorReplayTest, EqualsTheIndoorStage) {
   });
 }
 
+// With the Sobol draws too: a resumed path draws what its full trace draws (its batch's
+// point and scramble).
+TEST(IndoorReplayTest, EqualsTheIndoorStageWithSobolDraws) {
+  const Scene scene = LoadExample("city_office");
+  IndoorOptions options;
+  options.paths_per_sensor = 20'000;
+  options.parts = {2, 2};
+  options.sequence = Sequence::kSobol;
+  absl::StatusOr<std::unique_ptr<IndoorReplay>> replay = IndoorReplay::Record(scene, options);
+  ASSERT_TRUE(replay.ok()) << replay.status();
+  ExpectReplayIsTheTrace(scene, options, **replay);
+}
+
 // The records serve every finish: a design's finish replays as the scene whose blind is of its
 // materials (bit for bit), and as the design's full trace; dark slats get less light into the
 // room than the scene's light ones. A finish of materials the scene lacks is refused.
