@@ -4,7 +4,6 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/common/status_macros.h"
-#include "core/metrics/glare.h"
 
 namespace fenestra {
 

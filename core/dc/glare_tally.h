@@ -14,6 +14,7 @@
 #include "absl/status/statusor.h"
 #include "core/common/radiance_matrix.h"
 #include "core/dc/sun_entry.h"
+#include "core/metrics/glare.h"
 
 namespace fenestra {
 
@@ -23,7 +24,7 @@ struct GlareSteps {
   // Per view (a row) and column, the geometric factor of the column's sun (SunGlareFactor,
   // core/metrics/glare.h); 0 where the column has no sun or it is behind the eye
   Matrix sun_factor;
-  double threshold = 0.4;  // the DGP that counts as glare, in (0, 1)
+  double threshold = kDefaultGlareThreshold;  // the DGP that counts as glare, in (0, 1)
 };
 
 // Per version, per view the occupied steps in glare, and the steps in which some view is.

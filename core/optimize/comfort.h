@@ -29,6 +29,7 @@
 #include "core/dc/two_stage.h"
 #include "core/geometry/scene.h"
 #include "core/metrics/annual_metrics.h"
+#include "core/metrics/glare.h"
 #include "core/metrics/metric_errors.h"
 #include "core/sky/sky_matrix.h"
 
@@ -74,7 +75,7 @@ struct ComfortSky {
   std::vector<SunColumn> suns;
   std::vector<bool> occupied_column;
   int occupied_hours = 0;  // every occupied step, dark ones included: the denominator
-  double glare_threshold = 0.4;
+  double glare_threshold = kDefaultGlareThreshold;
   // Gains: the split solar sky [W m-2 sr-1] summed over every lit step (column 0) and over
   // those of the cooling season (column 1), times the step's hour; the sun of every lit
   // step of the solar matrix and whether it is in the season
