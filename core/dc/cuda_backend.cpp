@@ -232,16 +232,13 @@ class CudaAnnualProduct : public AnnualProduct {
 
   // Uploads `steps` (checked against S: DesignTallies::SetGlareSteps) for GlareSums.
   absl::Status SetGlare(const GlareSteps& steps) {
-    const Eigen::Index views = steps.sun_factor.rows(), columns = steps.sun_factor.cols();
-    std::vector<double> factor(static_cast<size_t>(views * columns));
-    for (Eigen::Index v = 0; v < views; ++v) {
-      for (Eigen::Index c = 0; c < columns; ++c) factor[v * columns + c] = steps.sun_factor(v, c);
-    }
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> factor =
+        steps.sun_factor;
     const std::vector<uint8_t> occupied(steps.occupied.begin(), steps.occupied.end());
     FENESTRA_RETURN_IF_ERROR(annual_->SetGlare(factor.data(), occupied.data(),
-                                               static_cast<int>(views), steps.threshold,
+                                               static_cast<int>(factor.rows()), steps.threshold,
                                                EyeLuxAtDgp(steps.threshold)));
-    glare_views_ = static_cast<int>(views);
+    glare_views_ = static_cast<int>(factor.rows());
     return absl::OkStatus();
   }
 
@@ -580,11 +577,11 @@ class CudaDesignTallies : public DesignTallies {
     if (replay_ == nullptr || product_ == nullptr || GlareStepsSet() == nullptr) {
       return DesignTallies::GlareDesigns(designs, sun);
     }
-    std::vector<std::vector<SunEntry>> in_order = sun;
-    in_order.resize(designs.size());
     return InReplayGroups<GlareCounts>(designs, [&](const std::vector<size_t>& group) {
       std::vector<std::vector<SunEntry>> group_sun;
-      for (const size_t i : group) group_sun.push_back(in_order[i]);
+      for (const size_t i : group) {
+        group_sun.push_back(i < sun.size() ? sun[i] : std::vector<SunEntry>{});
+      }
       return product_->GlareSums(tracer_->DeviceSums(), tracer_->DesignSums(),
                                  static_cast<int>(group.size()), FullBatchPaths(), group_sun);
     });
