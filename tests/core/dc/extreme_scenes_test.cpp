@@ -81,6 +81,22 @@ TEST(ExtremeScenesTest, NearlyWhiteLightwellWith1000Bounces) {
       grey.sky_sum(2), white->rays_traced / 60000.0, plain->rays_traced / 6000.0);
 }
 
+// The Sobol draws (OneStageOptions::sequence) in the stiffest case: the nearly white
+// lightwell stays finite and gives the pseudo-random draws' sums within 4 combined standard
+// errors (the Sobol run's from its batches).
+TEST(ExtremeScenesTest, NearlyWhiteLightwellWithSobolDraws) {
+  Scene scene = Lightwell();
+  for (Material& m : scene.materials) m.reflectance = 0.99;
+  const auto pseudo = ComputeOneStage(scene, DefaultDesign(scene), Options(20000, 1000, 1));
+  OneStageOptions options = Options(20000, 1000, 4);
+  options.sequence = Sequence::kSobol;
+  const auto sobol = ComputeOneStage(scene, DefaultDesign(scene), options);
+  ASSERT_TRUE(pseudo.ok() && sobol.ok()) << sobol.status();
+  ExpectFinite(*sobol);
+  EXPECT_EQ(sobol->batch_coefficients.size(), static_cast<size_t>(kSobolBatches));
+  ExpectSameSums(*pseudo, *sobol, 4);
+}
+
 // A room x in [-1.5, 1.5], y in [-6.25, 0], z in [0, 3] whose north wall (0.25 m thick) has an
 // opening x in [-1, 1], z in [0.9, 2.4], closed by ten 0.15 m slats of zero spacing: boxes
 // that touch each other and the reveals, face on face.
@@ -120,6 +136,12 @@ TEST(ExtremeScenesTest, ClosedTouchingSlatsLetNoLightThrough) {
   ExpectFinite(*result);
   EXPECT_EQ(result->coefficients.maxCoeff(), 0.0);
   EXPECT_EQ(result->escaped_paths, 0u);
+  OneStageOptions sobol = Options(200000, kUnlimitedBounces, 3);
+  sobol.sequence = Sequence::kSobol;
+  const auto closed = ComputeOneStage(mesh, materials, sensors, sobol);
+  ASSERT_TRUE(closed.ok()) << closed.status();
+  ExpectFinite(*closed);
+  EXPECT_EQ(closed->coefficients.maxCoeff(), 0.0);  // Sobol draws too
 
   // The same room with the slats removed lets light in
   TriangleMesh open = mesh;
